@@ -1,0 +1,23 @@
+"""The pybullet work cell of bt-arrange, installed as ``bt_arrange_sim``.
+
+It implements the robot interfaces of ``bt_arrange.robot`` for a simulated UR5 with a
+2F-85-like gripper, coloured 5 cm cubes and a top RGB-D camera.
+"""
+
+from bt_arrange_sim.cell import HOME_Q, CameraConfig, CellConfig, PhysicsConfig, WorkCell, robot_urdf_path
+from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
+from bt_arrange_sim.objects import CUBE_COLOURS_RGB, CUBE_EDGE_M, Contact
+
+__all__ = [
+    "CUBE_COLOURS_RGB",
+    "CUBE_EDGE_M",
+    "HOME_Q",
+    "CameraConfig",
+    "CameraNoise",
+    "CameraNoiseConfig",
+    "CellConfig",
+    "Contact",
+    "PhysicsConfig",
+    "WorkCell",
+    "robot_urdf_path",
+]

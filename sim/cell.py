@@ -1,0 +1,265 @@
+"""The pybullet work cell: a table, a UR5 with a 2F-85-like gripper, coloured cubes, a top camera.
+
+Each ``WorkCell`` owns its own ``BulletClient``, so several worlds can live in one process.
+The world frame has its origin on the table top under the robot base, z up.
+
+Ground truth (``cube_pose_truth``) is for evaluation and error injection only: behaviours
+see the world through the camera, like the robot in the paper.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+
+import numpy as np
+
+from bt_arrange.geometry import Pose, fold_yaw
+from bt_arrange.robot import Robot
+from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
+from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
+from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
+
+#: Joint vector the arm starts in: gripper straight down, TCP high above the table's near edge,
+#: out of the top camera's view of the table.
+HOME_Q = np.array([0.0, -1.9, 1.9, -1.5708, -1.5708, 0.0])
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Integration and contact settings, tuned so a 5 cm cube is held by friction alone.
+
+    The arm follows setpoints through pybullet's position motors; ``control_period_s`` must be a
+    whole number of ``time_step_s``.
+    """
+
+    time_step_s: float = 1.0 / 500.0
+    solver_iterations: int = 100
+    control_period_s: float = 0.008
+    gravity_m_s2: float = 9.81
+    arm_position_gain: float = 0.3
+    arm_velocity_gain: float = 1.0
+    finger_position_gain: float = 0.2
+    finger_open_force_n: float = 40.0
+    gripper_speed_m_s: float = 0.05
+    gear_max_force_n: float = 200.0
+    cube_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001)
+    pad_contact: Contact = Contact(lateral_friction=1.2, spinning_friction=0.002)
+    table_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001, friction_anchor=False)
+
+    @property
+    def substeps(self) -> int:
+        """Physics steps per control period."""
+        steps = round(self.control_period_s / self.time_step_s)
+        if steps < 1 or not math.isclose(steps * self.time_step_s, self.control_period_s, rel_tol=1e-9):
+            raise ValueError(
+                f"control period {self.control_period_s} s is not a multiple of the time step {self.time_step_s} s"
+            )
+        return steps
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """The top camera: L515-like RGB intrinsics, 70 cm above the table, looking straight down.
+
+    The long image axis runs along world y; image "down" points to world -x, towards the robot.
+    """
+
+    width_px: int = 1920
+    height_px: int = 1080
+    horizontal_fov_deg: float = 70.0
+    position_m: tuple[float, float, float] = (0.5, 0.0, 0.70)
+    near_m: float = 0.1
+    far_m: float = 2.0
+    light_direction: tuple[float, float, float] = (0.3, 0.2, 1.0)
+
+    def pose_world(self) -> Pose:
+        """``T_W_C`` in the OpenCV optical frame: x right (world -y), y down (world -x), z forward (-z)."""
+        rotation = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+        return Pose.from_rotation(self.position_m, rotation)
+
+
+@dataclass(frozen=True)
+class CellConfig:
+    """Everything that makes one work cell."""
+
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    camera_noise: CameraNoiseConfig = field(default_factory=CameraNoiseConfig)
+    table_size_m: tuple[float, float] = (1.3, 1.4)
+    table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
+
+
+def robot_urdf_path() -> str:
+    """Path of the UR5 + 2F-85 description shipped with bt_arrange."""
+    return str(resources.files("bt_arrange.descriptions") / "ur5_2f85.urdf")
+
+
+class WorkCell:
+    """One simulated work cell with its own physics world.
+
+    ``gui=True`` opens the pybullet window (needs a display); the default is DIRECT, headless.
+    """
+
+    ARM_JOINTS = (
+        "shoulder_pan_joint",
+        "shoulder_lift_joint",
+        "elbow_joint",
+        "wrist_1_joint",
+        "wrist_2_joint",
+        "wrist_3_joint",
+    )
+    FINGER_JOINTS = ("left_finger_joint", "right_finger_joint")
+
+    def __init__(self, config: CellConfig | None = None, gui: bool = False) -> None:
+        import pybullet
+        from pybullet_utils.bullet_client import BulletClient
+
+        self.config = config or CellConfig()
+        physics = self.config.physics
+        self._substeps = physics.substeps
+        self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        self.client.setGravity(0.0, 0.0, -physics.gravity_m_s2)
+        self.client.setPhysicsEngineParameter(
+            fixedTimeStep=physics.time_step_s, numSolverIterations=physics.solver_iterations
+        )
+        self._steps = 0
+        self.cubes: dict[str, int] = {}
+        self.table_id = self._create_table()
+        self.robot_id = self.client.loadURDF(
+            robot_urdf_path(), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE
+        )
+        self._joint_index = {
+            self.client.getJointInfo(self.robot_id, i)[1].decode(): i
+            for i in range(self.client.getNumJoints(self.robot_id))
+        }
+        self._link_index = {
+            self.client.getJointInfo(self.robot_id, i)[12].decode(): i
+            for i in range(self.client.getNumJoints(self.robot_id))
+        }
+        self.arm_joint_indices = tuple(self._joint_index[name] for name in self.ARM_JOINTS)
+        self.arm_joint_efforts_n_m = tuple(
+            self.client.getJointInfo(self.robot_id, i)[10] for i in self.arm_joint_indices
+        )
+        self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
+        self.tcp_link_index = self._link_index["tcp"]
+        self._configure_gripper()
+        self.camera_noise = CameraNoise(self.config.camera_noise)
+        self.clock = SimClock(self)
+        self.arm = SimArm(self)
+        self.gripper = SimGripper(self)
+        self.camera = SimCamera(self)
+        self.arm.reset(HOME_Q)
+        self.gripper.reset(self.gripper.max_width_m)
+
+    # -- world -----------------------------------------------------------------------------
+
+    @property
+    def sim_time_s(self) -> float:
+        """Seconds of simulated time since the cell was built."""
+        return self._steps * self.config.physics.time_step_s
+
+    @property
+    def robot(self) -> Robot:
+        """The cell's devices behind the interfaces behaviours use."""
+        return Robot(arm=self.arm, gripper=self.gripper, camera=self.camera, clock=self.clock)
+
+    def step(self, control_periods: int = 1) -> None:
+        """Advance the world by whole control periods (each several physics steps)."""
+        for _ in range(control_periods * self._substeps):
+            self.client.stepSimulation()
+        self._steps += control_periods * self._substeps
+
+    def settle(self, seconds: float = 0.5) -> None:
+        """Let the world run with the current commands, e.g. after adding cubes."""
+        self.step(max(1, round(seconds / self.config.physics.control_period_s)))
+
+    def joint_name(self, index: int) -> str:
+        """Name of a joint of the robot by its pybullet index."""
+        return self.client.getJointInfo(self.robot_id, index)[1].decode()
+
+    def close(self) -> None:
+        """Disconnect this world's physics client."""
+        if self.client is not None:
+            self.client.disconnect()
+            self.client = None  # type: ignore[assignment]
+
+    def __enter__(self) -> WorkCell:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- cubes -----------------------------------------------------------------------------
+
+    def add_cube(self, colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0, name: str | None = None) -> str:
+        """Put a cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
+        name = name or colour
+        if name in self.cubes:
+            raise ValueError(f"a cube named {name!r} is already in the cell")
+        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE_EDGE_M / 2)
+        self.cubes[name] = create_cube(
+            self.client, colour, pose.position_m, pose.quaternion_xyzw, self.config.physics.cube_contact
+        )
+        return name
+
+    def remove_cube(self, name: str) -> None:
+        """Take a cube off the table."""
+        self.client.removeBody(self.cubes.pop(name))
+
+    # -- ground truth: evaluation and error injection only ---------------------------------
+
+    def cube_pose_truth(self, name: str) -> Pose:
+        """The simulator's true pose of a cube's centre. Never steer the robot with it."""
+        position, orientation = self.client.getBasePositionAndOrientation(self.cubes[name])
+        return Pose(np.array(position), np.array(orientation))
+
+    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+        """True (x_m, y_m, yaw_rad) of a cube, yaw folded to its 90-degree symmetry."""
+        pose = self.cube_pose_truth(name)
+        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad)
+
+    def cube_in_gripper_truth(self, name: str) -> bool:
+        """True when both finger pads touch the cube."""
+        body = self.cubes[name]
+        return all(
+            len(self.client.getContactPoints(self.robot_id, body, linkIndexA=finger)) > 0
+            for finger in self.finger_joint_indices
+        )
+
+    # -- building ---------------------------------------------------------------------------
+
+    def _create_table(self) -> int:
+        import pybullet
+
+        length, width = self.config.table_size_m
+        thickness = 0.04
+        half = [length / 2, width / 2, thickness / 2]
+        collision = self.client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
+        visual = self.client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=[*TABLE_RGB, 1.0])
+        cx, cy = self.config.table_centre_xy_m
+        table = self.client.createMultiBody(0.0, collision, visual, basePosition=[cx, cy, -thickness / 2])
+        self.config.physics.table_contact.apply(self.client, table)
+        return int(table)
+
+    def _configure_gripper(self) -> None:
+        import pybullet
+
+        physics = self.config.physics
+        left, right = self.finger_joint_indices
+        # The real 2F-85 linkage keeps both fingers symmetric; pybullet ignores URDF <mimic>,
+        # so a gear constraint (ratio -1 on mirrored axes) ties the two joint values together.
+        gear = self.client.createConstraint(
+            self.robot_id,
+            left,
+            self.robot_id,
+            right,
+            jointType=pybullet.JOINT_GEAR,
+            jointAxis=[1, 0, 0],
+            parentFramePosition=[0, 0, 0],
+            childFramePosition=[0, 0, 0],
+        )
+        self.client.changeConstraint(gear, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=0.2)
+        for finger in self.finger_joint_indices:
+            physics.pad_contact.apply(self.client, self.robot_id, finger)

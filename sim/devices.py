@@ -1,0 +1,221 @@
+"""pybullet implementations of the robot interfaces of ``bt_arrange.robot``.
+
+Each device talks to one world's ``BulletClient``; none of them steps the simulation:
+the world's owner (the runner, a benchmark) does, one control period at a time.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bt_arrange.errors import OutOfRangeError
+from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.robot import (
+    GRIPPER_FORCE_RANGE_N,
+    GRIPPER_MAX_WIDTH_M,
+    GRIPPER_SPEED_RANGE_M_S,
+    CameraFrame,
+    CameraIntrinsics,
+)
+
+if TYPE_CHECKING:
+    from bt_arrange_sim.cell import WorkCell
+
+
+class SimClock:
+    """World time of one cell: advances only when the cell is stepped."""
+
+    def __init__(self, cell: WorkCell) -> None:
+        self._cell = cell
+
+    def now(self) -> float:
+        """Seconds of simulated time since the cell was built."""
+        return self._cell.sim_time_s
+
+
+class SimArm:
+    """The UR5's six joints under pybullet position control, fed one setpoint per control period."""
+
+    def __init__(self, cell: WorkCell) -> None:
+        self._cell = cell
+        self._client = cell.client
+        self._body = cell.robot_id
+        self._indices = list(cell.arm_joint_indices)
+        self._efforts_n_m = list(cell.arm_joint_efforts_n_m)
+        self._names = tuple(cell.joint_name(i) for i in self._indices)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The six arm joints, base to wrist."""
+        return self._names
+
+    @property
+    def control_period_s(self) -> float:
+        """Seconds between two setpoints."""
+        return self._cell.config.physics.control_period_s
+
+    def joint_positions(self) -> FloatArray:
+        """Measured joint positions in radians."""
+        return np.array([s[0] for s in self._client.getJointStates(self._body, self._indices)])
+
+    def joint_velocities(self) -> FloatArray:
+        """Measured joint velocities in radians per second."""
+        return np.array([s[1] for s in self._client.getJointStates(self._body, self._indices)])
+
+    def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
+        """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
+        import pybullet
+
+        velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
+        physics = self._cell.config.physics
+        self._client.setJointMotorControlArray(
+            self._body,
+            self._indices,
+            pybullet.POSITION_CONTROL,
+            targetPositions=list(np.asarray(positions_rad, dtype=float)),
+            targetVelocities=list(velocities),
+            forces=self._efforts_n_m,
+            positionGains=[physics.arm_position_gain] * 6,
+            velocityGains=[physics.arm_velocity_gain] * 6,
+        )
+
+    def tcp_pose(self) -> Pose:
+        """Measured pose of the TCP (between the finger pads) in the world."""
+        state = self._client.getLinkState(self._body, self._cell.tcp_link_index, computeForwardKinematics=True)
+        return Pose(np.array(state[4]), np.array(state[5]))
+
+    def reset(self, positions_rad: FloatArray) -> None:
+        """Put the arm at rest at ``positions_rad`` (set-up only, never during a task)."""
+        for index, q in zip(self._indices, positions_rad, strict=True):
+            self._client.resetJointState(self._body, index, float(q), 0.0)
+        self.command(np.asarray(positions_rad, dtype=float))
+
+
+class SimGripper:
+    """Two mirrored, force-limited prismatic fingers kept centred by a gear constraint.
+
+    Each finger joint is the distance of its pad from the centre, so the opening is their sum.
+    """
+
+    def __init__(self, cell: WorkCell) -> None:
+        self._cell = cell
+        self._client = cell.client
+        self._body = cell.robot_id
+        self._fingers = list(cell.finger_joint_indices)
+
+    @property
+    def max_width_m(self) -> float:
+        """The 2F-85 stroke in metres."""
+        return GRIPPER_MAX_WIDTH_M
+
+    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
+        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's gripper speed)."""
+        import pybullet
+
+        if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
+            raise OutOfRangeError(
+                f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
+            )
+        speed = self._checked_speed(speed_m_s)
+        physics = self._cell.config.physics
+        for finger in self._fingers:
+            self._client.setJointMotorControl2(
+                self._body,
+                finger,
+                pybullet.POSITION_CONTROL,
+                targetPosition=width_m / 2,
+                maxVelocity=speed / 2,
+                force=physics.finger_open_force_n,
+                positionGain=physics.finger_position_gain,
+            )
+
+    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
+        """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
+        import pybullet
+
+        low, high = GRIPPER_FORCE_RANGE_N
+        if not low <= force_n <= high:
+            raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
+        speed = self._checked_speed(speed_m_s)
+        for finger in self._fingers:
+            self._client.setJointMotorControl2(
+                self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed / 2, force=force_n
+            )
+
+    def width(self) -> float:
+        """Measured opening between the pads in metres."""
+        return float(sum(s[0] for s in self._client.getJointStates(self._body, self._fingers)))
+
+    def is_moving(self) -> bool:
+        """True while either finger moves faster than 1 mm/s."""
+        return any(abs(s[1]) > 1e-3 for s in self._client.getJointStates(self._body, self._fingers))
+
+    def reset(self, width_m: float) -> None:
+        """Put the fingers at rest at an opening (set-up only)."""
+        for finger in self._fingers:
+            self._client.resetJointState(self._body, finger, width_m / 2, 0.0)
+        self.open(width_m)
+
+    def _checked_speed(self, speed_m_s: float | None) -> float:
+        speed = self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
+        low, high = GRIPPER_SPEED_RANGE_M_S
+        if not low <= speed <= high:
+            raise OutOfRangeError(
+                f"gripper speed {speed * 1000:.0f} mm/s is outside {low * 1000:.0f} to {high * 1000:.0f} mm/s"
+            )
+        return speed
+
+
+class SimCamera:
+    """The top RGB-D camera, rendered with pybullet's TinyRenderer (CPU, no display needed)."""
+
+    def __init__(self, cell: WorkCell) -> None:
+        self._cell = cell
+        config = cell.config.camera
+        self._intrinsics = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
+        self._pose_world = config.pose_world()
+        # OpenGL looks down its -z with y up; the OpenCV optical frame looks down +z with y down.
+        flip = np.diag([1.0, -1.0, -1.0, 1.0])
+        self._view_matrix = list(np.linalg.inv(self._pose_world.matrix @ flip).flatten(order="F"))
+        vertical_fov_deg = math.degrees(2.0 * math.atan((config.height_px / 2.0) / self._intrinsics.fy_px))
+        self._projection_matrix = cell.client.computeProjectionMatrixFOV(
+            vertical_fov_deg, config.width_px / config.height_px, config.near_m, config.far_m
+        )
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics:
+        """Pinhole intrinsics of the rendered image."""
+        return self._intrinsics
+
+    @property
+    def pose_world(self) -> Pose:
+        """``T_W_C``, optical frame (x right, y down, z forward)."""
+        return self._pose_world
+
+    def capture(self, with_depth: bool = False) -> CameraFrame:
+        """Render one frame of the world as it is now."""
+        import pybullet
+
+        config = self._cell.config.camera
+        client = self._cell.client
+        _, _, rgba, zbuffer, _ = client.getCameraImage(
+            config.width_px,
+            config.height_px,
+            viewMatrix=self._view_matrix,
+            projectionMatrix=self._projection_matrix,
+            renderer=pybullet.ER_TINY_RENDERER,
+            shadow=0,
+            lightDirection=list(config.light_direction),
+            flags=pybullet.ER_NO_SEGMENTATION_MASK,
+        )
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(config.height_px, config.width_px, 4)[:, :, :3].copy()
+        depth = None
+        if with_depth:
+            z = np.asarray(zbuffer, dtype=np.float64).reshape(config.height_px, config.width_px)
+            near, far = config.near_m, config.far_m
+            depth = (far * near / (far - (far - near) * z)).astype(np.float32)
+        rgb = self._cell.camera_noise.apply(rgb)
+        return CameraFrame(rgb, depth, self._intrinsics, self._pose_world, self._cell.sim_time_s)
