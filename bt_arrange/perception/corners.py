@@ -1,0 +1,245 @@
+"""Sub-pixel corners of a top face.
+
+At 1920x1080 and 70 cm one pixel covers about 0.5 mm of the table and the arrangement
+threshold is 1 mm, so the Douglas-Peucker vertices (whole pixels, and rounded off by the 7x7
+morphology at the corners) are not good enough. The default, :attr:`CornerRefinement.EDGE_LINES`,
+measures each side's edge below a pixel and intersects the four fitted lines:
+
+* A camera integrates light over each pixel, so an edge pixel's colour is a mix
+  ``c * face + (1 - c) * outside`` where ``c`` is the fraction of the pixel the face covers.
+  The mix is linear in RGB; solving it for ``c`` in the chroma plane (RGB minus its grey part)
+  makes any grey neighbour (the table, the white cube sides, the robot) count as "outside"
+  whatever its brightness, and a coloured neighbour is unmixed with its own colour.
+* Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
+  height at the column's centre exactly, whatever the slope (the area under a straight line
+  over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
+* A least-squares line through these points per side, with outliers trimmed, and the corners
+  where adjacent lines meet: the rounded corners of the mask never enter.
+
+``CORNER_SUBPIX`` (``cv2.cornerSubPix`` on the face-coverage image), ``CONTOUR_LINES``
+(``cv2.fitLine`` on the mask's contour) and ``NONE`` remain for comparison; see
+docs/perception.md for the measured accuracy of each.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_arrange.geometry import FloatArray
+
+#: Points (Nx2, pixels) -> undistorted points (Nx2, pixels), for a lens with distortion.
+Undistort = Callable[[FloatArray], FloatArray]
+
+_SQRT2 = np.sqrt(2.0)
+_SQRT6 = np.sqrt(6.0)
+
+
+class CornerRefinement(str, enum.Enum):
+    """How to bring the four corners below a pixel."""
+
+    EDGE_LINES = "edge_lines"
+    CORNER_SUBPIX = "corner_subpix"
+    CONTOUR_LINES = "contour_lines"
+    NONE = "none"
+
+
+def chroma(rgb: NDArray[np.floating] | NDArray[np.uint8]) -> FloatArray:
+    """The chroma plane of RGB (..., 3) -> (..., 2): an orthonormal basis orthogonal to grey.
+
+    Linear, so an anti-aliased mix of two colours stays the same mix of their chromas, and
+    every grey, light or dark, maps to about zero.
+    """
+    x = np.asarray(rgb, dtype=np.float64)
+    r, g, b = x[..., 0], x[..., 1], x[..., 2]
+    return np.stack([(r - g) / _SQRT2, (r + g - 2.0 * b) / _SQRT6], axis=-1)
+
+
+def face_chroma(rgb: NDArray[np.uint8], corners_px: FloatArray) -> FloatArray:
+    """Median chroma of the face, sampled on a grid well inside its four corners."""
+    s = np.linspace(0.2, 0.8, 9)
+    a, b = np.meshgrid(s, s)
+    a, b = a.ravel()[:, None], b.ravel()[:, None]
+    p0, p1, p2, p3 = corners_px
+    points = (1 - a) * (1 - b) * p0 + a * (1 - b) * p1 + a * b * p2 + (1 - a) * b * p3
+    height, width = rgb.shape[:2]
+    u = np.clip(np.round(points[:, 0]).astype(int), 0, width - 1)
+    v = np.clip(np.round(points[:, 1]).astype(int), 0, height - 1)
+    return np.median(chroma(rgb[v, u]), axis=0)
+
+
+def _line_through(p: FloatArray, q: FloatArray) -> FloatArray:
+    """Homogeneous line ``(a, b, c)``, ``a u + b v + c = 0``, through two points."""
+    return np.cross([p[0], p[1], 1.0], [q[0], q[1], 1.0])
+
+
+def _intersect(line_a: FloatArray, line_b: FloatArray) -> FloatArray:
+    point = np.cross(line_a, line_b)
+    return point[:2] / point[2]
+
+
+def _intersect_sides(lines: list[FloatArray]) -> FloatArray:
+    """Corner ``i`` is where side ``i - 1`` (into it) meets side ``i`` (out of it)."""
+    return np.array([_intersect(lines[i - 1], lines[i]) for i in range(4)])
+
+
+def _side_edge_points(
+    rgb: NDArray[np.uint8],
+    p: FloatArray,
+    q: FloatArray,
+    face_centre: FloatArray,
+    face: FloatArray,
+    half_width_px: int,
+    margin_px: float,
+) -> FloatArray:
+    """Sub-pixel points on the edge between corners ``p`` and ``q`` (Nx2), from pixel coverages.
+
+    Works on columns for a side closer to horizontal and on rows otherwise, by swapping the
+    roles of u and v (a transposed view of the image).
+    """
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    if not by_columns:
+        rgb = rgb.transpose(1, 0, 2)
+        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
+    height, width = rgb.shape[:2]
+    length_px = float(np.hypot(*direction))
+    slope = direction[1] / direction[0]
+    # Skip the ends of the side, where the band of pixels would also cross the adjacent sides.
+    margin_u = margin_px * abs(direction[0]) / length_px
+    u_low, u_high = sorted((p[0], q[0]))
+    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
+    if len(u) < 3:
+        return np.empty((0, 2))
+    v_line = p[1] + (u - p[0]) * slope
+    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
+    v_start = np.round(v_line).astype(int) - half_width_px
+    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
+    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
+    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
+    if len(u) < 3:
+        return np.empty((0, 2))
+    x = chroma(rgb[rows, u[:, None]])  # (columns, band, 2)
+    # The outside colour per column from the two band pixels farthest from the face: the
+    # neighbour may change along a side (the table, then a touching cube of another colour).
+    outside = x[:, -2:].mean(axis=1) if face_above else x[:, :2].mean(axis=1)
+    contrast = face[None, :] - outside
+    contrast_sq = np.einsum("ij,ij->i", contrast, contrast)
+    covered = (
+        np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / np.maximum(contrast_sq, 1e-12)[:, None]
+    )
+    # Rows v_start .. v_start + 2h span v_start - 0.5 .. v_start + 2h + 0.5: the covered area
+    # measured from the face's end of the band is the edge's distance from that end.
+    if face_above:
+        v_edge = v_start - 0.5 + covered.sum(axis=1)
+    else:
+        v_edge = v_start + 2 * half_width_px + 0.5 - covered.sum(axis=1)
+    # A column whose neighbour has nearly the face's colour cannot place the edge, and an edge
+    # found outside the band's middle means the band missed the transition.
+    good = (contrast_sq > 0.09 * float(face @ face)) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
+    points = np.column_stack([u[good].astype(float), v_edge[good]])
+    return points if by_columns else points[:, ::-1]
+
+
+def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
+    """Least-squares line through edge points with error in v (columns) or u (rows), trimmed."""
+    if len(points) < 5:
+        return None
+    x, y = (points[:, 0], points[:, 1]) if by_columns else (points[:, 1], points[:, 0])
+    keep = np.ones(len(x), dtype=bool)
+    for _ in range(3):
+        slope, offset = np.polyfit(x[keep], y[keep], 1)
+        residual = np.abs(y - (offset + slope * x))
+        # Trim beyond 3.5 robust sigmas (noise, a touching cube's edge); never below 0.05 px.
+        limit = max(3.5 * 1.4826 * float(np.median(residual[keep])), 0.05)
+        new_keep = residual <= limit
+        if new_keep.sum() < 5 or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    # y = offset + slope * x as a homogeneous line in (u, v).
+    return np.array([slope, -1.0, offset]) if by_columns else np.array([-1.0, slope, offset])
+
+
+def refine_edge_lines(
+    rgb: NDArray[np.uint8],
+    corners_px: FloatArray,
+    undistort: Undistort | None = None,
+    passes: tuple[tuple[int, float], ...] = ((4, 10.0), (3, 7.0)),
+) -> FloatArray | None:
+    """Corners where the four sub-pixel edge lines meet; None when a side has too few points.
+
+    ``corners_px`` (4x2, ordered around the face) need only be within a pixel or two: each pass
+    ``(half_width_px, margin_px)`` re-centres the bands on the previous lines. With ``undistort``
+    the last pass's edge points are undistorted before the lines are fitted, so the corners
+    come back in undistorted pixel coordinates.
+    """
+    corners = np.asarray(corners_px, dtype=float).reshape(4, 2)
+    face = face_chroma(rgb, corners)
+    for index, (half_width_px, margin_px) in enumerate(passes):
+        centre = corners.mean(axis=0)
+        lines = []
+        for k in range(4):
+            p, q = corners[k], corners[(k + 1) % 4]
+            points = _side_edge_points(rgb, p, q, centre, face, half_width_px, margin_px)
+            by_columns = abs(q[0] - p[0]) >= abs(q[1] - p[1])
+            if undistort is not None and index == len(passes) - 1 and len(points):
+                points = undistort(points)
+            line = _fit_side(points, by_columns)
+            if line is None:
+                return None
+            lines.append(line)
+        corners = _intersect_sides(lines)
+    return corners
+
+
+def refine_corner_subpix(rgb: NDArray[np.uint8], corners_px: FloatArray, window_px: int = 5) -> FloatArray:
+    """``cv2.cornerSubPix`` on the face-coverage image (1 on the face, 0 on grey) of a crop."""
+    corners = np.asarray(corners_px, dtype=float).reshape(4, 2)
+    face = face_chroma(rgb, corners)
+    margin = 2 * window_px + 4
+    height, width = rgb.shape[:2]
+    x0, y0 = np.maximum(np.floor(corners.min(axis=0)).astype(int) - margin, 0)
+    x1, y1 = np.minimum(np.ceil(corners.max(axis=0)).astype(int) + margin + 1, [width, height])
+    coverage = (chroma(rgb[y0:y1, x0:x1]) @ face / float(face @ face)).astype(np.float32)
+    start = (corners - [x0, y0]).astype(np.float32).reshape(-1, 1, 2)
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-4)
+    refined = cv2.cornerSubPix(coverage, start, (window_px, window_px), (-1, -1), criteria)
+    return refined.reshape(4, 2).astype(float) + [x0, y0]
+
+
+def refine_contour_lines(
+    contour_px: NDArray[np.integer], corners_px: FloatArray, margin_px: float = 8.0
+) -> FloatArray:
+    """``cv2.fitLine`` through the mask contour's points of each side, intersected.
+
+    The contour runs through the outermost mask pixels, half a pixel inside the edge a 50 %
+    threshold would give, so each line is moved out by half a pixel.
+    """
+    corners = np.asarray(corners_px, dtype=float).reshape(4, 2)
+    contour = np.asarray(contour_px, dtype=float).reshape(-1, 2)
+    centre = corners.mean(axis=0)
+    lines = []
+    for k in range(4):
+        p, q = corners[k], corners[(k + 1) % 4]
+        direction = (q - p) / np.linalg.norm(q - p)
+        normal = np.array([-direction[1], direction[0]])
+        along = (contour - p) @ direction
+        across = (contour - p) @ normal
+        side = (along > margin_px) & (along < np.linalg.norm(q - p) - margin_px) & (np.abs(across) < 3.0)
+        points = contour[side]
+        if len(points) < 2:
+            lines.append(_line_through(p, q))
+            continue
+        vx, vy, x0, y0 = cv2.fitLine(points.astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
+        outward = (
+            np.array([vy, -vx])
+            if np.array([vy, -vx]) @ (np.array([x0, y0]) - centre) > 0
+            else np.array([-vy, vx])
+        )
+        start = np.array([x0, y0]) + 0.5 * outward
+        lines.append(_line_through(start, start + [vx, vy]))
+    return _intersect_sides(lines)

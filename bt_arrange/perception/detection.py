@@ -1,0 +1,414 @@
+"""The cube detector: a camera frame and a colour in, a :class:`Detection` out.
+
+Outcomes are values, never exceptions: a behaviour reads ``status`` and puts ``reason`` into
+its feedback message. Only configuration mistakes raise
+:class:`~bt_arrange.errors.PerceptionError` (a colour not in the table, an image that does not
+match its intrinsics).
+
+The detector is a pure function of the frame: it keeps no state between calls and knows
+nothing of the simulator.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_arrange.errors import PerceptionError
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.perception.corners import (
+    CornerRefinement,
+    Undistort,
+    refine_contour_lines,
+    refine_corner_subpix,
+    refine_edge_lines,
+)
+from bt_arrange.perception.pose import (
+    cube_centre_in_world,
+    expected_face_area_px,
+    pixel_on_plane,
+    solve_face_pose,
+    tilt_deg,
+)
+from bt_arrange.perception.segmentation import (
+    PAPER_KERNEL_PX,
+    Blob,
+    approximate_quadrilateral,
+    clean_mask,
+    colour_mask,
+    find_blobs,
+    order_corners,
+    polygon_area_px,
+    to_hsv,
+)
+from bt_arrange.robot import CameraFrame, CameraIntrinsics
+
+
+class DetectionStatus(str, enum.Enum):
+    """What a detection of one colour found."""
+
+    #: Exactly one whole face of the colour: ``pose_world`` is set.
+    FOUND = "found"
+    #: No blob of the colour large enough to be a face (in the region of interest, if one was given).
+    NOT_FOUND = "not_found"
+    #: More than one blob of the colour, or one blob as large as several faces.
+    AMBIGUOUS = "ambiguous"
+    #: One blob that is not a whole face: cut by the image border, covered, or not a 5 cm square.
+    PARTIAL = "partial"
+
+
+@dataclass(frozen=True)
+class WorldRegion:
+    """An axis-aligned rectangle on the table, in world metres: a region of interest."""
+
+    x_min_m: float
+    x_max_m: float
+    y_min_m: float
+    y_max_m: float
+
+    def __post_init__(self) -> None:
+        if not (self.x_min_m < self.x_max_m and self.y_min_m < self.y_max_m):
+            raise PerceptionError(f"empty region of interest: {self}")
+
+    @classmethod
+    def around(cls, x_m: float, y_m: float, half_size_m: float) -> WorldRegion:
+        """A square region of ``2 * half_size_m`` centred at ``(x, y)``."""
+        return cls(x_m - half_size_m, x_m + half_size_m, y_m - half_size_m, y_m + half_size_m)
+
+    def contains(self, x_m: float, y_m: float) -> bool:
+        """True when ``(x, y)`` lies inside the region (borders included)."""
+        return self.x_min_m <= x_m <= self.x_max_m and self.y_min_m <= y_m <= self.y_max_m
+
+
+@dataclass(frozen=True)
+class DetectorConfig:
+    """Everything the detector assumes about the cubes and how strict it is.
+
+    Areas are fractions of the expected image area of one top face, derived per blob from the
+    intrinsics, the camera pose and the height of the top faces (``table_z_m + cube_edge_m``).
+    """
+
+    cube_edge_m: float = 0.05
+    #: World z of the table top; the top faces lie one edge above it.
+    table_z_m: float = 0.0
+    #: The paper's 7x7 closing and opening, applied at full resolution.
+    kernel_px: int = PAPER_KERNEL_PX
+    #: Blobs smaller than this are specks, not cubes, and are ignored.
+    min_area_fraction: float = 0.25
+    #: A whole, uncovered face: anything outside is PARTIAL.
+    face_area_fraction_range: tuple[float, float] = (0.8, 1.25)
+    #: A single blob this large holds several faces of one colour: AMBIGUOUS.
+    ambiguous_area_fraction: float = 1.6
+    #: Each side of the polygon, relative to the expected edge length in pixels.
+    side_length_fraction_range: tuple[float, float] = (0.8, 1.2)
+    #: A larger RMS reprojection error means the corners are not those of a 5 cm square.
+    max_reprojection_error_px: float = 1.0
+    corner_refinement: CornerRefinement = CornerRefinement.EDGE_LINES
+    #: The blob search runs on the image downscaled so that a face is about this wide.
+    coarse_face_edge_px: float = 24.0
+
+    @property
+    def top_z_m(self) -> float:
+        """World z of the cubes' top faces."""
+        return self.table_z_m + self.cube_edge_m
+
+
+@dataclass(frozen=True)
+class Detection:
+    """The outcome of looking for one colour in one frame.
+
+    ``pose_world`` is ``T_W_O`` of the cube's centre (set only when FOUND), its yaw folded into
+    ``[-45, 45)`` degrees. ``corners_px`` are the refined top-face corners (undistorted pixel
+    coordinates), ``reprojection_error_px`` the RMS PnP residual, ``area_px`` the blob's area
+    and ``expected_area_px`` a face's expected area there, ``tilt_deg`` the angle between the
+    cube's up axis and the world's. ``candidates_xy_m`` lists where on the table the blobs of
+    this colour were (the top-face plane), e.g. the two of an AMBIGUOUS outcome.
+    """
+
+    colour: str
+    status: DetectionStatus
+    reason: str
+    pose_world: Pose | None = None
+    corners_px: FloatArray | None = None
+    reprojection_error_px: float | None = None
+    area_px: float | None = None
+    expected_area_px: float | None = None
+    tilt_deg: float | None = None
+    candidates_xy_m: tuple[tuple[float, float], ...] = field(default_factory=tuple)
+
+    @property
+    def found(self) -> bool:
+        """True when the cube was found and ``pose_world`` is set."""
+        return self.status is DetectionStatus.FOUND
+
+    @property
+    def planar(self) -> PlanarPose | None:
+        """x, y and folded yaw of the cube's centre on the table, when found."""
+        return None if self.pose_world is None else self.pose_world.planar()
+
+
+@dataclass(frozen=True)
+class _View:
+    """One frame, prepared once for any number of colours."""
+
+    rgb: NDArray[np.uint8]
+    intrinsics: CameraIntrinsics
+    T_W_C: Pose
+    scale: int
+    hsv_small: NDArray[np.uint8]
+    min_blob_area_px: float
+    undistort: Undistort | None
+
+
+def _format_xy(points: Iterable[tuple[float, float]]) -> str:
+    return ", ".join(f"({x:.3f}, {y:.3f})" for x, y in points)
+
+
+class CubeDetector:
+    """Finds coloured cubes' top faces in a camera frame and estimates their poses.
+
+    ``detect(frame, "red")`` looks for one colour, ``detect_all(frame)`` for every colour of the
+    table; both accept a :class:`WorldRegion` to look only at blobs whose centre lies inside.
+    """
+
+    def __init__(
+        self, colours: ColourTable = DEFAULT_COLOUR_TABLE, config: DetectorConfig | None = None
+    ) -> None:
+        self.colours = colours
+        self.config = config or DetectorConfig()
+
+    def detect(self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None) -> Detection:
+        """Look for the cube of ``colour``; raises PerceptionError for a colour not in the table."""
+        colour_range = self.colours[colour]
+        return self._detect(self._prepare(frame), colour_range, roi)
+
+    def detect_all(self, frame: CameraFrame, roi: WorldRegion | None = None) -> dict[str, Detection]:
+        """Look for the cube of every colour in the table, in table order."""
+        view = self._prepare(frame)
+        return {name: self._detect(view, colour_range, roi) for name, colour_range in self.colours.items()}
+
+    # -- stages ----------------------------------------------------------------------------
+
+    def _prepare(self, frame: CameraFrame) -> _View:
+        rgb, intrinsics = frame.rgb, frame.intrinsics
+        if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
+            raise PerceptionError(f"expected an RGB uint8 image (H x W x 3), got {rgb.dtype} {rgb.shape}")
+        if rgb.shape[:2] != (intrinsics.height_px, intrinsics.width_px):
+            raise PerceptionError(
+                f"image is {rgb.shape[1]}x{rgb.shape[0]} px but the intrinsics say "
+                f"{intrinsics.width_px}x{intrinsics.height_px} px"
+            )
+        T_W_C = frame.camera_pose_world
+        config = self.config
+        centre_px = np.array([intrinsics.cx_px, intrinsics.cy_px])
+        on_table = pixel_on_plane(intrinsics, T_W_C, centre_px, config.top_z_m)
+        if on_table is None:
+            raise PerceptionError(
+                f"the camera at {T_W_C} does not look down at the table plane z = {config.top_z_m} m"
+            )
+        # The smallest face anywhere in the image sets the speck threshold; the image corners
+        # see the table farthest away.
+        height, width = rgb.shape[:2]
+        areas = []
+        for pixel in ([0, 0], [width - 1, 0], [0, height - 1], [width - 1, height - 1], centre_px):
+            point = pixel_on_plane(intrinsics, T_W_C, np.asarray(pixel, dtype=float), config.top_z_m)
+            if point is not None:
+                areas.append(expected_face_area_px(intrinsics, T_W_C, point, config.cube_edge_m))
+        centre_edge_px = math.sqrt(expected_face_area_px(intrinsics, T_W_C, on_table, config.cube_edge_m))
+        scale = int(np.clip(centre_edge_px // config.coarse_face_edge_px, 1, 8))
+        # Downscale by an exact integer factor, so that small and full-resolution pixels align.
+        small = rgb[: height // scale * scale, : width // scale * scale]
+        if scale > 1:
+            small = cv2.resize(small, (width // scale, height // scale), interpolation=cv2.INTER_AREA)
+        undistort = None
+        if any(abs(k) > 0 for k in intrinsics.distortion):
+            camera_matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=float)
+
+            def undistort(points: FloatArray) -> FloatArray:
+                pts = np.asarray(points, dtype=np.float64).reshape(-1, 1, 2)
+                return cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix).reshape(-1, 2)
+
+        return _View(
+            rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort
+        )
+
+    def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+        config = self.config
+        # The paper's 7x7 kernel is meant for full resolution: scale it with the image.
+        coarse_kernel_px = max(3, round(config.kernel_px / view.scale) | 1)
+        mask = clean_mask(colour.mask(view.hsv_small), coarse_kernel_px)
+        candidates: list[tuple[Blob, FloatArray, float]] = []
+        outside_roi = 0
+        for blob in find_blobs(mask, view.scale, view.min_blob_area_px):
+            on_plane = pixel_on_plane(
+                view.intrinsics, view.T_W_C, np.asarray(blob.centroid_px), config.top_z_m
+            )
+            if on_plane is None:
+                continue
+            expected_px = expected_face_area_px(view.intrinsics, view.T_W_C, on_plane, config.cube_edge_m)
+            if blob.area_px < config.min_area_fraction * expected_px:
+                continue
+            if roi is not None and not roi.contains(on_plane[0], on_plane[1]):
+                outside_roi += 1
+                continue
+            candidates.append((blob, on_plane, expected_px))
+        xy = tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
+        name = colour.name
+
+        if not candidates:
+            where = (
+                "in the image" if roi is None else f"inside the region of interest ({outside_roi} outside)"
+            )
+            return Detection(
+                name,
+                DetectionStatus.NOT_FOUND,
+                f"no {name} blob of at least {config.min_area_fraction:.0%} of a face {where}",
+            )
+        if len(candidates) > 1:
+            return Detection(
+                name,
+                DetectionStatus.AMBIGUOUS,
+                f"{len(candidates)} {name} blobs, at {_format_xy(xy)} m; expected one",
+                candidates_xy_m=xy,
+            )
+        blob, _, expected_px = candidates[0]
+        return self._measure(view, colour, blob, expected_px, xy)
+
+    def _measure(
+        self,
+        view: _View,
+        colour: ColourRange,
+        blob: Blob,
+        expected_px: float,
+        xy: tuple[tuple[float, float], ...],
+    ) -> Detection:
+        """The paper's pipeline at full resolution on a crop around the one blob."""
+        config = self.config
+        name = colour.name
+        height, width = view.rgb.shape[:2]
+        edge_px = math.sqrt(expected_px)
+
+        def partial(reason: str, **values: object) -> Detection:
+            return Detection(
+                name,
+                DetectionStatus.PARTIAL,
+                f"{name} {reason}",
+                expected_area_px=expected_px,
+                candidates_xy_m=xy,
+                **values,  # type: ignore[arg-type]
+            )
+
+        # The downscaled blob's box is accurate to a few pixels: add room for the sides.
+        margin = int(max(12, 0.25 * edge_px)) + view.scale
+        x, y, w, h = blob.bbox_px
+        x0, y0 = max(0, x - margin), max(0, y - margin)
+        x1, y1 = min(width, x + w + margin), min(height, y + h + margin)
+        mask = colour_mask(view.rgb[y0:y1, x0:x1], colour, config.kernel_px)
+        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        if not contours:
+            return partial("blob vanished at full resolution after the closing and opening")
+        # The crop may also catch a piece of another blob: keep the one at this blob's centre.
+        centre = (blob.centroid_px[0] - x0, blob.centroid_px[1] - y0)
+        contour = max(
+            contours, key=lambda c: (cv2.pointPolygonTest(c, centre, False) >= 0, cv2.contourArea(c))
+        )
+        area_px = float(cv2.contourArea(contour))
+        contour = contour.reshape(-1, 2) + np.array([x0, y0])
+
+        touches_border = (
+            contour[:, 0].min() <= 0
+            or contour[:, 1].min() <= 0
+            or contour[:, 0].max() >= width - 1
+            or contour[:, 1].max() >= height - 1
+        )
+        if touches_border:
+            return partial("face is cut by the image border", area_px=area_px)
+        ratio = area_px / expected_px
+        if ratio > config.ambiguous_area_fraction:
+            return Detection(
+                name,
+                DetectionStatus.AMBIGUOUS,
+                f"one {name} blob as large as {ratio:.1f} faces: touching cubes of one colour?",
+                area_px=area_px,
+                expected_area_px=expected_px,
+                candidates_xy_m=xy,
+            )
+        low, high = config.face_area_fraction_range
+        if not low <= ratio <= high:
+            return partial(
+                f"blob is {ratio:.0%} of a face: covered, or not a whole top face", area_px=area_px
+            )
+        polygon = approximate_quadrilateral(contour)
+        if len(polygon) != 4:
+            return partial(f"outline has {len(polygon)} corners, not 4: covered?", area_px=area_px)
+        if not cv2.isContourConvex(polygon.reshape(-1, 1, 2)):
+            return partial("outline is not convex: covered?", area_px=area_px)
+        coarse = order_corners(polygon)
+        sides_px = np.linalg.norm(coarse - np.roll(coarse, -1, axis=0), axis=1)
+        low, high = config.side_length_fraction_range
+        if not (low * edge_px <= sides_px.min() and sides_px.max() <= high * edge_px):
+            return partial(
+                f"outline sides {sides_px.min():.0f}..{sides_px.max():.0f} px, expected {edge_px:.0f}: not a square face?",
+                area_px=area_px,
+            )
+        # Polygon and contour must agree, or Douglas-Peucker forced a quadrilateral on a shape
+        # that is not one (a face with a corner covered).
+        if abs(polygon_area_px(polygon) - area_px) > 0.06 * area_px:
+            return partial("outline is not a quadrilateral: covered?", area_px=area_px)
+
+        corners, undistorted = self._refine(view, coarse, contour)
+        if corners is None:
+            return partial("edges could not be measured below a pixel", area_px=area_px)
+        distortion = None if undistorted else np.asarray(view.intrinsics.distortion, dtype=float)
+        face = solve_face_pose(corners, view.intrinsics.matrix, config.cube_edge_m, distortion)
+        if face is None:
+            return partial("corners give no pose (PnP failed)", area_px=area_px, corners_px=corners)
+        if face.reprojection_error_px > config.max_reprojection_error_px:
+            return partial(
+                f"corners are not a {config.cube_edge_m * 100:.0f} cm square "
+                f"(reprojection error {face.reprojection_error_px:.2f} px)",
+                area_px=area_px,
+                corners_px=corners,
+                reprojection_error_px=face.reprojection_error_px,
+            )
+        pose = cube_centre_in_world(view.T_W_C, face.T_C_F, config.cube_edge_m)
+        return Detection(
+            name,
+            DetectionStatus.FOUND,
+            f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, yaw={math.degrees(pose.yaw_rad):.2f} deg",
+            pose_world=pose,
+            corners_px=corners,
+            reprojection_error_px=face.reprojection_error_px,
+            area_px=area_px,
+            expected_area_px=expected_px,
+            tilt_deg=tilt_deg(pose),
+            candidates_xy_m=xy,
+        )
+
+    def _refine(
+        self, view: _View, coarse: FloatArray, contour: NDArray[np.int32]
+    ) -> tuple[FloatArray | None, bool]:
+        """Sub-pixel corners, and whether they are already undistorted."""
+        method = self.config.corner_refinement
+        if method is CornerRefinement.EDGE_LINES:
+            corners = refine_edge_lines(view.rgb, coarse, view.undistort)
+            # The refined corners must stay near the coarse ones; far away, a band fitted a
+            # neighbour's edge instead.
+            if (
+                corners is not None
+                and np.abs(corners - coarse).max() > 6.0 + (view.undistort is not None) * 20.0
+            ):
+                return None, True
+            return corners, True
+        if method is CornerRefinement.CORNER_SUBPIX:
+            return refine_corner_subpix(view.rgb, coarse), False
+        if method is CornerRefinement.CONTOUR_LINES:
+            return refine_contour_lines(contour, coarse), False
+        return coarse, False

@@ -1,0 +1,123 @@
+"""Segmentation: colour masks, blobs, contours and the top face's four corners.
+
+The paper's steps: an HSV threshold per colour, a 7x7 closing and opening, contours by
+Suzuki-Abe (``cv2.findContours``), the polygon by Douglas-Peucker (``cv2.approxPolyDP``), and
+the corners in a sorted order. For speed the search for blobs runs on a downscaled image, and
+the paper's steps then run at full resolution on a crop around each blob.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_arrange.geometry import FloatArray
+from bt_arrange.perception.colours import ColourRange, Mask
+
+#: The paper's structuring element for the closing and the opening, at full resolution.
+PAPER_KERNEL_PX = 7
+
+
+def to_hsv(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """8-bit HSV (hue 0..179) of an RGB image."""
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+
+
+def clean_mask(mask: Mask, kernel_px: int = PAPER_KERNEL_PX) -> Mask:
+    """Close small holes, then open away specks, with a square ``kernel_px`` structuring element."""
+    if kernel_px <= 1:
+        return mask
+    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (kernel_px, kernel_px))
+    closed = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
+    return cv2.morphologyEx(closed, cv2.MORPH_OPEN, kernel)
+
+
+def colour_mask(rgb: NDArray[np.uint8], colour: ColourRange, kernel_px: int = PAPER_KERNEL_PX) -> Mask:
+    """The paper's segmentation of one colour: HSV threshold, then closing and opening."""
+    return clean_mask(colour.mask(to_hsv(rgb)), kernel_px)
+
+
+@dataclass(frozen=True)
+class Blob:
+    """A connected region of one colour, in full-resolution pixel coordinates.
+
+    ``bbox_px`` is ``(x, y, width, height)``; ``area_px`` is the pixel count scaled back from
+    the downscaled search image, so it is approximate.
+    """
+
+    area_px: float
+    centroid_px: tuple[float, float]
+    bbox_px: tuple[int, int, int, int]
+
+
+def find_blobs(mask: Mask, scale: int, min_area_px: float) -> list[Blob]:
+    """Connected regions of a (downscaled) mask at least ``min_area_px`` large at full resolution.
+
+    ``scale`` is the downscaling factor of ``mask``: coordinates and areas are mapped back to
+    the full-resolution image. Blobs are returned largest first.
+    """
+    count, _, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    blobs = []
+    for label in range(1, count):
+        x, y, w, h, area = (int(v) for v in stats[label])
+        area_px = float(area) * scale * scale
+        if area_px < min_area_px:
+            continue
+        cu, cv = centroids[label]
+        # A downscaled pixel (i, j) covers full-resolution pixels scale*i .. scale*i + scale - 1.
+        centroid = ((cu + 0.5) * scale - 0.5, (cv + 0.5) * scale - 0.5)
+        blobs.append(Blob(area_px, centroid, (x * scale, y * scale, w * scale, h * scale)))
+    blobs.sort(key=lambda b: -b.area_px)
+    return blobs
+
+
+def largest_contour(mask: Mask) -> NDArray[np.int32] | None:
+    """The outer contour (Suzuki-Abe) with the largest area, as an Nx2 array, or None."""
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return None
+    contour = max(contours, key=cv2.contourArea)
+    return np.asarray(contour, dtype=np.int32).reshape(-1, 2)
+
+
+def approximate_quadrilateral(
+    contour: NDArray[np.int32], epsilon_fractions: tuple[float, ...] = (0.02, 0.03, 0.04, 0.05)
+) -> NDArray[np.int32]:
+    """Douglas-Peucker polygon of a contour with the fewest vertices down to four.
+
+    Tries growing tolerances (fractions of the perimeter) and stops at the first polygon with
+    at most four vertices; a square face gives four, a covered or cut face may give more or
+    fewer, which the caller reports.
+    """
+    perimeter_px = cv2.arcLength(contour.reshape(-1, 1, 2), True)
+    polygon = contour
+    for fraction in epsilon_fractions:
+        polygon = cv2.approxPolyDP(contour.reshape(-1, 1, 2), fraction * perimeter_px, True).reshape(-1, 2)
+        if len(polygon) <= 4:
+            break
+    return np.asarray(polygon, dtype=np.int32)
+
+
+def order_corners(corners_px: NDArray[np.floating] | NDArray[np.integer]) -> FloatArray:
+    """Four corners in a fixed order: clockwise on screen, starting nearest the image's top left.
+
+    Clockwise on screen (x right, y down) is the order of the object points of
+    ``cv2.SOLVEPNP_IPPE_SQUARE`` for a square seen from the front; which corner comes first only
+    turns the face frame by a multiple of 90 degrees, which the cube's symmetry makes irrelevant.
+    """
+    points = np.asarray(corners_px, dtype=float).reshape(4, 2)
+    centre = points.mean(axis=0)
+    # Angles measured in image coordinates grow clockwise on screen.
+    angles = np.arctan2(points[:, 1] - centre[1], points[:, 0] - centre[0])
+    points = points[np.argsort(angles)]
+    start = int(np.argmin(points[:, 0] + points[:, 1]))
+    return np.roll(points, -start, axis=0)
+
+
+def polygon_area_px(polygon_px: NDArray[np.floating] | NDArray[np.integer]) -> float:
+    """Unsigned area of a polygon (shoelace), in square pixels."""
+    p = np.asarray(polygon_px, dtype=float).reshape(-1, 2)
+    return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))
