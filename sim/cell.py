@@ -9,21 +9,25 @@ see the world through the camera, like the robot in the paper.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import sys
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 
 import numpy as np
 
 from bt_arrange.geometry import Pose, fold_yaw
+from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.robot import Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
 
-#: Joint vector the arm starts in: gripper straight down, TCP high above the table's near edge,
-#: out of the top camera's view of the table.
-HOME_Q = np.array([0.0, -1.9, 1.9, -1.5708, -1.5708, 0.0])
+#: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
+HOME_Q = DEFAULT_HOME_Q
 
 
 @dataclass(frozen=True)
@@ -91,6 +95,19 @@ class CellConfig:
     table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
 
 
+@contextlib.contextmanager
+def _stdout_to_stderr() -> Iterator[None]:
+    """Send C-level stdout to stderr: pybullet prints ``argv[0]=`` on connect, which would spoil ``--json``."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def robot_urdf_path() -> str:
     """Path of the UR5 + 2F-85 description shipped with bt_arrange."""
     return str(resources.files("bt_arrange.descriptions") / "ur5_2f85.urdf")
@@ -119,7 +136,8 @@ class WorkCell:
         self.config = config or CellConfig()
         physics = self.config.physics
         self._substeps = physics.substeps
-        self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        with _stdout_to_stderr():
+            self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         self.client.setGravity(0.0, 0.0, -physics.gravity_m_s2)
         self.client.setPhysicsEngineParameter(
             fixedTimeStep=physics.time_step_s, numSolverIterations=physics.solver_iterations

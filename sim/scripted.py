@@ -1,0 +1,121 @@
+"""A scripted pick and place steered by ground truth: a yardstick for the cell, not the task.
+
+The benchmark of the work cell and its integration tests use it to measure what the arm, the
+gripper and the physics can do before perception enters. The behaviours of
+``bt_arrange.behaviours`` do the same steps tick by tick from camera poses instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bt_arrange.motion import (
+    ArmKinematics,
+    CartesianLimits,
+    JointLimits,
+    Motion,
+    MotionPlanner,
+    gripper_down_pose,
+    nearest_symmetric_yaw,
+)
+from bt_arrange_sim.cell import WorkCell
+from bt_arrange_sim.objects import CUBE_EDGE_M
+
+
+@dataclass(frozen=True)
+class GraspSettings:
+    """Heights, widths and forces of a pick and place of a 5 cm cube (metres, newtons, seconds)."""
+
+    approach_height_m: float = 0.12
+    grasp_height_m: float = CUBE_EDGE_M / 2
+    #: The held cube is let go this far above resting: the TCP height error plus a little.
+    release_clearance_m: float = 0.0005
+    grip_force_n: float = 40.0
+    open_width_m: float = 0.075
+    #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
+    grasp_width_tolerance_m: float = 0.003
+    settle_s: float = 0.15
+    gripper_timeout_s: float = 2.0
+
+
+@dataclass
+class PickPlaceResult:
+    """What one scripted pick and place measured (ground truth; the robot saw none of it)."""
+
+    grasped: bool
+    grip_width_m: float
+    sim_seconds: float
+
+
+class ScriptedPickPlace:
+    """Drives the cell through approach, descend, close, lift, carry, lower, open, retreat."""
+
+    def __init__(
+        self,
+        cell: WorkCell,
+        settings: GraspSettings | None = None,
+        joint_limits: JointLimits | None = None,
+        cartesian_limits: CartesianLimits | None = None,
+    ) -> None:
+        self.cell = cell
+        self.settings = settings or GraspSettings()
+        self.kinematics = ArmKinematics()
+        self.planner = MotionPlanner(
+            self.kinematics,
+            joint_limits or JointLimits(),
+            cartesian_limits or CartesianLimits(),
+            cell.config.physics.control_period_s,
+        )
+
+    def run(self, motion: Motion) -> None:
+        """Step the world until the motion is done and the arm has settled."""
+        arm = self.cell.arm
+        while not motion.done:
+            setpoint = motion.step()
+            arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
+            self.cell.step()
+        self.wait(self.settings.settle_s)
+
+    def wait(self, seconds: float) -> None:
+        """Let the world run with the current commands."""
+        self.cell.settle(seconds)
+
+    def wait_for_gripper(self) -> None:
+        """Step until the fingers stop (or the timeout passes)."""
+        period = self.cell.config.physics.control_period_s
+        self.cell.step(3)
+        waited = 0.0
+        while self.cell.gripper.is_moving() and waited < self.settings.gripper_timeout_s:
+            self.cell.step()
+            waited += period
+
+    def pick(self, x_m: float, y_m: float, yaw_rad: float) -> PickPlaceResult:
+        """Grasp a cube resting at (x, y, yaw) and lift it to the approach height."""
+        s = self.settings
+        start = self.cell.clock.now()
+        arm, gripper = self.cell.arm, self.cell.gripper
+        yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
+        gripper.open(s.open_width_m)
+        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        self.wait_for_gripper()
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.grasp_height_m, yaw)))
+        gripper.close(s.grip_force_n)
+        self.wait_for_gripper()
+        width = gripper.width()
+        grasped = width > CUBE_EDGE_M - s.grasp_width_tolerance_m
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        return PickPlaceResult(grasped, width, self.cell.clock.now() - start)
+
+    def place(self, x_m: float, y_m: float, yaw_rad: float) -> float:
+        """Carry the held cube above (x, y), lower it to rest, open and retreat; returns sim seconds."""
+        s = self.settings
+        start = self.cell.clock.now()
+        arm, gripper = self.cell.arm, self.cell.gripper
+        yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
+        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        release_z = s.grasp_height_m + s.release_clearance_m
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, release_z, yaw)))
+        gripper.open(s.open_width_m)
+        self.wait_for_gripper()
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        return self.cell.clock.now() - start

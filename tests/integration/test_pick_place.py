@@ -1,0 +1,51 @@
+"""A headless pick and place in the pybullet cell, steered by ground truth."""
+
+import math
+
+import pytest
+
+from bt_arrange_sim import CUBE_EDGE_M, WorkCell
+from bt_arrange_sim.scripted import ScriptedPickPlace
+
+
+@pytest.fixture
+def cell_with_cube():
+    with WorkCell() as cell:
+        cell.add_cube("blue", 0.42, 0.12, 0.35)
+        cell.settle(0.3)
+        yield cell
+
+
+def test_pick_and_place_lands_within_a_fraction_of_a_millimetre(cell_with_cube):
+    cell = cell_with_cube
+    script = ScriptedPickPlace(cell)
+    pick = script.pick(*cell.cube_planar_truth("blue"))
+    assert pick.grasped
+    assert pick.grip_width_m == pytest.approx(CUBE_EDGE_M, abs=5e-4)
+    assert cell.cube_pose_truth("blue").z_m > 0.08, "the cube was lifted with the gripper"
+    script.place(0.55, -0.10, -0.2)
+    x, y, _ = cell.cube_planar_truth("blue")
+    assert math.hypot(x - 0.55, y + 0.10) < 0.5e-3
+    assert cell.cube_pose_truth("blue").z_m == pytest.approx(CUBE_EDGE_M / 2, abs=1e-3)
+    assert not cell.cube_in_gripper_truth("blue")
+
+
+def test_the_grasp_is_friction_opening_mid_air_drops_the_cube(cell_with_cube):
+    cell = cell_with_cube
+    script = ScriptedPickPlace(cell)
+    assert script.pick(*cell.cube_planar_truth("blue")).grasped
+    assert cell.cube_in_gripper_truth("blue")
+    held_z = cell.cube_pose_truth("blue").z_m
+    cell.gripper.open(0.080)
+    cell.settle(1.0)
+    assert not cell.cube_in_gripper_truth("blue")
+    assert held_z > 0.08
+    assert cell.cube_pose_truth("blue").z_m < CUBE_EDGE_M  # on the table (it may have tipped over)
+
+
+def test_closing_on_nothing_is_a_failed_grasp():
+    with WorkCell() as cell:
+        script = ScriptedPickPlace(cell)
+        pick = script.pick(0.5, 0.0, 0.0)
+        assert not pick.grasped
+        assert pick.grip_width_m < 0.005
