@@ -13,7 +13,7 @@ or for the two-finger gripper, the one nearest the wrist's current yaw (``neares
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -48,12 +48,14 @@ CUBE_SYMMETRY_RAD = math.pi / 2
 GRIPPER_SYMMETRY_RAD = math.pi
 
 #: The home configuration: gripper pointing straight down at TCP (0.25, 0.0, 0.40) m, closing axis
-#: along world -y (yaw -90 deg), elbow up and behind the base (about (-0.20, 0.11, 0.45) m).
-#: Chosen to stay out of a top camera at (0.5, 0, 0.7) m looking down with a 70 x 43 deg field of
-#: view, in either orientation of the image: every corner of the gripper body and pads keeps at least
-#: 12 mm outside the field (at z = 0.35 m the gripper would reach 2 cm into it), and the links stay
-#: further out. With the closing axis along y the gripper body (12 cm long along its closing axis)
-#: extends only 2.5 cm towards the camera. wrist_2 is at -pi/2, wrist_3 as near zero as this yaw allows.
+#: along world -y (yaw -90 deg), elbow up and behind the base (at about (-0.20, 0.11, 0.45) m).
+#: Chosen to keep out of a top camera at (0.5, 0, 0.7) m looking down with a 70 x 43 deg field of
+#: view, whichever way the image is turned: every corner of the gripper body and pads stays at least
+#: 15 mm outside the field (at TCP z = 0.35 m it would reach 2 cm into it), and the axes of the
+#: forearm and wrist links at least 11 cm. With the closing axis along y, the gripper body (12 cm
+#: along its closing axis) reaches only 2.5 cm towards the camera. Only the shoulder, which no joint
+#: vector moves, sits near the field's edge when the 70 deg side lies along x.
+#: wrist_2 is at -pi/2, and wrist_3 as near zero as this yaw allows.
 DEFAULT_HOME_Q: FloatArray = np.array(
     [-0.451815968962, -2.126117167939, 1.682788359902, -1.127467518758, -1.570796326795, -0.451815968962]
 )
@@ -87,9 +89,7 @@ def gripper_down_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float = 0.0) 
     return Pose.from_rotation([x_m, y_m, z_m], gripper_down_rotation(yaw_rad))
 
 
-def nearest_symmetric_yaw(
-    yaw_rad: float, reference_yaw_rad: float, symmetry_rad: float = CUBE_SYMMETRY_RAD
-) -> float:
+def nearest_symmetric_yaw(yaw_rad: float, reference_yaw_rad: float, symmetry_rad: float = CUBE_SYMMETRY_RAD) -> float:
     """Among ``yaw + k * symmetry`` the one nearest ``reference_yaw_rad`` (e.g. the wrist's current yaw).
 
     Use ``CUBE_SYMMETRY_RAD`` to grasp or push a cube (any of its four faces will do) and
@@ -222,27 +222,7 @@ class ArmKinematics:
         centre (fixed by the target pose) lies within the arm's reach of the shoulder; and it lies
         at least the plane offset (d4) from the base axis, which no configuration can undercut.
         """
-        z_m = target.z_m
-        if z_m < self.min_tcp_z_m:
-            raise UnreachableError(
-                f"target {target!r} is below the table: TCP z {z_m:.4f} m < minimum {self.min_tcp_z_m:.4f} m "
-                f"(pad bottoms {PAD_HALF_HEIGHT_M * 1e3:.2f} mm below the TCP, table top {self.table_top_z_m:.4f} m, "
-                f"clearance {self.table_clearance_m * 1e3:.1f} mm)"
-            )
-        t_base = self._to_base(target)
-        wrist_centre = t_base[:3, :3] @ self._wrist_centre_in_tcp_m + t_base[:3, 3]
-        distance_m = float(np.linalg.norm(wrist_centre - np.array([0.0, 0.0, UR5_D1_M])))
-        if distance_m > _WRIST_CENTRE_REACH_M:
-            raise UnreachableError(
-                f"target {target!r} is out of reach: its wrist centre lies {distance_m:.3f} m from the shoulder, "
-                f"the reach is {_WRIST_CENTRE_REACH_M:.3f} m"
-            )
-        radial_m = math.hypot(wrist_centre[0], wrist_centre[1])
-        if radial_m < UR5_D4_M:
-            raise UnreachableError(
-                f"target {target!r} is too close to the base axis: its wrist centre lies {radial_m:.3f} m from it, "
-                f"the minimum is {UR5_D4_M:.3f} m"
-            )
+        self._check_reachable(target, self._to_base(target))
 
     def inverse(self, target: Pose, seed_q: ArrayLike, *, retry: bool = True) -> FloatArray:
         """Joint vector that puts the TCP at ``target`` (world frame), found from ``seed_q``.
@@ -253,8 +233,8 @@ class ArmKinematics:
         base joint turned towards the target, then from ``DEFAULT_HOME_Q`` turned the same way;
         ``retry=False`` keeps strictly to the seed's branch (used along a line).
         """
-        self.check_reachable(target)
         t_base = self._to_base(target)
+        self._check_reachable(target, t_base)
         best: tuple[float, float] | None = None
         for seed in self._seeds(t_base, self._as_q(seed_q), retry):
             q, position_error_m, orientation_error_rad = self._solve(t_base, seed)
@@ -274,10 +254,7 @@ class ArmKinematics:
 
     def _as_q(self, q: ArrayLike) -> FloatArray:
         """Validate a joint vector's shape and values."""
-        values = np.asarray(q, dtype=float).reshape(-1)
-        if values.shape != (6,) or not np.isfinite(values).all():
-            raise ValueError(f"a joint vector needs 6 finite values in radians, got {values}")
-        return values
+        return joint_vector(q)
 
     def _set_q(self, q: FloatArray) -> None:
         """Put the arm joints of the placo model at ``q`` and update its frames."""
@@ -307,10 +284,33 @@ class ArmKinematics:
         """A world pose as a base-frame 4x4 transform."""
         return target.matrix if self._base_is_identity else (self._world_to_base @ target).matrix
 
+    def _check_reachable(self, target: Pose, t_base: FloatArray) -> None:
+        """``check_reachable`` with the target already expressed in the base frame."""
+        z_m = target.z_m
+        if z_m < self.min_tcp_z_m:
+            raise UnreachableError(
+                f"target {target!r} is below the table: TCP z {z_m:.5f} m < minimum {self.min_tcp_z_m:.5f} m "
+                f"(pad bottoms {PAD_HALF_HEIGHT_M * 1e3:.2f} mm below the TCP, table top {self.table_top_z_m:.4f} m, "
+                f"clearance {self.table_clearance_m * 1e3:.1f} mm)"
+            )
+        wrist_centre = t_base[:3, :3] @ self._wrist_centre_in_tcp_m + t_base[:3, 3]
+        distance_m = math.dist(wrist_centre, (0.0, 0.0, UR5_D1_M))
+        if distance_m > _WRIST_CENTRE_REACH_M:
+            raise UnreachableError(
+                f"target {target!r} is out of reach: its wrist centre lies {distance_m:.3f} m from the shoulder, "
+                f"the reach is {_WRIST_CENTRE_REACH_M:.3f} m"
+            )
+        radial_m = math.hypot(wrist_centre[0], wrist_centre[1])
+        if radial_m < UR5_D4_M:
+            raise UnreachableError(
+                f"target {target!r} is too close to the base axis: its wrist centre lies {radial_m:.3f} m from it, "
+                f"the minimum is {UR5_D4_M:.3f} m"
+            )
+
     def _errors(self, t_target: FloatArray) -> tuple[float, float]:
         """Position (m) and orientation (rad) residuals of the current TCP against ``t_target``."""
         current = self._robot.get_T_world_frame(TCP_FRAME)
-        position_error_m = float(np.linalg.norm(current[:3, 3] - t_target[:3, 3]))
+        position_error_m = math.dist(current[:3, 3], t_target[:3, 3])
         return position_error_m, rotation_angle_rad(current[:3, :3], t_target[:3, :3])
 
     def _clip(self, q: FloatArray) -> FloatArray:
@@ -352,7 +352,7 @@ class ArmKinematics:
         return self._get_q(), position_error_m, orientation_error_rad
 
 
-def joint_vector(values: Sequence[float] | ArrayLike) -> FloatArray:
+def joint_vector(values: ArrayLike) -> FloatArray:
     """A copy of six joint values as a float array, checked for shape and finiteness."""
     q = np.array(values, dtype=float).reshape(-1)
     if q.shape != (6,) or not np.isfinite(q).all():

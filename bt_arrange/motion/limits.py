@@ -17,6 +17,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from bt_arrange.errors import OutOfRangeError, UnreachableError
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, read_joint_limits
 
@@ -122,10 +125,10 @@ class JointLimits:
             hardware_velocity_rad_s=urdf.velocity_rad_s,
         )
 
-    def check_positions(self, positions_rad: Sequence[float], what: str = "joint target") -> None:
+    def check_positions(self, positions_rad: ArrayLike, what: str = "joint target") -> None:
         """Raise ``UnreachableError`` naming the joint, its value and its range if one is out of range."""
-        values = _per_joint(what, positions_rad)
-        for name, value, lower, upper in zip(ARM_JOINT_NAMES, values, self.lower_rad, self.upper_rad):
+        values = _per_joint(what, np.asarray(positions_rad, dtype=float).reshape(-1).tolist())
+        for name, value, lower, upper in zip(ARM_JOINT_NAMES, values, self.lower_rad, self.upper_rad, strict=True):
             if not math.isfinite(value) or not lower <= value <= upper:
                 raise UnreachableError(
                     f"{what}: {name} = {value:.4f} rad is outside the joint limits [{lower:.4f}, {upper:.4f}] rad"
@@ -142,13 +145,13 @@ class CartesianLimits:
       0.15 m/s they take one to two seconds, and a push at this speed does not make a 5 cm
       cube tip or bounce.
     - ``acceleration_m_s2 = 0.5``: full speed after 0.3 s and about 2 cm of travel.
-    - ``jerk_m_s3 = 4.0``: full acceleration after 0.125 s, which keeps the joint jerks of a
-      typical line near the joint default (10 rad/s^3).
+    - ``jerk_m_s3 = 3.5``: full acceleration after 0.14 s, which keeps the joint jerks of a
+      typical line under the joint default (10 rad/s^3), so a line plans once, without a slowdown.
     """
 
     velocity_m_s: float = 0.15
     acceleration_m_s2: float = 0.5
-    jerk_m_s3: float = 4.0
+    jerk_m_s3: float = 3.5
 
     def __post_init__(self) -> None:
         for name, value, cap, unit in (
