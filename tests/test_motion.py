@@ -102,7 +102,7 @@ def test_limit_defaults_and_per_joint_values() -> None:
     cartesian = CartesianLimits()
     assert (cartesian.velocity_m_s, cartesian.acceleration_m_s2, cartesian.jerk_m_s3) == (0.15, 0.5, 3.5)
     slower = cartesian.time_scaled(0.5)
-    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.075, 0.125, 0.5))
+    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.075, 0.125, 0.4375))
 
 
 @pytest.mark.parametrize(
