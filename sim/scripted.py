@@ -7,7 +7,10 @@ gripper and the physics can do before perception enters. The behaviours of
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from bt_arrange.motion import (
     ArmKinematics,
@@ -36,6 +39,12 @@ class GraspSettings:
     grasp_width_tolerance_m: float = 0.003
     settle_s: float = 0.15
     gripper_timeout_s: float = 2.0
+    #: Pads 8 mm thick: at an opening of 50 - 8 = 42 mm the two pad centres sit on the cube's edges.
+    pad_thickness_m: float = 0.008
+    pad_width_m: float = 0.022
+    push_height_m: float = CUBE_EDGE_M / 2
+    #: The pads start this far from the face they will push, and back off this far after.
+    push_clearance_m: float = 0.010
 
 
 @dataclass
@@ -96,14 +105,15 @@ class ScriptedPickPlace:
         arm, gripper = self.cell.arm, self.cell.gripper
         yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
         gripper.open(s.open_width_m)
-        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        above = gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)
+        self.run(self.planner.move_to_pose(arm.joint_positions(), above))
         self.wait_for_gripper()
         self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.grasp_height_m, yaw)))
         gripper.close(s.grip_force_n)
         self.wait_for_gripper()
         width = gripper.width()
         grasped = width > CUBE_EDGE_M - s.grasp_width_tolerance_m
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        self.run(self.planner.move_line(arm.joint_positions(), above))
         return PickPlaceResult(grasped, width, self.cell.clock.now() - start)
 
     def place(self, x_m: float, y_m: float, yaw_rad: float) -> float:
@@ -112,10 +122,40 @@ class ScriptedPickPlace:
         start = self.cell.clock.now()
         arm, gripper = self.cell.arm, self.cell.gripper
         yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
-        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        above = gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)
+        self.run(self.planner.move_to_pose(arm.joint_positions(), above))
         release_z = s.grasp_height_m + s.release_clearance_m
         self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, release_z, yaw)))
         gripper.open(s.open_width_m)
         self.wait_for_gripper()
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)))
+        self.run(self.planner.move_line(arm.joint_positions(), above))
+        return self.cell.clock.now() - start
+
+    def push(self, x_m: float, y_m: float, axis: str, distance_m: float) -> float:
+        """Push a cube resting at (x, y) by ``distance_m`` along world ``axis`` ("x" or "y").
+
+        The fingers stand side by side along the face, opened to the cube's width minus a pad's
+        thickness, so both pads meet the face near its edges. Returns sim seconds.
+        """
+        if axis not in ("x", "y"):
+            raise ValueError(f"push axis must be 'x' or 'y', got {axis!r}")
+        s = self.settings
+        start = self.cell.clock.now()
+        arm, gripper = self.cell.arm, self.cell.gripper
+        direction = np.array([1.0, 0.0] if axis == "x" else [0.0, 1.0]) * np.sign(distance_m)
+        # The closing axis lies across the push; the pads' leading faces are half a pad width ahead.
+        push_yaw = math.atan2(direction[1], direction[0]) + math.pi / 2
+        yaw = nearest_symmetric_yaw(push_yaw, self.kinematics.wrist_yaw_rad(arm.joint_positions()), math.pi)
+        reach_m = CUBE_EDGE_M / 2 + s.pad_width_m / 2
+        centre = np.array([x_m, y_m])
+        begin = centre - direction * (reach_m + s.push_clearance_m)
+        end = centre - direction * reach_m + direction * abs(distance_m)
+        back = end - direction * s.push_clearance_m
+        gripper.open(CUBE_EDGE_M - s.pad_thickness_m)
+        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(*begin, s.approach_height_m, yaw)))
+        self.wait_for_gripper()
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*begin, s.push_height_m, yaw)))
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*end, s.push_height_m, yaw)))
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*back, s.push_height_m, yaw)))
+        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*back, s.approach_height_m, yaw)))
         return self.cell.clock.now() - start

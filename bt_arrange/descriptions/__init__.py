@@ -1,0 +1,1 @@
+"""Robot descriptions shipped with bt-arrange (URDF), loaded by placo and pybullet alike."""

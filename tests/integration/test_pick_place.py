@@ -49,3 +49,28 @@ def test_closing_on_nothing_is_a_failed_grasp():
         pick = script.pick(0.5, 0.0, 0.0)
         assert not pick.grasped
         assert pick.grip_width_m < 0.005
+
+
+@pytest.mark.parametrize(("axis", "distance_m"), [("x", 0.010), ("y", -0.006)])
+def test_a_cube_can_be_pushed_by_a_distance_along_an_axis(axis, distance_m):
+    with WorkCell() as cell:
+        cell.add_cube("red", 0.5, 0.05, 0.0)
+        cell.settle(0.3)
+        x0, y0, _ = cell.cube_planar_truth("red")
+        ScriptedPickPlace(cell).push(x0, y0, axis, distance_m)
+        x1, y1, yaw = cell.cube_planar_truth("red")
+        along, across = (x1 - x0, y1 - y0) if axis == "x" else (y1 - y0, x1 - x0)
+        assert along == pytest.approx(distance_m, abs=2e-4)
+        assert abs(across) < 2e-4
+        assert abs(yaw) < math.radians(0.5)
+        assert cell.cube_pose_truth("red").z_m == pytest.approx(CUBE_EDGE_M / 2, abs=1e-3)
+
+
+def test_a_push_squares_up_a_turned_cube():
+    """Two pads meeting one face (opening = width - pad thickness) turn the cube square to the push."""
+    with WorkCell() as cell:
+        cell.add_cube("red", 0.5, 0.0, math.radians(4.0))
+        cell.settle(0.3)
+        x0, y0, _ = cell.cube_planar_truth("red")
+        ScriptedPickPlace(cell).push(x0, y0, "x", 0.015)
+        assert abs(cell.cube_planar_truth("red")[2]) < math.radians(0.3)
