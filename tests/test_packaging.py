@@ -1,0 +1,51 @@
+"""What a user gets from ``pip install .`` and from the console script."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from bt_arrange import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_wheel_ships_the_cell_under_the_projects_name_with_its_robot(tmp_path):
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            str(ROOT),
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    (wheel,) = tmp_path.glob("bt_arrange-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert "bt_arrange_sim/cell.py" in names
+    assert "bt_arrange/descriptions/ur5_2f85.urdf" in names
+    assert "bt_arrange/py.typed" in names
+    assert not any(name.startswith("sim/") for name in names), "no generic top-level 'sim' package"
+
+
+def test_cli_info_starts_a_headless_cell(capsys):
+    assert cli.main(["info"]) == 0
+    out = capsys.readouterr().out
+    assert "headless work cell: ok" in out
+    assert "pybullet" in out
+
+
+def test_cli_without_a_command_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main([])
+    assert exit_info.value.code == 2
+    assert "required" in capsys.readouterr().err
