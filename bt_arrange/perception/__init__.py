@@ -24,6 +24,7 @@ from bt_arrange.perception.detection import (
     DetectorConfig,
     WorldRegion,
 )
+from bt_arrange.perception.pose import PoseModel
 
 __all__ = [
     "DEFAULT_COLOUR_TABLE",
@@ -34,5 +35,6 @@ __all__ = [
     "Detection",
     "DetectionStatus",
     "DetectorConfig",
+    "PoseModel",
     "WorldRegion",
 ]

@@ -47,7 +47,8 @@ class ColourRange:
         for low, high in self.hue_ranges_deg:
             if not 0.0 <= low <= high <= 360.0:
                 raise PerceptionError(
-                    f"colour {self.name!r}: hue range ({low}, {high}) deg must satisfy 0 <= low <= high <= 360"
+                    f"colour {self.name!r}: hue range ({low}, {high}) deg "
+                    "must satisfy 0 <= low <= high <= 360"
                 )
         for label, (low, high) in (("saturation", self.saturation_range), ("value", self.value_range)):
             if not 0.0 <= low <= high <= 1.0:
@@ -121,12 +122,12 @@ class ColourRange:
         mask = cv2.inRange(hsv, bounds[0][0], bounds[0][1])
         for low, high in bounds[1:]:
             mask = cv2.bitwise_or(mask, cv2.inRange(hsv, low, high))
-        return mask
+        return np.asarray(mask, dtype=np.uint8)
 
     def contains_rgb(self, rgb: tuple[float, float, float]) -> bool:
         """True when an RGB colour (0..1) falls inside this range, as the 8-bit mask would say."""
         pixel = np.clip(np.round(np.asarray(rgb, dtype=float) * 255.0), 0, 255).astype(np.uint8)
-        hsv = cv2.cvtColor(pixel.reshape(1, 1, 3), cv2.COLOR_RGB2HSV)
+        hsv = np.asarray(cv2.cvtColor(pixel.reshape(1, 1, 3), cv2.COLOR_RGB2HSV), dtype=np.uint8)
         return bool(self.mask(hsv)[0, 0])
 
 
@@ -151,6 +152,13 @@ class ColourTable(Mapping[str, ColourRange]):
         except KeyError:
             known = ", ".join(self._ranges) or "none"
             raise PerceptionError(f"unknown colour {name!r}: the colour table knows {known}") from None
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._ranges
+
+    def get(self, name: str, default: ColourRange | None = None) -> ColourRange | None:  # type: ignore[override]
+        """The range of ``name``, or ``default`` when the table does not know it (never raises)."""
+        return self._ranges.get(name, default)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._ranges)

@@ -2,8 +2,10 @@
 
 At 1920x1080 and 70 cm one pixel covers about 0.5 mm of the table and the arrangement
 threshold is 1 mm, so the Douglas-Peucker vertices (whole pixels, and rounded off by the 7x7
-morphology at the corners) are not good enough. The default, :attr:`CornerRefinement.EDGE_LINES`,
-measures each side's edge below a pixel and intersects the four fitted lines:
+morphology at the corners) are not good enough. Lines fitted to the contour's pixels of each
+side (``cv2.fitLine``) bring the corners within about half a pixel; from there the default,
+:attr:`CornerRefinement.EDGE_LINES`, measures each side's edge below a pixel and intersects the
+four fitted lines:
 
 * A camera integrates light over each pixel, so an edge pixel's colour is a mix
   ``c * face + (1 - c) * outside`` where ``c`` is the fraction of the pixel the face covers.
@@ -13,11 +15,16 @@ measures each side's edge below a pixel and intersects the four fitted lines:
 * Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
   height at the column's centre exactly, whatever the slope (the area under a straight line
   over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
+* The outside colour is read per column, just beyond the edge's spread (1 px for a sharp
+  edge, more when blurred, measured from the face's own edges): a neighbour changes along a
+  side (the table, then a touching cube), and a cube's side seen as a strip of a pixel or two
+  must count as outside even though it is a slightly different grey than the table beyond.
+  Pixels as far inside count as exactly 1, which keeps their noise out of the sum.
 * A least-squares line through these points per side, with outliers trimmed, and the corners
   where adjacent lines meet: the rounded corners of the mask never enter.
 
-``CORNER_SUBPIX`` (``cv2.cornerSubPix`` on the face-coverage image), ``CONTOUR_LINES``
-(``cv2.fitLine`` on the mask's contour) and ``NONE`` remain for comparison; see
+``CORNER_SUBPIX`` (``cv2.cornerSubPix`` on the face-coverage image), ``CONTOUR_LINES`` (the
+pixel-level lines alone) and ``NONE`` (the polygon's vertices) remain for comparison; see
 docs/perception.md for the measured accuracy of each.
 """
 
@@ -87,6 +94,17 @@ def _intersect_sides(lines: list[FloatArray]) -> FloatArray:
     return np.array([_intersect(lines[i - 1], lines[i]) for i in range(4)])
 
 
+#: The spread (summed min(c, 1 - c) across an edge) of an area-sampled edge without blur.
+SHARP_EDGE_SPREAD = 0.25
+
+
+def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
+    """Fraction of each pixel (columns, band) covered by the face, unmixed from ``outside``."""
+    contrast = face[None, :] - outside
+    contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
+    return np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+
+
 def _side_edge_points(
     rgb: NDArray[np.uint8],
     p: FloatArray,
@@ -95,8 +113,14 @@ def _side_edge_points(
     face: FloatArray,
     half_width_px: int,
     margin_px: float,
-) -> FloatArray:
+    near_outside_px: float | None,
+) -> tuple[FloatArray, FloatArray]:
     """Sub-pixel points on the edge between corners ``p`` and ``q`` (Nx2), from pixel coverages.
+
+    Each column's outside colour comes from the band's far end, or, with ``near_outside_px``,
+    from the first pixel whose centre lies that far beyond the edge. Also returns each column's
+    spread: the summed ``min(c, 1 - c)`` of its covered fractions ``c``, about 0.25 for a sharp
+    edge and growing with blur.
 
     Works on columns for a side closer to horizontal and on rows otherwise, by swapping the
     roles of u and v (a transposed view of the image).
@@ -114,7 +138,7 @@ def _side_edge_points(
     u_low, u_high = sorted((p[0], q[0]))
     u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
     if len(u) < 3:
-        return np.empty((0, 2))
+        return np.empty((0, 2)), np.empty(0)
     v_line = p[1] + (u - p[0]) * slope
     face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
     v_start = np.round(v_line).astype(int) - half_width_px
@@ -122,27 +146,36 @@ def _side_edge_points(
     keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
     u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
     if len(u) < 3:
-        return np.empty((0, 2))
+        return np.empty((0, 2)), np.empty(0)
     x = chroma(rgb[rows, u[:, None]])  # (columns, band, 2)
-    # The outside colour per column from the two band pixels farthest from the face: the
-    # neighbour may change along a side (the table, then a touching cube of another colour).
-    outside = x[:, -2:].mean(axis=1) if face_above else x[:, :2].mean(axis=1)
+    if not face_above:
+        x = x[:, ::-1]  # index 0 at the face's end of the band, growing outwards
+    # Pixel k of the band covers [k, k + 1] measured outwards from the face's end, so with the
+    # face's covered fraction c_k the edge lies at sum(c_k) from that end.
+    outside = x[:, -2:].mean(axis=1)
+    covered = _covered(x, face, outside)
+    edge = covered.sum(axis=1)
+    spread = np.clip(np.minimum(covered, 1.0 - covered), 0.0, None).sum(axis=1)
+    if near_outside_px is not None:
+        # The outside colour from the first pixel beyond the edge's spread, and nothing beyond
+        # it: a cube's side seen as a strip of 1 or 2 pixels between the face and the table
+        # (they differ a little in chroma) then counts as outside, not as a little bit of face.
+        # Symmetrically, pixels as far inside are pure face and count as exactly 1: summing
+        # only the transition keeps the noise of the pure pixels out of the edge.
+        index = np.arange(x.shape[1])
+        first_out = np.clip(np.ceil(edge + near_outside_px - 0.5).astype(int), 1, x.shape[1] - 1)
+        first_mixed = np.clip(np.floor(edge - near_outside_px + 0.5).astype(int), 0, first_out - 1)
+        outside = x[np.arange(len(x)), first_out]
+        window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
+        edge = first_mixed + np.where(window, _covered(x, face, outside), 0.0).sum(axis=1)
+    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
     contrast = face[None, :] - outside
     contrast_sq = np.einsum("ij,ij->i", contrast, contrast)
-    covered = (
-        np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / np.maximum(contrast_sq, 1e-12)[:, None]
-    )
-    # Rows v_start .. v_start + 2h span v_start - 0.5 .. v_start + 2h + 0.5: the covered area
-    # measured from the face's end of the band is the edge's distance from that end.
-    if face_above:
-        v_edge = v_start - 0.5 + covered.sum(axis=1)
-    else:
-        v_edge = v_start + 2 * half_width_px + 0.5 - covered.sum(axis=1)
     # A column whose neighbour has nearly the face's colour cannot place the edge, and an edge
     # found outside the band's middle means the band missed the transition.
     good = (contrast_sq > 0.09 * float(face @ face)) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
     points = np.column_stack([u[good].astype(float), v_edge[good]])
-    return points if by_columns else points[:, ::-1]
+    return (points if by_columns else points[:, ::-1]), spread[good]
 
 
 def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
@@ -168,23 +201,27 @@ def refine_edge_lines(
     rgb: NDArray[np.uint8],
     corners_px: FloatArray,
     undistort: Undistort | None = None,
-    passes: tuple[tuple[int, float], ...] = ((4, 10.0), (3, 7.0)),
+    passes: tuple[tuple[int, float], ...] = ((5, 10.0), (4, 8.0)),
 ) -> FloatArray | None:
     """Corners where the four sub-pixel edge lines meet; None when a side has too few points.
 
-    ``corners_px`` (4x2, ordered around the face) need only be within a pixel or two: each pass
+    ``corners_px`` (4x2, ordered around the face) need only be within a pixel: each pass
     ``(half_width_px, margin_px)`` re-centres the bands on the previous lines. With ``undistort``
     the last pass's edge points are undistorted before the lines are fitted, so the corners
     come back in undistorted pixel coordinates.
     """
     corners = np.asarray(corners_px, dtype=float).reshape(4, 2)
     face = face_chroma(rgb, corners)
+    near_outside_px: float | None = None
     for index, (half_width_px, margin_px) in enumerate(passes):
         centre = corners.mean(axis=0)
-        lines = []
+        lines, spreads = [], []
         for k in range(4):
             p, q = corners[k], corners[(k + 1) % 4]
-            points = _side_edge_points(rgb, p, q, centre, face, half_width_px, margin_px)
+            points, spread = _side_edge_points(
+                rgb, p, q, centre, face, half_width_px, margin_px, near_outside_px
+            )
+            spreads.append(spread)
             by_columns = abs(q[0] - p[0]) >= abs(q[1] - p[1])
             if undistort is not None and index == len(passes) - 1 and len(points):
                 points = undistort(points)
@@ -193,6 +230,12 @@ def refine_edge_lines(
                 return None
             lines.append(line)
         corners = _intersect_sides(lines)
+        # After the first pass, take each column's outside colour just beyond the edge's
+        # spread (1 px for a sharp edge, about 2.8 px for a blur of sigma 0.8 px): near enough
+        # to miss what lies beyond a thin neighbour, far enough to be clear of the blur. The
+        # spread is a property of the lens, so the face's median serves all four sides.
+        excess = max(0.0, float(np.median(np.concatenate(spreads))) - SHARP_EDGE_SPREAD)
+        near_outside_px = 1.0 + 4.0 * excess
     return corners
 
 

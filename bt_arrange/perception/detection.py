@@ -14,7 +14,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -31,8 +31,10 @@ from bt_arrange.perception.corners import (
     refine_edge_lines,
 )
 from bt_arrange.perception.pose import (
+    PoseModel,
     cube_centre_in_world,
     expected_face_area_px,
+    fit_square_on_plane,
     pixel_on_plane,
     solve_face_pose,
     tilt_deg,
@@ -45,7 +47,7 @@ from bt_arrange.perception.segmentation import (
     colour_mask,
     find_blobs,
     order_corners,
-    polygon_area_px,
+    outline_deviation_px,
     to_hsv,
 )
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
@@ -106,10 +108,18 @@ class DetectorConfig:
     face_area_fraction_range: tuple[float, float] = (0.8, 1.25)
     #: A single blob this large holds several faces of one colour: AMBIGUOUS.
     ambiguous_area_fraction: float = 1.6
-    #: Each side of the polygon, relative to the expected edge length in pixels.
-    side_length_fraction_range: tuple[float, float] = (0.8, 1.2)
+    #: Each side of the outline, relative to the expected edge length in pixels.
+    side_length_fraction_range: tuple[float, float] = (0.85, 1.15)
+    #: The contour may stray this far from the quadrilateral of its side lines: a whole face
+    #: strays about 2 px (the rounded corners of the mask), a notch deeper than this (a
+    #: covered corner) makes the face PARTIAL. Shallower ones do not touch the measured edges.
+    max_outline_deviation_px: float = 4.0
     #: A larger RMS reprojection error means the corners are not those of a 5 cm square.
     max_reprojection_error_px: float = 1.0
+    #: RESTING only: the face's size on the top-face plane may differ this much from the edge;
+    #: more means the cube is not resting on the table (lifted, stacked, tipped) or not 5 cm.
+    max_edge_error_fraction: float = 0.04
+    pose_model: PoseModel = PoseModel.RESTING
     corner_refinement: CornerRefinement = CornerRefinement.EDGE_LINES
     #: The blob search runs on the image downscaled so that a face is about this wide.
     coarse_face_edge_px: float = 24.0
@@ -124,12 +134,15 @@ class DetectorConfig:
 class Detection:
     """The outcome of looking for one colour in one frame.
 
-    ``pose_world`` is ``T_W_O`` of the cube's centre (set only when FOUND), its yaw folded into
-    ``[-45, 45)`` degrees. ``corners_px`` are the refined top-face corners (undistorted pixel
-    coordinates), ``reprojection_error_px`` the RMS PnP residual, ``area_px`` the blob's area
-    and ``expected_area_px`` a face's expected area there, ``tilt_deg`` the angle between the
-    cube's up axis and the world's. ``candidates_xy_m`` lists where on the table the blobs of
-    this colour were (the top-face plane), e.g. the two of an AMBIGUOUS outcome.
+    ``pose_world`` is ``T_W_O`` of the cube's centre (set only when FOUND) from the configured
+    :class:`PoseModel`, its yaw folded into ``[-45, 45)`` degrees. Quality figures:
+    ``corners_px``, the refined top-face corners (undistorted pixel coordinates);
+    ``reprojection_error_px``, the RMS distance between them and the model's projected face;
+    ``area_px``, the blob's area, and ``expected_area_px``, a face's expected area there;
+    ``edge_m``, the face's edge as measured on the plane of the top faces; ``pnp_pose_world``
+    and ``tilt_deg``, the paper's 6-DoF PnP pose and the angle between its up axis and the
+    world's. ``candidates_xy_m`` lists where on the table the blobs of this colour were, e.g.
+    the two of an AMBIGUOUS outcome.
     """
 
     colour: str
@@ -141,6 +154,8 @@ class Detection:
     area_px: float | None = None
     expected_area_px: float | None = None
     tilt_deg: float | None = None
+    edge_m: float | None = None
+    pnp_pose_world: Pose | None = None
     candidates_xy_m: tuple[tuple[float, float], ...] = field(default_factory=tuple)
 
     @property
@@ -226,14 +241,18 @@ class CubeDetector:
         # Downscale by an exact integer factor, so that small and full-resolution pixels align.
         small = rgb[: height // scale * scale, : width // scale * scale]
         if scale > 1:
-            small = cv2.resize(small, (width // scale, height // scale), interpolation=cv2.INTER_AREA)
+            small = np.asarray(
+                cv2.resize(small, (width // scale, height // scale), interpolation=cv2.INTER_AREA),
+                dtype=np.uint8,
+            )
         undistort = None
         if any(abs(k) > 0 for k in intrinsics.distortion):
             camera_matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=float)
 
             def undistort(points: FloatArray) -> FloatArray:
                 pts = np.asarray(points, dtype=np.float64).reshape(-1, 1, 2)
-                return cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix).reshape(-1, 2)
+                undistorted = cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix)
+                return np.asarray(undistorted, dtype=np.float64).reshape(-1, 2)
 
         return _View(
             rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort
@@ -279,7 +298,17 @@ class CubeDetector:
                 candidates_xy_m=xy,
             )
         blob, _, expected_px = candidates[0]
-        return self._measure(view, colour, blob, expected_px, xy)
+        try:
+            return self._measure(view, colour, blob, expected_px, xy)
+        except (cv2.error, ValueError, np.linalg.LinAlgError) as error:
+            # Degenerate geometry (say, corners that coincide) must not end a run: report it.
+            return Detection(
+                name,
+                DetectionStatus.PARTIAL,
+                f"{name} face could not be measured: {type(error).__name__}: {error}",
+                expected_area_px=expected_px,
+                candidates_xy_m=xy,
+            )
 
     def _measure(
         self,
@@ -295,14 +324,14 @@ class CubeDetector:
         height, width = view.rgb.shape[:2]
         edge_px = math.sqrt(expected_px)
 
-        def partial(reason: str, **values: object) -> Detection:
+        def partial(reason: str, area_px: float | None = None) -> Detection:
             return Detection(
                 name,
                 DetectionStatus.PARTIAL,
                 f"{name} {reason}",
+                area_px=area_px,
                 expected_area_px=expected_px,
                 candidates_xy_m=xy,
-                **values,  # type: ignore[arg-type]
             )
 
         # The downscaled blob's box is accurate to a few pixels: add room for the sides.
@@ -345,70 +374,101 @@ class CubeDetector:
             return partial(
                 f"blob is {ratio:.0%} of a face: covered, or not a whole top face", area_px=area_px
             )
-        polygon = approximate_quadrilateral(contour)
-        if len(polygon) != 4:
-            return partial(f"outline has {len(polygon)} corners, not 4: covered?", area_px=area_px)
-        if not cv2.isContourConvex(polygon.reshape(-1, 1, 2)):
+        vertices = approximate_quadrilateral(contour)
+        if len(vertices) != 4:
+            return partial(f"outline has {len(vertices)} corners, not 4: covered?", area_px=area_px)
+        if not cv2.isContourConvex(vertices.reshape(-1, 1, 2)):
             return partial("outline is not convex: covered?", area_px=area_px)
-        coarse = order_corners(polygon)
-        sides_px = np.linalg.norm(coarse - np.roll(coarse, -1, axis=0), axis=1)
+        polygon = order_corners(vertices)
+        # Lines through each side's contour pixels: corners within about half a pixel (the
+        # polygon's vertices sit up to 3 px inside, on the mask's rounded corners).
+        outline = refine_contour_lines(contour, polygon)
+        sides_px = np.linalg.norm(outline - np.roll(outline, -1, axis=0), axis=1)
         low, high = config.side_length_fraction_range
         if not (low * edge_px <= sides_px.min() and sides_px.max() <= high * edge_px):
             return partial(
-                f"outline sides {sides_px.min():.0f}..{sides_px.max():.0f} px, expected {edge_px:.0f}: not a square face?",
+                f"outline sides {sides_px.min():.0f}..{sides_px.max():.0f} px, "
+                f"expected {edge_px:.0f}: not a square face?",
                 area_px=area_px,
             )
-        # Polygon and contour must agree, or Douglas-Peucker forced a quadrilateral on a shape
-        # that is not one (a face with a corner covered).
-        if abs(polygon_area_px(polygon) - area_px) > 0.06 * area_px:
-            return partial("outline is not a quadrilateral: covered?", area_px=area_px)
+        # Where the contour leaves the quadrilateral, something covers the face (or
+        # Douglas-Peucker forced four corners on a shape that has more).
+        deviation_px = outline_deviation_px(contour, outline)
+        if deviation_px > config.max_outline_deviation_px:
+            return partial(
+                f"outline strays {deviation_px:.1f} px from a quadrilateral: covered?", area_px=area_px
+            )
 
-        corners, undistorted = self._refine(view, coarse, contour)
+        corners = self._refine(view, polygon, outline)
         if corners is None:
             return partial("edges could not be measured below a pixel", area_px=area_px)
-        distortion = None if undistorted else np.asarray(view.intrinsics.distortion, dtype=float)
-        face = solve_face_pose(corners, view.intrinsics.matrix, config.cube_edge_m, distortion)
-        if face is None:
-            return partial("corners give no pose (PnP failed)", area_px=area_px, corners_px=corners)
-        if face.reprojection_error_px > config.max_reprojection_error_px:
-            return partial(
-                f"corners are not a {config.cube_edge_m * 100:.0f} cm square "
-                f"(reprojection error {face.reprojection_error_px:.2f} px)",
-                area_px=area_px,
-                corners_px=corners,
-                reprojection_error_px=face.reprojection_error_px,
-            )
-        pose = cube_centre_in_world(view.T_W_C, face.T_C_F, config.cube_edge_m)
-        return Detection(
+        face = solve_face_pose(corners, view.intrinsics.matrix, config.cube_edge_m)
+        pnp_pose = None if face is None else cube_centre_in_world(view.T_W_C, face.T_C_F, config.cube_edge_m)
+        plane = fit_square_on_plane(corners, view.intrinsics, view.T_W_C, config.top_z_m, config.cube_edge_m)
+        # Everything measured so far, as a PARTIAL outcome that the checks below complete.
+        measured = Detection(
             name,
-            DetectionStatus.FOUND,
-            f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, yaw={math.degrees(pose.yaw_rad):.2f} deg",
-            pose_world=pose,
+            DetectionStatus.PARTIAL,
+            "",
             corners_px=corners,
-            reprojection_error_px=face.reprojection_error_px,
             area_px=area_px,
             expected_area_px=expected_px,
-            tilt_deg=tilt_deg(pose),
+            tilt_deg=None if pnp_pose is None else tilt_deg(pnp_pose),
+            edge_m=None if plane is None else plane.edge_m,
+            pnp_pose_world=pnp_pose,
             candidates_xy_m=xy,
         )
+        if config.pose_model is PoseModel.RESTING:
+            if plane is None:
+                return replace(measured, reason=f"{name} corners do not meet the table plane")
+            if abs(plane.edge_m / config.cube_edge_m - 1.0) > config.max_edge_error_fraction:
+                return replace(
+                    measured,
+                    reason=f"{name} face measures {plane.edge_m * 100:.1f} cm on the table plane, not "
+                    f"{config.cube_edge_m * 100:.1f} cm: not resting on the table?",
+                )
+            pose = Pose.from_planar(plane.centre_m[0], plane.centre_m[1], plane.yaw_rad, config.top_z_m)
+            pose = pose @ Pose(np.array([0.0, 0.0, -config.cube_edge_m / 2.0]))
+            error_px = plane.reprojection_error_px
+        else:
+            if face is None or pnp_pose is None:
+                return replace(measured, reason=f"{name} corners give no pose (PnP failed)")
+            pose, error_px = pnp_pose, face.reprojection_error_px
+        if error_px > config.max_reprojection_error_px:
+            return replace(
+                measured,
+                reason=f"{name} corners are not a {config.cube_edge_m * 100:.0f} cm square "
+                f"(reprojection error {error_px:.2f} px)",
+                reprojection_error_px=error_px,
+            )
+        return replace(
+            measured,
+            status=DetectionStatus.FOUND,
+            reason=f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, "
+            f"yaw={math.degrees(pose.yaw_rad):.2f} deg",
+            pose_world=pose,
+            reprojection_error_px=error_px,
+        )
 
-    def _refine(
-        self, view: _View, coarse: FloatArray, contour: NDArray[np.int32]
-    ) -> tuple[FloatArray | None, bool]:
-        """Sub-pixel corners, and whether they are already undistorted."""
+    def _refine(self, view: _View, polygon: FloatArray, outline: FloatArray) -> FloatArray | None:
+        """Corners in undistorted pixel coordinates, by the configured method, or None.
+
+        ``polygon`` holds the Douglas-Peucker vertices and ``outline`` the pixel-level corners
+        where the contour's side lines meet; the sub-pixel methods start from the latter.
+        """
         method = self.config.corner_refinement
         if method is CornerRefinement.EDGE_LINES:
-            corners = refine_edge_lines(view.rgb, coarse, view.undistort)
-            # The refined corners must stay near the coarse ones; far away, a band fitted a
-            # neighbour's edge instead.
-            if (
-                corners is not None
-                and np.abs(corners - coarse).max() > 6.0 + (view.undistort is not None) * 20.0
-            ):
-                return None, True
-            return corners, True
+            refined = refine_edge_lines(view.rgb, outline, view.undistort)
+            if refined is None:
+                return None
+            # The refined corners must stay near the pixel-level ones; far away, a band fitted
+            # a neighbour's edge instead.
+            reference = outline if view.undistort is None else view.undistort(outline)
+            return refined if np.abs(refined - reference).max() <= 3.0 else None
         if method is CornerRefinement.CORNER_SUBPIX:
-            return refine_corner_subpix(view.rgb, coarse), False
-        if method is CornerRefinement.CONTOUR_LINES:
-            return refine_contour_lines(contour, coarse), False
-        return coarse, False
+            corners = refine_corner_subpix(view.rgb, outline)
+        elif method is CornerRefinement.CONTOUR_LINES:
+            corners = outline
+        else:
+            corners = polygon
+        return corners if view.undistort is None else view.undistort(corners)

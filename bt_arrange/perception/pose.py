@@ -1,13 +1,22 @@
 """From four image corners to the cube's pose in the world.
 
-PnP on the top face's corners with the known edge length: ``cv2.SOLVEPNP_IPPE_SQUARE`` (the
-planar start, exact for four coplanar points of a square) refined by Levenberg-Marquardt
-(``cv2.solvePnPRefineLM``), then the paper's Eq. 1, ``T_W_O = T_W_C * T_C_O``, with the cube's
-centre half an edge below the top face.
+Two models, chosen with :class:`PoseModel`:
+
+* ``FREE``, the paper's: PnP on the top face's corners with the known edge length, from the
+  planar ``cv2.SOLVEPNP_IPPE_SQUARE`` solution and the DLT start of ``SOLVEPNP_ITERATIVE``,
+  refined by Levenberg-Marquardt (``cv2.solvePnPRefineLM``), then the paper's Eq. 1,
+  ``T_W_O = T_W_C * T_C_O``, with the cube's centre half an edge below the top face.
+* ``RESTING``, the default: a cube on the table has its top face at a known height, so each
+  corner's ray meets that plane at the corner itself; a square of the known edge fitted to
+  the four points gives x, y and yaw. PnP of four points seen head-on cannot tell a slightly
+  larger face from a nearer or tilted one, and turns a quarter-pixel error in the face's size
+  into millimetres sideways; the plane fit cannot. PnP still runs, for its tilt and pose as
+  quality figures.
 """
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -18,44 +27,156 @@ from bt_arrange.geometry import FloatArray, Pose, fold_yaw, rotation_z
 from bt_arrange.robot import CameraIntrinsics
 
 
+class PoseModel(str, enum.Enum):
+    """Which model of the cube turns its corners into a pose."""
+
+    #: The cube rests flat on the table, so its top face lies at a known height: x, y and yaw
+    #: from the corners' rays meeting that plane. Robust to errors in the face's apparent size.
+    RESTING = "resting"
+    #: Any 6-DoF pose, from PnP alone (the paper's method): also sees a tilted or lifted cube,
+    #: but a face seen head-on turns a size error of a fraction of a pixel into a tilt and a
+    #: sideways shift of millimetres.
+    FREE = "free"
+
+
 def square_object_points(edge_m: float) -> FloatArray:
-    """The top face's corners in the face frame (z out of the cube), in IPPE_SQUARE's order."""
+    """The top face's corners in the face frame (z out of the cube), in the order of the corners.
+
+    Seen from above, like the camera sees them, they run clockwise on screen: the order of
+    :func:`~bt_arrange.perception.segmentation.order_corners`.
+    """
     h = edge_m / 2.0
     return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
 
 
+#: Turns the face frame by 180 degrees about its x axis: z out of the cube <-> z into it.
+_FLIP_X = Pose.from_rotation(np.zeros(3), np.diag([1.0, -1.0, -1.0]))
+
+
 @dataclass(frozen=True)
 class FacePose:
-    """The top face in the camera frame, and how well it explains the corners."""
+    """The top face in the camera frame (z out of the cube), and how well it explains the corners."""
 
     T_C_F: Pose
     reprojection_error_px: float
 
 
+def _rms_px(projected: FloatArray, measured: FloatArray) -> float:
+    return float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - measured.reshape(-1, 2)) ** 2, axis=1))))
+
+
 def solve_face_pose(
     corners_px: FloatArray, camera_matrix: FloatArray, edge_m: float, distortion: FloatArray | None = None
 ) -> FacePose | None:
-    """PnP of a square face from its four corners (ordered as :func:`~.segmentation.order_corners`).
+    """PnP of a square face of known edge from its four corners (ordered as ``order_corners``).
 
-    Returns None when OpenCV finds no pose. The reprojection error is the RMS distance, in
-    pixels, between the corners and the projected square.
+    Starts from ``SOLVEPNP_IPPE_SQUARE`` (the planar solution) and from ``SOLVEPNP_ITERATIVE``
+    (the paper's DLT start), refines each with Levenberg-Marquardt and keeps the pose with the
+    smaller RMS reprojection error, in pixels. OpenCV's IPPE returns a correct pose only when
+    the object's z axis points away from the camera (a face seen from the front comes back
+    wrong by up to hundreds of pixels, or NaN when exactly fronto-parallel): it is given the
+    face from behind, with the corners in reverse order, and its pose flipped back. Returns
+    None when no start gives a finite pose.
     """
     object_points = square_object_points(edge_m)
     image_points = np.asarray(corners_px, dtype=np.float64).reshape(4, 1, 2)
     dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=np.float64)
+    starts: list[tuple[FloatArray, FloatArray]] = []
+    # Seen from behind, the face's corners run the other way round: reverse them, so that
+    # IPPE_SQUARE's object points are the face frame turned by 180 degrees about x.
+    behind = image_points[[3, 2, 1, 0]]
+    count, rvecs, tvecs, _ = cv2.solvePnPGeneric(
+        object_points, behind, camera_matrix, dist, flags=cv2.SOLVEPNP_IPPE_SQUARE
+    )
+    for rvec, tvec in zip(rvecs[:count], tvecs[:count], strict=True):
+        if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
+            continue
+        rotation, _ = cv2.Rodrigues(rvec)
+        flipped = Pose.from_rotation(np.ravel(tvec), rotation) @ _FLIP_X
+        starts.append(
+            (np.asarray(cv2.Rodrigues(flipped.rotation)[0], dtype=float), flipped.position_m.reshape(3, 1))
+        )
     ok, rvec, tvec = cv2.solvePnP(
-        object_points, image_points, camera_matrix, dist, flags=cv2.SOLVEPNP_IPPE_SQUARE
+        object_points, image_points, camera_matrix, dist, flags=cv2.SOLVEPNP_ITERATIVE
     )
-    if not ok:
-        return None
+    if ok:
+        starts.append((np.asarray(rvec, dtype=float), np.asarray(tvec, dtype=float)))
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-12)
-    rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, camera_matrix, dist, rvec, tvec, criteria)
-    projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, dist)
-    error_px = float(
-        np.sqrt(np.mean(np.sum((projected.reshape(4, 2) - image_points.reshape(4, 2)) ** 2, axis=1)))
+    best: FacePose | None = None
+    for rvec, tvec in starts:
+        if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
+            continue
+        rvec, tvec = cv2.solvePnPRefineLM(
+            object_points, image_points, camera_matrix, dist, rvec, tvec, criteria
+        )
+        if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
+            continue
+        projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, dist)
+        error_px = _rms_px(np.asarray(projected, dtype=float), image_points)
+        # The face must lie in front of the camera, seen from outside the cube.
+        rotation, _ = cv2.Rodrigues(rvec)
+        if tvec.ravel()[2] <= 0 or rotation[:, 2] @ tvec.ravel() >= 0:
+            continue
+        if best is None or error_px < best.reprojection_error_px:
+            best = FacePose(Pose.from_rotation(tvec.ravel(), rotation), error_px)
+    return best
+
+
+@dataclass(frozen=True)
+class PlaneFit:
+    """A level square fitted to corners back-projected onto the plane of the top faces.
+
+    ``centre_m`` is the face centre (x, y, z) in the world, ``yaw_rad`` the heading of its edges,
+    ``edge_m`` the edge length the corners suggest (the known edge for a cube resting on the
+    table), ``reprojection_error_px`` the RMS distance between the corners and the projected
+    square of the known edge.
+    """
+
+    centre_m: FloatArray
+    yaw_rad: float
+    edge_m: float
+    reprojection_error_px: float
+
+
+def fit_square_on_plane(
+    corners_px: FloatArray, intrinsics: CameraIntrinsics, T_W_C: Pose, plane_z_m: float, edge_m: float
+) -> PlaneFit | None:
+    """x, y and yaw of a level square face on the plane ``z = plane_z_m`` from its four corners.
+
+    For a cube resting on the table the height of its top face is known, and each corner's ray
+    meets that plane at the corner itself: a rigid 2D fit (Procrustes) of the known square to the
+    four points gives the pose. Unlike 6-DoF PnP, an error in the face's apparent size cannot
+    turn into a tilt or a depth, and so into a sideways shift of the centre. Corners are
+    undistorted pixels. Returns None if a ray misses the plane.
+    """
+    points = []
+    for corner in np.asarray(corners_px, dtype=float).reshape(4, 2):
+        point = pixel_on_plane(intrinsics, T_W_C, corner, plane_z_m)
+        if point is None:
+            return None
+        points.append(point[:2])
+    world = np.array(points)
+    h = edge_m / 2.0
+    model = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])  # counter-clockwise seen from above
+    if _signed_area(world) < 0:
+        model = model[::-1].copy()
+    centre = world.mean(axis=0)
+    relative = world - centre
+    # Procrustes rotation: the angle that best turns the model's corners onto the measured ones.
+    cross = float(np.sum(model[:, 0] * relative[:, 1] - model[:, 1] * relative[:, 0]))
+    dot = float(np.sum(model[:, 0] * relative[:, 0] + model[:, 1] * relative[:, 1]))
+    yaw_rad = math.atan2(cross, dot)
+    rotated = model @ rotation_z(yaw_rad)[:2, :2].T
+    scale = float(np.sum(rotated * relative) / np.sum(model * model))
+    fitted = np.column_stack([rotated + centre, np.full(4, plane_z_m)])
+    error_px = _rms_px(project_world(intrinsics, T_W_C, fitted), np.asarray(corners_px, dtype=float))
+    return PlaneFit(np.array([centre[0], centre[1], plane_z_m]), fold_yaw(yaw_rad), scale * edge_m, error_px)
+
+
+def _signed_area(points: FloatArray) -> float:
+    return 0.5 * float(
+        np.sum(points[:, 0] * np.roll(points[:, 1], -1) - np.roll(points[:, 0], -1) * points[:, 1])
     )
-    rotation, _ = cv2.Rodrigues(rvec)
-    return FacePose(Pose.from_rotation(tvec.ravel(), rotation), error_px)
 
 
 def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float) -> Pose:

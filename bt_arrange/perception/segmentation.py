@@ -23,16 +23,20 @@ PAPER_KERNEL_PX = 7
 
 def to_hsv(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
     """8-bit HSV (hue 0..179) of an RGB image."""
-    return cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    return np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV), dtype=np.uint8)
 
 
 def clean_mask(mask: Mask, kernel_px: int = PAPER_KERNEL_PX) -> Mask:
-    """Close small holes, then open away specks, with a square ``kernel_px`` structuring element."""
+    """Close small holes, then open away specks, with a ``kernel_px`` x ``kernel_px`` disc.
+
+    A disc, not a square: the opening with a 7x7 square cuts 3.5 px off each corner of a face
+    turned by 45 degrees and none off an upright one, a disc rounds every yaw alike (by 1.2 px).
+    """
     if kernel_px <= 1:
         return mask
-    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (kernel_px, kernel_px))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kernel_px, kernel_px))
     closed = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
-    return cv2.morphologyEx(closed, cv2.MORPH_OPEN, kernel)
+    return np.asarray(cv2.morphologyEx(closed, cv2.MORPH_OPEN, kernel), dtype=np.uint8)
 
 
 def colour_mask(rgb: NDArray[np.uint8], colour: ColourRange, kernel_px: int = PAPER_KERNEL_PX) -> Mask:
@@ -95,7 +99,8 @@ def approximate_quadrilateral(
     perimeter_px = cv2.arcLength(contour.reshape(-1, 1, 2), True)
     polygon = contour
     for fraction in epsilon_fractions:
-        polygon = cv2.approxPolyDP(contour.reshape(-1, 1, 2), fraction * perimeter_px, True).reshape(-1, 2)
+        approximation = cv2.approxPolyDP(contour.reshape(-1, 1, 2), fraction * perimeter_px, True)
+        polygon = np.asarray(approximation, dtype=np.int32).reshape(-1, 2)
         if len(polygon) <= 4:
             break
     return np.asarray(polygon, dtype=np.int32)
@@ -117,7 +122,13 @@ def order_corners(corners_px: NDArray[np.floating] | NDArray[np.integer]) -> Flo
     return np.roll(points, -start, axis=0)
 
 
-def polygon_area_px(polygon_px: NDArray[np.floating] | NDArray[np.integer]) -> float:
-    """Unsigned area of a polygon (shoelace), in square pixels."""
-    p = np.asarray(polygon_px, dtype=float).reshape(-1, 2)
-    return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))
+def outline_deviation_px(contour_px: NDArray[np.integer], polygon_px: FloatArray) -> float:
+    """Largest distance, in pixels, from a contour's points to the sides of a closed polygon."""
+    points = np.asarray(contour_px, dtype=float).reshape(-1, 2)
+    polygon = np.asarray(polygon_px, dtype=float).reshape(-1, 2)
+    distance = np.full(len(points), np.inf)
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0), strict=True):
+        ab = b - a
+        t = np.clip((points - a) @ ab / float(ab @ ab), 0.0, 1.0)
+        distance = np.minimum(distance, np.linalg.norm(points - (a + t[:, None] * ab), axis=1))
+    return float(distance.max()) if len(points) else 0.0

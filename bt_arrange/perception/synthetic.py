@@ -56,18 +56,29 @@ def top_down_camera_pose(
 
 @dataclass(frozen=True)
 class SyntheticCube:
-    """A cube resting on the table: its top face colour, centre ``(x, y)`` and yaw.
+    """A cube resting on the table: its colour's name, centre ``(x, y)`` and yaw.
 
-    ``brightness`` scales the top face colour (the simulator's lighting gives 0.45..1.0).
+    The top face is ``rgb`` if given, else the simulator's colour of that name, scaled by
+    ``brightness`` (the simulator's lighting gives 0.45..1.0).
     """
 
-    rgb: tuple[float, float, float]
+    colour: str
     x_m: float
     y_m: float
     yaw_rad: float = 0.0
     brightness: float = 1.0
+    rgb: tuple[float, float, float] | None = None
     edge_m: float = CUBE_EDGE_M
     table_z_m: float = 0.0
+    #: The simulated cubes' colour is a thin plate inset at the top: its sides, this tall,
+    #: show the colour on the cube's visible sides, just below the top face's edge.
+    top_plate_m: float = 0.0
+
+    @property
+    def top_rgb(self) -> FloatArray:
+        """The top face's rendered colour (0..1)."""
+        rgb = self.rgb if self.rgb is not None else SIM_CUBE_COLOURS_RGB[self.colour]
+        return np.asarray(rgb, dtype=float) * self.brightness
 
     @property
     def centre_world(self) -> Pose:
@@ -113,6 +124,7 @@ def _visible_faces(
     """The cube's side faces that face the camera, shaded, and its top face."""
     top = cube.top_corners_world()
     bottom = cube.corners_world(cube.table_z_m)
+    plate = cube.corners_world(cube.table_z_m + cube.edge_m - cube.top_plate_m)
     centre = cube.centre_world.position_m
     sides = []
     for i in range(4):
@@ -126,10 +138,11 @@ def _visible_faces(
             continue
         shade = 0.45 + 0.55 * max(0.0, float(normal @ light_direction))
         sides.append(_Face(project_points(intrinsics, camera_pose_world, quad), np.asarray(side_rgb) * shade))
-    top_face = _Face(
-        project_points(intrinsics, camera_pose_world, top),
-        np.asarray(cube.rgb, dtype=float) * cube.brightness,
-    )
+        if cube.top_plate_m > 0:
+            band = np.array([plate[i], plate[j], top[j], top[i]])
+            colour = cube.top_rgb / max(cube.brightness, 1e-9) * shade
+            sides.append(_Face(project_points(intrinsics, camera_pose_world, band), colour))
+    top_face = _Face(project_points(intrinsics, camera_pose_world, top), cube.top_rgb)
     return sides, top_face
 
 
@@ -222,13 +235,64 @@ def render_frame(
         for face in [*all_sides, *all_tops]:
             _paint(tile, (x0, y0), supersample, face)
         if supersample > 1:
-            tile = cv2.resize(tile, (x1 - x0, y1 - y0), interpolation=cv2.INTER_AREA)
-        image[y0:y1, x0:x1] = tile
+            image[y0:y1, x0:x1] = cv2.resize(tile, (x1 - x0, y1 - y0), interpolation=cv2.INTER_AREA)
+        else:
+            image[y0:y1, x0:x1] = tile
 
     image *= 255.0
     if blur_sigma_px > 0:
-        image = cv2.GaussianBlur(image, (0, 0), blur_sigma_px)
+        image = np.asarray(cv2.GaussianBlur(image, (0, 0), blur_sigma_px), dtype=np.float32)
     if noise_sigma > 0:
         image += np.random.default_rng(seed).normal(0.0, noise_sigma, image.shape).astype(np.float32)
     rgb = np.clip(np.round(image), 0, 255).astype(np.uint8)
     return CameraFrame(rgb, None, intrinsics, camera_pose_world, 0.0)
+
+
+def visible_table_box(
+    intrinsics: CameraIntrinsics, camera_pose_world: Pose, z_m: float, margin_m: float = 0.0
+) -> tuple[float, float, float, float]:
+    """``(x_min, x_max, y_min, y_max)`` of a box at height ``z_m`` that the camera sees entirely.
+
+    The box lies inside the back-projected image corners, shrunk by ``margin_m`` on every side
+    (for a cube's top face to stay whole, half its diagonal, about 0.036 m).
+    """
+    corners = [
+        (0.0, 0.0),
+        (intrinsics.width_px - 1.0, 0.0),
+        (0.0, intrinsics.height_px - 1.0),
+        (intrinsics.width_px - 1.0, intrinsics.height_px - 1.0),
+    ]
+    points = []
+    for u, v in corners:
+        ray = camera_pose_world.rotation @ np.array(
+            [(u - intrinsics.cx_px) / intrinsics.fx_px, (v - intrinsics.cy_px) / intrinsics.fy_px, 1.0]
+        )
+        origin = camera_pose_world.position_m
+        points.append(origin + (z_m - origin[2]) / ray[2] * ray)
+    xs, ys = np.sort([p[0] for p in points]), np.sort([p[1] for p in points])
+    # The inner two of the four corner coordinates bound a box inside a trapezoid too.
+    return float(xs[1] + margin_m), float(xs[2] - margin_m), float(ys[1] + margin_m), float(ys[2] - margin_m)
+
+
+def random_cubes(
+    rng: np.random.Generator,
+    count: int,
+    intrinsics: CameraIntrinsics | None = None,
+    camera_pose_world: Pose | None = None,
+    colours: Sequence[str] = ("red", "green", "blue", "yellow"),
+    brightness_range: tuple[float, float] = (0.45, 1.0),
+) -> list[SyntheticCube]:
+    """``count`` single cubes spread uniformly over the visible table, any yaw, colour and lighting."""
+    intrinsics = intrinsics or sim_intrinsics()
+    camera_pose_world = camera_pose_world or top_down_camera_pose()
+    x_min, x_max, y_min, y_max = visible_table_box(intrinsics, camera_pose_world, CUBE_EDGE_M, 0.04)
+    return [
+        SyntheticCube(
+            str(rng.choice(list(colours))),
+            float(rng.uniform(x_min, x_max)),
+            float(rng.uniform(y_min, y_max)),
+            float(rng.uniform(-math.pi, math.pi)),
+            float(rng.uniform(*brightness_range)),
+        )
+        for _ in range(count)
+    ]

@@ -1,0 +1,139 @@
+"""Sub-pixel corners on anti-aliased synthetic frames, and the comparison that chose the method."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.perception.corners import (
+    chroma,
+    refine_contour_lines,
+    refine_corner_subpix,
+    refine_edge_lines,
+)
+from bt_arrange.perception.segmentation import (
+    approximate_quadrilateral,
+    colour_mask,
+    largest_contour,
+    order_corners,
+)
+from bt_arrange.perception.synthetic import (
+    SIM_SIDE_RGB,
+    SIM_TABLE_RGB,
+    SyntheticCube,
+    project_points,
+    render_frame,
+    sim_intrinsics,
+    top_down_camera_pose,
+)
+from bt_arrange.robot import CameraFrame
+
+INTRINSICS = sim_intrinsics()
+CAMERA = top_down_camera_pose()
+
+# A spread over the image: centre, corners of the visible table, all lightings, yaws from
+# square to the image to 45 degrees.
+CUBES = [
+    SyntheticCube("red", 0.50, 0.00, math.radians(7.0), 1.0),
+    SyntheticCube("green", 0.68, 0.38, math.radians(-33.0), 0.45),
+    SyntheticCube("blue", 0.33, -0.40, math.radians(45.0), 0.7),
+    SyntheticCube("yellow", 0.36, 0.31, math.radians(18.0), 0.55),
+    SyntheticCube("red", 0.66, -0.22, math.radians(-3.0), 0.85),
+    SyntheticCube("blue", 0.52, 0.15, math.radians(61.0), 0.5),
+]
+
+
+def pixel_corners(frame: CameraFrame, colour: str) -> tuple[np.ndarray, np.ndarray]:
+    """The pipeline's pixel-level corners and the contour they came from."""
+    contour = largest_contour(colour_mask(frame.rgb, DEFAULT_COLOUR_TABLE[colour]))
+    assert contour is not None
+    polygon = order_corners(approximate_quadrilateral(contour))
+    return refine_contour_lines(contour, polygon), contour
+
+
+def corner_error_px(found: np.ndarray, cube: SyntheticCube) -> float:
+    truth = project_points(INTRINSICS, CAMERA, cube.top_corners_world())
+    return float(np.linalg.norm(found[:, None] - truth[None], axis=2).min(axis=1).max())
+
+
+@pytest.fixture(scope="module")
+def frames() -> list[CameraFrame]:
+    return [render_frame([cube], INTRINSICS, CAMERA, supersample=8) for cube in CUBES]
+
+
+def test_grey_has_no_chroma_and_mixes_stay_linear() -> None:
+    greys = np.array([SIM_SIDE_RGB, SIM_TABLE_RGB, (0.1, 0.1, 0.1)]) * 255
+    assert np.abs(chroma(greys)).max() < 0.03 * 255
+    red, table = np.array([204.0, 20.0, 20.0]), np.array(SIM_TABLE_RGB) * 255
+    mix = 0.3 * red + 0.7 * table
+    assert np.allclose(chroma(mix), 0.3 * chroma(red) + 0.7 * chroma(table))
+
+
+def test_edge_lines_bring_corners_within_a_tenth_of_a_pixel(frames: list[CameraFrame]) -> None:
+    for cube, frame in zip(CUBES, frames, strict=True):
+        start, _ = pixel_corners(frame, cube.colour)
+        refined = refine_edge_lines(frame.rgb, start)
+        assert refined is not None
+        assert corner_error_px(refined, cube) < 0.1, cube
+
+
+def test_edge_lines_converge_from_a_pixel_away(frames: list[CameraFrame]) -> None:
+    cube, frame = CUBES[1], frames[1]
+    truth = order_corners(project_points(INTRINSICS, CAMERA, cube.top_corners_world()))
+    rng = np.random.default_rng(0)
+    start = truth + rng.uniform(-1.0, 1.0, truth.shape)
+    refined = refine_edge_lines(frame.rgb, start)
+    assert refined is not None
+    assert corner_error_px(refined, cube) < 0.1
+
+
+def test_edge_lines_with_the_sims_realistic_camera_noise() -> None:
+    # CameraNoiseConfig.realistic: sigma 4 grey levels, 0.8 px blur.
+    for seed, cube in enumerate(CUBES[:3]):
+        frame = render_frame([cube], INTRINSICS, CAMERA, noise_sigma=4.0, blur_sigma_px=0.8, seed=seed)
+        start, _ = pixel_corners(frame, cube.colour)
+        refined = refine_edge_lines(frame.rgb, start)
+        assert refined is not None
+        assert corner_error_px(refined, cube) < 0.25, cube
+
+
+def test_edge_lines_are_the_most_accurate_method(frames: list[CameraFrame]) -> None:
+    """The measurement behind the default: fitted sub-pixel edges beat the alternatives."""
+    errors: dict[str, list[float]] = {"edge_lines": [], "corner_subpix": [], "contour_lines": []}
+    for cube, frame in zip(CUBES, frames, strict=True):
+        start, _ = pixel_corners(frame, cube.colour)
+        refined = refine_edge_lines(frame.rgb, start)
+        assert refined is not None
+        errors["edge_lines"].append(corner_error_px(refined, cube))
+        errors["corner_subpix"].append(corner_error_px(refine_corner_subpix(frame.rgb, start), cube))
+        errors["contour_lines"].append(corner_error_px(start, cube))
+    means = {name: float(np.mean(values)) for name, values in errors.items()}
+    assert means["edge_lines"] < 0.05
+    assert means["edge_lines"] < 0.25 * means["corner_subpix"]
+    assert means["edge_lines"] < 0.25 * means["contour_lines"]
+
+
+def test_aliased_render_keeps_corners_within_half_a_pixel() -> None:
+    # TinyRenderer samples pixel centres without anti-aliasing: an edge square to the image
+    # axes can only be placed to the pixel boundary, +-0.5 px.
+    for cube in (CUBES[0], CUBES[2], SyntheticCube("yellow", 0.55, 0.1, 0.0)):
+        frame = render_frame([cube], INTRINSICS, CAMERA, supersample=1)
+        start, _ = pixel_corners(frame, cube.colour)
+        refined = refine_edge_lines(frame.rgb, start)
+        assert refined is not None
+        assert corner_error_px(refined, cube) < 0.75, cube
+
+
+def test_edge_lines_unmix_a_touching_cube_of_another_colour() -> None:
+    # Two faces share an edge: each side of it is unmixed with the neighbour's own colour.
+    red = SyntheticCube("red", 0.5, 0.0, 0.0, 0.9)
+    yellow = SyntheticCube("yellow", 0.5, 0.05, 0.0, 0.6)
+    frame = render_frame([red, yellow], INTRINSICS, CAMERA)
+    for cube in (red, yellow):
+        start, _ = pixel_corners(frame, cube.colour)
+        refined = refine_edge_lines(frame.rgb, start)
+        assert refined is not None
+        assert corner_error_px(refined, cube) < 0.1, cube.colour
