@@ -13,7 +13,7 @@ import contextlib
 import math
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 
@@ -25,6 +25,7 @@ from bt_arrange.robot import Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
+from bt_arrange_sim.scenes import CubeStart
 
 #: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
 HOME_Q = DEFAULT_HOME_Q
@@ -245,6 +246,20 @@ class WorkCell:
         """True (x_m, y_m, yaw_rad) of a cube, yaw folded to its 90-degree symmetry."""
         pose = self.cube_pose_truth(name)
         return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad)
+
+    def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+        """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.
+
+        The robot learns of it only through its camera. Never used to steer or to fake a result.
+        """
+        pose = self.cube_pose_truth(name)
+        moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
+        self.client.resetBasePositionAndOrientation(self.cubes[name], moved.position_m, moved.quaternion_xyzw)
+
+    def add_cubes(self, starts: Iterable[CubeStart]) -> None:
+        """Put several cubes on the table (a scene from ``scenes.scatter``)."""
+        for start in starts:
+            self.add_cube(start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name)
 
     def cube_in_gripper_truth(self, name: str) -> bool:
         """True when both finger pads touch the cube."""

@@ -21,30 +21,8 @@ from bt_arrange.motion import (
     gripper_down_pose,
     nearest_symmetric_yaw,
 )
+from bt_arrange.settings import CUBE_EDGE_M, ManipulationSettings
 from bt_arrange_sim.cell import WorkCell
-from bt_arrange_sim.objects import CUBE_EDGE_M
-
-
-@dataclass(frozen=True)
-class GraspSettings:
-    """Heights, widths and forces of a pick and place of a 5 cm cube (metres, newtons, seconds)."""
-
-    approach_height_m: float = 0.12
-    grasp_height_m: float = CUBE_EDGE_M / 2
-    #: The held cube is let go this far above resting: the TCP height error plus a little.
-    release_clearance_m: float = 0.0005
-    grip_force_n: float = 40.0
-    open_width_m: float = 0.075
-    #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
-    grasp_width_tolerance_m: float = 0.003
-    settle_s: float = 0.15
-    gripper_timeout_s: float = 2.0
-    #: Pads 8 mm thick: at an opening of 50 - 8 = 42 mm the two pad centres sit on the cube's edges.
-    pad_thickness_m: float = 0.008
-    pad_width_m: float = 0.022
-    push_height_m: float = CUBE_EDGE_M / 2
-    #: The pads start this far from the face they will push, and back off this far after.
-    push_clearance_m: float = 0.010
 
 
 @dataclass
@@ -62,12 +40,12 @@ class ScriptedPickPlace:
     def __init__(
         self,
         cell: WorkCell,
-        settings: GraspSettings | None = None,
+        settings: ManipulationSettings | None = None,
         joint_limits: JointLimits | None = None,
         cartesian_limits: CartesianLimits | None = None,
     ) -> None:
         self.cell = cell
-        self.settings = settings or GraspSettings()
+        self.settings = settings or ManipulationSettings()
         self.kinematics = ArmKinematics()
         self.planner = MotionPlanner(
             self.kinematics,
@@ -146,12 +124,12 @@ class ScriptedPickPlace:
         # The closing axis lies across the push; the pads' leading faces are half a pad width ahead.
         push_yaw = math.atan2(direction[1], direction[0]) + math.pi / 2
         yaw = nearest_symmetric_yaw(push_yaw, self.kinematics.wrist_yaw_rad(arm.joint_positions()), math.pi)
-        reach_m = CUBE_EDGE_M / 2 + s.pad_width_m / 2
+        reach_m = s.push_reach_m
         centre = np.array([x_m, y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * abs(distance_m)
         back = end - direction * s.push_clearance_m
-        gripper.open(CUBE_EDGE_M - s.pad_thickness_m)
+        gripper.open(s.push_opening_m)
         self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(*begin, s.approach_height_m, yaw)))
         self.wait_for_gripper()
         self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*begin, s.push_height_m, yaw)))

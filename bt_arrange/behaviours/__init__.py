@@ -1,0 +1,30 @@
+"""The py_trees behaviours of an arrangement: Detect, Pick, Place, Inspect, Push.
+
+Each reaches the world only through the ``Context`` handed to ``setup(context=...)``, declares
+its blackboard keys (see ``keys``), sets ``feedback_message`` on every branch, never blocks a
+tick, and turns errors of the framework into FAILURE with the reason as feedback.
+"""
+
+from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.context import ArmBrake, Context
+from bt_arrange.behaviours.handling import GraspGuard, Pick, Place, Push, holding
+from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, offset_in_target_frame_mm
+
+__all__ = [
+    "ArmBrake",
+    "Context",
+    "Detect",
+    "GraspGuard",
+    "GripperStage",
+    "Inspect",
+    "InstantStage",
+    "MoveHome",
+    "MoveStage",
+    "Pick",
+    "Place",
+    "Push",
+    "Stage",
+    "StagedBehaviour",
+    "holding",
+    "offset_in_target_frame_mm",
+]

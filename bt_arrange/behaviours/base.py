@@ -1,0 +1,232 @@
+"""A behaviour made of stages that never block: a motion, a gripper action, a check.
+
+``StagedBehaviour.initialise()`` builds the stage list from the blackboard and starts the first
+stage (planning its motion); each ``update()`` advances the current stage by one control period
+and moves on to the next when it ends. Errors of the framework (``BtArrangeError``) become
+FAILURE with the error as the feedback message. An interrupted motion is handed to the
+context's ``ArmBrake``, which finishes its jerk-limited stop.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+
+from bt_arrange.behaviours.context import Context
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.geometry import FloatArray
+from bt_arrange.motion import Motion
+
+
+class Stage:
+    """One step of a behaviour. ``start`` may raise ``BtArrangeError``; ``poll`` runs once per tick."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.reason = ""
+
+    def start(self, context: Context) -> None:
+        """Begin the step (plan a motion, command the gripper)."""
+
+    @abstractmethod
+    def poll(self, context: Context) -> Status:
+        """Advance by one control period; RUNNING, SUCCESS, or FAILURE with ``self.reason`` set."""
+
+    def interrupt(self, context: Context) -> None:
+        """The behaviour was interrupted while this step ran."""
+
+
+class MoveStage(Stage):
+    """Follow a motion planned at the start of the step, then let the arm settle.
+
+    ``plan(context, q)`` receives the measured joint positions and returns the motion.
+    """
+
+    def __init__(self, name: str, plan: Callable[[Context, FloatArray], Motion]) -> None:
+        super().__init__(name)
+        self._plan = plan
+        self.motion: Motion | None = None
+        self._done_at_s: float | None = None
+
+    def start(self, context: Context) -> None:
+        """Plan the motion from where the arm is now."""
+        self.motion = self._plan(context, context.robot.arm.joint_positions())
+        self._done_at_s = None
+
+    def poll(self, context: Context) -> Status:
+        """Send the next setpoint; after the last one, wait ``settle_s`` of world time."""
+        assert self.motion is not None
+        clock = context.robot.clock
+        if not self.motion.done:
+            setpoint = self.motion.step()
+            context.robot.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
+            if not self.motion.done:
+                return Status.RUNNING
+            self._done_at_s = clock.now()
+        assert self._done_at_s is not None
+        if clock.now() - self._done_at_s < context.settings.settle_s:
+            return Status.RUNNING
+        return Status.SUCCESS
+
+    def interrupt(self, context: Context) -> None:
+        """Hand a running motion to the brake."""
+        if self.motion is not None and not self.motion.done:
+            context.brake.take(self.motion)
+
+
+class GripperStage(Stage):
+    """Command the gripper, then wait until the fingers stop (or fail after the timeout)."""
+
+    #: Control periods to wait before reading the fingers' speed: they need a moment to start.
+    START_PERIODS = 3
+
+    def __init__(self, name: str, command: Callable[[Context], None], wait: bool = True) -> None:
+        super().__init__(name)
+        self._command = command
+        self._wait = wait
+        self._started_at_s = 0.0
+        self._polls = 0
+
+    def start(self, context: Context) -> None:
+        """Send the command."""
+        self._command(context)
+        self._started_at_s = context.robot.clock.now()
+        self._polls = 0
+
+    def poll(self, context: Context) -> Status:
+        """SUCCESS once the fingers stand still."""
+        if not self._wait:
+            return Status.SUCCESS
+        self._polls += 1
+        gripper = context.robot.gripper
+        if self._polls <= self.START_PERIODS or gripper.is_moving():
+            waited_s = context.robot.clock.now() - self._started_at_s
+            if waited_s > context.settings.gripper_timeout_s:
+                self.reason = (
+                    f"{self.name}: fingers still moving after {waited_s:.1f} s "
+                    f"(limit {context.settings.gripper_timeout_s:.1f} s), width {gripper.width() * 1000:.1f} mm"
+                )
+                return Status.FAILURE
+            return Status.RUNNING
+        return Status.SUCCESS
+
+
+class InstantStage(Stage):
+    """A step done within one tick: ``action(context)`` returns ``None``, or a reason to fail."""
+
+    def __init__(self, name: str, action: Callable[[Context], str | None]) -> None:
+        super().__init__(name)
+        self._action = action
+        self._result: str | None = None
+
+    def start(self, context: Context) -> None:
+        """Do it."""
+        self._result = self._action(context)
+
+    def poll(self, context: Context) -> Status:
+        """SUCCESS, or FAILURE with the action's reason."""
+        if self._result is not None:
+            self.reason = self._result
+            return Status.FAILURE
+        return Status.SUCCESS
+
+
+class StagedBehaviour(py_trees.behaviour.Behaviour):
+    """A behaviour that runs ``stages()`` one after the other, never blocking a tick.
+
+    Subclasses declare their blackboard keys in ``__init__`` (configuration only: a tree can be
+    built and drawn without a robot), build their stages in ``stages()`` from the blackboard, and
+    may say what they achieved in ``success_message()``.
+    """
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name=name)
+        self.context: Context | None = None
+        self._stages: list[Stage] = []
+        self._index = 0
+        self._started = False
+        self._failure: str | None = None
+
+    def setup(self, **kwargs: Any) -> None:
+        """Receive the ``context`` keyword that ``BehaviourTree.setup(context=...)`` hands out."""
+        context = kwargs.get("context")
+        if not isinstance(context, Context):
+            raise BtArrangeError(
+                f"behaviour {self.name!r} needs setup(context=Context(...)), got {type(context).__name__}"
+            )
+        self.context = context
+
+    @abstractmethod
+    def stages(self, context: Context) -> list[Stage]:
+        """The steps of this run, built from the blackboard when the behaviour starts."""
+
+    def success_message(self) -> str:
+        """Feedback once every stage succeeded."""
+        return "done"
+
+    def initialise(self) -> None:
+        """Build the stages and start the first one (plan its motion) unless the arm is still braking."""
+        context = self._require_context()
+        self._index = 0
+        self._started = False
+        self._failure = None
+        try:
+            self._stages = self.stages(context)
+        except BtArrangeError as error:
+            self._failure = str(error)
+            self._stages = []
+            return
+        if self._stages and not context.brake.active:
+            self._start_current(context)
+
+    def update(self) -> Status:
+        """Advance the current stage by one control period; move on when it ends."""
+        context = self._require_context()
+        if self._failure is not None:
+            self.feedback_message = self._failure
+            return Status.FAILURE
+        if context.brake.active:
+            self.feedback_message = "waiting for the arm to stop"
+            return Status.RUNNING
+        while self._index < len(self._stages):
+            stage = self._stages[self._index]
+            if not self._started and not self._start_current(context):
+                self.feedback_message = self._failure or ""
+                return Status.FAILURE
+            status = stage.poll(context)
+            if status == Status.RUNNING:
+                self.feedback_message = stage.name
+                return Status.RUNNING
+            if status == Status.FAILURE:
+                self.feedback_message = stage.reason or f"{stage.name} failed"
+                return Status.FAILURE
+            self._index += 1
+            self._started = False
+        self.feedback_message = self.success_message()
+        return Status.SUCCESS
+
+    def terminate(self, new_status: Status) -> None:
+        """On interruption (INVALID), hand a running motion to the brake."""
+        if new_status == Status.INVALID and self.context is not None and self._index < len(self._stages):
+            if self._started:
+                self._stages[self._index].interrupt(self.context)
+            self.feedback_message = "interrupted"
+
+    def _start_current(self, context: Context) -> bool:
+        stage = self._stages[self._index]
+        try:
+            stage.start(context)
+        except BtArrangeError as error:
+            self._failure = f"{stage.name}: {error}"
+            return False
+        self._started = True
+        return True
+
+    def _require_context(self) -> Context:
+        if self.context is None:
+            raise BtArrangeError(f"behaviour {self.name!r} was not set up: call tree.setup(context=...) first")
+        return self.context

@@ -1,0 +1,226 @@
+"""Behaviours that handle a cube: Pick, Place and Push, and the guard that watches a grasp."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import py_trees
+from py_trees.common import Access, Status
+
+from bt_arrange.behaviours import keys
+from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.context import Context
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
+
+
+def _to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
+    """A stage planner: a joint-space move to a gripper-down pose (fast, path free)."""
+
+    def plan(context: Context, q: FloatArray) -> Motion:
+        return context.planner.move_to_pose(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+
+    return plan
+
+
+def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
+    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push)."""
+
+    def plan(context: Context, q: FloatArray) -> Motion:
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+
+    return plan
+
+
+def _wrist_yaw(context: Context) -> float:
+    return context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
+
+
+def holding(context: Context) -> bool:
+    """True when the closed fingers still stand a cube's width apart."""
+    settings = context.settings
+    return context.robot.gripper.width() > settings.cube_edge_m - settings.grasp_width_tolerance_m
+
+
+class Pick(StagedBehaviour):
+    """Grasp the object at its measured pose (``/<obj>/pose``) and lift it.
+
+    Approach above it with the pads square to its faces, descend, close with a force limit,
+    check from the finger width that the cube is between the pads, lift.
+    """
+
+    def __init__(self, name: str, obj: str) -> None:
+        super().__init__(name)
+        self.obj = obj
+        self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
+        self.grip_width_m: float | None = None
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Open, approach, descend, close, check, lift."""
+        pose: Pose = self.blackboard.get(keys.key(self.obj, keys.POSE))
+        s = context.settings
+        x, y = pose.x_m, pose.y_m
+        yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
+        return [
+            GripperStage("open the gripper", lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
+            MoveStage("move above the cube", _to_pose(x, y, s.approach_height_m, yaw)),
+            GripperStage("wait for the fingers to open", lambda c: None),
+            MoveStage("descend to the cube", _line_to(x, y, s.grasp_height_m, yaw)),
+            GripperStage("close on the cube", lambda c: c.robot.gripper.close(s.grip_force_n)),
+            InstantStage("check the grasp", self._check_grasp),
+            MoveStage("lift the cube", _line_to(x, y, s.approach_height_m, yaw)),
+        ]
+
+    def _check_grasp(self, context: Context) -> str | None:
+        self.grip_width_m = max(0.0, context.robot.gripper.width())
+        if holding(context):
+            return None
+        s = context.settings
+        return (
+            f"no cube between the pads: the fingers closed to {self.grip_width_m * 1000:.1f} mm, "
+            f"a {s.cube_edge_m * 1000:.0f} mm cube holds them at least "
+            f"{(s.cube_edge_m - s.grasp_width_tolerance_m) * 1000:.1f} mm apart"
+        )
+
+    def success_message(self) -> str:
+        """Feedback with the grip width."""
+        assert self.grip_width_m is not None
+        return f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
+
+
+class Place(StagedBehaviour):
+    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat."""
+
+    def __init__(self, name: str, obj: str) -> None:
+        super().__init__(name)
+        self.obj = obj
+        self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Carry, lower, open, retreat."""
+        target: PlanarPose = self.blackboard.get(keys.key(self.obj, keys.TARGET))
+        s = context.settings
+        x, y = target.x_m, target.y_m
+        # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
+        yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
+        return [
+            MoveStage("carry above the target", _to_pose(x, y, s.approach_height_m, yaw)),
+            MoveStage("lower the cube to the table", _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
+            GripperStage("release the cube", lambda c: c.robot.gripper.open(s.open_width_m)),
+            MoveStage("retreat", _line_to(x, y, s.approach_height_m, yaw)),
+        ]
+
+    def success_message(self) -> str:
+        """Feedback once released."""
+        return f"{self.obj} released at its target"
+
+
+class Push(StagedBehaviour):
+    """One corrective push along the target's x or y axis, alternating between pushes.
+
+    Reads the measured pose and the offset (``/<obj>/offset_xy_mm``, target minus pose in the
+    target's frame); pushes along ``/<obj>/push_axis`` (x first) by that axis' offset, unless it is
+    below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
+    opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
+    also squares the cube up); the pads start on the side away from the target, push, back off.
+    """
+
+    def __init__(self, name: str, obj: str) -> None:
+        super().__init__(name)
+        self.obj = obj
+        self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
+        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
+        self.blackboard.register_key(keys.key(obj, keys.OFFSET_XY_MM), access=Access.READ)
+        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.WRITE)
+        self.pushed: tuple[str, float] | None = None
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
+        s = context.settings
+        pose: Pose = self.blackboard.get(keys.key(self.obj, keys.POSE))
+        target: PlanarPose = self.blackboard.get(keys.key(self.obj, keys.TARGET))
+        offset_xy_mm = self.blackboard.get(keys.key(self.obj, keys.OFFSET_XY_MM))
+        axis_key = keys.key(self.obj, keys.PUSH_AXIS)
+        preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
+        axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
+        self.blackboard.set(axis_key, "y" if axis == "x" else "x", overwrite=True)
+        distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
+        self.pushed = (axis, distance_m)
+        if abs(distance_m) < s.min_push_m:
+            return []
+        unit = np.array([1.0, 0.0, 0.0]) if axis == "x" else np.array([0.0, 1.0, 0.0])
+        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * math.copysign(1.0, distance_m)
+        # The closing axis lies across the push; the gripper is symmetric under a half turn.
+        yaw = nearest_symmetric_yaw(
+            math.atan2(direction[1], direction[0]) + math.pi / 2, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD
+        )
+        centre = np.array([pose.x_m, pose.y_m])
+        begin = centre - direction * (s.push_reach_m + s.push_clearance_m)
+        end = centre - direction * s.push_reach_m + direction * abs(distance_m)
+        back = end - direction * s.push_clearance_m
+        return [
+            GripperStage("set the push opening", lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
+            MoveStage("move behind the cube", _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
+            GripperStage("wait for the fingers", lambda c: None),
+            MoveStage("lower the fingers", _line_to(begin[0], begin[1], s.push_height_m, yaw)),
+            MoveStage(f"push {abs(distance_m) * 1000:.2f} mm along {axis}", _line_to(end[0], end[1], s.push_height_m, yaw)),
+            MoveStage("back off", _line_to(back[0], back[1], s.push_height_m, yaw)),
+            MoveStage("lift the fingers", _line_to(back[0], back[1], s.approach_height_m, yaw)),
+        ]
+
+    @staticmethod
+    def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
+        """The preferred (alternated) axis, unless its offset is below a push and the other's is not."""
+        other = "y" if preferred == "x" else "x"
+        along = {"x": abs(offset_xy_mm[0]), "y": abs(offset_xy_mm[1])}
+        if along[preferred] < min_push_mm <= along[other]:
+            return other
+        return preferred
+
+    def success_message(self) -> str:
+        """Feedback with the push made."""
+        assert self.pushed is not None
+        axis, distance_m = self.pushed
+        if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
+            return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
+        return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
+
+
+class GraspGuard(py_trees.decorators.EternalGuard):
+    """Runs its child (e.g. Place) only while the cube stays between the fingers.
+
+    Checked before every tick: when the fingers close past the cube's width (it slipped out),
+    the child is interrupted at once and the guard fails, so a retry above can detect and pick
+    the cube again instead of placing air.
+    """
+
+    def __init__(self, name: str, child: py_trees.behaviour.Behaviour) -> None:
+        super().__init__(name=name, child=child, condition=self._holding)
+        self.context: Context | None = None
+
+    def setup(self, **kwargs: object) -> None:
+        """Receive the context."""
+        context = kwargs.get("context")
+        if isinstance(context, Context):
+            self.context = context
+
+    def _holding(self) -> bool:
+        if self.context is None:
+            return True
+        if holding(self.context):
+            return True
+        s = self.context.settings
+        self.feedback_message = (
+            f"the cube left the gripper: fingers at {self.context.robot.gripper.width() * 1000:.1f} mm, "
+            f"under the {(s.cube_edge_m - s.grasp_width_tolerance_m) * 1000:.1f} mm of a held cube"
+        )
+        return False
+
+    def update(self) -> Status:
+        """Reflect the child, with its feedback."""
+        self.feedback_message = f"holding; {self.decorated.feedback_message}"
+        return self.decorated.status

@@ -1,0 +1,27 @@
+"""Blackboard keys, one namespace per object: ``/red/pose``, ``/red/offset_mm``, ...
+
+| key | type | written by | read by |
+|---|---|---|---|
+| ``/<obj>/target`` | ``PlanarPose`` | the tree (``SetBlackboardVariable``) | Place, Inspect, Push |
+| ``/<obj>/pose`` | ``Pose`` (cube centre, world) | Detect, Inspect | Pick, Push |
+| ``/<obj>/offset_mm`` | ``float``, planar distance to the target | Inspect | RetryUntilThreshold |
+| ``/<obj>/offset_xy_mm`` | ``(float, float)``, target minus pose in the target's frame | Inspect | Push |
+| ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
+| ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
+| ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+"""
+
+from __future__ import annotations
+
+TARGET = "target"
+POSE = "pose"
+OFFSET_MM = "offset_mm"
+OFFSET_XY_MM = "offset_xy_mm"
+PLACED_OFFSET_MM = "placed_offset_mm"
+CORRECTIONS = "corrections"
+PUSH_AXIS = "push_axis"
+
+
+def key(obj: str, field: str) -> str:
+    """The absolute blackboard key of ``field`` for object ``obj``."""
+    return f"/{obj}/{field}"

@@ -1,0 +1,120 @@
+"""RetryUntilThreshold: re-run a correction until an offset on the blackboard is under a threshold.
+
+The paper's inner loop (Algorithm 1, lines 11-15) as a py_trees decorator::
+
+    while offset >= threshold:
+        push; inspect (which writes the new offset)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import py_trees
+from py_trees.common import Access, Status
+
+from bt_arrange.errors import PlanError
+
+
+class RetryUntilThreshold(py_trees.decorators.Decorator):
+    """Run the child until the blackboard value at ``offset_key`` drops below ``threshold_mm``.
+
+    - Before each run of the child: SUCCESS at once when the offset is already under the
+      threshold (no correction is started).
+    - The child (e.g. Sequence[Push, Inspect]) must update the offset; each SUCCESS of the child
+      counts one correction, recorded at ``corrections_key`` when given.
+    - FAILURE with the residual offset in the feedback message once ``max_attempts`` corrections
+      left it above the threshold; FAILURE with the child's reason when the child fails.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        child: py_trees.behaviour.Behaviour,
+        offset_key: str,
+        threshold_mm: float,
+        max_attempts: int,
+        corrections_key: str | None = None,
+    ) -> None:
+        if not threshold_mm > 0:
+            raise PlanError(f"threshold {threshold_mm!r} mm must be a positive number of millimetres")
+        if not isinstance(max_attempts, int) or max_attempts < 0:
+            raise PlanError(f"max_attempts {max_attempts!r} must be a whole number, 0 or more")
+        super().__init__(name=name, child=child)
+        self.offset_key = offset_key
+        self.threshold_mm = float(threshold_mm)
+        self.max_attempts = max_attempts
+        self.corrections_key = corrections_key
+        self.attempts = 0
+        self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(offset_key, access=Access.READ)
+        if corrections_key is not None:
+            self.blackboard.register_key(corrections_key, access=Access.WRITE)
+
+    def initialise(self) -> None:
+        """Start counting corrections from zero."""
+        self.attempts = 0
+        self._record()
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Check the offset before the child runs; run it only while a correction is needed."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        if self.decorated.status != Status.RUNNING:
+            verdict = self._verdict()
+            if verdict is not None:
+                self.stop(verdict)
+                yield self
+                return
+        yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def update(self) -> Status:
+        """After a tick of the child: count a finished correction, pass on a failure."""
+        child = self.decorated
+        if child.status == Status.FAILURE:
+            self.feedback_message = f"correction failed: {child.feedback_message}"
+            return Status.FAILURE
+        if child.status == Status.SUCCESS:
+            self.attempts += 1
+            self._record()
+            self.feedback_message = f"{self.attempts} correction(s), offset {self._offset_text()}"
+            return Status.RUNNING  # the next tick checks the new offset before anything else
+        self.feedback_message = f"correcting ({self.attempts} done), offset {self._offset_text()}"
+        return Status.RUNNING
+
+    def _verdict(self) -> Status | None:
+        """SUCCESS or FAILURE when the loop is over, None to run the child once more."""
+        offset = self._offset()
+        if offset is None:
+            self.feedback_message = f"no offset at {self.offset_key}: inspect the object before correcting it"
+            return Status.FAILURE
+        if offset < self.threshold_mm:
+            self.feedback_message = (
+                f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm after {self.attempts} correction(s)"
+            )
+            return Status.SUCCESS
+        if self.attempts >= self.max_attempts:
+            self.feedback_message = (
+                f"offset still {offset:.2f} mm >= {self.threshold_mm:.2f} mm after {self.attempts} correction(s)"
+            )
+            return Status.FAILURE
+        return None
+
+    def _offset(self) -> float | None:
+        if not self.blackboard.exists(self.offset_key):
+            return None
+        value = self.blackboard.get(self.offset_key)
+        return None if value is None else float(value)
+
+    def _offset_text(self) -> str:
+        offset = self._offset()
+        return "unknown" if offset is None else f"{offset:.2f} mm"
+
+    def _record(self) -> None:
+        if self.corrections_key is not None:
+            self.blackboard.set(self.corrections_key, self.attempts, overwrite=True)

@@ -1,0 +1,65 @@
+"""How the arm handles a cube: heights, widths, forces and timeouts of pick, place and push."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bt_arrange.errors import OutOfRangeError
+from bt_arrange.robot import GRIPPER_FORCE_RANGE_N, GRIPPER_MAX_WIDTH_M
+
+#: Edge length of the paper's cubes, in metres.
+CUBE_EDGE_M = 0.05
+
+
+@dataclass(frozen=True)
+class ManipulationSettings:
+    """Geometry and forces for 5 cm cubes on a table at z = 0 (metres, newtons, seconds).
+
+    The TCP sits between the pads at mid-pad height, so ``grasp_height_m`` = half an edge grasps
+    the cube through its centre of mass.
+    """
+
+    cube_edge_m: float = CUBE_EDGE_M
+    #: TCP height for moves above the table: pads 10 cm clear of a resting cube's top.
+    approach_height_m: float = 0.12
+    grasp_height_m: float = CUBE_EDGE_M / 2
+    #: The held cube is let go this far above resting: the arm's height error plus a little.
+    release_clearance_m: float = 0.0005
+    grip_force_n: float = 40.0
+    #: Opening before a grasp: the full stroke, so a cube up to 17.5 mm off along the closing axis
+    #: still lands between the pads (and is dragged to the centre as they close).
+    open_width_m: float = 0.085
+    #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
+    grasp_width_tolerance_m: float = 0.003
+    #: Pads of the 2F-85: at an opening of edge - thickness the two pad centres sit on the cube's edges.
+    pad_thickness_m: float = 0.008
+    pad_width_m: float = 0.022
+    push_height_m: float = CUBE_EDGE_M / 2
+    #: The pads start this far from the face they push, and back off this far after.
+    push_clearance_m: float = 0.010
+    #: A push shorter than this along the alternated axis gives way to the other axis.
+    min_push_m: float = 0.0002
+    #: After a motion, the arm gets this long to settle before the next step.
+    settle_s: float = 0.15
+    #: The fingers must stop within this time after an open or close command.
+    gripper_timeout_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        low, high = GRIPPER_FORCE_RANGE_N
+        if not low <= self.grip_force_n <= high:
+            raise OutOfRangeError(f"grip force {self.grip_force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
+        if not self.cube_edge_m < self.open_width_m <= GRIPPER_MAX_WIDTH_M:
+            raise OutOfRangeError(
+                f"open width {self.open_width_m * 1000:.1f} mm must exceed the cube's {self.cube_edge_m * 1000:.0f} mm "
+                f"and stay within the gripper's {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
+            )
+
+    @property
+    def push_opening_m(self) -> float:
+        """Opening for a push: both pads meet the face near its edges (the paper's width - thickness)."""
+        return self.cube_edge_m - self.pad_thickness_m
+
+    @property
+    def push_reach_m(self) -> float:
+        """From the cube's centre to the TCP when the pads' leading faces touch the pushed face."""
+        return self.cube_edge_m / 2 + self.pad_width_m / 2

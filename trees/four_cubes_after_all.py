@@ -1,0 +1,19 @@
+"""The four-colour pattern placed first and corrected afterwards, as in the paper's Fig. 5.
+
+bt-arrange run trees/four_cubes_after_all.py --record runs/fig5
+"""
+
+from four_cubes import TARGETS  # the same pattern  # noqa: I001
+
+from bt_arrange.trees import Arrangement, arrangement
+from bt_arrange_sim.scenes import CubeStart, scatter
+
+
+def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
+    """The tree: place all four cubes, then correct each."""
+    return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="after_all")
+
+
+def create_scene(seed: int = 0) -> list[CubeStart]:
+    """Where the cubes start in the simulator."""
+    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)
