@@ -187,8 +187,9 @@ def arrange_one(
 class Arrangement(py_trees.composites.Sequence):
     """The root of an arrangement tree; remembers its plan so a runner can report per object."""
 
-    def __init__(self, name: str, children: Sequence[py_trees.behaviour.Behaviour], targets: list[Target],
-                 threshold_mm: float) -> None:
+    def __init__(
+        self, name: str, children: Sequence[py_trees.behaviour.Behaviour], targets: list[Target], threshold_mm: float
+    ) -> None:
         super().__init__(name=name, memory=True, children=list(children))
         self.targets = targets
         self.threshold_mm = threshold_mm

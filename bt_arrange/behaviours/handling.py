@@ -167,7 +167,9 @@ class Push(StagedBehaviour):
             MoveStage("move behind the cube", _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
             GripperStage("wait for the fingers", lambda c: None),
             MoveStage("lower the fingers", _line_to(begin[0], begin[1], s.push_height_m, yaw)),
-            MoveStage(f"push {abs(distance_m) * 1000:.2f} mm along {axis}", _line_to(end[0], end[1], s.push_height_m, yaw)),
+            MoveStage(
+                f"push {abs(distance_m) * 1000:.2f} mm along {axis}", _line_to(end[0], end[1], s.push_height_m, yaw)
+            ),
             MoveStage("back off", _line_to(back[0], back[1], s.push_height_m, yaw)),
             MoveStage("lift the fingers", _line_to(back[0], back[1], s.approach_height_m, yaw)),
         ]
