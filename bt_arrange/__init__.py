@@ -6,6 +6,7 @@ from bt_arrange.errors import (
     OutOfRangeError,
     PerceptionError,
     PlanError,
+    TreeFileError,
     UnreachableError,
 )
 from bt_arrange.geometry import PlanarPose, Pose
@@ -28,5 +29,6 @@ __all__ = [
     "PlanarPose",
     "Pose",
     "Robot",
+    "TreeFileError",
     "UnreachableError",
 ]

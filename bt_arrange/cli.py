@@ -1,18 +1,28 @@
 """The ``bt-arrange`` command line.
 
-``bt-arrange info`` reports the library versions and checks that a headless work cell starts.
-Errors a user can cause end in a one-line message and exit status 2, never a traceback.
+    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
+    bt-arrange show TREE_FILE [--format text|dot|png|svg] [--blackboard] [--out FILE]
+    bt-arrange info
+
+Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
+tree-file or plan error (a one-line message, never a traceback), 130 when interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import sys
 from importlib import metadata
+from pathlib import Path
+from typing import Any
 
+from bt_arrange import treefile
 from bt_arrange.errors import BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
+EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _info(_: argparse.Namespace) -> int:
@@ -28,14 +38,110 @@ def _info(_: argparse.Namespace) -> int:
         cell.settle(0.1)
         print(f"  robot description: {robot_urdf_path()}")
         print(f"  headless work cell: ok (TCP at {cell.arm.tcp_pose()})")
-    return 0
+    return EXIT_OK
+
+
+def _run(args: argparse.Namespace) -> int:
+    if args.threshold_mm is not None and not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
+        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
+    module = treefile.load(args.tree_file)
+    root = treefile.build_root(module, threshold_mm=args.threshold_mm)
+    starts = treefile.scene(module, args.seed)
+
+    from bt_arrange_sim.runs import SimulatedRun
+
+    with SimulatedRun(root, starts, gui=args.gui, record_dir=args.record, time_limit_s=args.time_limit_s) as run:
+        if args.live:
+            from bt_arrange.display import LiveView
+
+            view = LiveView(sys.stderr if args.json else sys.stdout)
+            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.cell.clock.now()))
+        report = run.run()
+        if args.live:
+            view.close()
+    if args.json:
+        print(json.dumps(report.to_dict()))
+    else:
+        _print_report(report, args)
+    return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _print_report(report: Any, args: argparse.Namespace) -> None:
+    def mm(value: float | None) -> str:
+        return "-" if value is None else f"{value:.2f}"
+
+    rows = [("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "pushes", "status")]
+    for o in report.objects:
+        x, y, yaw = o.target
+        status = o.status if not o.reason else f"{o.status}: {o.reason}"
+        rows.append(
+            (
+                o.name,
+                f"{x:.3f}, {y:.3f}, {math.degrees(yaw):.1f}",
+                mm(o.placed_offset_mm),
+                mm(o.final_offset_mm),
+                mm(o.final_offset_truth_mm),
+                str(o.pushes),
+                status,
+            )
+        )
+    if report.objects:
+        widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]
+        for row in rows:
+            print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False)) + "  " + row[-1])
+        print(
+            f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
+            f"truth = the simulator's ground truth (evaluation only); threshold {report.threshold_mm:g} mm"
+        )
+    speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
+    ending = "stopped at the time limit" if report.timed_out else report.tree_status
+    print(
+        f"{Path(args.tree_file).name}: {ending} after {report.sim_seconds:.1f} s of world time "
+        f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
+    )
+    if args.record:
+        print(f"recorded images, report.json and transitions.jsonl in {args.record}")
+
+
+def _show(args: argparse.Namespace) -> int:
+    from bt_arrange.display import render_tree
+
+    module = treefile.load(args.tree_file)
+    root = treefile.build_root(module)
+    result = render_tree(root, args.format, blackboard=args.blackboard, out=args.out, name=Path(args.tree_file).stem)
+    if args.format in ("text", "dot") and args.out is None:
+        print(result)
+    else:
+        print(f"wrote {result}")
+    return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="bt-arrange", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="bt-arrange", description="Behaviour trees for precise robotic arrangement.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {metadata.version('bt-arrange')}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = commands.add_parser("run", help="run a tree file in the simulated work cell (headless by default)")
+    run.add_argument("tree_file", metavar="TREE_FILE", help="a Python file exposing create_root() and create_scene()")
+    run.add_argument("--seed", type=int, default=0, help="seed of the scene (where the cubes start); default 0")
+    run.add_argument("--threshold-mm", type=float, help="accuracy threshold in mm (the tree file's default if absent)")
+    run.add_argument("--gui", action="store_true", help="open the pybullet window (needs a display)")
+    run.add_argument("--live", action="store_true", help="redraw the tree with its statuses while it runs")
+    run.add_argument("--record", type=Path, metavar="DIR", help="save top-camera images and the transition log")
+    run.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    run.add_argument(
+        "--time-limit-s", type=float, default=1800.0, help="stop after this much world time (default 1800 s)"
+    )
+    run.set_defaults(handler=_run)
+
+    show = commands.add_parser("show", help="draw a tree file's tree without starting a simulator")
+    show.add_argument("tree_file", metavar="TREE_FILE")
+    show.add_argument("--format", choices=("text", "dot", "png", "svg"), default="text", help="default text")
+    show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
+    show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
+    show.set_defaults(handler=_show)
+
     info = commands.add_parser("info", help="library versions, and a check that a headless cell starts")
     info.set_defaults(handler=_info)
     return parser
@@ -48,10 +154,10 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.handler(args))
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     except KeyboardInterrupt:
-        print("bt-arrange: interrupted", file=sys.stderr)
-        return 130
+        print("bt-arrange: interrupted; what was logged so far is kept", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

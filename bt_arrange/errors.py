@@ -29,3 +29,7 @@ class MotionError(BtArrangeError):
 
 class PerceptionError(BtArrangeError):
     """The camera pipeline was misconfigured (an unknown colour, bad intrinsics)."""
+
+
+class TreeFileError(BtArrangeError):
+    """A tree file cannot be loaded, or does not provide what the command needs."""

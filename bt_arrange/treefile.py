@@ -1,0 +1,88 @@
+"""Load a tree file (``trees/*.py``) by path and build its root, with one-line errors.
+
+A tree file exposes ``create_root(...)`` returning a py_trees behaviour, and, to run in the
+simulator, ``create_scene(seed)`` returning where the cubes start. Its own folder is on
+``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import inspect
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import py_trees
+
+from bt_arrange.errors import BtArrangeError, TreeFileError
+
+
+def load(path: str | Path) -> ModuleType:
+    """Import the tree file at ``path``."""
+    path = Path(path)
+    if not path.is_file():
+        raise TreeFileError(f"tree file {path} not found")
+    if path.suffix != ".py":
+        raise TreeFileError(f"tree file {path} is not a Python file (.py)")
+    spec = importlib.util.spec_from_file_location(f"bt_arrange_tree_{path.stem}", path)
+    if spec is None or spec.loader is None:
+        raise TreeFileError(f"cannot load tree file {path}")
+    module = importlib.util.module_from_spec(spec)
+    folder = str(path.resolve().parent)
+    sys.path.insert(0, folder)
+    try:
+        spec.loader.exec_module(module)
+    except BtArrangeError as error:
+        raise TreeFileError(f"{path}: {error}") from error
+    except SyntaxError as error:
+        message = f"cannot load tree file {path}: syntax error at line {error.lineno}: {error.msg}"
+        raise TreeFileError(message) from error
+    except Exception as error:  # a user's file may raise anything while it loads
+        raise TreeFileError(f"cannot load tree file {path}: {type(error).__name__}: {error}") from error
+    finally:
+        sys.path.remove(folder)
+    return module
+
+
+def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behaviour:
+    """Call the file's ``create_root`` with the options it accepts (``None`` values are left out)."""
+    create_root = getattr(module, "create_root", None)
+    where = getattr(module, "__file__", module.__name__)
+    if not callable(create_root):
+        raise TreeFileError(f"tree file {where} defines no create_root() function")
+    parameters = inspect.signature(create_root).parameters
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())
+    kwargs = {}
+    for name, value in options.items():
+        if value is None:
+            continue
+        if name not in parameters and not takes_any:
+            raise TreeFileError(f"create_root() in {where} takes no {name} argument")
+        kwargs[name] = value
+    try:
+        root = create_root(**kwargs)
+    except BtArrangeError:
+        raise
+    except Exception as error:
+        raise TreeFileError(f"create_root() in {where} failed: {type(error).__name__}: {error}") from error
+    if not isinstance(root, py_trees.behaviour.Behaviour):
+        raise TreeFileError(f"create_root() in {where} returned {type(root).__name__}, not a py_trees behaviour")
+    return root
+
+
+def scene(module: ModuleType, seed: int) -> list[Any]:
+    """The file's ``create_scene(seed)``: where the cubes start in the simulator."""
+    create_scene = getattr(module, "create_scene", None)
+    where = getattr(module, "__file__", module.__name__)
+    if not callable(create_scene):
+        raise TreeFileError(
+            f"tree file {where} defines no create_scene(seed): the simulator needs to know where the cubes start"
+        )
+    try:
+        return list(create_scene(seed))
+    except BtArrangeError:
+        raise
+    except Exception as error:
+        raise TreeFileError(f"create_scene() in {where} failed: {type(error).__name__}: {error}") from error

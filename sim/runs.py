@@ -1,0 +1,212 @@
+"""Run an arrangement tree in a fresh work cell and report per object, camera and ground truth apart.
+
+``SimulatedRun`` builds the cell and the scene, ticks the tree on the world's clock, optionally
+records the paper's Fig. 5 images and the transition log, and reports what the camera measured
+beside what the simulator knows (ground truth, labelled as such, for evaluation only).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import py_trees
+from py_trees.common import Status
+
+from bt_arrange.behaviours import Context, keys
+from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.trees import Arrangement, Target
+from bt_arrange_sim.cell import CellConfig, WorkCell
+from bt_arrange_sim.scenes import CubeStart
+
+#: Behaviours whose failure explains why an object was not finished.
+_REASON_KINDS = {"Detect", "Inspect", "Pick", "Place", "Push", "RetryUntilThreshold", "GraspGuard"}
+
+
+@dataclass
+class ObjectOutcome:
+    """How one object ended. Offsets in millimetres; ``*_truth_*`` is the simulator's ground truth."""
+
+    name: str
+    target: tuple[float, float, float]
+    placed_offset_mm: float | None
+    final_offset_mm: float | None
+    final_offset_truth_mm: float
+    pushes: int
+    status: str
+    reason: str = ""
+
+
+@dataclass
+class SimulationReport:
+    """A run's outcome: per object, and for the whole tree."""
+
+    objects: list[ObjectOutcome]
+    tree_status: str
+    threshold_mm: float | None
+    sim_seconds: float
+    wall_seconds: float
+    timed_out: bool
+    transitions: list[Transition] = field(default_factory=list, repr=False)
+
+    @property
+    def all_within_threshold(self) -> bool:
+        """True when every object ended within the threshold, as measured by the camera."""
+        if not self.objects:
+            return self.tree_status == Status.SUCCESS.value
+        return all(o.status == "within" for o in self.objects)
+
+    def to_dict(self) -> dict:
+        """The ``--json`` form of the report."""
+        return {
+            "objects": [asdict(o) for o in self.objects],
+            "threshold_mm": self.threshold_mm,
+            "tree_status": self.tree_status,
+            "timed_out": self.timed_out,
+            "sim_seconds": round(self.sim_seconds, 3),
+            "wall_seconds": round(self.wall_seconds, 3),
+        }
+
+
+class SimulatedRun:
+    """One tree in one freshly built cell.
+
+    ``transition_hooks`` are called with every status change (e.g. to inject an error through
+    the cell's ground-truth access at the moment the paper names); ``tick_hooks`` after every tick.
+    """
+
+    def __init__(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        starts: Iterable[CubeStart],
+        *,
+        cell_config: CellConfig | None = None,
+        gui: bool = False,
+        record_dir: Path | None = None,
+        time_limit_s: float = 1800.0,
+    ) -> None:
+        self.root = root
+        self.cell = WorkCell(cell_config, gui=gui)
+        self.cell.add_cubes(starts)
+        self.cell.settle(0.3)
+        self.context = Context.create(self.cell.robot)
+        self.record_dir = Path(record_dir) if record_dir is not None else None
+        self.time_limit_s = time_limit_s
+        self.transition_hooks: list[Callable[[Transition], None]] = []
+        self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+
+    def run(self) -> SimulationReport:
+        """Tick the tree to the end; returns the report. The cell stays open for inspection."""
+        py_trees.blackboard.Blackboard.clear()
+        log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
+        if self.record_dir is not None:
+            self.record_dir.mkdir(parents=True, exist_ok=True)
+            self._save_image("before_picking")
+        runner = Runner(
+            self.root,
+            self.context,
+            self.cell.step,
+            time_limit_s=self.time_limit_s,
+            log=log,
+            on_transition=self._on_transition,
+            on_tick=self._on_tick,
+        )
+        result = runner.run()
+        if self.record_dir is not None:
+            self._save_image("after_pushing")
+        report = SimulationReport(
+            objects=self._outcomes(result.transitions),
+            tree_status=result.status.value,
+            threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
+            sim_seconds=result.sim_seconds,
+            wall_seconds=result.wall_seconds,
+            timed_out=result.timed_out,
+            transitions=result.transitions,
+        )
+        if self.record_dir is not None:
+            (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+        return report
+
+    def close(self) -> None:
+        """Close the cell."""
+        self.cell.close()
+
+    def __enter__(self) -> SimulatedRun:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _on_transition(self, transition: Transition) -> None:
+        for hook in self.transition_hooks:
+            hook(transition)
+        if self.record_dir is None or transition.new != Status.SUCCESS.value:
+            return
+        if transition.kind == "Inspect" and transition.behaviour.endswith(" after placing"):
+            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+            self._save_image(f"after_placing_{obj}")
+        elif transition.behaviour == "place all":
+            self._save_image("after_placing")
+
+    def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        for hook in self.tick_hooks:
+            hook(root)
+
+    def _save_image(self, stem: str) -> None:
+        import cv2
+
+        assert self.record_dir is not None
+        frame = self.cell.camera.capture()
+        cv2.imwrite(str(self.record_dir / f"{stem}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+
+    def _outcomes(self, transitions: list[Transition]) -> list[ObjectOutcome]:
+        if not isinstance(self.root, Arrangement):
+            return []
+        storage = py_trees.blackboard.Blackboard.storage
+        outcomes = []
+        for target in self.root.targets:
+            placed = storage.get(keys.key(target.obj, keys.PLACED_OFFSET_MM))
+            final = storage.get(keys.key(target.obj, keys.OFFSET_MM))
+            status = self._status(final)
+            outcomes.append(
+                ObjectOutcome(
+                    name=target.obj,
+                    target=(target.x_m, target.y_m, target.yaw_rad),
+                    placed_offset_mm=_rounded(placed),
+                    final_offset_mm=_rounded(final),
+                    final_offset_truth_mm=round(self._truth_offset_mm(target), 4),
+                    pushes=int(storage.get(keys.key(target.obj, keys.CORRECTIONS), 0) or 0),
+                    status=status,
+                    reason="" if status == "within" else _last_failure(transitions, target.obj),
+                )
+            )
+        return outcomes
+
+    def _status(self, final_offset_mm: float | None) -> str:
+        assert isinstance(self.root, Arrangement)
+        if final_offset_mm is None:
+            return "failed"
+        return "within" if final_offset_mm < self.root.threshold_mm else "outside"
+
+    def _truth_offset_mm(self, target: Target) -> float:
+        x, y, _ = self.cell.cube_planar_truth(target.obj)
+        return math.hypot(x - target.x_m, y - target.y_m) * 1000
+
+
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(float(value), 4)
+
+
+def _last_failure(transitions: list[Transition], obj: str) -> str:
+    """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
+    for transition in reversed(transitions):
+        if (
+            transition.new == Status.FAILURE.value
+            and transition.kind in _REASON_KINDS
+            and obj in transition.behaviour.split()
+        ):
+            return transition.feedback
+    return ""
