@@ -36,9 +36,9 @@ class RetryUntilThreshold(py_trees.decorators.Decorator):
         max_attempts: int,
         corrections_key: str | None = None,
     ) -> None:
-        if not threshold_mm > 0:
+        if isinstance(threshold_mm, bool) or not isinstance(threshold_mm, (int, float)) or not threshold_mm > 0:
             raise PlanError(f"threshold {threshold_mm!r} mm must be a positive number of millimetres")
-        if not isinstance(max_attempts, int) or max_attempts < 0:
+        if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 0:
             raise PlanError(f"max_attempts {max_attempts!r} must be a whole number, 0 or more")
         super().__init__(name=name, child=child)
         self.offset_key = offset_key

@@ -97,12 +97,13 @@ def validate_targets(
                 raise PlanError(f"target {index} ({target.colour}): {field}={value!r} is not a finite number")
         if target.colour not in known:
             raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
-        if target.obj in seen:
-            raise PlanError(
-                f"targets {seen[target.obj]} and {index} are both for {target.obj!r}: "
-                "the camera tells cubes apart by colour, so each colour is one object"
-            )
-        seen[target.obj] = index
+        for taken, what in ((target.obj, "named"), (target.colour, "coloured")):
+            if taken in seen:
+                raise PlanError(
+                    f"targets {seen[taken]} and {index} are both {what} {taken!r}: "
+                    "the camera tells cubes apart by colour, so each colour is one object"
+                )
+        seen[target.obj] = seen[target.colour] = index
     checked = [target for target in plan if isinstance(target, Target)]
     kinematics = kinematics or ArmKinematics()
     for target in checked:
@@ -146,7 +147,10 @@ def transfer(target: Target, max_regrasps: int = 3) -> py_trees.behaviour.Behavi
             GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj)),
         ],
     )
-    return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps)
+    if isinstance(max_regrasps, bool) or not isinstance(max_regrasps, int) or max_regrasps < 0:
+        raise PlanError(f"max_regrasps={max_regrasps!r} must be a whole number, 0 or more")
+    # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
+    return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
 
 
 def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) -> py_trees.behaviour.Behaviour:
@@ -255,6 +259,10 @@ def arrangement(
                         name=f"correct {t.obj} after all",
                         memory=True,
                         children=[
+                            # An object whose transfer failed was never placed: nothing to correct.
+                            py_trees.behaviours.CheckBlackboardVariableExists(
+                                name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
+                            ),
                             Inspect(f"inspect {t.obj} before correcting", t.obj, t.colour),
                             correction(t, threshold_mm, max_pushes),
                         ],

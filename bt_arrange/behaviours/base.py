@@ -17,7 +17,7 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.behaviours.context import Context
-from bt_arrange.errors import BtArrangeError
+from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import Motion
 
@@ -64,9 +64,10 @@ class MoveStage(Stage):
         if not self.motion.done:
             setpoint = self.motion.step()
             context.robot.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
-            if not self.motion.done:
-                return Status.RUNNING
-            self._done_at_s = clock.now()
+            if self.motion.done:
+                self._done_at_s = clock.now()
+            # Even after the last setpoint: the next stage commands the arm on the next tick, not this one.
+            return Status.RUNNING
         assert self._done_at_s is not None
         if clock.now() - self._done_at_s < context.settings.settle_s:
             return Status.RUNNING
@@ -167,6 +168,13 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
     def success_message(self) -> str:
         """Feedback once every stage succeeded."""
         return "done"
+
+    def read(self, key: str, written_by: str) -> Any:
+        """A blackboard value this behaviour needs; a ``PlanError`` naming the key when it is missing."""
+        blackboard = getattr(self, "blackboard", None)
+        if blackboard is None or not blackboard.exists(key):
+            raise PlanError(f"{self.name} needs {key} on the blackboard, written by {written_by}: run that first")
+        return blackboard.get(key)
 
     def initialise(self) -> None:
         """Build the stages and start the first one (plan its motion) unless the arm is still braking."""

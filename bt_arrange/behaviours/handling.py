@@ -11,6 +11,7 @@ from py_trees.common import Access, Status
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
+from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
 
@@ -59,7 +60,7 @@ class Pick(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """Open, approach, descend, close, check, lift."""
-        pose: Pose = self.blackboard.get(keys.key(self.obj, keys.POSE))
+        pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
         s = context.settings
         x, y = pose.x_m, pose.y_m
         yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
@@ -101,7 +102,7 @@ class Place(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
-        target: PlanarPose = self.blackboard.get(keys.key(self.obj, keys.TARGET))
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         s = context.settings
         x, y = target.x_m, target.y_m
         # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
@@ -141,9 +142,9 @@ class Push(StagedBehaviour):
     def stages(self, context: Context) -> list[Stage]:
         """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
         s = context.settings
-        pose: Pose = self.blackboard.get(keys.key(self.obj, keys.POSE))
-        target: PlanarPose = self.blackboard.get(keys.key(self.obj, keys.TARGET))
-        offset_xy_mm = self.blackboard.get(keys.key(self.obj, keys.OFFSET_XY_MM))
+        pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+        offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
         axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
@@ -205,10 +206,12 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         self.context: Context | None = None
 
     def setup(self, **kwargs: object) -> None:
-        """Receive the context."""
+        """Receive the context; without one the guard could never fire, so that is an error."""
         context = kwargs.get("context")
-        if isinstance(context, Context):
-            self.context = context
+        if not isinstance(context, Context):
+            raise BtArrangeError(f"guard {self.name!r} needs setup(context=Context(...)), got {type(context).__name__}")
+        self.context = context
+        super().setup(**kwargs)
 
     def _holding(self) -> bool:
         if self.context is None:

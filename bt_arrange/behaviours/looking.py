@@ -89,8 +89,7 @@ class Detect(StagedBehaviour):
         assert self.found is not None
         planar = self.found.planar()
         return (
-            f"{self.colour} at x={planar.x_m:.4f} m, y={planar.y_m:.4f} m, "
-            f"yaw={math.degrees(planar.yaw_rad):.2f} deg"
+            f"{self.colour} at x={planar.x_m:.4f} m, y={planar.y_m:.4f} m, yaw={math.degrees(planar.yaw_rad):.2f} deg"
         )
 
 
@@ -113,7 +112,7 @@ class Inspect(Detect):
 
     def on_found(self, pose: Pose) -> None:
         """Compare with the target and write the offsets."""
-        target: PlanarPose = self.blackboard.get(keys.key(self.obj, keys.TARGET))
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         dx_mm, dy_mm = offset_in_target_frame_mm(target, pose)
         self.offset_mm = math.hypot(dx_mm, dy_mm)
         self.blackboard.set(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm, overwrite=True)

@@ -47,8 +47,7 @@ class ColourRange:
         for low, high in self.hue_ranges_deg:
             if not 0.0 <= low <= high <= 360.0:
                 raise PerceptionError(
-                    f"colour {self.name!r}: hue range ({low}, {high}) deg "
-                    "must satisfy 0 <= low <= high <= 360"
+                    f"colour {self.name!r}: hue range ({low}, {high}) deg must satisfy 0 <= low <= high <= 360"
                 )
         for label, (low, high) in (("saturation", self.saturation_range), ("value", self.value_range)):
             if not 0.0 <= low <= high <= 1.0:
@@ -67,9 +66,7 @@ class ColourRange:
     ) -> ColourRange:
         """A range of ``hue_deg +- hue_tolerance_deg``, split in two where it crosses hue 0."""
         if not 0.0 < hue_tolerance_deg < 180.0:
-            raise PerceptionError(
-                f"colour {name!r}: hue tolerance {hue_tolerance_deg} deg must be in (0, 180)"
-            )
+            raise PerceptionError(f"colour {name!r}: hue tolerance {hue_tolerance_deg} deg must be in (0, 180)")
         low = (hue_deg - hue_tolerance_deg) % 360.0
         high = (hue_deg + hue_tolerance_deg) % 360.0
         ranges = ((low, high),) if low <= high else ((0.0, high), (low, 360.0))

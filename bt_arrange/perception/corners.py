@@ -218,9 +218,7 @@ def refine_edge_lines(
         lines, spreads = [], []
         for k in range(4):
             p, q = corners[k], corners[(k + 1) % 4]
-            points, spread = _side_edge_points(
-                rgb, p, q, centre, face, half_width_px, margin_px, near_outside_px
-            )
+            points, spread = _side_edge_points(rgb, p, q, centre, face, half_width_px, margin_px, near_outside_px)
             spreads.append(spread)
             by_columns = abs(q[0] - p[0]) >= abs(q[1] - p[1])
             if undistort is not None and index == len(passes) - 1 and len(points):
@@ -254,9 +252,7 @@ def refine_corner_subpix(rgb: NDArray[np.uint8], corners_px: FloatArray, window_
     return refined.reshape(4, 2).astype(float) + [x0, y0]
 
 
-def refine_contour_lines(
-    contour_px: NDArray[np.integer], corners_px: FloatArray, margin_px: float = 8.0
-) -> FloatArray:
+def refine_contour_lines(contour_px: NDArray[np.integer], corners_px: FloatArray, margin_px: float = 8.0) -> FloatArray:
     """``cv2.fitLine`` through the mask contour's points of each side, intersected.
 
     The contour runs through the outermost mask pixels, half a pixel inside the edge a 50 %
@@ -279,9 +275,7 @@ def refine_contour_lines(
             continue
         vx, vy, x0, y0 = cv2.fitLine(points.astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
         outward = (
-            np.array([vy, -vx])
-            if np.array([vy, -vx]) @ (np.array([x0, y0]) - centre) > 0
-            else np.array([-vy, vx])
+            np.array([vy, -vx]) if np.array([vy, -vx]) @ (np.array([x0, y0]) - centre) > 0 else np.array([-vy, vx])
         )
         start = np.array([x0, y0]) + 0.5 * outward
         lines.append(_line_through(start, start + [vx, vy]))

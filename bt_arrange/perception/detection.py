@@ -193,9 +193,7 @@ class CubeDetector:
     table; both accept a :class:`WorldRegion` to look only at blobs whose centre lies inside.
     """
 
-    def __init__(
-        self, colours: ColourTable = DEFAULT_COLOUR_TABLE, config: DetectorConfig | None = None
-    ) -> None:
+    def __init__(self, colours: ColourTable = DEFAULT_COLOUR_TABLE, config: DetectorConfig | None = None) -> None:
         self.colours = colours
         self.config = config or DetectorConfig()
 
@@ -225,9 +223,7 @@ class CubeDetector:
         centre_px = np.array([intrinsics.cx_px, intrinsics.cy_px])
         on_table = pixel_on_plane(intrinsics, T_W_C, centre_px, config.top_z_m)
         if on_table is None:
-            raise PerceptionError(
-                f"the camera at {T_W_C} does not look down at the table plane z = {config.top_z_m} m"
-            )
+            raise PerceptionError(f"the camera at {T_W_C} does not look down at the table plane z = {config.top_z_m} m")
         # The smallest face anywhere in the image sets the speck threshold; the image corners
         # see the table farthest away.
         height, width = rgb.shape[:2]
@@ -254,9 +250,7 @@ class CubeDetector:
                 undistorted = cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix)
                 return np.asarray(undistorted, dtype=np.float64).reshape(-1, 2)
 
-        return _View(
-            rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort
-        )
+        return _View(rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort)
 
     def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
         config = self.config
@@ -266,9 +260,7 @@ class CubeDetector:
         candidates: list[tuple[Blob, FloatArray, float]] = []
         outside_roi = 0
         for blob in find_blobs(mask, view.scale, view.min_blob_area_px):
-            on_plane = pixel_on_plane(
-                view.intrinsics, view.T_W_C, np.asarray(blob.centroid_px), config.top_z_m
-            )
+            on_plane = pixel_on_plane(view.intrinsics, view.T_W_C, np.asarray(blob.centroid_px), config.top_z_m)
             if on_plane is None:
                 continue
             expected_px = expected_face_area_px(view.intrinsics, view.T_W_C, on_plane, config.cube_edge_m)
@@ -282,9 +274,7 @@ class CubeDetector:
         name = colour.name
 
         if not candidates:
-            where = (
-                "in the image" if roi is None else f"inside the region of interest ({outside_roi} outside)"
-            )
+            where = "in the image" if roi is None else f"inside the region of interest ({outside_roi} outside)"
             return Detection(
                 name,
                 DetectionStatus.NOT_FOUND,
@@ -345,9 +335,7 @@ class CubeDetector:
             return partial("blob vanished at full resolution after the closing and opening")
         # The crop may also catch a piece of another blob: keep the one at this blob's centre.
         centre = (blob.centroid_px[0] - x0, blob.centroid_px[1] - y0)
-        contour = max(
-            contours, key=lambda c: (cv2.pointPolygonTest(c, centre, False) >= 0, cv2.contourArea(c))
-        )
+        contour = max(contours, key=lambda c: (cv2.pointPolygonTest(c, centre, False) >= 0, cv2.contourArea(c)))
         area_px = float(cv2.contourArea(contour))
         contour = contour.reshape(-1, 2) + np.array([x0, y0])
 
@@ -371,9 +359,7 @@ class CubeDetector:
             )
         low, high = config.face_area_fraction_range
         if not low <= ratio <= high:
-            return partial(
-                f"blob is {ratio:.0%} of a face: covered, or not a whole top face", area_px=area_px
-            )
+            return partial(f"blob is {ratio:.0%} of a face: covered, or not a whole top face", area_px=area_px)
         vertices = approximate_quadrilateral(contour)
         if len(vertices) != 4:
             return partial(f"outline has {len(vertices)} corners, not 4: covered?", area_px=area_px)
@@ -395,9 +381,7 @@ class CubeDetector:
         # Douglas-Peucker forced four corners on a shape that has more).
         deviation_px = outline_deviation_px(contour, outline)
         if deviation_px > config.max_outline_deviation_px:
-            return partial(
-                f"outline strays {deviation_px:.1f} px from a quadrilateral: covered?", area_px=area_px
-            )
+            return partial(f"outline strays {deviation_px:.1f} px from a quadrilateral: covered?", area_px=area_px)
 
         corners = self._refine(view, polygon, outline)
         if corners is None:
@@ -444,8 +428,7 @@ class CubeDetector:
         return replace(
             measured,
             status=DetectionStatus.FOUND,
-            reason=f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, "
-            f"yaw={math.degrees(pose.yaw_rad):.2f} deg",
+            reason=f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, yaw={math.degrees(pose.yaw_rad):.2f} deg",
             pose_world=pose,
             reprojection_error_px=error_px,
         )

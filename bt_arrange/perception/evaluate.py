@@ -124,9 +124,7 @@ def evaluate(trials: list[Trial], detector: CubeDetector) -> Summary:
         seconds.append(time.perf_counter() - start)
         if detection.pose_world is None or detection.corners_px is None:
             continue
-        truth_px = project_points(
-            trial.frame.intrinsics, trial.frame.camera_pose_world, trial.cube.top_corners_world()
-        )
+        truth_px = project_points(trial.frame.intrinsics, trial.frame.camera_pose_world, trial.cube.top_corners_world())
         corner_px.append(_corner_error_px(detection.corners_px, truth_px))
         pose = detection.pose_world
         xy_mm.append(1000.0 * math.hypot(pose.x_m - trial.cube.x_m, pose.y_m - trial.cube.y_m))

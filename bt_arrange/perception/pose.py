@@ -93,12 +93,8 @@ def solve_face_pose(
             continue
         rotation, _ = cv2.Rodrigues(rvec)
         flipped = Pose.from_rotation(np.ravel(tvec), rotation) @ _FLIP_X
-        starts.append(
-            (np.asarray(cv2.Rodrigues(flipped.rotation)[0], dtype=float), flipped.position_m.reshape(3, 1))
-        )
-    ok, rvec, tvec = cv2.solvePnP(
-        object_points, image_points, camera_matrix, dist, flags=cv2.SOLVEPNP_ITERATIVE
-    )
+        starts.append((np.asarray(cv2.Rodrigues(flipped.rotation)[0], dtype=float), flipped.position_m.reshape(3, 1)))
+    ok, rvec, tvec = cv2.solvePnP(object_points, image_points, camera_matrix, dist, flags=cv2.SOLVEPNP_ITERATIVE)
     if ok:
         starts.append((np.asarray(rvec, dtype=float), np.asarray(tvec, dtype=float)))
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-12)
@@ -106,9 +102,7 @@ def solve_face_pose(
     for rvec, tvec in starts:
         if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
             continue
-        rvec, tvec = cv2.solvePnPRefineLM(
-            object_points, image_points, camera_matrix, dist, rvec, tvec, criteria
-        )
+        rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, camera_matrix, dist, rvec, tvec, criteria)
         if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
             continue
         projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, dist)
@@ -174,9 +168,7 @@ def fit_square_on_plane(
 
 
 def _signed_area(points: FloatArray) -> float:
-    return 0.5 * float(
-        np.sum(points[:, 0] * np.roll(points[:, 1], -1) - np.roll(points[:, 0], -1) * points[:, 1])
-    )
+    return 0.5 * float(np.sum(points[:, 0] * np.roll(points[:, 1], -1) - np.roll(points[:, 0], -1) * points[:, 1]))
 
 
 def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float) -> Pose:
@@ -198,20 +190,14 @@ def tilt_deg(T_W_O: Pose) -> float:
     return math.degrees(math.acos(float(np.clip(T_W_O.rotation[2, 2], -1.0, 1.0))))
 
 
-def pixel_ray_world(
-    intrinsics: CameraIntrinsics, T_W_C: Pose, pixel: FloatArray
-) -> tuple[FloatArray, FloatArray]:
+def pixel_ray_world(intrinsics: CameraIntrinsics, T_W_C: Pose, pixel: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Origin and direction (not normalised; unit depth along the optical axis) of a pixel's ray."""
     u, v = float(pixel[0]), float(pixel[1])
-    ray_camera = np.array(
-        [(u - intrinsics.cx_px) / intrinsics.fx_px, (v - intrinsics.cy_px) / intrinsics.fy_px, 1.0]
-    )
+    ray_camera = np.array([(u - intrinsics.cx_px) / intrinsics.fx_px, (v - intrinsics.cy_px) / intrinsics.fy_px, 1.0])
     return T_W_C.position_m, T_W_C.rotation @ ray_camera
 
 
-def pixel_on_plane(
-    intrinsics: CameraIntrinsics, T_W_C: Pose, pixel: FloatArray, plane_z_m: float
-) -> FloatArray | None:
+def pixel_on_plane(intrinsics: CameraIntrinsics, T_W_C: Pose, pixel: FloatArray, plane_z_m: float) -> FloatArray | None:
     """The world point where a pixel's ray meets the horizontal plane ``z = plane_z_m``, or None."""
     origin, direction = pixel_ray_world(intrinsics, T_W_C, pixel)
     if abs(direction[2]) < 1e-9:
@@ -232,16 +218,12 @@ def project_world(intrinsics: CameraIntrinsics, T_W_C: Pose, points_world: Float
     )
 
 
-def expected_face_area_px(
-    intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray, edge_m: float
-) -> float:
+def expected_face_area_px(intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray, edge_m: float) -> float:
     """Image area of a level square face of ``edge_m`` centred at ``centre_world``, in pixels.
 
     Projects the square's corners, so it holds for any camera pose, not only straight down.
     """
     h = edge_m / 2.0
-    corners = np.asarray(centre_world, dtype=float) + np.array(
-        [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]]
-    )
+    corners = np.asarray(centre_world, dtype=float) + np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
     p = project_world(intrinsics, T_W_C, corners)
     return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))

@@ -96,9 +96,7 @@ class SyntheticCube:
         return self.corners_world(self.table_z_m + self.edge_m)
 
 
-def project_points(
-    intrinsics: CameraIntrinsics, camera_pose_world: Pose, points_world: ArrayLike
-) -> FloatArray:
+def project_points(intrinsics: CameraIntrinsics, camera_pose_world: Pose, points_world: ArrayLike) -> FloatArray:
     """Pinhole projection (no distortion) of world points to pixel coordinates (Nx2)."""
     points = np.atleast_2d(np.asarray(points_world, dtype=float))
     in_camera = (points - camera_pose_world.position_m) @ camera_pose_world.rotation
@@ -164,9 +162,7 @@ def _paint(tile: NDArray[np.float32], origin_px: tuple[int, int], supersample: i
         return
     u = x0 + (np.arange(i0, i1) + 0.5) / s - 0.5
     v = y0 + (np.arange(j0, j1) + 0.5) / s - 0.5
-    area2 = float(
-        np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1])
-    )
+    area2 = float(np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1]))
     orientation = 1.0 if area2 > 0 else -1.0
     inside = np.ones((j1 - j0, i1 - i0), dtype=bool)
     for k in range(len(polygon)):

@@ -1,0 +1,628 @@
+"""The behaviours alone, on fake devices and a hand-filled blackboard: what they write, how they fail.
+
+Every run is driven the way the runner drives a tree (``fakes.tick_until_done``: tick, brake step,
+one control period of world time) and checked tick by tick: a feedback message on every tick, and
+at most one arm setpoint per tick (a behaviour never blocks).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import py_trees
+import pytest
+from fakes import (
+    ArmCommand,
+    Run,
+    Tick,
+    brake_until_idle,
+    cube,
+    fake_arm,
+    fake_camera,
+    fake_clock,
+    fake_gripper,
+    make_context,
+    tick_until_done,
+)
+from py_trees.common import Access, Status
+
+from bt_arrange.behaviours import (
+    Context,
+    Detect,
+    GraspGuard,
+    Inspect,
+    MoveHome,
+    Pick,
+    Place,
+    Push,
+    StagedBehaviour,
+    keys,
+    offset_in_target_frame_mm,
+)
+from bt_arrange.errors import BtArrangeError, UnreachableError
+from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
+from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.settings import ManipulationSettings
+
+SETTINGS = ManipulationSettings()
+#: Narrowest opening that still counts as holding a cube: 47 mm.
+HELD_MIN_WIDTH_M = SETTINGS.cube_edge_m - SETTINGS.grasp_width_tolerance_m
+#: Somewhere away from home, reachable, arm bent the usual way.
+AWAY_Q = [0.3, -1.8, 1.6, -1.4, -1.57, 0.3]
+#: Out of the UR5's 0.92 m reach.
+FAR_X_M = 1.2
+
+
+# -- helpers -------------------------------------------------------------------------------------
+
+
+def write(values: dict[str, object]) -> None:
+    """Fill the blackboard by hand, as the behaviours before this one would have."""
+    client = py_trees.blackboard.Client(name="test")
+    for key, value in values.items():
+        client.register_key(key, access=Access.WRITE)
+        client.set(key, value, overwrite=True)
+
+
+def read(key: str) -> object:
+    return py_trees.blackboard.Blackboard.get(key)
+
+
+def exists(key: str) -> bool:
+    return py_trees.blackboard.Blackboard.exists(key)
+
+
+def set_up(behaviour: py_trees.behaviour.Behaviour, context: Context) -> py_trees.behaviour.Behaviour:
+    for node in behaviour.iterate():
+        node.setup(context=context)
+    return behaviour
+
+
+def assert_never_blocks(run: Run) -> None:
+    """Every tick explains itself and sends at most one setpoint."""
+    for index, tick in enumerate(run.ticks):
+        assert tick.feedback, f"tick {index} ({tick.status}) left the feedback message empty"
+        assert tick.arm_commands <= 1, f"tick {index} ({tick.feedback}) sent {tick.arm_commands} arm commands"
+
+
+def after(feedback: str, ticks: int = 1) -> Callable[[Tick], bool]:
+    """A ``tick_until_done(until=...)`` predicate: the n-th tick that ends with this feedback."""
+    seen = [0]
+
+    def predicate(tick: Tick) -> bool:
+        seen[0] += tick.feedback == feedback
+        return seen[0] >= ticks
+
+    return predicate
+
+
+def command_at(commands: list[ArmCommand], time_s: float) -> ArmCommand:
+    """The setpoint the arm was following at ``time_s``."""
+    sent = [c for c in commands if c.time_s <= time_s]
+    assert sent, f"no arm command before t = {time_s} s"
+    return sent[-1]
+
+
+def speeds(commands: list[ArmCommand]) -> list[float]:
+    return [float(np.linalg.norm(c.velocities_rad_s)) for c in commands]
+
+
+def assert_comes_to_rest(braking: list[ArmCommand]) -> None:
+    """Jerk-limited: the speed may still rise while the acceleration turns round, then only falls to zero."""
+    assert braking, "the brake sent no setpoint"
+    profile = speeds(braking)
+    peak = int(np.argmax(profile))
+    assert np.all(np.diff(profile[: peak + 1]) >= -1e-9), profile
+    assert np.all(np.diff(profile[peak:]) <= 1e-9), profile
+    assert profile[-1] == pytest.approx(0.0, abs=1e-9)
+
+
+def cube_pose(x_m: float, y_m: float, yaw_rad: float = 0.0) -> Pose:
+    return Pose.from_planar(x_m, y_m, yaw_rad, SETTINGS.cube_edge_m / 2)
+
+
+def test_blackboard_keys_are_one_namespace_per_object() -> None:
+    assert keys.key("red", keys.POSE) == "/red/pose"
+    assert [keys.key("a", field) for field in (keys.TARGET, keys.OFFSET_MM, keys.OFFSET_XY_MM)] == [
+        "/a/target",
+        "/a/offset_mm",
+        "/a/offset_xy_mm",
+    ]
+    assert [keys.key("a", field) for field in (keys.PLACED_OFFSET_MM, keys.CORRECTIONS, keys.PUSH_AXIS)] == [
+        "/a/placed_offset_mm",
+        "/a/corrections",
+        "/a/push_axis",
+    ]
+
+
+# -- set-up --------------------------------------------------------------------------------------
+
+BEHAVIOURS: dict[str, Callable[[], StagedBehaviour]] = {
+    "Detect": lambda: Detect("detect red", "red"),
+    "Inspect": lambda: Inspect("inspect red", "red"),
+    "Pick": lambda: Pick("pick red", "red"),
+    "Place": lambda: Place("place red", "red"),
+    "Push": lambda: Push("push red", "red"),
+    "MoveHome": lambda: MoveHome("park"),
+}
+
+
+@pytest.mark.parametrize("make", BEHAVIOURS.values(), ids=BEHAVIOURS.keys())
+def test_setup_without_a_context_raises_a_clear_error(make: Callable[[], StagedBehaviour]) -> None:
+    behaviour = make()
+    with pytest.raises(BtArrangeError, match=r"needs setup\(context=Context\(\.\.\.\)\), got NoneType"):
+        behaviour.setup()
+    assert behaviour.context is None
+
+
+def test_setup_with_something_else_than_a_context_names_what_it_got() -> None:
+    with pytest.raises(BtArrangeError, match=r"'pick red' needs setup\(context=Context\(\.\.\.\)\), got dict"):
+        Pick("pick red", "red").setup(context={"arm": None})
+
+
+def test_ticking_a_behaviour_that_was_not_set_up_raises_a_clear_error() -> None:
+    with pytest.raises(BtArrangeError, match=r"'park' was not set up: call tree.setup\(context=\.\.\.\) first"):
+        MoveHome("park").tick_once()
+
+
+# -- MoveHome ------------------------------------------------------------------------------------
+
+
+def test_move_home_when_parked_succeeds_at_once_without_moving(context: Context) -> None:
+    run = tick_until_done(set_up(MoveHome("park"), context), context)
+    assert [t.status for t in run.ticks] == [Status.SUCCESS]
+    assert run.feedback == "at home, out of the camera's view"
+    assert fake_arm(context).commands == []
+
+
+def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    run = tick_until_done(set_up(MoveHome("park"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "at home, out of the camera's view"
+    assert {t.feedback for t in run.running} == {"move home"}
+    assert_never_blocks(run)
+    arm = fake_arm(context)
+    assert len(arm.commands) > 50, "a joint motion of a second or more, one setpoint per control period"
+    np.testing.assert_allclose(arm.joint_positions(), context.home_q, atol=1e-9)
+    # Then the arm settles: the last ticks wait settle_s without sending anything.
+    settle_ticks = [t for t in run.running if t.time_s > arm.commands[-1].time_s]
+    assert len(settle_ticks) == pytest.approx(SETTINGS.settle_s / arm.control_period_s, abs=1)
+    assert all(t.arm_commands == 0 for t in settle_ticks)
+
+
+# -- Detect --------------------------------------------------------------------------------------
+
+
+def test_detect_writes_the_measured_pose_under_the_object_name(clock) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.55, -0.12, math.radians(20.0)), cube("blue", 0.4, 0.15)])
+    run = tick_until_done(set_up(Detect("detect the first", "first", colour="red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    pose = read("/first/pose")
+    assert isinstance(pose, Pose)
+    assert 1000 * math.hypot(pose.x_m - 0.55, pose.y_m + 0.12) < 0.5
+    assert math.degrees(fold_yaw(pose.yaw_rad - math.radians(20.0))) == pytest.approx(0.0, abs=0.5)
+    assert pose.z_m == pytest.approx(0.025, abs=1e-6)
+    assert run.feedback.startswith("red at x=0.55")
+    assert not exists("/red/pose")
+    assert fake_arm(context).commands == [], "a parked arm does not move to look"
+
+
+def test_detect_parks_the_arm_before_looking(clock) -> None:
+    context = make_context(clock, q=AWAY_Q, cubes=[cube("green", 0.5, 0.0)])
+    run = tick_until_done(set_up(Detect("detect green", "green"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.ticks[0].feedback == "move out of the camera's view"
+    assert_never_blocks(run)
+    captures = fake_camera(context).captures
+    assert len(captures) == 1
+    time_s, q = captures[0]
+    assert q is not None
+    np.testing.assert_allclose(q, context.home_q, atol=1e-9)
+    assert time_s > fake_arm(context).commands[-1].time_s, "the camera looks once the arm stands still at home"
+
+
+@pytest.mark.parametrize(
+    ("cubes", "status", "why"),
+    [
+        ([cube("blue", 0.5, 0.0)], "not_found", "no red blob"),
+        ([cube("red", 0.245, 0.0)], "partial", "cut by the image border"),
+        ([cube("red", 0.45, -0.1), cube("red", 0.55, 0.1)], "ambiguous", "two red cubes"),
+    ],
+    ids=["not_found", "partial", "ambiguous"],
+)
+def test_detect_of_a_cube_the_camera_cannot_see_fails_saying_why(clock, cubes, status: str, why: str) -> None:
+    context = make_context(clock, cubes=cubes)
+    run = tick_until_done(set_up(Detect("detect red", "red"), context), context)
+    assert run.status == Status.FAILURE, why
+    assert run.feedback.startswith(f"red {status}: ")
+    assert len(run.feedback) > len(f"red {status}: ") + 10, "the detector's reason follows"
+    assert not exists("/red/pose")
+
+
+def test_detect_of_an_unknown_colour_fails_naming_it_before_looking(context: Context) -> None:
+    run = tick_until_done(set_up(Detect("detect purple", "purple"), context), context)
+    assert run.status == Status.FAILURE
+    assert "unknown colour 'purple'" in run.feedback
+    assert "red" in run.feedback, "the known colours are listed"
+    assert fake_camera(context).captures == []
+    assert fake_arm(context).commands == []
+
+
+# -- Inspect -------------------------------------------------------------------------------------
+
+
+def test_offset_in_target_frame_is_target_minus_pose_turned_into_the_target() -> None:
+    pose = cube_pose(0.502, -0.001, 0.3)
+    assert offset_in_target_frame_mm(PlanarPose(0.5, 0.0, 0.0), pose) == pytest.approx((-2.0, 1.0))
+    assert offset_in_target_frame_mm(PlanarPose(0.5, 0.0, math.pi / 2), pose) == pytest.approx((1.0, 2.0))
+    assert offset_in_target_frame_mm(PlanarPose(0.5, 0.0, math.pi), pose) == pytest.approx((2.0, -1.0))
+
+
+@pytest.mark.parametrize(
+    ("target_yaw_rad", "expected_xy_mm"),
+    [(0.0, (-2.0, 1.0)), (math.pi / 2, (1.0, 2.0))],
+    ids=["target yaw 0", "target yaw 90 deg"],
+)
+def test_inspect_writes_target_minus_pose_in_the_target_frame(clock, target_yaw_rad, expected_xy_mm) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.502, -0.001, 0.2)])
+    write({"/red/target": PlanarPose(0.5, 0.0, target_yaw_rad)})
+    run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    dx_mm, dy_mm = read("/red/offset_xy_mm")
+    assert (dx_mm, dy_mm) == pytest.approx(expected_xy_mm, abs=0.3)
+    assert read("/red/offset_mm") == pytest.approx(math.hypot(dx_mm, dy_mm))
+    assert read("/red/offset_mm") == pytest.approx(math.sqrt(5.0), abs=0.3)
+    assert isinstance(read("/red/pose"), Pose)
+    assert run.feedback.endswith(f"; {read('/red/offset_mm'):.2f} mm from the target")
+    assert not exists("/red/placed_offset_mm"), "only an inspection after placing records it"
+
+
+def test_inspect_after_placing_also_records_the_placed_offset(clock) -> None:
+    context = make_context(clock, cubes=[cube("yellow", 0.45, 0.1)])
+    write({"/yellow/target": PlanarPose(0.45, 0.103, 0.0)})
+    inspect = Inspect("inspect yellow after placing", "yellow", after_placing=True)
+    run = tick_until_done(set_up(inspect, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert read("/yellow/placed_offset_mm") == read("/yellow/offset_mm")
+    assert read("/yellow/placed_offset_mm") == pytest.approx(3.0, abs=0.3)
+
+
+def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(clock) -> None:
+    context = make_context(clock, cubes=[])
+    write({"/red/target": PlanarPose(0.5, 0.0), "/red/offset_mm": 4.0})
+    run = tick_until_done(set_up(Inspect("inspect red", "red", after_placing=True), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback.startswith("red not_found: ")
+    assert read("/red/offset_mm") == 4.0
+    assert not exists("/red/placed_offset_mm")
+
+
+# -- Pick ----------------------------------------------------------------------------------------
+
+
+def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=SETTINGS.cube_edge_m)
+    yaw = math.radians(17.0)
+    write({"/red/pose": cube_pose(0.5, 0.1, yaw)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "holding red, fingers 50.0 mm apart"
+    assert_never_blocks(run)
+    stages = list(dict.fromkeys(t.feedback for t in run.running))
+    assert stages == [
+        "move above the cube",
+        "wait for the fingers to open",
+        "descend to the cube",
+        "close on the cube",
+        "lift the cube",
+    ]
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", SETTINGS.open_width_m),
+        ("close", SETTINGS.grip_force_n),
+    ]
+    grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, SETTINGS.grasp_height_m], atol=1e-6)
+    assert fold_yaw(grasp.yaw_rad - yaw) == pytest.approx(0.0, abs=1e-4), "pads square to the cube's faces"
+    np.testing.assert_allclose(arm.tcp_pose().position_m, [0.5, 0.1, SETTINGS.approach_height_m], atol=1e-6)
+
+
+def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
+    context = make_context(clock, object_width_m=None)
+    write({"/red/pose": cube_pose(0.45, -0.05)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback == (
+        "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
+    )
+    assert "lift the cube" not in {t.feedback for t in run.ticks}
+    assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.grasp_height_m, abs=1e-6), "no lift"
+
+
+@pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])
+def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, make) -> None:
+    write({"/red/pose": cube_pose(FAR_X_M, 0.0), "/red/target": PlanarPose(FAR_X_M, 0.0)})
+    with pytest.raises(UnreachableError) as unreachable:
+        ArmKinematics().check_reachable(gripper_down_pose(FAR_X_M, 0.0, SETTINGS.approach_height_m))
+    run = tick_until_done(set_up(make(f"{make.__name__} red", "red"), context), context)
+    assert [t.status for t in run.ticks] == [Status.FAILURE], "fails on its first tick"
+    first_move = "move above the cube" if make is Pick else "carry above the target"
+    assert run.feedback.startswith(f"{first_move}: ")
+    assert str(unreachable.value).split(" is out of reach")[1] in run.feedback
+    assert fake_arm(context).commands == []
+
+
+def test_fingers_that_never_stop_fail_after_the_gripper_timeout(clock) -> None:
+    context = make_context(clock, stuck_gripper=True)
+    write({"/red/pose": cube_pose(0.5, 0.0)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback.startswith("wait for the fingers to open: fingers still moving after 2.0 s (limit 2.0 s)")
+    waiting = [t for t in run.ticks if t.feedback == "wait for the fingers to open"]
+    waited_s = run.ticks[-1].time_s - waiting[0].time_s
+    assert SETTINGS.gripper_timeout_s < waited_s <= SETTINGS.gripper_timeout_s + 2 * fake_arm(context).control_period_s
+    assert all(t.arm_commands == 0 for t in waiting)
+
+
+def test_pick_without_a_pose_on_the_blackboard_fails_naming_the_key(context: Context) -> None:
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert "/red/pose" in run.feedback
+
+
+# -- Place ---------------------------------------------------------------------------------------
+
+
+def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
+    context = make_context(clock, gripper_width_m=SETTINGS.cube_edge_m, object_width_m=SETTINGS.cube_edge_m)
+    target = PlanarPose(0.45, -0.1, math.radians(30.0))
+    write({"/red/target": target})
+    run = tick_until_done(set_up(Place("place red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "red released at its target"
+    assert_never_blocks(run)
+    assert list(dict.fromkeys(t.feedback for t in run.running)) == [
+        "carry above the target",
+        "lower the cube to the table",
+        "release the cube",
+        "retreat",
+    ]
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [("open", SETTINGS.open_width_m)]
+    release = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[0].time_s).positions_rad)
+    expected_z_m = SETTINGS.grasp_height_m + SETTINGS.release_clearance_m
+    np.testing.assert_allclose(release.position_m, [0.45, -0.1, expected_z_m], atol=1e-6)
+    assert fold_yaw(release.yaw_rad - target.yaw_rad) == pytest.approx(0.0, abs=1e-4)
+    np.testing.assert_allclose(arm.tcp_pose().position_m, [0.45, -0.1, SETTINGS.approach_height_m], atol=1e-6)
+
+
+# -- Push ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("preferred", "offset_xy_mm", "axis"),
+    [
+        ("x", (3.0, 2.0), "x"),
+        ("y", (3.0, 2.0), "y"),
+        ("x", (0.1, 2.0), "y"),
+        ("y", (-2.0, -0.1), "x"),
+        ("x", (0.1, 0.1), "x"),
+        ("y", (0.1, 0.1), "y"),
+        ("x", (0.2, 0.0), "x"),
+    ],
+    ids=["x kept", "y kept", "x too short", "y too short", "both too short", "both too short y", "x at min"],
+)
+def test_push_chooses_the_alternated_axis_unless_its_offset_is_below_min_push(preferred, offset_xy_mm, axis) -> None:
+    assert Push.choose_axis(preferred, offset_xy_mm, min_push_mm=0.2) == axis
+
+
+def push_setup(context: Context, pose: Pose, target_yaw_rad: float, offset_xy_mm: tuple[float, float]) -> Push:
+    write({"/red/pose": pose, "/red/target": PlanarPose(0.0, 0.0, target_yaw_rad), "/red/offset_xy_mm": offset_xy_mm})
+    return set_up(Push("push red", "red"), context)
+
+
+def test_push_alternates_axes_through_the_blackboard(context: Context) -> None:
+    pushed = []
+    for _ in range(3):
+        push = push_setup(context, cube_pose(0.5, 0.0), 0.0, (3.0, -2.0))
+        run = tick_until_done(push, context)
+        assert run.status == Status.SUCCESS, run.feedback
+        pushed.append((run.feedback, read("/red/push_axis")))
+    assert pushed == [
+        ("pushed +3.00 mm along x", "y"),
+        ("pushed -2.00 mm along y", "x"),
+        ("pushed +3.00 mm along x", "y"),
+    ]
+
+
+def test_push_falls_back_to_the_other_axis_when_the_preferred_offset_is_below_min_push(context: Context) -> None:
+    write({"/red/push_axis": "x"})
+    run = tick_until_done(push_setup(context, cube_pose(0.5, 0.0), 0.0, (0.1, -2.5)), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed -2.50 mm along y"
+    assert read("/red/push_axis") == "x", "the next push goes along the other axis again"
+
+
+def test_push_with_nothing_to_push_succeeds_without_moving(context: Context) -> None:
+    run = tick_until_done(push_setup(context, cube_pose(0.5, 0.0), 0.0, (0.1, 0.15)), context)
+    assert [t.status for t in run.ticks] == [Status.SUCCESS]
+    assert run.feedback == "nothing to push: 0.10 mm along x"
+    assert fake_arm(context).commands == []
+    assert fake_gripper(context).commands == []
+
+
+@pytest.mark.parametrize(
+    ("target_yaw_rad", "offset_xy_mm", "direction", "distance_mm"),
+    [
+        (0.0, (3.0, 0.5), (1.0, 0.0), 3.0),
+        (0.0, (0.05, -2.0), (0.0, -1.0), 2.0),
+        (math.pi / 2, (2.5, 0.0), (0.0, 1.0), 2.5),
+        (math.pi / 4, (-1.5, 0.0), (-math.sqrt(0.5), -math.sqrt(0.5)), 1.5),
+    ],
+    ids=["+x", "-y by fallback", "x of a turned target", "-x of a diagonal target"],
+)
+def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
+    clock, target_yaw_rad, offset_xy_mm, direction, distance_mm
+) -> None:
+    context = make_context(clock)
+    centre = np.array([0.5, 0.05])
+    push = push_setup(context, cube_pose(*centre, 0.1), target_yaw_rad, offset_xy_mm)
+    arm, s = fake_arm(context), SETTINGS
+    towards = np.array(direction)
+    across = np.array([-towards[1], towards[0]])
+
+    run = tick_until_done(push, context, until=after("wait for the fingers"))
+    assert run.status == Status.RUNNING, run.feedback
+    assert_never_blocks(run)
+    behind = arm.tcp_pose()
+    # The first waypoint: above the cube's far side from the target, clear of its face.
+    from_centre = behind.position_m[:2] - centre
+    assert from_centre @ towards == pytest.approx(-(s.push_reach_m + s.push_clearance_m), abs=1e-6)
+    assert from_centre @ across == pytest.approx(0.0, abs=1e-6)
+    assert behind.z_m == pytest.approx(s.approach_height_m, abs=1e-6)
+    # Fingers side by side along the pushed face: the closing axis lies across the push.
+    assert fold_yaw(behind.yaw_rad - math.atan2(across[1], across[0]), math.pi) == pytest.approx(0.0, abs=1e-4)
+    gripper = fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [("open", s.cube_edge_m - s.pad_thickness_m)]
+
+    before = len(arm.commands)
+    rest = tick_until_done(push, context)
+    assert rest.status == Status.SUCCESS, rest.feedback
+    assert_never_blocks(rest)
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands[before:]])
+    along = (tcp[:, :2] - centre) @ towards
+    deepest = int(np.argmax(along))
+    assert along[deepest] == pytest.approx(-s.push_reach_m + distance_mm / 1000, abs=1e-6)
+    assert tcp[deepest, 2] == pytest.approx(s.push_height_m, abs=1e-6)
+    np.testing.assert_allclose((tcp[:, :2] - centre) @ across, 0.0, atol=1e-6)
+    assert along[-1] == pytest.approx(along[deepest] - s.push_clearance_m, abs=1e-6), "backed off"
+    assert tcp[-1, 2] == pytest.approx(s.approach_height_m, abs=1e-6), "lifted"
+    axis = "x" if "x" in rest.feedback else "y"
+    assert rest.feedback == f"pushed {math.copysign(distance_mm, sum(offset_xy_mm)):+.2f} mm along {axis}"
+
+
+# -- interruption --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("make", "during"),
+    [
+        (lambda: MoveHome("park"), "move home"),
+        (lambda: Pick("pick red", "red"), "descend to the cube"),
+    ],
+    ids=["joint motion", "straight line"],
+)
+def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_rest(clock, make, during) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    write({"/red/pose": cube_pose(0.5, 0.1)})
+    behaviour = set_up(make(), context)
+    run = tick_until_done(behaviour, context, until=after(during, 30))
+    assert run.status == Status.RUNNING
+    arm = fake_arm(context)
+    assert speeds(arm.commands[-1:])[0] > 0.1, "interrupted at speed"
+
+    behaviour.stop(Status.INVALID)
+    assert behaviour.status == Status.INVALID
+    assert behaviour.feedback_message == "interrupted"
+    assert context.brake.active
+    braking = brake_until_idle(context)
+    assert_comes_to_rest(braking)
+    assert len(braking) < 150, "a stop, not the rest of the motion"
+    assert not context.brake.active
+
+
+def test_a_behaviour_started_while_the_arm_brakes_waits_for_it(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    first = set_up(MoveHome("park"), context)
+    tick_until_done(first, context, until=after("move home", 40))
+    first.stop(Status.INVALID)
+    arm = fake_arm(context)
+
+    second = set_up(MoveHome("park again"), context)
+    run = tick_until_done(second, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    waiting = [t for t in run.ticks if t.feedback == "waiting for the arm to stop"]
+    assert len(waiting) > 10
+    assert run.ticks[: len(waiting)] == waiting, "it waits first, then moves"
+    assert all(t.arm_commands == 0 for t in waiting), "only the brake commands the arm meanwhile"
+    assert_never_blocks(run)
+    own = [c for c in arm.commands if c.time_s > waiting[-1].time_s]
+    rest_q = command_at(arm.commands, waiting[-1].time_s).positions_rad
+    assert np.max(np.abs(own[0].positions_rad - rest_q)) < 1e-3, "its motion starts where the brake left the arm"
+    np.testing.assert_allclose(arm.joint_positions(), context.home_q, atol=1e-9)
+
+
+def test_each_tick_sends_at_most_one_arm_command_even_without_settling(clock) -> None:
+    context = make_context(
+        clock, gripper_width_m=0.05, object_width_m=0.05, settings=ManipulationSettings(settle_s=0.0)
+    )
+    write({"/red/target": PlanarPose(0.45, -0.1, 0.2)})
+    run = tick_until_done(set_up(Place("place red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert max(t.arm_commands for t in run.ticks) == 1
+
+
+# -- GraspGuard ----------------------------------------------------------------------------------
+
+
+def guarded_place(context: Context) -> tuple[GraspGuard, Place]:
+    """A cube held between closed fingers, a Place under the guard."""
+    fake_gripper(context).close(SETTINGS.grip_force_n)
+    fake_clock(context).advance(2.0)  # 85 mm closed at 50 mm/s: at rest
+    write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
+    place = Place("place red", "red")
+    guard = GraspGuard("while holding red", place)
+    set_up(guard, context)
+    return guard, place
+
+
+def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
+    context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
+    guard, place = guarded_place(context)
+    run = tick_until_done(guard, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert place.status == Status.SUCCESS
+    assert run.ticks[0].feedback == "holding; carry above the target"
+    assert all(t.feedback.startswith("holding; ") for t in run.ticks)
+    assert_never_blocks(run)
+
+
+def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
+    context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
+    guard, place = guarded_place(context)
+    run = tick_until_done(guard, context, until=after("holding; carry above the target", 50))
+    assert guard.status == Status.RUNNING and place.status == Status.RUNNING
+    assert run.feedback == "holding; carry above the target"
+
+    gripper = fake_gripper(context)
+    gripper.slip()
+    for _ in range(100):
+        width_m = gripper.width()
+        guard.tick_once()
+        context.brake.step()
+        clock.advance(fake_arm(context).control_period_s)
+        if width_m >= HELD_MIN_WIDTH_M:
+            assert guard.status == Status.RUNNING, f"still held at {width_m * 1000:.1f} mm"
+        else:
+            assert guard.status == Status.FAILURE, f"the first tick at {width_m * 1000:.1f} mm fails"
+            break
+    assert guard.status == Status.FAILURE
+    assert place.status == Status.INVALID, "the child is interrupted"
+    assert place.feedback_message == "interrupted"
+    assert guard.feedback_message.startswith("the cube left the gripper: fingers at ")
+    assert guard.feedback_message.endswith("mm, under the 47.0 mm of a held cube")
+    assert context.brake.active, "the carry motion goes to the brake"
+    assert_comes_to_rest(brake_until_idle(context))
+
+
+def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
+    context = make_context(clock, object_width_m=None)
+    guard, place = guarded_place(context)
+    guard.tick_once()
+    assert guard.status == Status.FAILURE
+    assert guard.feedback_message == "the cube left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held cube"
+    assert place.status == Status.INVALID, "the child never ran"
+    assert fake_arm(context).commands == []
