@@ -2,6 +2,7 @@
 
     bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg] [--blackboard] [--out FILE]
+    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
@@ -103,6 +104,32 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
         print(f"recorded images, report.json and transitions.jsonl in {args.record}")
 
 
+def _experiment(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from bt_arrange_sim.experiment import markdown_table, parse_rows, run_experiment
+
+    rows = parse_rows(args.rows)
+    if not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
+        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
+    bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
+
+    def progress(record: dict, done: int, total: int) -> None:
+        bar.n = done
+        bar.set_postfix_str(f"{record['row']} #{record['trial']}: {record['status']}", refresh=False)
+        bar.refresh()
+
+    try:
+        summary = run_experiment(
+            rows, args.trials, args.seed, args.threshold_mm, args.out, workers=args.workers, on_trial=progress
+        )
+    finally:
+        bar.close()
+    print(markdown_table(summary), end="")
+    print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {args.out}")
+    return EXIT_OK
+
+
 def _show(args: argparse.Namespace) -> int:
     from bt_arrange.display import render_tree
 
@@ -141,6 +168,21 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
+
+    experiment = commands.add_parser("experiment", help="reproduce the paper's Table 1 and Fig. 4 in simulation")
+    experiment.add_argument(
+        "--rows",
+        default="system,translation,orientation,grasp-estimator",
+        help="comma-separated rows (default: all four)",
+    )
+    experiment.add_argument("--trials", type=int, default=100, help="trials per row (default 100)")
+    experiment.add_argument("--seed", type=int, default=0, help="experiment seed (default 0)")
+    experiment.add_argument("--threshold-mm", type=float, default=1.0, help="accuracy threshold in mm (default 1)")
+    experiment.add_argument("--workers", type=int, default=1, help="worker processes, each with its own world")
+    experiment.add_argument(
+        "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.set_defaults(handler=_experiment)
 
     info = commands.add_parser("info", help="library versions, and a check that a headless cell starts")
     info.set_defaults(handler=_info)

@@ -105,16 +105,18 @@ class CellConfig:
 
 
 @contextlib.contextmanager
-def _stdout_to_stderr() -> Iterator[None]:
-    """Send C-level stdout to stderr: pybullet prints ``argv[0]=`` on connect, which would spoil ``--json``."""
+def _quiet_connect() -> Iterator[None]:
+    """Silence C-level stdout while connecting: pybullet prints ``argv[0]=``, which would spoil ``--json``."""
     sys.stdout.flush()
     saved = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(2, 1)
+        os.dup2(devnull, 1)
         yield
     finally:
         os.dup2(saved, 1)
         os.close(saved)
+        os.close(devnull)
 
 
 def robot_urdf_path() -> str:
@@ -145,7 +147,7 @@ class WorkCell:
         self.config = config or CellConfig()
         physics = self.config.physics
         self._substeps = physics.substeps
-        with _stdout_to_stderr():
+        with _quiet_connect():
             self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         self.client.setGravity(0.0, 0.0, -physics.gravity_m_s2)
         self.client.setPhysicsEngineParameter(

@@ -35,6 +35,7 @@ class ObjectOutcome:
     placed_offset_mm: float | None
     final_offset_mm: float | None
     final_offset_truth_mm: float
+    placed_offset_truth_mm: float | None
     pushes: int
     status: str
     reason: str = ""
@@ -97,6 +98,7 @@ class SimulatedRun:
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+        self._placed_truth_mm: dict[str, float] = {}
 
     def run(self) -> SimulationReport:
         """Tick the tree to the end; returns the report. The cell stays open for inspection."""
@@ -143,9 +145,17 @@ class SimulatedRun:
     def _on_transition(self, transition: Transition) -> None:
         for hook in self.transition_hooks:
             hook(transition)
-        if self.record_dir is None or transition.new != Status.SUCCESS.value:
+        if transition.new != Status.SUCCESS.value:
             return
-        if transition.kind == "Inspect" and transition.behaviour.endswith(" after placing"):
+        placed = transition.kind == "Inspect" and transition.behaviour.endswith(" after placing")
+        if placed and isinstance(self.root, Arrangement):
+            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+            for target in self.root.targets:
+                if target.obj == obj:
+                    self._placed_truth_mm[obj] = self._truth_offset_mm(target)
+        if self.record_dir is None:
+            return
+        if placed:
             obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
             self._save_image(f"after_placing_{obj}")
         elif transition.behaviour == "place all":
@@ -178,6 +188,7 @@ class SimulatedRun:
                     placed_offset_mm=_rounded(placed),
                     final_offset_mm=_rounded(final),
                     final_offset_truth_mm=round(self._truth_offset_mm(target), 4),
+                    placed_offset_truth_mm=_rounded(self._placed_truth_mm.get(target.obj)),
                     pushes=int(storage.get(keys.key(target.obj, keys.CORRECTIONS), 0) or 0),
                     status=status,
                     reason="" if status == "within" else _last_failure(transitions, target.obj),
