@@ -23,7 +23,16 @@ from bt_arrange_sim.cell import CellConfig, WorkCell
 from bt_arrange_sim.scenes import CubeStart
 
 #: Behaviours whose failure explains why an object was not finished.
-_REASON_KINDS = {"Detect", "Inspect", "Pick", "Place", "Push", "RetryUntilThreshold", "GraspGuard"}
+_REASON_KINDS = {
+    "Detect",
+    "EstimateGraspFromDepth",
+    "Inspect",
+    "Pick",
+    "Place",
+    "Push",
+    "RetryUntilThreshold",
+    "GraspGuard",
+}
 
 
 @dataclass

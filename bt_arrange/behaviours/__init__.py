@@ -7,6 +7,7 @@ tick, and turns errors of the framework into FAILURE with the reason as feedback
 
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import ArmBrake, Context
+from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth, transfer_with_depth_grasp
 from bt_arrange.behaviours.handling import GraspGuard, Pick, Place, Push, holding
 from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, offset_in_target_frame_mm
 
@@ -14,6 +15,7 @@ __all__ = [
     "ArmBrake",
     "Context",
     "Detect",
+    "EstimateGraspFromDepth",
     "GraspGuard",
     "GripperStage",
     "Inspect",
@@ -27,4 +29,5 @@ __all__ = [
     "StagedBehaviour",
     "holding",
     "offset_in_target_frame_mm",
+    "transfer_with_depth_grasp",
 ]

@@ -17,6 +17,7 @@ See docs/perception.md.
 
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.perception.corners import CornerRefinement
+from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.perception.detection import (
     CubeDetector,
     Detection,
@@ -32,6 +33,8 @@ __all__ = [
     "ColourTable",
     "CornerRefinement",
     "CubeDetector",
+    "DepthGraspConfig",
+    "DepthGraspEstimator",
     "Detection",
     "DetectionStatus",
     "DetectorConfig",
