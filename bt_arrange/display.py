@@ -159,7 +159,7 @@ def _dot_node_names(root: py_trees.behaviour.Behaviour) -> dict[uuid.UUID, str]:
 def dot_graph(root: py_trees.behaviour.Behaviour, *, blackboard: bool = False) -> pydot.Dot:
     """``py_trees.display.dot_tree(root)``, plus this tree's blackboard keys when asked.
 
-    The keys are drawn as py_trees draws them (boxes in a "Blackboard" cluster below the tree, a
+    The keys are drawn as py_trees draws them (boxes in a "Blackboard" subgraph ranked below the tree, a
     blue edge from each writer, a green edge to each reader) but only for the given tree: py_trees'
     own ``with_blackboard_variables`` draws every client still registered on the global blackboard,
     so a second tree built in the same process would appear twice.
@@ -217,10 +217,16 @@ def render_picture(graph: pydot.Dot, fmt: str, out: Path) -> Path:
     dot = shutil.which("dot")
     if dot is None:
         raise DisplayError(NO_GRAPHVIZ)
+    source = graph.to_string()
+    if fmt == "png":
+        # A PNG bakes in the glyphs of this machine's fonts, which often lack py_trees' marks:
+        # use py_trees' own ASCII fallbacks ("M" for a composite with memory) rather than empty boxes.
+        for mark in ("memory", "synchronised"):
+            source = source.replace(py_trees.display.unicode_symbols[mark], py_trees.display.ascii_symbols[mark])
     try:
         result = subprocess.run(
             [dot, f"-T{fmt}", "-o", str(out)],
-            input=graph.to_string().encode("utf-8"),
+            input=source.encode("utf-8"),
             capture_output=True,
             timeout=DOT_TIMEOUT_S,
             check=False,

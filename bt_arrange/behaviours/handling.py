@@ -136,6 +136,8 @@ class Push(StagedBehaviour):
         self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
         self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
         self.blackboard.register_key(keys.key(obj, keys.OFFSET_XY_MM), access=Access.READ)
+        # Push reads the axis it alternates from and writes the next one.
+        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.READ)
         self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.WRITE)
         self.pushed: tuple[str, float] | None = None
 
