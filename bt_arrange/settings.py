@@ -31,6 +31,10 @@ class ManipulationSettings:
     open_width_m: float = 0.085
     #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
     grasp_width_tolerance_m: float = 0.003
+    #: A grip wider than this holds the cube more than about 13 degrees off square, or by two of its
+    #: vertical edges (a cube turned 29 degrees or more under the pads: 68 mm apart): let go, look again.
+    #: Narrower turned grips are kept, as in the paper's orientation error: the pushes square the cube.
+    max_grip_width_m: float = 0.060
     #: Pads of the 2F-85: at an opening of edge - thickness the two pad centres sit on the cube's edges.
     pad_thickness_m: float = 0.008
     pad_width_m: float = 0.022

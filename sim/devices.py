@@ -185,10 +185,42 @@ class SimCamera:
         # OpenGL looks down its -z with y up; the OpenCV optical frame looks down +z with y down.
         flip = np.diag([1.0, -1.0, -1.0, 1.0])
         self._view_matrix = list(np.linalg.inv(self._pose_world.matrix @ flip).flatten(order="F"))
+        # Error injection only (``set_render_offset``): the view actually rendered, normally the calibrated one.
+        self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self._render_view_matrix = self._view_matrix
         vertical_fov_deg = math.degrees(2.0 * math.atan((config.height_px / 2.0) / self._intrinsics.fy_px))
         self._projection_matrix = cell.client.computeProjectionMatrixFOV(
             vertical_fov_deg, config.width_px / config.height_px, config.near_m, config.far_m
         )
+
+    @property
+    def render_offset(self) -> tuple[float, float, float]:
+        """The physical displacement rendered from: (dx_m, dy_m, dyaw_rad); zeros when calibrated (the default)."""
+        return self._render_offset
+
+    def set_render_offset(self, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+        """Error injection: render from a camera displaced as if its mount had been bumped.
+
+        The rendering camera is moved by (dx_m, dy_m) along world x and y and turned by ``dyaw_rad``
+        about the vertical through its centre. Frames still report the calibrated ``pose_world``, so
+        poses measured from them are off: a cube appears shifted by -(dx, dy) and turned by -dyaw
+        about the point below the camera. Off by default; call with no arguments (all zeros) to
+        render from the calibrated pose again.
+        """
+        offset = (float(dx_m), float(dy_m), float(dyaw_rad))
+        if not all(math.isfinite(v) for v in offset):
+            raise OutOfRangeError(f"camera render offset {offset} is not finite")
+        self._render_offset = offset
+        if offset == (0.0, 0.0, 0.0):
+            self._render_view_matrix = self._view_matrix
+            return
+        c, s = math.cos(offset[2]), math.sin(offset[2])
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        moved = Pose.from_rotation(
+            self._pose_world.position_m + np.array([offset[0], offset[1], 0.0]), turn @ self._pose_world.rotation
+        )
+        flip = np.diag([1.0, -1.0, -1.0, 1.0])  # as in __init__: OpenGL view from the OpenCV optical frame
+        self._render_view_matrix = list(np.linalg.inv(moved.matrix @ flip).flatten(order="F"))
 
     @property
     def intrinsics(self) -> CameraIntrinsics:
@@ -209,7 +241,7 @@ class SimCamera:
         _, _, rgba, zbuffer, _ = client.getCameraImage(
             config.width_px,
             config.height_px,
-            viewMatrix=self._view_matrix,
+            viewMatrix=self._render_view_matrix,
             projectionMatrix=self._projection_matrix,
             renderer=pybullet.ER_TINY_RENDERER,
             shadow=0,

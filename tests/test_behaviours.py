@@ -338,8 +338,20 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
     assert run.feedback == (
         "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
     )
-    assert "lift the cube" not in {t.feedback for t in run.ticks}
-    assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.grasp_height_m, abs=1e-6), "no lift"
+    feedback = [t.feedback for t in run.ticks]
+    assert feedback.index("let go of a bad grasp") < feedback.index("lift the cube"), "lets go before lifting"
+    assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.approach_height_m, abs=1e-6), "lifted clear"
+    assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
+
+
+def test_pick_that_holds_a_turned_cube_by_its_corners_lets_go_and_fails(clock) -> None:
+    # A cube turned ~30 degrees under the pads is gripped across two vertical edges, 68 mm apart.
+    context = make_context(clock, object_width_m=0.068)
+    write({"/red/pose": cube_pose(0.45, -0.05)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback.startswith("the pads hold the cube across its corners: 68.0 mm apart")
+    assert "let go of a bad grasp" in [t.feedback for t in run.ticks]
 
 
 @pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])

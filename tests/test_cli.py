@@ -115,14 +115,14 @@ def test_run_json_reports_every_object(capsys, tmp_path):
 
 
 def test_run_exits_1_when_an_object_does_not_end_within_the_threshold(capsys, tmp_path):
-    # No pushes allowed and a threshold below what placing reaches (about 0.24 mm here).
+    # No pushes allowed and a threshold below anything the camera reads.
     path = write_tree(
         tmp_path,
         """
         from bt_arrange.trees import Target, arrangement
         from bt_arrange_sim.scenes import scatter
         TARGETS = [Target("red", 0.5, 0.0)]
-        def create_root(threshold_mm=0.05):
+        def create_root(threshold_mm=0.001):
             return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=0)
         def create_scene(seed):
             return scatter(["red"], seed, avoid=TARGETS)

@@ -136,6 +136,35 @@ class InstantStage(Stage):
         return Status.SUCCESS
 
 
+class OnlyIf(Stage):
+    """Run ``stage`` only when ``condition(context)`` holds as the step starts; otherwise skip it."""
+
+    def __init__(self, stage: Stage, condition: Callable[[Context], bool]) -> None:
+        super().__init__(stage.name)
+        self._stage = stage
+        self._condition = condition
+        self._active = False
+
+    def start(self, context: Context) -> None:
+        """Decide, then start the wrapped step if it runs."""
+        self._active = self._condition(context)
+        if self._active:
+            self._stage.start(context)
+
+    def poll(self, context: Context) -> Status:
+        """The wrapped step's status, or SUCCESS when skipped."""
+        if not self._active:
+            return Status.SUCCESS
+        status = self._stage.poll(context)
+        self.reason = self._stage.reason
+        return status
+
+    def interrupt(self, context: Context) -> None:
+        """Pass an interruption on."""
+        if self._active:
+            self._stage.interrupt(context)
+
+
 class StagedBehaviour(py_trees.behaviour.Behaviour):
     """A behaviour that runs ``stages()`` one after the other, never blocking a tick.
 

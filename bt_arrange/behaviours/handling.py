@@ -9,7 +9,7 @@ import py_trees
 from py_trees.common import Access, Status
 
 from bt_arrange.behaviours import keys
-from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
@@ -48,7 +48,9 @@ class Pick(StagedBehaviour):
     """Grasp the object at its measured pose (``/<obj>/pose``) and lift it.
 
     Approach above it with the pads square to its faces, descend, close with a force limit,
-    check from the finger width that the cube is between the pads, lift.
+    check from the finger width that the pads hold the cube across two faces, lift. A bad grasp
+    (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
+    lifting and fails with the width, so a retry can look and pick again.
     """
 
     def __init__(self, name: str, obj: str) -> None:
@@ -57,6 +59,7 @@ class Pick(StagedBehaviour):
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
         self.grip_width_m: float | None = None
+        self.bad_grasp: str | None = None
 
     def stages(self, context: Context) -> list[Stage]:
         """Open, approach, descend, close, check, lift."""
@@ -71,19 +74,32 @@ class Pick(StagedBehaviour):
             MoveStage("descend to the cube", _line_to(x, y, s.grasp_height_m, yaw)),
             GripperStage("close on the cube", lambda c: c.robot.gripper.close(s.grip_force_n)),
             InstantStage("check the grasp", self._check_grasp),
+            # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
+            OnlyIf(GripperStage("let go of a bad grasp", lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
             MoveStage("lift the cube", _line_to(x, y, s.approach_height_m, yaw)),
+            InstantStage("confirm the grasp", lambda c: self.bad_grasp),
         ]
 
+    def _bad(self, context: Context) -> bool:
+        return self.bad_grasp is not None
+
     def _check_grasp(self, context: Context) -> str | None:
-        self.grip_width_m = max(0.0, context.robot.gripper.width())
-        if holding(context):
-            return None
+        """Record whether the pads hold the cube across two faces; never fails by itself."""
         s = context.settings
-        return (
-            f"no cube between the pads: the fingers closed to {self.grip_width_m * 1000:.1f} mm, "
-            f"a {s.cube_edge_m * 1000:.0f} mm cube holds them at least "
-            f"{(s.cube_edge_m - s.grasp_width_tolerance_m) * 1000:.1f} mm apart"
-        )
+        self.grip_width_m = width = max(0.0, context.robot.gripper.width())
+        low, high = s.cube_edge_m - s.grasp_width_tolerance_m, s.max_grip_width_m
+        self.bad_grasp = None
+        if width < low:
+            self.bad_grasp = (
+                f"no cube between the pads: the fingers closed to {width * 1000:.1f} mm, "
+                f"a {s.cube_edge_m * 1000:.0f} mm cube holds them at least {low * 1000:.1f} mm apart"
+            )
+        elif width > high:
+            self.bad_grasp = (
+                f"the pads hold the cube across its corners: {width * 1000:.1f} mm apart, more than the "
+                f"{high * 1000:.1f} mm of a {s.cube_edge_m * 1000:.0f} mm cube held nearly square (it is turned)"
+            )
+        return None
 
     def success_message(self) -> str:
         """Feedback with the grip width."""
