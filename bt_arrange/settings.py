@@ -9,6 +9,16 @@ from bt_arrange.robot import GRIPPER_FORCE_RANGE_N, GRIPPER_MAX_WIDTH_M
 
 #: Edge length of the paper's cubes, in metres.
 CUBE_EDGE_M = 0.05
+#: Top-face colours (RGB, 0..1) of the paper's four cubes as the simulated cell paints them; the
+#: perception's default colour table covers them (a new colour needs an HSV range there too).
+CUBE_COLOURS_RGB: dict[str, tuple[float, float, float]] = {
+    "red": (0.80, 0.08, 0.08),
+    "green": (0.10, 0.65, 0.20),
+    "blue": (0.10, 0.25, 0.85),
+    "yellow": (0.90, 0.80, 0.10),
+}
+#: Sides of every cube: near-white, so a top camera sees only the top face in colour.
+CUBE_SIDE_RGB = (0.85, 0.85, 0.82)
 
 
 @dataclass(frozen=True)

@@ -4,20 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-#: Top-face colours (RGB, 0..1) the cell paints cubes with. Perception's default colour
-#: table covers these; users who add a colour here add its HSV range there too.
-CUBE_COLOURS_RGB: dict[str, tuple[float, float, float]] = {
-    "red": (0.80, 0.08, 0.08),
-    "green": (0.10, 0.65, 0.20),
-    "blue": (0.10, 0.25, 0.85),
-    "yellow": (0.90, 0.80, 0.10),
-}
-#: Sides and bottom of every cube: near-white, so a top camera sees only the top face in colour.
-CUBE_SIDE_RGB = (0.85, 0.85, 0.82)
+from bt_arrange.settings import CUBE_COLOURS_RGB, CUBE_EDGE_M, CUBE_SIDE_RGB
+
 TABLE_RGB = (0.45, 0.45, 0.47)
 
-#: Edge length of the paper's cubes, in metres.
-CUBE_EDGE_M = 0.05
 #: A 5 cm cube of hard wood; light enough for the 2F-85, heavy enough to rest firmly.
 CUBE_MASS_KG = 0.1
 #: Thickness of the coloured top plate, part of the cube's visual only: thin, because a 0.5 mm

@@ -20,19 +20,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from bt_arrange.geometry import FloatArray, Pose, rotation_z
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.settings import CUBE_COLOURS_RGB, CUBE_EDGE_M, CUBE_SIDE_RGB
 
-#: The simulated cell's top-face colours (RGB 0..1, fully lit).
-SIM_CUBE_COLOURS_RGB: dict[str, tuple[float, float, float]] = {
-    "red": (0.80, 0.08, 0.08),
-    "green": (0.10, 0.65, 0.20),
-    "blue": (0.10, 0.25, 0.85),
-    "yellow": (0.90, 0.80, 0.10),
-}
-SIM_SIDE_RGB = (0.85, 0.85, 0.82)
+#: The simulated cell's top-face colours (RGB 0..1, fully lit) and cube sides.
+SIM_CUBE_COLOURS_RGB = CUBE_COLOURS_RGB
+SIM_SIDE_RGB = CUBE_SIDE_RGB
 SIM_TABLE_RGB = (0.45, 0.45, 0.47)
 SIM_CAMERA_HEIGHT_M = 0.70
 SIM_HORIZONTAL_FOV_DEG = 70.0
-CUBE_EDGE_M = 0.05
 
 
 def sim_intrinsics(width_px: int = 1920, height_px: int = 1080) -> CameraIntrinsics:
