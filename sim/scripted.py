@@ -1,41 +1,54 @@
-"""A scripted pick and place steered by ground truth: a yardstick for the cell, not the task.
+"""Pick, place and push a cube told by ground truth: a yardstick for the cell, not the task.
 
 The benchmark of the work cell and its integration tests use it to measure what the arm, the
-gripper and the physics can do before perception enters. The behaviours of
-``bt_arrange.behaviours`` do the same steps tick by tick from camera poses instead.
+gripper and the physics can do before perception enters. It runs the very behaviours an
+arrangement tree runs (``Pick``, ``Place``, ``Push``), each as a one-node tree on the world's
+clock, with the cube's true pose written to the blackboard where ``Detect`` would write the
+camera's.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numpy as np
+import py_trees
+from py_trees.common import Status
 
-from bt_arrange.motion import (
-    ArmKinematics,
-    CartesianLimits,
-    JointLimits,
-    Motion,
-    MotionPlanner,
-    gripper_down_pose,
-    nearest_symmetric_yaw,
-)
+from bt_arrange.behaviours import Context, MoveStage, Pick, Place, Push, StagedBehaviour, keys
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.geometry import PlanarPose, Pose
+from bt_arrange.motion import CartesianLimits, JointLimits
+from bt_arrange.runner import Runner
 from bt_arrange.settings import CUBE_EDGE_M, ManipulationSettings
 from bt_arrange_sim.cell import WorkCell
+
+#: The blackboard namespace of the cube the script handles.
+OBJ = "cube"
 
 
 @dataclass
 class PickPlaceResult:
-    """What one scripted pick and place measured (ground truth; the robot saw none of it)."""
+    """What one scripted pick measured (ground truth steered it; the robot saw nothing)."""
 
     grasped: bool
     grip_width_m: float
     sim_seconds: float
+    feedback: str = ""
+
+
+class _MoveTo(StagedBehaviour):
+    """One joint-space move to a TCP pose."""
+
+    def __init__(self, pose: Pose) -> None:
+        super().__init__("move")
+        self._pose = pose
+
+    def stages(self, context: Context) -> list:  # noqa: D102
+        return [MoveStage("move", lambda c, q: c.planner.move_to_pose(q, self._pose))]
 
 
 class ScriptedPickPlace:
-    """Drives the cell through approach, descend, close, lift, carry, lower, open, retreat."""
+    """Runs the arrangement behaviours on one cell, one at a time, from ground-truth poses."""
 
     def __init__(
         self,
@@ -43,97 +56,54 @@ class ScriptedPickPlace:
         settings: ManipulationSettings | None = None,
         joint_limits: JointLimits | None = None,
         cartesian_limits: CartesianLimits | None = None,
+        time_limit_s: float = 60.0,
     ) -> None:
         self.cell = cell
-        self.settings = settings or ManipulationSettings()
-        self.kinematics = ArmKinematics()
-        self.planner = MotionPlanner(
-            self.kinematics,
-            joint_limits or JointLimits(),
-            cartesian_limits or CartesianLimits(),
-            cell.config.physics.control_period_s,
+        self.context = Context.create(
+            cell.robot, joint_limits=joint_limits, cartesian_limits=cartesian_limits, settings=settings
         )
-
-    def run(self, motion: Motion) -> None:
-        """Step the world until the motion is done and the arm has settled."""
-        arm = self.cell.arm
-        while not motion.done:
-            setpoint = motion.step()
-            arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
-            self.cell.step()
-        self.wait(self.settings.settle_s)
-
-    def wait(self, seconds: float) -> None:
-        """Let the world run with the current commands."""
-        self.cell.settle(seconds)
-
-    def wait_for_gripper(self) -> None:
-        """Step until the fingers stop (or the timeout passes)."""
-        period = self.cell.config.physics.control_period_s
-        self.cell.step(3)
-        waited = 0.0
-        while self.cell.gripper.is_moving() and waited < self.settings.gripper_timeout_s:
-            self.cell.step()
-            waited += period
+        self.time_limit_s = time_limit_s
+        self._blackboard = py_trees.blackboard.Client(name="ground truth")
+        for field in (keys.POSE, keys.TARGET, keys.OFFSET_XY_MM, keys.PUSH_AXIS):
+            self._blackboard.register_key(keys.key(OBJ, field), access=py_trees.common.Access.WRITE)
 
     def pick(self, x_m: float, y_m: float, yaw_rad: float) -> PickPlaceResult:
-        """Grasp a cube resting at (x, y, yaw) and lift it to the approach height."""
-        s = self.settings
-        start = self.cell.clock.now()
-        arm, gripper = self.cell.arm, self.cell.gripper
-        yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
-        gripper.open(s.open_width_m)
-        above = gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)
-        self.run(self.planner.move_to_pose(arm.joint_positions(), above))
-        self.wait_for_gripper()
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, s.grasp_height_m, yaw)))
-        gripper.close(s.grip_force_n)
-        self.wait_for_gripper()
-        width = gripper.width()
-        grasped = width > CUBE_EDGE_M - s.grasp_width_tolerance_m
-        self.run(self.planner.move_line(arm.joint_positions(), above))
-        return PickPlaceResult(grasped, width, self.cell.clock.now() - start)
+        """Grasp a cube resting at (x, y, yaw) and lift it (``Pick``)."""
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE_EDGE_M / 2))
+        pick = Pick("pick", OBJ)
+        status, seconds = self._run(pick)
+        width = pick.grip_width_m if pick.grip_width_m is not None else self.cell.gripper.width()
+        return PickPlaceResult(status == Status.SUCCESS, width, seconds, pick.feedback_message)
 
     def place(self, x_m: float, y_m: float, yaw_rad: float) -> float:
-        """Carry the held cube above (x, y), lower it to rest, open and retreat; returns sim seconds."""
-        s = self.settings
-        start = self.cell.clock.now()
-        arm, gripper = self.cell.arm, self.cell.gripper
-        yaw = nearest_symmetric_yaw(yaw_rad, self.kinematics.wrist_yaw_rad(arm.joint_positions()))
-        above = gripper_down_pose(x_m, y_m, s.approach_height_m, yaw)
-        self.run(self.planner.move_to_pose(arm.joint_positions(), above))
-        release_z = s.grasp_height_m + s.release_clearance_m
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(x_m, y_m, release_z, yaw)))
-        gripper.open(s.open_width_m)
-        self.wait_for_gripper()
-        self.run(self.planner.move_line(arm.joint_positions(), above))
-        return self.cell.clock.now() - start
+        """Carry the held cube to (x, y, yaw), lower it, release it, retreat (``Place``); returns sim seconds."""
+        self._write(keys.TARGET, PlanarPose(x_m, y_m, yaw_rad))
+        return self._expect_success(Place("place", OBJ))
 
     def push(self, x_m: float, y_m: float, axis: str, distance_m: float) -> float:
-        """Push a cube resting at (x, y) by ``distance_m`` along world ``axis`` ("x" or "y").
-
-        The fingers stand side by side along the face, opened to the cube's width minus a pad's
-        thickness, so both pads meet the face near its edges. Returns sim seconds.
-        """
+        """Push a cube resting at (x, y) by ``distance_m`` along world ``axis`` (``Push``); returns sim seconds."""
         if axis not in ("x", "y"):
             raise ValueError(f"push axis must be 'x' or 'y', got {axis!r}")
-        s = self.settings
-        start = self.cell.clock.now()
-        arm, gripper = self.cell.arm, self.cell.gripper
-        direction = np.array([1.0, 0.0] if axis == "x" else [0.0, 1.0]) * np.sign(distance_m)
-        # The closing axis lies across the push; the pads' leading faces are half a pad width ahead.
-        push_yaw = math.atan2(direction[1], direction[0]) + math.pi / 2
-        yaw = nearest_symmetric_yaw(push_yaw, self.kinematics.wrist_yaw_rad(arm.joint_positions()), math.pi)
-        reach_m = s.push_reach_m
-        centre = np.array([x_m, y_m])
-        begin = centre - direction * (reach_m + s.push_clearance_m)
-        end = centre - direction * reach_m + direction * abs(distance_m)
-        back = end - direction * s.push_clearance_m
-        gripper.open(s.push_opening_m)
-        self.run(self.planner.move_to_pose(arm.joint_positions(), gripper_down_pose(*begin, s.approach_height_m, yaw)))
-        self.wait_for_gripper()
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*begin, s.push_height_m, yaw)))
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*end, s.push_height_m, yaw)))
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*back, s.push_height_m, yaw)))
-        self.run(self.planner.move_line(arm.joint_positions(), gripper_down_pose(*back, s.approach_height_m, yaw)))
-        return self.cell.clock.now() - start
+        dx_m, dy_m = (distance_m, 0.0) if axis == "x" else (0.0, distance_m)
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, 0.0, z_m=CUBE_EDGE_M / 2))
+        self._write(keys.TARGET, PlanarPose(x_m + dx_m, y_m + dy_m, 0.0))
+        self._write(keys.OFFSET_XY_MM, (dx_m * 1000, dy_m * 1000))
+        self._write(keys.PUSH_AXIS, axis)
+        return self._expect_success(Push("push", OBJ))
+
+    def move_to(self, pose: Pose) -> float:
+        """A joint-space move of the TCP to ``pose``; returns sim seconds."""
+        return self._expect_success(_MoveTo(pose))
+
+    def _write(self, field: str, value: object) -> None:
+        self._blackboard.set(keys.key(OBJ, field), value, overwrite=True)
+
+    def _run(self, behaviour: py_trees.behaviour.Behaviour) -> tuple[Status, float]:
+        result = Runner(behaviour, self.context, self.cell.step, time_limit_s=self.time_limit_s).run()
+        return result.status, result.sim_seconds
+
+    def _expect_success(self, behaviour: py_trees.behaviour.Behaviour) -> float:
+        status, seconds = self._run(behaviour)
+        if status != Status.SUCCESS:
+            raise BtArrangeError(f"{behaviour.name} ended {status.value}: {behaviour.feedback_message}")
+        return seconds

@@ -40,7 +40,7 @@ def test_a_cube_under_the_gripper_is_not_reported_as_found():
         cell.settle(0.1)
         script = ScriptedPickPlace(cell)
         # Hover over the cube, low enough for the gripper body to hide part of its face.
-        script.run(script.planner.move_to_pose(cell.arm.joint_positions(), gripper_down_pose(0.515, 0.0, 0.09, 0.2)))
+        script.move_to(gripper_down_pose(0.515, 0.0, 0.09, 0.2))
         detection = CubeDetector().detect(cell.camera.capture(), "red")
         assert detection.status in (DetectionStatus.PARTIAL, DetectionStatus.NOT_FOUND)
         assert detection.reason
