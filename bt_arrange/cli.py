@@ -33,11 +33,12 @@ def _info(_: argparse.Namespace) -> int:
             print(f"  {package} {metadata.version(package)}")
         except metadata.PackageNotFoundError:
             print(f"  {package} missing (pip install -e . installs it)")
-    from bt_arrange_sim import WorkCell, robot_urdf_path
+    from bt_arrange.motion import default_urdf_path
+    from bt_arrange_sim import WorkCell
 
     with WorkCell() as cell:
         cell.settle(0.1)
-        print(f"  robot description: {robot_urdf_path()}")
+        print(f"  robot description: {default_urdf_path()}")
         print(f"  headless work cell: ok (TCP at {cell.arm.tcp_pose()})")
     return EXIT_OK
 

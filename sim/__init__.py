@@ -4,7 +4,7 @@ It implements the robot interfaces of ``bt_arrange.robot`` for a simulated UR5 w
 2F-85-like gripper, coloured 5 cm cubes and a top RGB-D camera.
 """
 
-from bt_arrange_sim.cell import HOME_Q, CameraConfig, CellConfig, PhysicsConfig, WorkCell, robot_urdf_path
+from bt_arrange_sim.cell import HOME_Q, CameraConfig, CellConfig, PhysicsConfig, WorkCell
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import CUBE_COLOURS_RGB, CUBE_EDGE_M, Contact
 
@@ -19,5 +19,4 @@ __all__ = [
     "Contact",
     "PhysicsConfig",
     "WorkCell",
-    "robot_urdf_path",
 ]

@@ -15,12 +15,12 @@ import os
 import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from importlib import resources
 
 import numpy as np
 
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
+from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.robot import Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
@@ -125,26 +125,14 @@ def _quiet_connect() -> Iterator[None]:
         os.close(devnull)
 
 
-def robot_urdf_path() -> str:
-    """Path of the UR5 + 2F-85 description shipped with bt_arrange."""
-    return str(resources.files("bt_arrange.descriptions") / "ur5_2f85.urdf")
-
-
 class WorkCell:
     """One simulated work cell with its own physics world.
 
     ``gui=True`` opens the pybullet window (needs a display); the default is DIRECT, headless.
     """
 
-    ARM_JOINTS = (
-        "shoulder_pan_joint",
-        "shoulder_lift_joint",
-        "elbow_joint",
-        "wrist_1_joint",
-        "wrist_2_joint",
-        "wrist_3_joint",
-    )
-    FINGER_JOINTS = ("left_finger_joint", "right_finger_joint")
+    ARM_JOINTS = ARM_JOINT_NAMES
+    FINGER_JOINTS = FINGER_JOINT_NAMES
 
     def __init__(self, config: CellConfig | None = None, gui: bool = False) -> None:
         import pybullet
@@ -163,7 +151,7 @@ class WorkCell:
         self.cubes: dict[str, int] = {}
         self.table_id = self._create_table()
         self.robot_id = self.client.loadURDF(
-            robot_urdf_path(), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE
+            str(default_urdf_path()), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE
         )
         self._joint_index = {
             self.client.getJointInfo(self.robot_id, i)[1].decode(): i
@@ -178,7 +166,7 @@ class WorkCell:
             self.client.getJointInfo(self.robot_id, i)[10] for i in self.arm_joint_indices
         )
         self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
-        self.tcp_link_index = self._link_index["tcp"]
+        self.tcp_link_index = self._link_index[TCP_FRAME]
         self._configure_gripper()
         self.camera_noise = CameraNoise(self.config.camera_noise)
         self.clock = SimClock(self)

@@ -8,7 +8,6 @@ beside what the simulator knows (ground truth, labelled as such, for evaluation 
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -17,6 +16,7 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, keys
+from bt_arrange.geometry import PlanarPose
 from bt_arrange.runner import Runner, Transition, TransitionLog
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange_sim.cell import CellConfig, WorkCell
@@ -213,7 +213,7 @@ class SimulatedRun:
 
     def _truth_offset_mm(self, target: Target) -> float:
         x, y, _ = self.cell.cube_planar_truth(target.obj)
-        return math.hypot(x - target.x_m, y - target.y_m) * 1000
+        return PlanarPose(x, y).distance_to(target.planar) * 1000
 
 
 def _rounded(value: float | None) -> float | None:
