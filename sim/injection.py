@@ -30,9 +30,10 @@ whether it fired (``"fired"``) and what it did, in millimetres and degrees.
 
 **Seeds.** Each injector draws from its own ``numpy.random.Generator``; ``attach_all`` derives
 one per injector from the seed and the injector's name (not its position), so an injector draws
-the same values whatever else is attached. The draws of the picking injectors are resampled until
-the cube fits between the open pads, which depends on where the camera saw the cube, so the same
-seed reproduces a record for the same scene.
+the same values whatever else is attached. The draws of the picking injectors are resampled only
+when the pads could not close on the cube (``grasp_fits``: the limit binds across the closing axis),
+which depends on where the camera saw the cube, so the same seed reproduces a record for the same
+scene.
 
 The stage names an injector waits for are the feedback messages of ``Pick`` and ``Place`` while
 they run, on the behaviours ``detect <obj>``, ``pick <obj>`` and ``place <obj>`` that
@@ -56,6 +57,7 @@ from py_trees.common import Status
 from bt_arrange.behaviours import keys
 from bt_arrange.errors import OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose, quaternion_to_matrix, rotation_z
+from bt_arrange.motion import nearest_symmetric_yaw
 from bt_arrange.runner import Transition
 
 if TYPE_CHECKING:
@@ -193,19 +195,28 @@ class Injector(ABC):
         self.run.tick_hooks.append(hook)
 
     def _grasp_reference(self) -> tuple[float, float, float]:
-        """Where the pads will come down: the pose the robot measured (``/<obj>/pose``), else the true pose.
+        """Where and how the pads will come down: the pose the robot measured (``/<obj>/pose``, else the
+        true pose) with the yaw of the pads' closing axis (Pick's choice among the cube's quarter turns).
 
         Read only to keep a picking error graspable, as the paper's bounds do; never written.
         """
         storage = py_trees.blackboard.Blackboard.storage
         measured = storage.get(keys.key(self.cube, keys.POSE))
         if isinstance(measured, Pose):
-            return measured.x_m, measured.y_m, measured.yaw_rad
-        truth = self.run.cell.cube_pose_truth(self.cube)
-        return truth.x_m, truth.y_m, truth.yaw_rad
+            x, y, yaw = measured.x_m, measured.y_m, measured.yaw_rad
+        else:
+            truth = self.run.cell.cube_pose_truth(self.cube)
+            x, y, yaw = truth.x_m, truth.y_m, truth.yaw_rad
+        return x, y, self._closing_yaw(yaw)
+
+    def _closing_yaw(self, cube_yaw_rad: float) -> float:
+        """The yaw Pick will close at for a cube seen at ``cube_yaw_rad``: the quarter turn nearest the wrist."""
+        context = self.run.context
+        wrist = context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
+        return nearest_symmetric_yaw(cube_yaw_rad, wrist)
 
     def _fits(self, x_m: float, y_m: float, yaw_rad: float, reference: tuple[float, float, float]) -> bool:
-        """True when a cube at (x, y, yaw) lies between pads opened around ``reference`` along either of its axes."""
+        """True when a cube at (x, y, yaw) can still be grasped by pads closing around ``reference``."""
         settings = self.run.context.settings
         return grasp_fits(x_m, y_m, yaw_rad, reference, settings.cube_edge_m, settings.open_width_m)
 
@@ -231,22 +242,22 @@ def grasp_fits(
     edge_m: float,
     open_width_m: float,
 ) -> bool:
-    """The paper's grasp feasibility: the cube still lies between the open pads.
+    """The paper's grasp feasibility: the pads still close on the cube.
 
-    The pads come down around ``reference`` (x_m, y_m, yaw_rad: where the robot saw the cube),
-    closing along one of its axes. Along both of them, the cube's centre offset plus its half
-    extent (half an edge when square to the pads, up to edge / sqrt(2) turned by 45 degrees) must
-    stay within half the opening: for an 85 mm opening and a 50 mm cube square to the pads, the
-    centre may be at most 17.5 mm off along either axis.
+    The pads come down around ``reference`` (x_m, y_m, and yaw_rad: the direction of the closing
+    axis) and close along that axis. The limit binds across the closing axis only: the cube's centre
+    offset along it plus its half extent there (half an edge when square to the pads, up to
+    edge / sqrt(2) turned by 45 degrees) must stay within half the opening; for an 85 mm opening
+    and a 50 mm cube square to the pads, 17.5 mm. Along the pads the cube is still grasped while
+    the pads' centre stays on it: up to half an edge (25 mm) off.
     """
-    rx, ry, ryaw = reference
-    relative_yaw = yaw_rad - ryaw
+    rx, ry, closing_yaw = reference
+    relative_yaw = yaw_rad - closing_yaw
     half_extent_m = edge_m / 2 * (abs(math.cos(relative_yaw)) + abs(math.sin(relative_yaw)))
     offset = np.array([x_m - rx, y_m - ry])
-    for axis in (np.array([math.cos(ryaw), math.sin(ryaw)]), np.array([-math.sin(ryaw), math.cos(ryaw)])):
-        if abs(float(offset @ axis)) + half_extent_m > open_width_m / 2:
-            return False
-    return True
+    across = abs(float(offset @ np.array([math.cos(closing_yaw), math.sin(closing_yaw)])))
+    along_pads = abs(float(offset @ np.array([-math.sin(closing_yaw), math.cos(closing_yaw)])))
+    return across + half_extent_m <= open_width_m / 2 + 1e-12 and along_pads <= edge_m / 2 + 1e-12
 
 
 def _sample(draw: Callable[[], T], fits: Callable[[T], bool]) -> tuple[T, int] | None:
@@ -319,7 +330,9 @@ class PerceptionOffset(Injector):
             dx, dy, dyaw = offset
             # What the calibrated camera will report for the cube (see SimCamera.set_render_offset).
             seen = rotation_z(-dyaw)[:2, :2] @ np.array([truth.x_m - cx - dx, truth.y_m - cy - dy]) + (cx, cy)
-            return self._fits(truth.x_m, truth.y_m, truth.yaw_rad, (seen[0], seen[1], truth.yaw_rad - dyaw))
+            return self._fits(
+                truth.x_m, truth.y_m, truth.yaw_rad, (seen[0], seen[1], self._closing_yaw(truth.yaw_rad - dyaw))
+            )
 
         drawn = _sample(draw, fits)
         (dx, dy, dyaw), draws = drawn or ((0.0, 0.0, 0.0), MAX_DRAWS)
@@ -362,9 +375,10 @@ class PickTranslation(Injector):
 
     Right after ``detect <obj>`` first succeeds (seen, not yet grasped) the cube is moved by dx, dy,
     each uniform in +-``max_m`` along world x and y (the paper: up to +-2.5 cm, half a cube),
-    resampled while the cube would not fit between the open pads (``grasp_fits``: at most 17.5 mm
-    off along either of its axes). The closing pads drag it back to the centre along their
-    closing axis; the offset along the pads remains and shows up after placing.
+    as the paper draws it; only a draw the pads could not close on is drawn again (``grasp_fits``:
+    at most 17.5 mm off across the closing axis; along the pads up to half an edge still grasps).
+    The closing pads drag it back to the centre along their closing axis; the offset along the
+    pads remains and shows up after placing.
 
     Record: ``dx_mm``, ``dy_mm`` (world), ``draws`` (samples drawn), ``time_s``.
     """
@@ -400,8 +414,8 @@ class PickRotation(Injector):
     """Orientation error (Fig. 2c): the pads are not aligned with the cube's faces.
 
     Right after ``detect <obj>`` first succeeds the cube is turned about the vertical through its
-    centre by an angle uniform in +-``max_deg`` (the paper: up to +-40 deg), resampled while it
-    would not fit between the open pads (with another picking error already injected). The
+    centre by an angle uniform in +-``max_deg`` (the paper: up to +-40 deg), drawn again only when
+    the pads could not close on it (with another picking error already injected). The
     closing pads turn it back towards square, which moves it.
 
     Measured in this cell (trees/single_cube.py): turned by about 24 deg, the cube is held about
