@@ -2,7 +2,8 @@
 
     bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg] [--blackboard] [--out FILE]
-    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
+    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.25,0.5,1,2]
+                          [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
@@ -108,26 +109,70 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from bt_arrange_sim.experiment import markdown_table, parse_rows, run_experiment
+    from bt_arrange_sim.executors import check_choice, open_executor
+    from bt_arrange_sim.experiment import (
+        CampaignIncompleteError,
+        combinations,
+        markdown_table,
+        parse_rows,
+        parse_thresholds,
+        run_campaign,
+    )
 
     rows = parse_rows(args.rows)
-    if not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
-        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
-    bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
+    if args.thresholds is not None and args.threshold_mm is not None:
+        raise BtArrangeError("give --threshold-mm or --thresholds, not both")
+    if args.thresholds is not None:
+        thresholds = parse_thresholds(args.thresholds)
+    else:
+        threshold_mm = 1.0 if args.threshold_mm is None else args.threshold_mm
+        if not (math.isfinite(threshold_mm) and threshold_mm > 0):
+            raise BtArrangeError(f"--threshold-mm {threshold_mm:g} must be a positive number of millimetres")
+        thresholds = [threshold_mm]
+    if args.trials < 1:
+        raise BtArrangeError(f"--trials must be at least 1, got {args.trials}")
+    check_choice(args.executor, args.workers, args.scheduler)
+    combos = combinations(thresholds)
+    # A --thresholds campaign keeps one folder per combination; a single --threshold-mm writes into --out.
+    flat = args.thresholds is None
+    bar = tqdm(total=len(rows) * args.trials * len(combos), unit="trial", desc="trials", file=sys.stderr)
 
     def progress(record: dict, done: int, total: int) -> None:
         bar.n = done
-        bar.set_postfix_str(f"{record['row']} #{record['trial']}: {record['status']}", refresh=False)
+        bar.set_postfix_str(
+            f"{record['row']} #{record['trial']} at {record['threshold_mm']:g} mm: {record['status']}", refresh=False
+        )
         bar.refresh()
 
     try:
-        summary = run_experiment(
-            rows, args.trials, args.seed, args.threshold_mm, args.out, workers=args.workers, on_trial=progress
-        )
+        with open_executor(args.executor, args.workers, args.scheduler) as executor:
+            result = run_campaign(
+                rows,
+                args.trials,
+                args.seed,
+                combos,
+                args.out,
+                workers=args.workers,
+                executor=executor,
+                on_trial=progress,
+                flat=flat,
+            )
     finally:
         bar.close()
-    print(markdown_table(summary), end="")
-    print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {args.out}")
+    for combination, summary in result.summaries.items():
+        folder = result.folders[combination]
+        if not flat:
+            print(f"## threshold {combination.threshold_mm:g} mm ({folder})\n")
+        print(markdown_table(summary))
+        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {folder}\n")
+    if not flat:
+        print(f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {args.out}")
+    if result.lost:
+        spec, error = result.lost[0]
+        raise CampaignIncompleteError(
+            f"{len(result.lost)} trial(s) did not finish (first: {spec.row} #{spec.index}: {error}); "
+            "what finished is written: rerun the same command to complete the rest"
+        )
     return EXIT_OK
 
 
@@ -170,16 +215,30 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 
-    experiment = commands.add_parser("experiment", help="reproduce the paper's Table 1 and Fig. 4 in simulation")
+    experiment = commands.add_parser(
+        "experiment", help="reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask"
+    )
     experiment.add_argument(
         "--rows",
         default="system,translation,orientation,grasp-estimator",
-        help="comma-separated rows (default: all four)",
+        help="comma-separated rows: system, translation, orientation, grasp-estimator, perception, surface, "
+        "slip, sticking, release, tilt, all (default: Table 1's four)",
     )
     experiment.add_argument("--trials", type=int, default=100, help="trials per row (default 100)")
     experiment.add_argument("--seed", type=int, default=0, help="experiment seed (default 0)")
-    experiment.add_argument("--threshold-mm", type=float, default=1.0, help="accuracy threshold in mm (default 1)")
-    experiment.add_argument("--workers", type=int, default=1, help="worker processes, each with its own world")
+    experiment.add_argument("--threshold-mm", type=float, help="accuracy threshold in mm (default 1)")
+    experiment.add_argument(
+        "--thresholds", metavar="MM,MM,...", help="sweep: comma-separated thresholds in mm, one folder each"
+    )
+    experiment.add_argument(
+        "--executor", default="local", choices=("local", "dask"), help="local process pool (default) or Dask"
+    )
+    experiment.add_argument(
+        "--workers", type=int, default=1, help="worker processes (local pool or Dask LocalCluster), default 1"
+    )
+    experiment.add_argument(
+        "--scheduler", metavar="tcp://HOST:PORT", help="with --executor dask: an existing cluster's scheduler"
+    )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )

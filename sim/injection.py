@@ -195,10 +195,11 @@ class Injector(ABC):
         self.run.tick_hooks.append(hook)
 
     def _grasp_reference(self) -> tuple[float, float, float]:
-        """Where and how the pads will come down: the pose the robot measured (``/<obj>/pose``, else the
-        true pose) with the yaw of the pads' closing axis (Pick's choice among the cube's quarter turns).
+        """Where the pads will come down (x, y) and the yaw of their closing axis.
 
-        Read only to keep a picking error graspable, as the paper's bounds do; never written.
+        The position is the pose the robot measured (``/<obj>/pose``), else the true pose; the yaw is
+        Pick's choice among the cube's quarter turns. Read only to keep a picking error graspable, as the
+        paper's bounds do; never written.
         """
         storage = py_trees.blackboard.Blackboard.storage
         measured = storage.get(keys.key(self.cube, keys.POSE))
