@@ -139,3 +139,20 @@ def test_show_prints_the_tree_as_text(capsys):
     assert code == 0
     for name in ("arrange red", "detect red", "pick red", "while holding red", "correct yellow to 1 mm"):
         assert name in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragments"),
+    [
+        (("--threshold-mm", "1", "--thresholds", "0.5,1"), ("--threshold-mm or --thresholds",)),
+        (("--thresholds", "0.5,abc"), ("--thresholds", "'abc' is not a number")),
+        (("--scheduler", "tcp://127.0.0.1:8786"), ("--scheduler needs --executor dask",)),
+        (("--rows", "system,wobble"), ("unknown row 'wobble'", "tilt, all")),
+        (("--executor", "dask", "--workers", "0"), ("--workers must be at least 1",)),
+        (("--trials", "0"), ("--trials must be at least 1",)),
+    ],
+)
+def test_experiment_options_are_checked_before_any_trial_runs(capsys, tmp_path, argv, fragments):
+    code, _, err = run_cli(capsys, "experiment", "--out", tmp_path / "out", *argv)
+    assert_one_line_error(code, err, *fragments)
+    assert not (tmp_path / "out").exists(), "nothing started"
