@@ -357,10 +357,11 @@ def run_campaign(
                     f"threshold {combination.threshold_mm:g} mm"
                 )
         done = {(record["row"], record["trial"]) for record in existing}
+        # Trial by trial across the rows: an interrupted campaign has measured every row about as often.
         specs += [
             (combination, combination.spec(row, index, seed))
-            for row in rows
             for index in range(trials)
+            for row in rows
             if (row, index) not in done
         ]
     total = len(rows) * trials * len(combos)

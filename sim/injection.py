@@ -250,15 +250,21 @@ def grasp_fits(
     offset along it plus its half extent there (half an edge when square to the pads, up to
     edge / sqrt(2) turned by 45 degrees) must stay within half the opening; for an 85 mm opening
     and a 50 mm cube square to the pads, 17.5 mm. Along the pads the cube is still grasped while
-    the pads' centre stays on it: up to half an edge (25 mm) off.
+    the pads' centre stays on the part of it they close on: up to half an edge (25 mm) off for a
+    cube square to them; for a cube turned by ``a`` the pads first meet two vertical edges,
+    ``edge / 2 * (cos a - sin a)`` either side of its centre along the pads, and the pads' centre
+    must stay between them (measured: with the centre beyond, a cube turned by 37 deg and 15 mm
+    off along the pads was squeezed out sideways and thrown off the table's view).
     """
     rx, ry, closing_yaw = reference
-    relative_yaw = yaw_rad - closing_yaw
-    half_extent_m = edge_m / 2 * (abs(math.cos(relative_yaw)) + abs(math.sin(relative_yaw)))
+    # Turned by more than 45 degrees is turned the other way: fold into [0, 45] degrees.
+    turn = abs((yaw_rad - closing_yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4)
+    half_extent_m = edge_m / 2 * (math.cos(turn) + math.sin(turn))
+    along_pads_limit_m = edge_m / 2 * (math.cos(turn) - math.sin(turn))
     offset = np.array([x_m - rx, y_m - ry])
     across = abs(float(offset @ np.array([math.cos(closing_yaw), math.sin(closing_yaw)])))
     along_pads = abs(float(offset @ np.array([-math.sin(closing_yaw), math.cos(closing_yaw)])))
-    return across + half_extent_m <= open_width_m / 2 + 1e-12 and along_pads <= edge_m / 2 + 1e-12
+    return across + half_extent_m <= open_width_m / 2 + 1e-12 and along_pads <= along_pads_limit_m + 1e-12
 
 
 def _sample(draw: Callable[[], T], fits: Callable[[T], bool]) -> tuple[T, int] | None:

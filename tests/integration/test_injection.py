@@ -253,10 +253,15 @@ def test_grasp_feasibility_binds_across_the_closing_axis_only():
     # The paper's +-2.5 cm in world x and y, with the pads closing along world y: 24 mm along x still grasps.
     assert grasp_fits(0.024, 0.017, 0.0, (0.0, 0.0, math.pi / 2), edge, opening)
     assert not grasp_fits(0.017, 0.018, 0.0, (0.0, 0.0, math.pi / 2), edge, opening)
-    # Pads closing along a cube turned by 30 degrees: 17 mm across them, 20 mm along them.
+    # Pads closing along a cube square to them, turned by 30 degrees in the world: 17 mm across, 20 mm along.
     yaw = math.radians(30)
     dx, dy = 0.017 * math.cos(yaw) - 0.020 * math.sin(yaw), 0.017 * math.sin(yaw) + 0.020 * math.cos(yaw)
     assert grasp_fits(dx, dy, yaw, (0.0, 0.0, yaw), edge, opening)
+    # A cube turned by 30 degrees against the pads is first met by two edges 9.15 mm either side of
+    # its centre along the pads: the pads' centre must stay between them.
+    assert grasp_fits(0.0, 0.009, math.radians(30), (0.0, 0.0, 0.0), edge, opening)
+    assert not grasp_fits(0.0, 0.0095, math.radians(30), (0.0, 0.0, 0.0), edge, opening)
+    assert grasp_fits(0.0, 0.009, math.radians(-60), (0.0, 0.0, 0.0), edge, opening), "a quarter turn is no turn"
     # A cube turned by 40 degrees against the pads reaches 35.2 mm from its centre: 7.3 mm of room.
     assert grasp_fits(0.007, 0.0, math.radians(40), (0.0, 0.0, 0.0), edge, opening)
     assert not grasp_fits(0.008, 0.0, math.radians(40), (0.0, 0.0, 0.0), edge, opening)
