@@ -428,6 +428,7 @@ def write_campaign(summaries: dict[Combination, list[dict]], folders: dict[Combi
 def plot_thresholds(rows: list[dict], path: Path) -> None:
     """Final offset (camera, mean and max) and pushes (mean) against the threshold, one line per row."""
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -445,6 +446,7 @@ def plot_thresholds(rows: list[dict], path: Path) -> None:
     offset_ax.plot(every, every, "k--", linewidth=1, label="threshold")
     for ax in (offset_ax, pushes_ax):
         ax.set_xscale("log")
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         ax.set_xticks(every, [f"{t:g}" for t in every])
         ax.set_xlabel("threshold [mm]")
         ax.grid(True, which="both", alpha=0.3)
@@ -534,7 +536,7 @@ def markdown_table(summary: list[dict]) -> str:
             f"| {pm(s['pushed_mean_mm'], s['pushed_std_mm'])} "
             f"| {pm(s['paper_placed_mean_mm'], s['paper_placed_std_mm'])} "
             f"| {pm(s['paper_pushed_mean_mm'], s['paper_pushed_std_mm'])} "
-            f"| {s['pushes_mean']} | {success} | {_mm_or_dash(s.get('pushed_max_mm'))} "
+            f"| {_mm_or_dash(s['pushes_mean'])} | {success} | {_mm_or_dash(s.get('pushed_max_mm'))} "
             f"| {s.get('regrasp_trials', 0)} | {truth} |"
         )
     return (
