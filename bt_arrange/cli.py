@@ -6,7 +6,8 @@
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
-tree-file or plan error (a one-line message, never a traceback), 130 when interrupted.
+tree-file or plan error (a one-line message, never a traceback), 130 when interrupted, 141 when
+the reader of the output went away (``| head``).
 """
 
 from __future__ import annotations
@@ -14,16 +15,80 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from bt_arrange import treefile
 from bt_arrange.errors import BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
-EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+EXIT_CODES_HELP = """exit status:
+  0    every object ended within the threshold (measured by the camera)
+  1    an object did not (outside, failed, or the time limit stopped the run)
+  2    a usage, tree-file or plan error: one line on stderr, before anything moves
+  130  interrupted (Ctrl-C); what was logged so far is kept
+  141  the reader of the output went away (e.g. | head)"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (the usage is one ``--help`` away), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print one line and exit with the usage status."""
+        self.exit(
+            EXIT_USAGE,
+            f"bt-arrange: error: {self.prog.removeprefix('bt-arrange').strip() or 'usage'}: "
+            f"{message} (see {self.prog} --help)\n",
+        )
+
+
+def _whole(minimum: int) -> Any:
+    """An argparse type: a whole number of at least ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value} must be {minimum} or more")
+        return value
+
+    return parse
+
+
+def _positive_seconds(text: str) -> float:
+    """An argparse type: a positive, finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive number of seconds")
+    return value
+
+
+def _millimetres(text: str) -> float:
+    """An argparse type: a number (the plan check decides whether a push can correct it)."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of millimetres") from None
+
+
+def _check_threshold_option(threshold_mm: float | None) -> None:
+    if threshold_mm is None:
+        return
+    from bt_arrange.trees import check_threshold
+
+    try:
+        check_threshold(threshold_mm)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
 
 
 def _info(_: argparse.Namespace) -> int:
@@ -44,8 +109,7 @@ def _info(_: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    if args.threshold_mm is not None and not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
-        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
+    _check_threshold_option(args.threshold_mm)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     starts = treefile.scene(module, args.seed)
@@ -57,7 +121,7 @@ def _run(args: argparse.Namespace) -> int:
             from bt_arrange.display import LiveView
 
             view = LiveView(sys.stderr if args.json else sys.stdout)
-            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.cell.clock.now()))
+            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.elapsed_s()))
         report = run.run()
         if args.live:
             view.close()
@@ -95,24 +159,35 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
             f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
             f"truth = the simulator's ground truth (evaluation only); threshold {report.threshold_mm:g} mm"
         )
-    speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
-    ending = "stopped at the time limit" if report.timed_out else report.tree_status
-    print(
-        f"{Path(args.tree_file).name}: {ending} after {report.sim_seconds:.1f} s of world time "
-        f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
-    )
     if args.record:
         print(f"recorded images, report.json and transitions.jsonl in {args.record}")
+    speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
+    ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
+    if report.objects:
+        within = sum(o.status == "within" for o in report.objects)
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm; "
+    else:
+        verdict = ""
+    # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
+    print(
+        f"{Path(args.tree_file).name}: {verdict}{ending} after {report.sim_seconds:.1f} s of world time "
+        f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
+    )
 
 
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from bt_arrange_sim.experiment import markdown_table, parse_rows, run_experiment
+    from bt_arrange_sim.runs import prepare_record_dir
 
+    # Every option is checked before the progress bar is drawn or a worker starts.
     rows = parse_rows(args.rows)
-    if not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
-        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
+    _check_threshold_option(args.threshold_mm)
+    try:
+        prepare_record_dir(args.out)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--out {args.out}: {error}") from error
     bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
 
     def progress(record: dict, done: int, total: int) -> None:
@@ -140,52 +215,92 @@ def _show(args: argparse.Namespace) -> int:
     if args.format in ("text", "dot") and args.out is None:
         print(result)
     else:
-        print(f"wrote {result}")
+        # render_tree returns the text itself for text and dot, the picture's path otherwise.
+        print(f"wrote {args.out if args.out is not None else result}")
     return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="bt-arrange", description="Behaviour trees for precise robotic arrangement.")
+    # The experiment's rows come from its registry: bt_arrange_sim.experiment imports neither
+    # pybullet nor matplotlib at module level, so building the help starts no simulator.
+    from bt_arrange_sim.experiment import ROW_LABELS, ROWS
+
+    parser = _Parser(
+        prog="bt-arrange",
+        description="Behaviour trees for precise robotic arrangement.",
+        epilog=EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"%(prog)s {metadata.version('bt-arrange')}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    run = commands.add_parser("run", help="run a tree file in the simulated work cell (headless by default)")
+    def add_command(name: str, help_text: str, epilog: str = EXIT_CODES_HELP) -> argparse.ArgumentParser:
+        return commands.add_parser(
+            name,
+            help=help_text,
+            description=help_text,
+            epilog=epilog,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+
+    run = add_command("run", "run a tree file in the simulated work cell (headless by default)")
     run.add_argument("tree_file", metavar="TREE_FILE", help="a Python file exposing create_root() and create_scene()")
-    run.add_argument("--seed", type=int, default=0, help="seed of the scene (where the cubes start); default 0")
-    run.add_argument("--threshold-mm", type=float, help="accuracy threshold in mm (the tree file's default if absent)")
+    run.add_argument(
+        "--seed", type=_whole(0), default=0, help="seed of the scene (where the cubes start), 0 or more; default 0"
+    )
+    run.add_argument(
+        "--threshold-mm", type=_millimetres, help="accuracy threshold in mm (the tree file's default if absent)"
+    )
     run.add_argument("--gui", action="store_true", help="open the pybullet window (needs a display)")
     run.add_argument("--live", action="store_true", help="redraw the tree with its statuses while it runs")
     run.add_argument("--record", type=Path, metavar="DIR", help="save top-camera images and the transition log")
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     run.add_argument(
-        "--time-limit-s", type=float, default=1800.0, help="stop after this much world time (default 1800 s)"
+        "--time-limit-s",
+        type=_positive_seconds,
+        default=1800.0,
+        help="stop after this much world time (default 1800 s)",
     )
     run.set_defaults(handler=_run)
 
-    show = commands.add_parser("show", help="draw a tree file's tree without starting a simulator")
+    show = add_command(
+        "show",
+        "draw a tree file's tree without starting a simulator",
+        "exit status: 0 drawn, 2 a usage or tree-file error",
+    )
     show.add_argument("tree_file", metavar="TREE_FILE")
     show.add_argument("--format", choices=("text", "dot", "png", "svg"), default="text", help="default text")
     show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 
-    experiment = commands.add_parser("experiment", help="reproduce the paper's Table 1 and Fig. 4 in simulation")
-    experiment.add_argument(
-        "--rows",
-        default="system,translation,orientation,grasp-estimator",
-        help="comma-separated rows (default: all four)",
+    rows_help = "\n".join(f"  {row:<16} {ROW_LABELS.get(row, '')}" for row in ROWS)
+    experiment = add_command(
+        "experiment",
+        "reproduce the paper's Table 1 and Fig. 4 in simulation",
+        f"rows (--rows):\n{rows_help}\n\n"
+        "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
     )
-    experiment.add_argument("--trials", type=int, default=100, help="trials per row (default 100)")
-    experiment.add_argument("--seed", type=int, default=0, help="experiment seed (default 0)")
-    experiment.add_argument("--threshold-mm", type=float, default=1.0, help="accuracy threshold in mm (default 1)")
-    experiment.add_argument("--workers", type=int, default=1, help="worker processes, each with its own world")
+    experiment.add_argument(
+        "--rows", default=",".join(ROWS), help=f"comma-separated rows, listed below (default: all {len(ROWS)})"
+    )
+    experiment.add_argument("--trials", type=_whole(1), default=100, help="trials per row (default 100)")
+    experiment.add_argument("--seed", type=_whole(0), default=0, help="experiment seed, 0 or more (default 0)")
+    experiment.add_argument(
+        "--threshold-mm", type=_millimetres, default=1.0, help="accuracy threshold in mm (default 1)"
+    )
+    experiment.add_argument(
+        "--workers", type=_whole(1), default=1, help="worker processes, each with its own world (default 1)"
+    )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
     experiment.set_defaults(handler=_experiment)
 
-    info = commands.add_parser("info", help="library versions, and a check that a headless cell starts")
+    info = add_command(
+        "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"
+    )
     info.set_defaults(handler=_info)
     return parser
 
@@ -194,7 +309,14 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bt-arrange`` console script."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.handler(args))
+        code = int(args.handler(args))
+        sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
+        return code
+    except BrokenPipeError:
+        # The reader (| head) has what it wanted; point stdout at nothing so the exit flush is quiet.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from bt_arrange.errors import OutOfRangeError
@@ -72,6 +73,17 @@ class ManipulationSettings:
     def push_opening_m(self) -> float:
         """Opening for a push: both pads meet the face near its edges (the paper's width - thickness)."""
         return self.cube_edge_m - self.pad_thickness_m
+
+    @property
+    def min_threshold_mm(self) -> float:
+        """The smallest threshold a push is sure to correct, in millimetres.
+
+        An offset at the threshold may lie diagonally: ``threshold / sqrt(2)`` along each axis.
+        Push skips an axis whose offset is below ``min_push_m``, so below ``sqrt(2) * min_push_m``
+        an offset over the threshold could leave both axes without a push, and every "correction"
+        would leave the cube where it is.
+        """
+        return math.sqrt(2.0) * self.min_push_m * 1000
 
     @property
     def push_reach_m(self) -> float:

@@ -125,6 +125,26 @@ def validate_targets(
     return checked
 
 
+def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
+    """The threshold in millimetres, or a ``PlanError``: it must be a number a push can correct.
+
+    The floor is ``settings.min_threshold_mm`` (0.28 mm with the default ``min_push_m`` of 0.2 mm):
+    below it a correction loop could "push" without moving the arm.
+    """
+    if isinstance(threshold_mm, bool) or not isinstance(threshold_mm, (int, float)) or not threshold_mm > 0:
+        raise PlanError(f"threshold_mm={threshold_mm!r} must be a positive number of millimetres")
+    if not math.isfinite(threshold_mm):
+        raise PlanError(f"threshold_mm={threshold_mm!r} must be a finite number of millimetres")
+    settings = settings or ManipulationSettings()
+    floor_mm = settings.min_threshold_mm
+    if threshold_mm < floor_mm:
+        raise PlanError(
+            f"threshold {threshold_mm:g} mm is below {floor_mm:.2f} mm, the smallest offset a push can correct "
+            f"(pushes shorter than min_push_m = {settings.min_push_m * 1000:.1f} mm along an axis are not made)"
+        )
+    return float(threshold_mm)
+
+
 def set_target(target: Target) -> py_trees.behaviour.Behaviour:
     """Write the object's target to ``/<obj>/target``."""
     return py_trees.behaviours.SetBlackboardVariable(
@@ -155,6 +175,7 @@ def transfer(target: Target, max_regrasps: int = 3) -> py_trees.behaviour.Behavi
 
 def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` of its target."""
+    check_threshold(threshold_mm)
     obj, colour = target.obj, target.colour
     push_and_look = py_trees.composites.Sequence(
         name=f"push and inspect {obj}",
@@ -217,8 +238,7 @@ def arrangement(
     """
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
-    if isinstance(threshold_mm, bool) or not isinstance(threshold_mm, (int, float)) or not threshold_mm > 0:
-        raise PlanError(f"threshold_mm={threshold_mm!r} must be a positive number of millimetres")
+    check_threshold(threshold_mm)
     if isinstance(max_pushes, bool) or not isinstance(max_pushes, int) or max_pushes < 0:
         raise PlanError(f"max_pushes={max_pushes!r} must be a whole number, 0 or more")
     plan = validate_targets(targets)

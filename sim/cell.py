@@ -10,6 +10,7 @@ see the world through the camera, like the robot in the paper.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import os
 import sys
@@ -18,10 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
-from bt_arrange.robot import Robot
+from bt_arrange.plancheck import CameraView
+from bt_arrange.robot import CameraIntrinsics, Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
@@ -93,6 +96,20 @@ class CameraConfig:
     #: (0.25 mm); a few degrees give every edge a staircase to measure below a pixel.
     roll_deg: float = 3.0
 
+    def calibrated_intrinsics(self) -> CameraIntrinsics:
+        """The intrinsics of the rendered image, as a calibration would find them.
+
+        TinyRenderer decides a pixel's coverage at its corner, not its centre, and flips rows:
+        the rendered image sits half a pixel right of and half a pixel above the nominal
+        pinhole (measured: +0.52, -0.59 px on blob centroids).
+        """
+        nominal = CameraIntrinsics.from_fov(self.width_px, self.height_px, self.horizontal_fov_deg)
+        return dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
+
+    def view(self) -> CameraView:
+        """What this camera sees, for the plan check (no world needed)."""
+        return CameraView(self.calibrated_intrinsics(), self.pose_world())
+
     def pose_world(self) -> Pose:
         """``T_W_C`` in the OpenCV optical frame: x right (about world -y), y down (about world -x), z forward."""
         square = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -125,6 +142,46 @@ def _quiet_connect() -> Iterator[None]:
         os.close(devnull)
 
 
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    """Silence C-level stderr while pybullet is first imported.
+
+    pybullet prints its build time there, which broke the experiment's progress bar (drawn on
+    stderr) once per worker.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def import_pybullet():  # noqa: ANN201 - the pybullet module
+    """``import pybullet`` without its build-time banner on stderr."""
+    if "pybullet" in sys.modules:
+        return sys.modules["pybullet"]
+    with _quiet_stderr():
+        import pybullet
+    return pybullet
+
+
+def require_display() -> None:
+    """Raise a ``PlanError`` when the pybullet window (``gui=True``) cannot open: no X or Wayland display.
+
+    Without one, pybullet prints an X error and ends the process itself, with no chance to say why.
+    """
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise PlanError(
+            "the pybullet window (--gui) needs a display, and DISPLAY is not set: run headless "
+            "(without --gui), or under a virtual display: xvfb-run bt-arrange run ... --gui"
+        )
+
+
 class WorkCell:
     """One simulated work cell with its own physics world.
 
@@ -135,7 +192,9 @@ class WorkCell:
     FINGER_JOINTS = FINGER_JOINT_NAMES
 
     def __init__(self, config: CellConfig | None = None, gui: bool = False) -> None:
-        import pybullet
+        if gui:
+            require_display()
+        pybullet = import_pybullet()
         from pybullet_utils.bullet_client import BulletClient
 
         self.config = config or CellConfig()

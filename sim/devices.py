@@ -6,7 +6,6 @@ the world's owner (the runner, a benchmark) does, one control period at a time.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import TYPE_CHECKING
 
@@ -176,11 +175,7 @@ class SimCamera:
     def __init__(self, cell: WorkCell) -> None:
         self._cell = cell
         config = cell.config.camera
-        nominal = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
-        # TinyRenderer decides a pixel's coverage at its corner, not its centre, and flips rows:
-        # the rendered image sits half a pixel right of and half a pixel above the nominal
-        # pinhole (measured: +0.52, -0.59 px on blob centroids). These are the calibrated values.
-        self._intrinsics = dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
+        self._intrinsics = config.calibrated_intrinsics()
         self._pose_world = config.pose_world()
         # OpenGL looks down its -z with y up; the OpenCV optical frame looks down +z with y down.
         flip = np.diag([1.0, -1.0, -1.0, 1.0])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bt_arrange.errors import PlanError
 from bt_arrange.settings import CUBE_COLOURS_RGB, CUBE_EDGE_M, CUBE_SIDE_RGB
 
 TABLE_RGB = (0.45, 0.45, 0.47)
@@ -49,7 +50,7 @@ def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Cont
     import pybullet
 
     if colour not in CUBE_COLOURS_RGB:
-        raise ValueError(f"unknown cube colour {colour!r}; known: {', '.join(sorted(CUBE_COLOURS_RGB))}")
+        raise PlanError(f"unknown cube colour {colour!r}; known: {', '.join(sorted(CUBE_COLOURS_RGB))}")
     half = CUBE_EDGE_M / 2
     collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[half, half, half])
     visual = client.createVisualShapeArray(

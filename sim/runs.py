@@ -8,6 +8,8 @@ beside what the simulator knows (ground truth, labelled as such, for evaluation 
 from __future__ import annotations
 
 import json
+import math
+import os
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -15,12 +17,18 @@ from pathlib import Path
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.behaviours import Context, keys
+from bt_arrange.behaviours import Context, Inspect, keys
+from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.plancheck import check_plan, check_scene
 from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.settings import CUBE_COLOURS_RGB
 from bt_arrange.trees import Arrangement, Target
-from bt_arrange_sim.cell import CellConfig, WorkCell
+from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
 from bt_arrange_sim.scenes import CubeStart
+
+#: World time the scene settles for before the tree starts (cubes dropped onto the table come to rest).
+SETTLE_S = 0.3
 
 #: Behaviours whose failure explains why an object was not finished.
 _REASON_KINDS = {
@@ -98,23 +106,48 @@ class SimulatedRun:
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
     ) -> None:
+        if not isinstance(root, py_trees.behaviour.Behaviour):
+            raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
+        if isinstance(time_limit_s, bool) or not isinstance(time_limit_s, (int, float)) or not time_limit_s > 0:
+            raise PlanError(f"time limit {time_limit_s!r} s must be a positive number of seconds")
+        if not math.isfinite(time_limit_s):
+            raise PlanError(f"time limit {time_limit_s!r} s must be a finite number of seconds")
+        cell_config = cell_config or CellConfig()
+        # Everything a user can get wrong is checked here, before the world is built.
+        scene = list(starts)
+        view = cell_config.camera.view()
+        if isinstance(root, Arrangement):
+            check_plan(root.targets, threshold_mm=root.threshold_mm, starts=scene, view=view, colours=CUBE_COLOURS_RGB)
+        else:
+            check_scene(scene, view=view, colours=CUBE_COLOURS_RGB)
+        self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
+        if gui:
+            require_display()
         self.root = root
+        # The Inspects that record the after-placing figures, by their own flag rather than their names.
+        self._after_placing_inspects = {
+            node.name: node.obj for node in root.iterate() if isinstance(node, Inspect) and node.after_placing
+        }
         self.cell = WorkCell(cell_config, gui=gui)
-        self.cell.add_cubes(starts)
-        self.cell.settle(0.3)
+        self.cell.add_cubes(scene)
+        self.cell.settle(SETTLE_S)
+        #: World time when the tree starts: the report and the live view count from here.
+        self.start_s = self.cell.clock.now()
         self.context = Context.create(self.cell.robot)
-        self.record_dir = Path(record_dir) if record_dir is not None else None
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
+
+    def elapsed_s(self) -> float:
+        """World time since the tree started (the settling of the scene excluded), as the report counts it."""
+        return self.cell.clock.now() - self.start_s
 
     def run(self) -> SimulationReport:
         """Tick the tree to the end; returns the report. The cell stays open for inspection."""
         py_trees.blackboard.Blackboard.clear()
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
-            self.record_dir.mkdir(parents=True, exist_ok=True)
             self._save_image("before_picking")
         runner = Runner(
             self.root,
@@ -129,7 +162,7 @@ class SimulatedRun:
         if self.record_dir is not None:
             self._save_image("after_pushing")
         report = SimulationReport(
-            objects=self._outcomes(result.transitions),
+            objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
             tree_status=result.status.value,
             threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
             sim_seconds=result.sim_seconds,
@@ -156,16 +189,14 @@ class SimulatedRun:
             hook(transition)
         if transition.new != Status.SUCCESS.value:
             return
-        placed = transition.kind == "Inspect" and transition.behaviour.endswith(" after placing")
-        if placed and isinstance(self.root, Arrangement):
-            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+        obj = self._after_placing_inspects.get(transition.behaviour) if transition.kind == "Inspect" else None
+        if obj is not None and isinstance(self.root, Arrangement):
             for target in self.root.targets:
                 if target.obj == obj:
                     self._placed_truth_mm[obj] = self._truth_offset_mm(target)
         if self.record_dir is None:
             return
-        if placed:
-            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+        if obj is not None:
             self._save_image(f"after_placing_{obj}")
         elif transition.behaviour == "place all":
             self._save_image("after_placing")
@@ -181,7 +212,7 @@ class SimulatedRun:
         frame = self.cell.camera.capture()
         cv2.imwrite(str(self.record_dir / f"{stem}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
 
-    def _outcomes(self, transitions: list[Transition]) -> list[ObjectOutcome]:
+    def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
         if not isinstance(self.root, Arrangement):
             return []
         storage = py_trees.blackboard.Blackboard.storage
@@ -200,7 +231,7 @@ class SimulatedRun:
                     placed_offset_truth_mm=_rounded(self._placed_truth_mm.get(target.obj)),
                     pushes=int(storage.get(keys.key(target.obj, keys.CORRECTIONS), 0) or 0),
                     status=status,
-                    reason="" if status == "within" else _last_failure(transitions, target.obj),
+                    reason="" if status == "within" else (_last_failure(transitions, target.obj) or stopped),
                 )
             )
         return outcomes
@@ -214,6 +245,20 @@ class SimulatedRun:
     def _truth_offset_mm(self, target: Target) -> float:
         x, y, _ = self.cell.cube_planar_truth(target.obj)
         return PlanarPose(x, y).distance_to(target.planar) * 1000
+
+
+def prepare_record_dir(path: Path | str) -> Path:
+    """Make the folder ``--record`` writes to, or a ``PlanError`` saying why it cannot be used."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise PlanError(f"cannot record into {folder}: it is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise PlanError(f"cannot record into {folder}: {error.strerror or error}") from error
+    if not os.access(folder, os.W_OK):
+        raise PlanError(f"cannot record into {folder}: the folder is not writable")
+    return folder
 
 
 def _rounded(value: float | None) -> float | None:
