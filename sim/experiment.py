@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange.errors import PlanError
+from bt_arrange.trees import check_threshold
 
 #: Rows of Table 1, in the paper's order.
 ROWS = ("system", "translation", "orientation", "grasp-estimator")
@@ -175,6 +176,12 @@ def run_experiment(
     reports progress.
     """
     rows = list(rows)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise PlanError(f"--seed {seed!r} must be a whole number, 0 or more")
+    try:
+        check_threshold(threshold_mm)
+    except PlanError as error:
+        raise PlanError(f"--threshold-mm {threshold_mm!r}: {error}") from error
     if trials < 1:
         raise PlanError(f"--trials must be at least 1, got {trials}")
     if workers < 1:

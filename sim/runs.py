@@ -80,7 +80,9 @@ class SimulationReport:
     def to_dict(self) -> dict:
         """The ``--json`` form of the report."""
         return {
-            "objects": [asdict(o) for o in self.objects],
+            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
+            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "tree_status": self.tree_status,
             "timed_out": self.timed_out,

@@ -291,3 +291,15 @@ def test_clutter_gives_outcomes_never_exceptions() -> None:
             assert isinstance(detection.status, DetectionStatus)
             assert colour in detection.reason
             assert detection.found == (detection.pose_world is not None)
+
+
+def test_the_evaluation_shows_a_sign_of_life_before_each_row(monkeypatch, capsys) -> None:  # issue 8, item 9
+    from bt_arrange.perception import evaluate
+
+    monkeypatch.setattr(evaluate, "make_trials", lambda n, **_: [])
+    monkeypatch.setattr(evaluate, "evaluate", lambda trials, detector: type("S", (), {"row": lambda self, r: r})())
+    monkeypatch.setattr(evaluate, "runtime_ms", lambda: {})
+    evaluate.main(["--trials", "3"])
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "evaluate: row 1 of 24, 3 trials: 1920x1080 anti-aliased"
+    assert len(lines) == 25 and lines[-1].startswith("evaluate: timing")
