@@ -17,6 +17,7 @@ from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, keys
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.replay import ReplayRecorder
 from bt_arrange.runner import Runner, Transition, TransitionLog
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange_sim.cell import CellConfig, WorkCell
@@ -97,6 +98,7 @@ class SimulatedRun:
         gui: bool = False,
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        title: str | None = None,
     ) -> None:
         self.root = root
         self.cell = WorkCell(cell_config, gui=gui)
@@ -108,6 +110,9 @@ class SimulatedRun:
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
+        #: What the replay page shows (recorded runs only), and its heading.
+        self.replay: ReplayRecorder | None = None
+        self.title = title or root.name
 
     def run(self) -> SimulationReport:
         """Tick the tree to the end; returns the report. The cell stays open for inspection."""
@@ -115,6 +120,7 @@ class SimulatedRun:
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
             self.record_dir.mkdir(parents=True, exist_ok=True)
+            self.replay = ReplayRecorder(self.root)
             self._save_image("before_picking")
         runner = Runner(
             self.root,
@@ -128,6 +134,8 @@ class SimulatedRun:
         result = runner.run()
         if self.record_dir is not None:
             self._save_image("after_pushing")
+            assert self.replay is not None
+            self.replay.observe(self.cell.clock.now())  # a stop at the time limit comes after the last tick
         report = SimulationReport(
             objects=self._outcomes(result.transitions),
             tree_status=result.status.value,
@@ -139,6 +147,8 @@ class SimulatedRun:
         )
         if self.record_dir is not None:
             (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+            assert self.replay is not None
+            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
         return report
 
     def close(self) -> None:
@@ -171,6 +181,8 @@ class SimulatedRun:
             self._save_image("after_placing")
 
     def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        if self.replay is not None:
+            self.replay.observe(self.cell.clock.now())
         for hook in self.tick_hooks:
             hook(root)
 
@@ -179,7 +191,10 @@ class SimulatedRun:
 
         assert self.record_dir is not None
         frame = self.cell.camera.capture()
-        cv2.imwrite(str(self.record_dir / f"{stem}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        path = self.record_dir / f"{stem}.png"
+        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        if self.replay is not None:
+            self.replay.add_image(self.cell.clock.now(), stem.replace("_", " "), path)
 
     def _outcomes(self, transitions: list[Transition]) -> list[ObjectOutcome]:
         if not isinstance(self.root, Arrangement):
