@@ -41,7 +41,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, NoReturn
 from xml.sax.saxutils import escape, quoteattr
 
 import py_trees
@@ -236,14 +236,37 @@ register(
         description="camera -> /<obj>/pose, /<obj>/offset_mm",
     )
 )
-for _cls, _what in ((Pick, "grasp at /<obj>/pose"), (Place, "release at /<obj>/target"), (Push, "one push")):
+Builder = Callable[[str, dict[str, Any], Children], py_trees.behaviour.Behaviour]
+
+
+def _with_obj(cls: type[Pick] | type[Place] | type[Push]) -> Builder:
+    return lambda name, values, children: cls(name, values["obj"])
+
+
+def _with_memory(cls: type[py_trees.composites.Sequence] | type[py_trees.composites.Selector], memory: bool) -> Builder:
+    return lambda name, values, children: cls(name, memory, children)
+
+
+def _memory_is(memory: bool) -> Callable[[Any], bool]:
+    return lambda node: node.memory is memory
+
+
+def _decorating(cls: Callable[[str, py_trees.behaviour.Behaviour], py_trees.behaviour.Behaviour]) -> Builder:
+    return lambda name, values, children: cls(name, _only(children))
+
+
+def _named(cls: Callable[[str], py_trees.behaviour.Behaviour]) -> Builder:
+    return lambda name, values, children: cls(name)
+
+
+for _leaf_cls, _what in ((Pick, "grasp at /<obj>/pose"), (Place, "release at /<obj>/target"), (Push, "one push")):
     register(
         NodeModel(
-            _cls.__name__,
+            _leaf_cls.__name__,
             "Action",
-            _cls,
+            _leaf_cls,
             (_OBJ,),
-            lambda name, v, _, cls=_cls: cls(name, v["obj"]),
+            _with_obj(_leaf_cls),
             lambda n: {"obj": n.obj},
             description=_what,
         )
@@ -354,8 +377,8 @@ for _tag, _memory in (("Sequence", True), ("ReactiveSequence", False)):
             "Control",
             py_trees.composites.Sequence,
             (),
-            lambda name, v, children, memory=_memory: py_trees.composites.Sequence(name, memory, children),
-            matches=lambda n, memory=_memory: n.memory is memory,
+            _with_memory(py_trees.composites.Sequence, _memory),
+            matches=_memory_is(_memory),
             builtin=True,
         )
     )
@@ -366,8 +389,8 @@ for _tag, _memory in (("Fallback", True), ("ReactiveFallback", False)):
             "Control",
             py_trees.composites.Selector,
             (),
-            lambda name, v, children, memory=_memory: py_trees.composites.Selector(name, memory, children),
-            matches=lambda n, memory=_memory: n.memory is memory,
+            _with_memory(py_trees.composites.Selector, _memory),
+            matches=_memory_is(_memory),
             builtin=True,
         )
     )
@@ -431,18 +454,14 @@ register(
         builtin=True,
     )
 )
-for _tag, _cls in (
+for _tag, _decorator in (
     ("ForceSuccess", py_trees.decorators.FailureIsSuccess),
     ("ForceFailure", py_trees.decorators.SuccessIsFailure),
     ("Inverter", py_trees.decorators.Inverter),
 ):
-    register(
-        NodeModel(
-            _tag, "Decorator", _cls, (), lambda name, v, children, cls=_cls: cls(name, _only(children)), builtin=True
-        )
-    )
-for _tag, _cls in (("AlwaysSuccess", py_trees.behaviours.Success), ("AlwaysFailure", py_trees.behaviours.Failure)):
-    register(NodeModel(_tag, "Action", _cls, (), lambda name, v, _, cls=_cls: cls(name), builtin=True))
+    register(NodeModel(_tag, "Decorator", _decorator, (), _decorating(_decorator), builtin=True))
+for _tag, _leaf in (("AlwaysSuccess", py_trees.behaviours.Success), ("AlwaysFailure", py_trees.behaviours.Failure)):
+    register(NodeModel(_tag, "Action", _leaf, (), _named(_leaf), builtin=True))
 
 
 def model_of(node: py_trees.behaviour.Behaviour) -> NodeModel:
@@ -601,7 +620,7 @@ class _Reader:
         if not self.trees:
             self.fail(document, "no <BehaviorTree ID=...> in the file")
 
-    def fail(self, element: Element, message: str) -> Any:
+    def fail(self, element: Element, message: str) -> NoReturn:
         raise XmlTreeError(f"{self.source} line {element.line}: {message}")
 
     def build(self, tree_id: str | None) -> py_trees.behaviour.Behaviour:
@@ -675,10 +694,9 @@ class _Reader:
         return values
 
     def _subtree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
-        subtree_id = element.attributes.get("ID")
+        subtree_id = element.attributes.get("ID", "")
         if subtree_id not in self.trees:
             self.fail(element, f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file")
-        assert subtree_id is not None
         if subtree_id in entered:
             self.fail(element, f"<SubTree ID={subtree_id!r}> includes itself")
         extra = set(element.attributes) - {"ID", "name"} - METADATA_ATTRIBUTES
