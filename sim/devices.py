@@ -114,15 +114,15 @@ class SimGripper:
         return GRIPPER_MAX_WIDTH_M
 
     def open(self, width_m: float, speed_m_s: float | None = None) -> None:
-        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's gripper speed)."""
+        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
         import pybullet
 
         if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
             raise OutOfRangeError(
                 f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
             )
-        speed = self._checked_speed(speed_m_s)
         physics = self._cell.config.physics
+        speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,

@@ -43,7 +43,7 @@ from bt_arrange.behaviours import (
 )
 from bt_arrange.errors import BtArrangeError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
-from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
 from bt_arrange.robot import PixelWindow
 from bt_arrange.settings import ManipulationSettings
 
@@ -500,6 +500,19 @@ def test_push_falls_back_to_the_other_axis_when_the_preferred_offset_is_below_mi
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "pushed -2.50 mm along y"
     assert read("/red/push_axis") == "x", "the next push goes along the other axis again"
+
+
+def test_the_push_itself_runs_at_the_slower_push_limits(context: Context) -> None:
+    push = push_setup(context, cube_pose(0.5, 0.0), 0.0, (6.0, 0.0))
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    lines = {
+        stage.name: stage.motion for stage in push._stages if isinstance(getattr(stage, "motion", None), LinearMotion)
+    }
+    pushing = lines["push 6.00 mm along x"]
+    assert pushing.cartesian_limits.velocity_m_s <= SETTINGS.push_limits.velocity_m_s
+    assert SETTINGS.push_limits.velocity_m_s < context.planner.cartesian_limits.velocity_m_s
+    assert lines["lower the fingers"].cartesian_limits.velocity_m_s > SETTINGS.push_limits.velocity_m_s
 
 
 def test_push_with_nothing_to_push_succeeds_without_moving(context: Context) -> None:
