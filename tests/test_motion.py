@@ -101,8 +101,8 @@ def line_deviation_m(kinematics: ArmKinematics, positions: np.ndarray, start_m: 
 def test_limit_defaults_and_per_joint_values() -> None:
     limits = JointLimits()
     assert limits.velocity_rad_s == (2.0,) * 6
-    assert limits.acceleration_rad_s2 == (5.0,) * 6
-    assert limits.jerk_rad_s3 == (40.0,) * 6
+    assert limits.acceleration_rad_s2 == (8.0,) * 6
+    assert limits.jerk_rad_s3 == (100.0,) * 6
     per_joint = JointLimits(velocity_rad_s=[0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
     assert per_joint.velocity_rad_s == (0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
     cartesian = CartesianLimits()
