@@ -148,7 +148,7 @@ class CartesianLimits:
     Defaults, and why:
 
     - ``velocity_m_s = 0.4``: descend, lift, lower and retreat are short (7 to 8 cm); with the
-      acceleration below a 7.5 cm line takes about 0.4 s (at the former 0.15 m/s, 0.9 s). A push
+      acceleration below a 7.5 cm line takes 0.5 s (at the former 0.15 m/s a 9.5 cm one took 1.1 s). A push
       uses slower limits of its own (``ManipulationSettings.push_limits``: 0.15 m/s, which does not
       make a 5 cm cube tip, bounce or slide on).
     - ``acceleration_m_s2 = 2.0``: full speed after 0.3 s and about 5 cm of travel.
