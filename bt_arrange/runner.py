@@ -45,11 +45,19 @@ class TransitionLog:
         self.transitions: list[Transition] = []
         self._last: dict[int, Status] = {}
         self._file: IO[str] | None = None
+        self._root: py_trees.behaviour.Behaviour | None = None
+        self._nodes: list[py_trees.behaviour.Behaviour] = []
 
     def observe(self, root: py_trees.behaviour.Behaviour, time_s: float) -> list[Transition]:
-        """Compare every node's status with the last look; log and return the changes."""
+        """Compare every node's status with the last look; log and return the changes.
+
+        The nodes of ``root`` are listed once: a tree keeps its structure while it runs (walking
+        py_trees' recursive generator every tick cost more than the tick itself).
+        """
+        if self._root is not root:
+            self._root, self._nodes = root, list(root.iterate())
         changes = []
-        for node in root.iterate():
+        for node in self._nodes:
             before = self._last.get(id(node), Status.INVALID)
             if node.status != before:
                 changes.append(
@@ -132,6 +140,20 @@ class Runner:
         self.tree.setup(context=self.context)
         self._is_set_up = True
 
+    def tick_tree(self) -> None:
+        """Tick the tree once.
+
+        Through ``BehaviourTree.tick`` when visitors or tick handlers were added to ``self.tree``;
+        otherwise the root's ``tick_once()`` alone, which skips the walk over every node that
+        ``BehaviourTree.tick`` makes for visitors even when there are none.
+        """
+        tree = self.tree
+        if tree.visitors or tree.pre_tick_handlers or tree.post_tick_handlers:
+            tree.tick()
+            return
+        self.root.tick_once()
+        tree.count += 1
+
     def run(self) -> RunResult:
         """Tick until the root succeeds or fails, or the world-time limit passes."""
         if not self._is_set_up:
@@ -143,7 +165,7 @@ class Runner:
         timed_out = False
         try:
             while True:
-                self.tree.tick()
+                self.tick_tree()
                 ticks += 1
                 for transition in self.log.observe(self.root, clock.now()):
                     if self.on_transition is not None:

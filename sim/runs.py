@@ -141,6 +141,8 @@ class SimulatedRun:
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+        #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
+        self.runner_hooks: list[Callable[[Runner], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
         #: What the replay page shows (recorded runs only), and its heading.
         self.replay: ReplayRecorder | None = None
@@ -166,6 +168,8 @@ class SimulatedRun:
             on_transition=self._on_transition,
             on_tick=self._on_tick,
         )
+        for hook in self.runner_hooks:
+            hook(runner)
         result = runner.run()
         if self.record_dir is not None:
             self._save_image("after_pushing")

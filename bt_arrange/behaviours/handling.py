@@ -25,11 +25,15 @@ def _to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN20
     return plan
 
 
-def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
-    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push)."""
+def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False):  # noqa: ANN202
+    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
+
+    ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    """
 
     def plan(context: Context, q: FloatArray) -> Motion:
-        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+        limits = context.settings.push_limits if pushing else None
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
 
     return plan
 
@@ -187,7 +191,8 @@ class Push(StagedBehaviour):
             GripperStage("wait for the fingers", lambda c: None),
             MoveStage("lower the fingers", _line_to(begin[0], begin[1], s.push_height_m, yaw)),
             MoveStage(
-                f"push {abs(distance_m) * 1000:.2f} mm along {axis}", _line_to(end[0], end[1], s.push_height_m, yaw)
+                f"push {abs(distance_m) * 1000:.2f} mm along {axis}",
+                _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True),
             ),
             MoveStage("back off", _line_to(back[0], back[1], s.push_height_m, yaw)),
             MoveStage("lift the fingers", _line_to(back[0], back[1], s.approach_height_m, yaw)),
