@@ -1,8 +1,10 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
+    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
+                   [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
+                          [--cell ideal|real|FILE.toml] [--strategy paper|learned]
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
@@ -91,6 +93,12 @@ def _check_threshold_option(threshold_mm: float | None) -> None:
         raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
 
 
+CELL_HELP = (
+    "the work cell: ideal (default; today's simulated cell), real (the paper's real cell's errors, "
+    "docs/simulation.md) or FILE.toml with your own values"
+)
+
+
 def _info(_: argparse.Namespace) -> int:
     print(f"bt-arrange {metadata.version('bt-arrange')}")
     for package in STACK:
@@ -108,17 +116,30 @@ def _info(_: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cell_option(text: str) -> Any:
+    """``--cell``: the checked errors of ``ideal``, ``real`` or a ``.toml`` file (one-line error otherwise)."""
+    from bt_arrange_sim.realcell import parse_cell
+
+    try:
+        return parse_cell(text)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--cell {text}: {error}") from error
+
+
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
+    errors = _cell_option(args.cell)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     starts = treefile.scene(module, args.seed)
 
+    from bt_arrange_sim.cell import CellConfig
     from bt_arrange_sim.runs import SimulatedRun
 
     with SimulatedRun(
         root,
         starts,
+        cell_config=CellConfig(errors=errors.with_run_seed(args.seed)),
         gui=args.gui,
         record_dir=args.record,
         time_limit_s=args.time_limit_s,
@@ -191,6 +212,7 @@ def _experiment(args: argparse.Namespace) -> int:
     # Every option is checked before the progress bar is drawn or a worker starts.
     rows = parse_rows(args.rows)
     _check_threshold_option(args.threshold_mm)
+    _cell_option(args.cell)
     try:
         prepare_record_dir(args.out)
     except BtArrangeError as error:
@@ -204,7 +226,15 @@ def _experiment(args: argparse.Namespace) -> int:
 
     try:
         summary = run_experiment(
-            rows, args.trials, args.seed, args.threshold_mm, args.out, workers=args.workers, on_trial=progress
+            rows,
+            args.trials,
+            args.seed,
+            args.threshold_mm,
+            args.out,
+            workers=args.workers,
+            on_trial=progress,
+            cell=args.cell,
+            strategy=args.strategy,
         )
     finally:
         bar.close()
@@ -295,6 +325,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=1800.0,
         help="stop after this much world time (default 1800 s)",
     )
+    run.add_argument("--cell", default="ideal", help=CELL_HELP)
     run.set_defaults(handler=_run)
 
     show = add_command(
@@ -333,6 +364,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.add_argument("--cell", default="ideal", help=CELL_HELP)
+    experiment.add_argument(
+        "--strategy",
+        choices=("paper", "learned"),
+        default="paper",
+        help="push strategy: paper (alternating x/y, Table 1's; default) or learned (docs/experiments.md)",
     )
     experiment.set_defaults(handler=_experiment)
 

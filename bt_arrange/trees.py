@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import py_trees
 
 from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, keys
+from bt_arrange.behaviours.handling import PUSH_STRATEGIES
 from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
@@ -173,14 +174,27 @@ def transfer(target: Target, max_regrasps: int = 3) -> py_trees.behaviour.Behavi
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
 
 
-def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) -> py_trees.behaviour.Behaviour:
-    """Push and inspect one object until it lies within ``threshold_mm`` of its target."""
+def check_strategy(strategy: object) -> str:
+    """The push strategy's name, or a ``PlanError`` listing the strategies."""
+    if strategy not in PUSH_STRATEGIES:
+        raise PlanError(f"strategy={strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+    return str(strategy)
+
+
+def correction(
+    target: Target, threshold_mm: float = 1.0, max_pushes: int = 10, strategy: str = "paper"
+) -> py_trees.behaviour.Behaviour:
+    """Push and inspect one object until it lies within ``threshold_mm`` of its target.
+
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
+    """
     check_threshold(threshold_mm)
+    check_strategy(strategy)
     obj, colour = target.obj, target.colour
     push_and_look = py_trees.composites.Sequence(
         name=f"push and inspect {obj}",
         memory=True,
-        children=[Push(f"push {obj}", obj), Inspect(f"inspect {obj}", obj, colour)],
+        children=[Push(f"push {obj}", obj, strategy), Inspect(f"inspect {obj}", obj, colour)],
     )
     return RetryUntilThreshold(
         name=f"correct {obj} to {threshold_mm:g} mm",
@@ -193,7 +207,7 @@ def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) 
 
 
 def arrange_one(
-    target: Target, threshold_mm: float = 1.0, max_pushes: int = 10, max_regrasps: int = 3
+    target: Target, threshold_mm: float = 1.0, max_pushes: int = 10, max_regrasps: int = 3, strategy: str = "paper"
 ) -> py_trees.behaviour.Behaviour:
     """Algorithm 1 for one object: detect, pick, place, inspect, push until within the threshold."""
     obj = target.obj
@@ -204,7 +218,7 @@ def arrange_one(
             set_target(target),
             transfer(target, max_regrasps),
             Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes),
+            correction(target, threshold_mm, max_pushes, strategy),
         ],
     )
 
@@ -228,6 +242,7 @@ def arrangement(
     *,
     max_regrasps: int = 3,
     keep_going: bool = True,
+    strategy: str = "paper",
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -235,7 +250,10 @@ def arrangement(
     ``"after_all"`` places all of them first and corrects them afterwards (the paper's Fig. 5).
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned).
     """
+    check_strategy(strategy)
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm)
@@ -249,7 +267,7 @@ def arrangement(
         return py_trees.decorators.FailureIsSuccess(name=f"then the next ({obj})", child=subtree)
 
     if correct == "each":
-        children = [carry_on(arrange_one(t, threshold_mm, max_pushes, max_regrasps), t.obj) for t in plan]
+        children = [carry_on(arrange_one(t, threshold_mm, max_pushes, max_regrasps, strategy), t.obj) for t in plan]
     else:
         place_all = py_trees.composites.Sequence(
             name="place all",
@@ -284,7 +302,7 @@ def arrangement(
                                 name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
                             ),
                             Inspect(f"inspect {t.obj} before correcting", t.obj, t.colour),
-                            correction(t, threshold_mm, max_pushes),
+                            correction(t, threshold_mm, max_pushes, strategy),
                         ],
                     ),
                     t.obj,

@@ -9,6 +9,8 @@
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+| ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
+| ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
+PUSH_BIAS_MM = "push_bias_mm"
+LAST_PUSH = "last_push"
 
 
 def key(obj: str, field: str) -> str:
