@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bt_arrange.checks import whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.trees import check_threshold
 
@@ -126,22 +127,10 @@ def row_injectors(row: str) -> list:
 
 def _depth_grasp_tree(target, threshold_mm: float, seed: int):  # noqa: ANN001, ANN202 - py_trees types
     """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
-    import py_trees
+    from bt_arrange.behaviours import MoveHome
+    from bt_arrange.trees import Arrangement, arrange_one, by_depth
 
-    from bt_arrange.behaviours import Inspect, MoveHome
-    from bt_arrange.behaviours.grasp_estimation import transfer_with_depth_grasp
-    from bt_arrange.trees import Arrangement, correction, set_target
-
-    arrange = py_trees.composites.Sequence(
-        name=f"arrange {target.obj}",
-        memory=True,
-        children=[
-            set_target(target),
-            transfer_with_depth_grasp(target, seed=seed),
-            Inspect(f"inspect {target.obj} after placing", target.obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes=10),
-        ],
-    )
+    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed))
     return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)
 
 
@@ -176,8 +165,7 @@ def run_experiment(
     reports progress.
     """
     rows = list(rows)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise PlanError(f"--seed {seed!r} must be a whole number, 0 or more")
+    whole_number("--seed", seed, style="unit")
     try:
         check_threshold(threshold_mm)
     except PlanError as error:

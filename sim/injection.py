@@ -34,9 +34,11 @@ the same values whatever else is attached. The draws of the picking injectors ar
 the cube fits between the open pads, which depends on where the camera saw the cube, so the same
 seed reproduces a record for the same scene.
 
-The stage names an injector waits for are the feedback messages of ``Pick`` and ``Place`` while
-they run, on the behaviours ``detect <obj>``, ``pick <obj>`` and ``place <obj>`` that
-``bt_arrange.trees.transfer`` builds; in a tree without them an injector never fires.
+An injector finds the behaviours it waits for by their type and object (the ``Detect``, ``Pick``
+and ``Place`` of ``obj`` that ``bt_arrange.trees.transfer`` builds), never by their names, and a
+stage by the running behaviour's feedback, compared with the constants of
+``bt_arrange.behaviours.stages`` the behaviours themselves use; in a tree without them an
+injector never fires.
 """
 
 from __future__ import annotations
@@ -53,7 +55,9 @@ import numpy as np
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import Detect, Inspect, Pick, Place, keys
+from bt_arrange.behaviours import stages as stage
+from bt_arrange.checks import finite_number, whole_number
 from bt_arrange.errors import OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose, quaternion_to_matrix, rotation_z
 from bt_arrange.runner import Transition
@@ -61,11 +65,11 @@ from bt_arrange.runner import Transition
 if TYPE_CHECKING:
     from bt_arrange_sim.runs import SimulatedRun
 
-#: Stage names (feedback messages of the running behaviour) the injectors wait for.
-CLOSE_STAGE = "close on the cube"
-LIFT_STAGE = "lift the cube"
-CARRY_STAGE = "carry above the target"
-RELEASE_STAGE = "release the cube"
+#: Stages (feedback messages of the running behaviour) the injectors wait for: the behaviours' own names.
+CLOSE_STAGE = stage.CLOSE_ON_CUBE
+LIFT_STAGE = stage.LIFT_CUBE
+CARRY_STAGE = stage.CARRY_ABOVE_TARGET
+RELEASE_STAGE = stage.RELEASE_CUBE
 T = TypeVar("T")
 #: Draws tried before a picking injector gives up on finding one that still lets the pads grasp the cube.
 MAX_DRAWS = 10_000
@@ -84,13 +88,18 @@ class Parameter:
 
     def check(self, value: float, owner: str) -> float:
         """``value`` as a float, or an ``OutOfRangeError`` naming the injector, the parameter and its range."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise OutOfRangeError(f"{owner}: {self.name}={value!r} is not a finite number")
+        finite_number(self.name, value, self.unit, where=f"{owner}: ", error=OutOfRangeError)
         above_low = value >= self.low if self.low_inclusive else value > self.low
         if not (above_low and value <= self.high):
             bracket = "[" if self.low_inclusive else "("
             allowed = f"{bracket}{self.low:g}, {self.high:g}] {self.unit}"
-            raise OutOfRangeError(f"{owner}: {self.name}={value:g} {self.unit} is outside {allowed}")
+            raise OutOfRangeError(
+                f"{owner}: {self.name}={value:g} {self.unit} is outside {allowed}",
+                field=self.name,
+                value=value,
+                limit=(self.low, self.high),
+                unit=self.unit,
+            )
         return float(value)
 
 
@@ -166,28 +175,36 @@ class Injector(ABC):
     def _now(self) -> float:
         return round(self.run.cell.sim_time_s, 4)
 
+    def _is_detection(self, transition: Transition) -> bool:
+        """True when ``transition`` is about the Detect before the pick of this cube (not an Inspect)."""
+        return is_detection(self.run.node(transition), self.cube)
+
     def _on_first_detection(self, action: Callable[[], None]) -> None:
-        """Call ``action`` once, right after ``detect <obj>`` first succeeds (seen, not yet grasped)."""
-        behaviour = f"detect {self.cube}"
+        """Call ``action`` once, right after the Detect of ``obj`` first succeeds (seen, not yet grasped)."""
 
         def hook(transition: Transition) -> None:
-            if not self.fired and transition.behaviour == behaviour and transition.new == Status.SUCCESS.value:
+            if not self.fired and transition.new == Status.SUCCESS.value and self._is_detection(transition):
                 self.fired = True
                 self.details["time_s"] = round(transition.time_s, 4)
                 action()
 
         self.run.transition_hooks.append(hook)
 
-    def _on_stage(self, behaviour: str, stage: str, action: Callable[[py_trees.behaviour.Behaviour], bool]) -> None:
-        """Call ``action(node)`` after every tick in which ``behaviour`` runs ``stage``, until it returns True."""
-        finder = _NodeFinder(behaviour)
+    def _on_stage(
+        self,
+        kind: type[py_trees.behaviour.Behaviour],
+        stage_name: str,
+        action: Callable[[py_trees.behaviour.Behaviour], bool],
+    ) -> None:
+        """Call ``action(node)`` after every tick in which the ``kind`` of this cube runs ``stage_name``, until True."""
+        finder = _NodeFinder(kind, self.cube)
         state = {"done": False}
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
             if state["done"]:
                 return
             node = finder(root)
-            if node is not None and node.status == Status.RUNNING and node.feedback_message == stage:
+            if node is not None and node.status == Status.RUNNING and node.feedback_message == stage_name:
                 state["done"] = action(node)
 
         self.run.tick_hooks.append(hook)
@@ -197,8 +214,7 @@ class Injector(ABC):
 
         Read only to keep a picking error graspable, as the paper's bounds do; never written.
         """
-        storage = py_trees.blackboard.Blackboard.storage
-        measured = storage.get(keys.key(self.cube, keys.POSE))
+        measured = read_blackboard(keys.key(self.cube, keys.POSE))
         if isinstance(measured, Pose):
             return measured.x_m, measured.y_m, measured.yaw_rad
         truth = self.run.cell.cube_pose_truth(self.cube)
@@ -211,16 +227,38 @@ class Injector(ABC):
 
 
 class _NodeFinder:
-    """Finds a behaviour of the tree by name, once."""
+    """Finds the behaviour of a type (``Pick``, ``Place``) that handles an object, once.
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    By type and object, not by name: a tree may hold two nodes of one name (trees/row_of_three.py
+    has a Sequence and a Place both called "place red"). The first in tick order is taken.
+    """
+
+    def __init__(self, kind: type[py_trees.behaviour.Behaviour], obj: str) -> None:
+        self.kind = kind
+        self.obj = obj
         self.node: py_trees.behaviour.Behaviour | None = None
 
     def __call__(self, root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
         if self.node is None:
-            self.node = next((n for n in root.iterate() if n.name == self.name), None)
+            self.node = next(
+                (n for n in root.iterate() if isinstance(n, self.kind) and getattr(n, "obj", None) == self.obj), None
+            )
         return self.node
+
+
+def is_detection(node: py_trees.behaviour.Behaviour | None, obj: str) -> bool:
+    """True for the Detect of ``obj`` that finds it before the pick (an Inspect is a Detect too, but not this)."""
+    return isinstance(node, Detect) and not isinstance(node, Inspect) and node.obj == obj
+
+
+def read_blackboard(key: str) -> Any:
+    """What the robot wrote at ``key`` (None if nothing), read through a client of the injectors' own.
+
+    Read only: an injector never writes the blackboard.
+    """
+    client = py_trees.blackboard.Client(name="error injection")
+    client.register_key(key, access=py_trees.common.Access.READ)
+    return client.get(key) if client.exists(key) else None
 
 
 def grasp_fits(
@@ -329,19 +367,18 @@ class PerceptionOffset(Injector):
         )
         if drawn is None:
             self.details["skipped"] = "no draw keeps the pads off the cube"
-        detect = f"detect {obj}"
 
         def hook(transition: Transition) -> None:
             if self.fired or transition.new != Status.SUCCESS.value:
                 return
-            if transition.behaviour != detect:
-                if transition.kind in ("Detect", "Inspect"):
+            if not self._is_detection(transition):
+                if isinstance(run.node(transition), Detect):  # another look through the displaced camera
                     self.details["also_seen_by"].append(transition.behaviour)
                 return
             self.fired = True
             camera.set_render_offset()
             now = run.cell.cube_pose_truth(obj)
-            measured = py_trees.blackboard.Blackboard.storage.get(keys.key(obj, keys.POSE))
+            measured = read_blackboard(keys.key(obj, keys.POSE))
             self.details["time_s"] = round(transition.time_s, 4)
             if isinstance(measured, Pose):
                 dyaw_seen = (measured.yaw_rad - now.yaw_rad + math.pi / 4) % (math.pi / 2) - math.pi / 4
@@ -454,7 +491,7 @@ class SurfaceShift(Injector):
         super().__init__(max_m=max_m)
 
     def _attach(self, run: SimulatedRun, obj: str) -> None:
-        self._on_stage(f"pick {obj}", CLOSE_STAGE, self._inject)
+        self._on_stage(Pick, CLOSE_STAGE, self._inject)
 
     def _inject(self, node: py_trees.behaviour.Behaviour) -> bool:
         cell = self.run.cell
@@ -507,7 +544,7 @@ class TransportSlip(Injector):
         self._carry: dict[str, Any] | None = None
 
     def _attach(self, run: SimulatedRun, obj: str) -> None:
-        finder = _NodeFinder(f"place {obj}")
+        finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
             node = finder(root)
@@ -527,7 +564,7 @@ class TransportSlip(Injector):
         """Begin the slip once the carry has covered the drawn fraction of its way."""
         tcp_xy = self.run.cell.arm.tcp_pose().position_m[:2]
         if self._carry is None:
-            target = py_trees.blackboard.Blackboard.storage.get(keys.key(self.cube, keys.TARGET))
+            target = read_blackboard(keys.key(self.cube, keys.TARGET))
             goal = np.array([target.x_m, target.y_m]) if target is not None else tcp_xy
             self._carry = {
                 "from": tcp_xy.copy(),
@@ -600,7 +637,7 @@ class ReleaseStick(Injector):
         self._drag: dict[str, Any] | None = None
 
     def _attach(self, run: SimulatedRun, obj: str) -> None:
-        finder = _NodeFinder(f"place {obj}")
+        finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
             node = finder(root)
@@ -689,13 +726,14 @@ class ReleaseHeight(Injector):
         self._nominal_m: float | None = None
 
     def _attach(self, run: SimulatedRun, obj: str) -> None:
-        self._on_stage(f"pick {obj}", LIFT_STAGE, self._apply)
-        place = f"place {obj}"
+        self._on_stage(Pick, LIFT_STAGE, self._apply)
 
         def restore(transition: Transition) -> None:
+            node = run.node(transition)
             if (
                 self._nominal_m is not None
-                and transition.behaviour == place
+                and isinstance(node, Place)
+                and node.obj == obj
                 and transition.old == Status.RUNNING.value
                 and transition.new != Status.RUNNING.value
             ):
@@ -740,7 +778,7 @@ class ReleaseTilt(Injector):
         self._draw: tuple[float, float] | None = None
 
     def _attach(self, run: SimulatedRun, obj: str) -> None:
-        finder = _NodeFinder(f"place {obj}")
+        finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
             node = finder(root)
@@ -865,8 +903,7 @@ def attach_all(run: SimulatedRun, obj: str, injectors: Sequence[Injector], seed:
     that name), so adding another injector does not change the others' draws. Hooks run in the
     order given: of two picking errors, the later one is drawn to fit with the earlier.
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise PlanError(f"injection seed {seed!r} must be a whole number, 0 or more")
+    whole_number("injection seed", seed, style="unit")
     seen: dict[str, int] = {}
     for injector in injectors:
         index = seen.get(injector.name, 0)

@@ -64,7 +64,9 @@ def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(fake
     inspect = Inspect("look at red once it is down", "red", after_placing=True)
     root = Arrangement("mine", [set_target(RED), transfer(RED), inspect], [RED], 1.0)
     run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target"))
+    run._on_transition(
+        Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red")
+    )
     assert run._placed_truth_mm["red"] == pytest.approx(223.607, abs=1e-3)  # the fake cube still at its start
     assert (tmp_path / "after_placing_red.png").is_file()
 
@@ -73,7 +75,7 @@ def test_an_inspect_that_does_not_record_placing_is_not_taken_for_one(fake_cell,
     inspect = Inspect("inspect red after placing", "red")  # the name says so, the flag does not
     root = Arrangement("mine", [set_target(RED), inspect], [RED], 1.0)
     run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", ""))
+    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "", str(inspect.id), "red"))
     assert run._placed_truth_mm == {}
 
 
