@@ -1,7 +1,7 @@
 """The ``bt-arrange`` command line.
 
     bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
-    bt-arrange show TREE_FILE [--format text|dot|png|svg] [--blackboard] [--out FILE]
+    bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
     bt-arrange info
 
@@ -116,7 +116,14 @@ def _run(args: argparse.Namespace) -> int:
 
     from bt_arrange_sim.runs import SimulatedRun
 
-    with SimulatedRun(root, starts, gui=args.gui, record_dir=args.record, time_limit_s=args.time_limit_s) as run:
+    with SimulatedRun(
+        root,
+        starts,
+        gui=args.gui,
+        record_dir=args.record,
+        time_limit_s=args.time_limit_s,
+        title=Path(args.tree_file).name,
+    ) as run:
         if args.live:
             from bt_arrange.display import LiveView
 
@@ -160,7 +167,7 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
             f"truth = the simulator's ground truth (evaluation only); threshold {report.threshold_mm:g} mm"
         )
     if args.record:
-        print(f"recorded images, report.json and transitions.jsonl in {args.record}")
+        print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
     if report.objects:
@@ -211,12 +218,32 @@ def _show(args: argparse.Namespace) -> int:
 
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module)
+    if args.format == "xml":
+        return _show_xml(root, args)
     result = render_tree(root, args.format, blackboard=args.blackboard, out=args.out, name=Path(args.tree_file).stem)
     if args.format in ("text", "dot") and args.out is None:
         print(result)
     else:
         # render_tree returns the text itself for text and dot, the picture's path otherwise.
         print(f"wrote {args.out if args.out is not None else result}")
+    return EXIT_OK
+
+
+def _show_xml(root: Any, args: argparse.Namespace) -> int:
+    from bt_arrange import xmltree
+
+    stem = Path(args.tree_file).stem
+    text = xmltree.to_xml(
+        root, tree_id=stem, comment=f"generated from {Path(args.tree_file).name} by bt-arrange show (format xml)"
+    )
+    if args.out is None:
+        print(text, end="")
+        return EXIT_OK
+    try:
+        args.out.write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise BtArrangeError(f"cannot write {args.out}: {error.strerror}") from error
+    print(f"wrote {args.out}")
     return EXIT_OK
 
 
@@ -245,7 +272,11 @@ def build_parser() -> argparse.ArgumentParser:
         )
 
     run = add_command("run", "run a tree file in the simulated work cell (headless by default)")
-    run.add_argument("tree_file", metavar="TREE_FILE", help="a Python file exposing create_root() and create_scene()")
+    run.add_argument(
+        "tree_file",
+        metavar="TREE_FILE",
+        help="a Python file exposing create_root() and create_scene(), or a BehaviorTree.CPP .xml tree",
+    )
     run.add_argument(
         "--seed", type=_whole(0), default=0, help="seed of the scene (where the cubes start), 0 or more; default 0"
     )
@@ -254,7 +285,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--gui", action="store_true", help="open the pybullet window (needs a display)")
     run.add_argument("--live", action="store_true", help="redraw the tree with its statuses while it runs")
-    run.add_argument("--record", type=Path, metavar="DIR", help="save top-camera images and the transition log")
+    run.add_argument(
+        "--record", type=Path, metavar="DIR", help="save top-camera images, the transition log and replay.html"
+    )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     run.add_argument(
         "--time-limit-s",
@@ -270,7 +303,12 @@ def build_parser() -> argparse.ArgumentParser:
         "exit status: 0 drawn, 2 a usage or tree-file error",
     )
     show.add_argument("tree_file", metavar="TREE_FILE")
-    show.add_argument("--format", choices=("text", "dot", "png", "svg"), default="text", help="default text")
+    show.add_argument(
+        "--format",
+        choices=("text", "dot", "png", "svg", "xml"),
+        default="text",
+        help="default text; xml: BehaviorTree.CPP v4 for Groot2",
+    )
     show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)

@@ -17,6 +17,7 @@ from collections.abc import Iterator
 import py_trees
 from py_trees.common import Access, Status
 
+from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
 
 
@@ -50,7 +51,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.threshold_mm = float(threshold_mm)
         self.max_attempts = max_attempts
         self.corrections_key = corrections_key
-        self.obj = obj
+        #: The object corrected: ``obj``, else the one whose offset it watches (``/<obj>/offset_mm``).
+        self.obj = obj if obj is not None else keys.object_of_key(offset_key)
         self.attempts = 0
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)

@@ -217,6 +217,26 @@ class Runner:
         self.tree.setup(context=self.context)
         self._is_set_up = True
 
+    def tick_tree(self) -> None:
+        """Tick the tree once, handing the ticked behaviours to its visitors (the log among them).
+
+        Through ``BehaviourTree.tick`` when a full visitor or a tick handler was added to
+        ``self.tree``; otherwise the same steps without the walk over every node that
+        ``BehaviourTree.tick`` makes for full visitors even when there are none.
+        """
+        tree = self.tree
+        if tree.pre_tick_handlers or tree.post_tick_handlers or any(v.full for v in tree.visitors):
+            tree.tick()
+            return
+        for visitor in tree.visitors:
+            visitor.initialise()
+        for node in self.root.tick():
+            for visitor in tree.visitors:
+                node.visit(visitor)
+        for visitor in tree.visitors:
+            visitor.finalise()
+        tree.count += 1
+
     def run(self) -> RunResult:
         """Tick until the root succeeds or fails, or the world-time limit passes."""
         if not self._is_set_up:
@@ -228,7 +248,7 @@ class Runner:
         timed_out = False
         try:
             while True:
-                self.tree.tick()
+                self.tick_tree()
                 ticks += 1
                 for transition in self.log.take():
                     if self.on_transition is not None:

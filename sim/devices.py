@@ -6,6 +6,7 @@ the world's owner (the runner, a benchmark) does, one control period at a time.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING
 
@@ -19,6 +20,7 @@ from bt_arrange.robot import (
     GRIPPER_SPEED_RANGE_M_S,
     CameraFrame,
     CameraIntrinsics,
+    PixelWindow,
 )
 
 if TYPE_CHECKING:
@@ -112,15 +114,15 @@ class SimGripper:
         return GRIPPER_MAX_WIDTH_M
 
     def open(self, width_m: float, speed_m_s: float | None = None) -> None:
-        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's gripper speed)."""
+        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
         import pybullet
 
         if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
             raise OutOfRangeError(
                 f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
             )
-        speed = self._checked_speed(speed_m_s)
         physics = self._cell.config.physics
+        speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
@@ -183,6 +185,9 @@ class SimCamera:
         # Error injection only (``set_render_offset``): the view actually rendered, normally the calibrated one.
         self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self._render_view_matrix = self._view_matrix
+        # Uncalibrated pinhole: windows shift it by the renderer's half pixel in their own pixels.
+        self._nominal = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
+        self._full_window = PixelWindow.full(self._intrinsics)
         vertical_fov_deg = math.degrees(2.0 * math.atan((config.height_px / 2.0) / self._intrinsics.fy_px))
         self._projection_matrix = cell.client.computeProjectionMatrixFOV(
             vertical_fov_deg, config.width_px / config.height_px, config.near_m, config.far_m
@@ -227,27 +232,73 @@ class SimCamera:
         """``T_W_C``, optical frame (x right, y down, z forward)."""
         return self._pose_world
 
-    def capture(self, with_depth: bool = False) -> CameraFrame:
-        """Render one frame of the world as it is now."""
+    def projection_matrix(self, window: PixelWindow) -> list[float]:
+        """OpenGL projection (column-major, as pybullet takes it) of the frustum through ``window``.
+
+        The full image's frustum is symmetric about the optical axis; a window's is the part of
+        it through the window's pixels (an off-axis frustum, like ``glFrustum``), so each pixel
+        of the window sees what that pixel of the full image sees. Binning only changes how
+        many pixels the frustum is rendered into.
+        """
+        config = self._cell.config.camera
+        near, far = config.near_m, config.far_m
+        width, height = config.width_px, config.height_px
+        # Half extents of the full frustum on the near plane (the nominal pinhole is centred).
+        half_w = near * (width / 2.0) / self._nominal.fx_px
+        half_h = near * (height / 2.0) / self._nominal.fy_px
+        # Pixel edges u = 0 .. width map to x = -half_w .. +half_w; rows run down from +half_h.
+        left = half_w * (2.0 * window.x_px / width - 1.0)
+        right = half_w * (2.0 * (window.x_px + window.width_px) / width - 1.0)
+        top = half_h * (1.0 - 2.0 * window.y_px / height)
+        bottom = half_h * (1.0 - 2.0 * (window.y_px + window.height_px) / height)
+        matrix = np.array(
+            [
+                [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
+                [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
+                [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
+                [0.0, 0.0, -1.0, 0.0],
+            ]
+        )
+        return [float(v) for v in matrix.flatten(order="F")]
+
+    def window_intrinsics(self, window: PixelWindow) -> CameraIntrinsics:
+        """Intrinsics of the frame rendered through ``window``.
+
+        The calibration above (TinyRenderer samples a pixel at its corner) is half a pixel of the
+        *rendered* image, so a binned render is not the area-binned full frame: its principal
+        point is the nominal one of the window's frustum, moved by half a rendered pixel.
+        """
+        nominal = self._nominal.windowed(window)
+        return dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
+
+    def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
+        """Render one frame of the world as it is now: the full image, or only ``window``."""
         import pybullet
 
         config = self._cell.config.camera
         client = self._cell.client
+        if window is None or window == self._full_window:
+            projection, intrinsics = self._projection_matrix, self._intrinsics
+            width, height = config.width_px, config.height_px
+        else:
+            intrinsics = self.window_intrinsics(window)
+            projection = self.projection_matrix(window)
+            width, height = window.out_width_px, window.out_height_px
         _, _, rgba, zbuffer, _ = client.getCameraImage(
-            config.width_px,
-            config.height_px,
+            width,
+            height,
             viewMatrix=self._render_view_matrix,
-            projectionMatrix=self._projection_matrix,
+            projectionMatrix=projection,
             renderer=pybullet.ER_TINY_RENDERER,
             shadow=0,
             lightDirection=list(config.light_direction),
             flags=pybullet.ER_NO_SEGMENTATION_MASK,
         )
-        rgb = np.asarray(rgba, dtype=np.uint8).reshape(config.height_px, config.width_px, 4)[:, :, :3].copy()
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
         depth = None
         if with_depth:
-            z = np.asarray(zbuffer, dtype=np.float64).reshape(config.height_px, config.width_px)
+            z = np.asarray(zbuffer, dtype=np.float64).reshape(height, width)
             near, far = config.near_m, config.far_m
             depth = (far * near / (far - (far - near) * z)).astype(np.float32)
         rgb = self._cell.camera_noise.apply(rgb)
-        return CameraFrame(rgb, depth, self._intrinsics, self._pose_world, self._cell.sim_time_s)
+        return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)

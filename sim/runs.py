@@ -24,6 +24,7 @@ from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.plancheck import check_plan, check_scene
+from bt_arrange.replay import ReplayRecorder
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.settings import CUBE_COLOURS_RGB
 from bt_arrange.trees import Arrangement, Target
@@ -109,6 +110,7 @@ class SimulatedRun:
         gui: bool = False,
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        title: str | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
@@ -136,7 +138,12 @@ class SimulatedRun:
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+        #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
+        self.runner_hooks: list[Callable[[Runner], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
+        #: What the replay page shows (recorded runs only), and its heading.
+        self.replay: ReplayRecorder | None = None
+        self.title = title or root.name
 
     def elapsed_s(self) -> float:
         """World time since the tree started (the settling of the scene excluded), as the report counts it."""
@@ -147,6 +154,7 @@ class SimulatedRun:
         py_trees.blackboard.Blackboard.clear()
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
+            self.replay = ReplayRecorder(self.root)
             self._save_image("before_picking")
         runner = Runner(
             self.root,
@@ -157,9 +165,13 @@ class SimulatedRun:
             on_transition=self._on_transition,
             on_tick=self._on_tick,
         )
+        for hook in self.runner_hooks:
+            hook(runner)
         result = runner.run()
         if self.record_dir is not None:
             self._save_image("after_pushing")
+            assert self.replay is not None
+            self.replay.observe(self.cell.clock.now())  # a stop at the time limit comes after the last tick
         report = SimulationReport(
             objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
             tree_status=result.status.value,
@@ -171,6 +183,8 @@ class SimulatedRun:
         )
         if self.record_dir is not None:
             (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+            assert self.replay is not None
+            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
         return report
 
     def close(self) -> None:
@@ -207,6 +221,8 @@ class SimulatedRun:
         return self.nodes.get(transition.node_id)
 
     def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        if self.replay is not None:
+            self.replay.observe(self.cell.clock.now())
         for hook in self.tick_hooks:
             hook(root)
 
@@ -215,7 +231,10 @@ class SimulatedRun:
 
         assert self.record_dir is not None
         frame = self.cell.camera.capture()
-        cv2.imwrite(str(self.record_dir / f"{stem}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        path = self.record_dir / f"{stem}.png"
+        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        if self.replay is not None:
+            self.replay.add_image(self.cell.clock.now(), stem.replace("_", " "), path)
 
     def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
         if not isinstance(self.root, Arrangement):

@@ -28,7 +28,6 @@ from fakes import (
 )
 from py_trees.common import Access, Status
 
-from bt_arrange.behaviours import stages
 from bt_arrange.behaviours import (
     Context,
     Detect,
@@ -41,10 +40,12 @@ from bt_arrange.behaviours import (
     StagedBehaviour,
     keys,
     offset_in_target_frame_mm,
+    stages,
 )
 from bt_arrange.errors import BtArrangeError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
-from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
+from bt_arrange.robot import PixelWindow
 from bt_arrange.settings import ManipulationSettings
 
 SETTINGS = ManipulationSettings()
@@ -217,12 +218,16 @@ def test_detect_parks_the_arm_before_looking(clock) -> None:
     assert run.status == Status.SUCCESS, run.feedback
     assert run.ticks[0].feedback == stages.PARK
     assert_never_blocks(run)
-    captures = fake_camera(context).captures
-    assert len(captures) == 1
-    time_s, q = captures[0]
-    assert q is not None
-    np.testing.assert_allclose(q, context.home_q, atol=1e-9)
-    assert time_s > fake_arm(context).commands[-1].time_s, "the camera looks once the arm stands still at home"
+    camera = fake_camera(context)
+    assert len(camera.captures) == 2, "a binned full view to find the cube, a window to measure it"
+    search, measure = camera.windows
+    assert search == PixelWindow.full(camera.intrinsics, search.binning) and search.binning > 1
+    assert measure is not None and measure.binning == 1
+    assert measure.width_px * measure.height_px < 0.1 * camera.intrinsics.width_px * camera.intrinsics.height_px
+    for time_s, q in camera.captures:
+        assert q is not None
+        np.testing.assert_allclose(q, context.home_q, atol=1e-9)
+        assert time_s > fake_arm(context).commands[-1].time_s, "the camera looks once the arm stands still at home"
 
 
 @pytest.mark.parametrize(
@@ -301,6 +306,45 @@ def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(cloc
     assert not exists("/red/placed_offset_mm")
 
 
+def test_inspect_looks_through_a_window_around_the_target_only(clock) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.507, 0.004, 0.3), cube("blue", 0.4, 0.15)])
+    write({"/red/target": PlanarPose(0.5, 0.0)})
+    run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    camera = fake_camera(context)
+    (window,) = camera.windows
+    assert window is not None and window.binning == 1
+    assert window.width_px * window.height_px < 0.1 * camera.intrinsics.width_px * camera.intrinsics.height_px
+    assert read("/red/offset_mm") == pytest.approx(math.hypot(7.0, 4.0), abs=0.3)
+
+
+def test_inspect_searches_the_whole_view_for_a_cube_far_from_its_target(clock) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.62, -0.2, 0.3)])
+    write({"/red/target": PlanarPose(0.5, 0.0)})
+    run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    target_window, search, measure = fake_camera(context).windows
+    assert target_window is not None and search is not None and measure is not None
+    assert search.binning > 1 and measure.binning == 1 and measure != target_window
+    pose = read("/red/pose")
+    assert 1000 * math.hypot(pose.x_m - 0.62, pose.y_m + 0.2) < 0.5
+
+
+def test_a_detection_in_a_window_is_the_full_frames(clock) -> None:
+    context = make_context(clock, cubes=[cube("green", 0.47, 0.06, 0.4)])
+    camera, detector = fake_camera(context), context.detector
+    window = detector.window_around(camera.intrinsics, camera.pose_world, 0.47, 0.06, 0.06)
+    assert window is not None
+    in_full, in_window = (
+        detector.detect(camera.capture(), "green"),
+        detector.detect(camera.capture(window=window), "green"),
+    )
+    assert in_full.found and in_window.found
+    assert (
+        1000 * math.hypot(in_full.planar.x_m - in_window.planar.x_m, in_full.planar.y_m - in_window.planar.y_m) < 0.01
+    )
+
+
 # -- Pick ----------------------------------------------------------------------------------------
 
 
@@ -312,8 +356,8 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "holding red, fingers 50.0 mm apart"
     assert_never_blocks(run)
-    stages = list(dict.fromkeys(t.feedback for t in run.running))
-    assert stages == [
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen == [
         stages.MOVE_ABOVE_CUBE,
         stages.WAIT_FOR_OPEN_FINGERS,
         stages.DESCEND_TO_CUBE,
@@ -457,6 +501,19 @@ def test_push_falls_back_to_the_other_axis_when_the_preferred_offset_is_below_mi
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "pushed -2.50 mm along y"
     assert read("/red/push_axis") == "x", "the next push goes along the other axis again"
+
+
+def test_the_push_itself_runs_at_the_slower_push_limits(context: Context) -> None:
+    push = push_setup(context, cube_pose(0.5, 0.0), 0.0, (6.0, 0.0))
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    lines = {
+        stage.name: stage.motion for stage in push._stages if isinstance(getattr(stage, "motion", None), LinearMotion)
+    }
+    pushing = lines["push 6.00 mm along x"]
+    assert pushing.cartesian_limits.velocity_m_s <= SETTINGS.push_limits.velocity_m_s
+    assert SETTINGS.push_limits.velocity_m_s < context.planner.cartesian_limits.velocity_m_s
+    assert lines["lower the fingers"].cartesian_limits.velocity_m_s > SETTINGS.push_limits.velocity_m_s
 
 
 def test_push_with_nothing_to_push_succeeds_without_moving(context: Context) -> None:

@@ -65,7 +65,9 @@ def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(fake
     root = Arrangement("mine", [set_target(RED), transfer(RED), inspect], [RED], 1.0)
     run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
     run._on_transition(
-        Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red")
+        Transition(
+            1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red"
+        )
     )
     assert run._placed_truth_mm["red"] == pytest.approx(223.607, abs=1e-3)  # the fake cube still at its start
     assert (tmp_path / "after_placing_red.png").is_file()

@@ -26,11 +26,15 @@ def _to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN20
     return plan
 
 
-def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
-    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push)."""
+def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False):  # noqa: ANN202
+    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
+
+    ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    """
 
     def plan(context: Context, q: FloatArray) -> Motion:
-        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+        limits = context.settings.push_limits if pushing else None
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
 
     return plan
 
@@ -182,7 +186,7 @@ class Push(StagedBehaviour):
             MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
             MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], s.push_height_m, yaw)),
-            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], s.push_height_m, yaw)),
+            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True)),
             MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], s.push_height_m, yaw)),
             MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], s.approach_height_m, yaw)),
         ]

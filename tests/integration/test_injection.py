@@ -18,8 +18,8 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from bt_arrange.behaviours import stages
 from bt_arrange import treefile
+from bt_arrange.behaviours import stages
 from bt_arrange.errors import BtArrangeError, OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.settings import ManipulationSettings
@@ -79,10 +79,10 @@ class Probe:
         return Snapshot(self.run.cell.cube_pose_truth(OBJ), self.run.cell.arm.tcp_pose())
 
     def before_tick(self, root) -> None:
-        for behaviour, stages in STAGES.items():
+        for behaviour, watched in STAGES.items():
             node = self._nodes.get(behaviour) or next(n for n in root.iterate() if n.name == behaviour)
             self._nodes[behaviour] = node
-            if node.status == Status.RUNNING and node.feedback_message in stages:
+            if node.status == Status.RUNNING and node.feedback_message in watched:
                 self.stages.setdefault(node.feedback_message, self.snap())
         self._last = self.snap()
 

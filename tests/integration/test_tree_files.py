@@ -6,9 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_arrange.behaviours import stages
 from bt_arrange import treefile
-from bt_arrange.behaviours import holding
+from bt_arrange.behaviours import holding, stages
 from bt_arrange_sim.runs import SimulatedRun
 
 TREES = sorted((Path(__file__).resolve().parents[2] / "trees").glob("*.py"))
