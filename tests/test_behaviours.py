@@ -37,12 +37,13 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    Stage,
     StagedBehaviour,
     keys,
     offset_in_target_frame_mm,
     stages,
 )
-from bt_arrange.errors import BtArrangeError, UnreachableError
+from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
 from bt_arrange.robot import PixelWindow
@@ -696,3 +697,46 @@ def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
     assert guard.feedback_message == "the cube left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held cube"
     assert place.status == Status.INVALID, "the child never ran"
     assert fake_arm(context).commands == []
+
+
+def test_an_error_raised_mid_motion_is_a_failure_with_the_reason_and_the_motion_goes_to_the_brake(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    behaviour = set_up(MoveHome("park"), context)
+    run = tick_until_done(behaviour, context, until=after(stages.MOVE_HOME, 30))
+    assert run.status == Status.RUNNING
+    assert speeds(fake_arm(context).commands[-1:])[0] > 0.1, "at speed when the error comes"
+    motion = behaviour._stages[behaviour._index].motion
+    step = motion.step
+
+    def fails_once():
+        motion.step = step  # the brake steps the same motion afterwards
+        raise MotionError("joint motion failed at t = 0.300 s: ruckig Error")
+
+    motion.step = fails_once
+    behaviour.tick_once()
+    assert behaviour.status == Status.FAILURE
+    assert behaviour.feedback_message == f"{stages.MOVE_HOME}: joint motion failed at t = 0.300 s: ruckig Error"
+    assert context.brake.active, "the motion was handed to the brake"
+    assert_comes_to_rest(brake_until_idle(context))
+
+
+def test_a_stage_without_poll_cannot_be_made() -> None:
+    class Forgetful(Stage):
+        pass
+
+    with pytest.raises(TypeError, match="abstract"):
+        Forgetful("forgot to poll")  # type: ignore[abstract]
+
+
+def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
+    push = Push("push red", "red")
+    assert isinstance(push.blackboard, py_trees.blackboard.Client)
+    assert set(push.blackboard.read) >= {"/red/pose", "/red/target", "/red/offset_xy_mm", "/red/push_axis"}
+    assert set(push.blackboard.write) == {"/red/push_axis"}
+    inspect = Inspect("inspect red", "red", after_placing=True)
+    assert set(inspect.blackboard.write) == {
+        "/red/pose",
+        "/red/offset_mm",
+        "/red/offset_xy_mm",
+        "/red/placed_offset_mm",
+    }
