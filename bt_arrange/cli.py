@@ -1,6 +1,6 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
+    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
     bt-arrange info
@@ -21,8 +21,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, NoReturn
 
-from bt_arrange import treefile
-from bt_arrange.errors import BtArrangeError
+from bt_arrange import backends, treefile
+from bt_arrange.backends import Backend, Experiment, RunReport
+from bt_arrange.errors import BackendError, BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
 EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
@@ -91,20 +92,15 @@ def _check_threshold_option(threshold_mm: float | None) -> None:
         raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
 
 
-def _info(_: argparse.Namespace) -> int:
+def _info(args: argparse.Namespace) -> int:
     print(f"bt-arrange {metadata.version('bt-arrange')}")
     for package in STACK:
         try:
             print(f"  {package} {metadata.version(package)}")
         except metadata.PackageNotFoundError:
             print(f"  {package} missing (pip install -e . installs it)")
-    from bt_arrange.motion import default_urdf_path
-    from bt_arrange_sim import WorkCell
-
-    with WorkCell() as cell:
-        cell.settle(0.1)
-        print(f"  robot description: {default_urdf_path()}")
-        print(f"  headless work cell: ok (TCP at {cell.arm.tcp_pose()})")
+    for line in backends.load(args.backend).check():
+        print(f"  {line}")
     return EXIT_OK
 
 
@@ -114,9 +110,8 @@ def _run(args: argparse.Namespace) -> int:
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     starts = treefile.scene(module, args.seed)
 
-    from bt_arrange_sim.runs import SimulatedRun
-
-    with SimulatedRun(
+    backend = backends.load(args.backend)
+    with backend.open_run(
         root,
         starts,
         gui=args.gui,
@@ -139,7 +134,7 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
 
 
-def _print_report(report: Any, args: argparse.Namespace) -> None:
+def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
@@ -182,17 +177,23 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
     )
 
 
+def _experiment_of(backend: Backend) -> Experiment:
+    experiment = backend.experiment
+    if experiment is None:
+        raise BackendError(f"backend {backend.name!r} cannot run the experiment")
+    return experiment
+
+
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from bt_arrange_sim.experiment import markdown_table, parse_rows, run_experiment
-    from bt_arrange_sim.runs import prepare_record_dir
-
+    backend = backends.load(args.backend)
+    experiment = _experiment_of(backend)
     # Every option is checked before the progress bar is drawn or a worker starts.
-    rows = parse_rows(args.rows)
+    rows = experiment.parse_rows(args.rows)
     _check_threshold_option(args.threshold_mm)
     try:
-        prepare_record_dir(args.out)
+        backend.prepare_out(args.out)
     except BtArrangeError as error:
         raise BtArrangeError(f"--out {args.out}: {error}") from error
     bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
@@ -203,12 +204,12 @@ def _experiment(args: argparse.Namespace) -> int:
         bar.refresh()
 
     try:
-        summary = run_experiment(
+        summary = experiment.run_experiment(
             rows, args.trials, args.seed, args.threshold_mm, args.out, workers=args.workers, on_trial=progress
         )
     finally:
         bar.close()
-    print(markdown_table(summary), end="")
+    print(experiment.markdown_table(summary), end="")
     print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {args.out}")
     return EXIT_OK
 
@@ -249,9 +250,14 @@ def _show_xml(root: Any, args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with one sub-command per job."""
-    # The experiment's rows come from its registry: bt_arrange_sim.experiment imports neither
-    # pybullet nor matplotlib at module level, so building the help starts no simulator.
-    from bt_arrange_sim.experiment import ROW_LABELS, ROWS
+    # The experiment's rows come from the default backend's registry of rows; loading it starts
+    # no simulator (the sim backend imports neither pybullet nor matplotlib at module level).
+    try:
+        default_experiment = backends.load().experiment
+    except BtArrangeError:
+        default_experiment = None
+    rows = tuple(default_experiment.ROWS) if default_experiment is not None else ()
+    row_labels = dict(default_experiment.ROW_LABELS) if default_experiment is not None else {}
 
     parser = _Parser(
         prog="bt-arrange",
@@ -269,6 +275,14 @@ def build_parser() -> argparse.ArgumentParser:
             description=help_text,
             epilog=epilog,
             formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+
+    def add_backend(command: argparse.ArgumentParser) -> None:
+        command.add_argument(
+            "--backend",
+            default=backends.DEFAULT_BACKEND,
+            metavar="NAME",
+            help=f"what to run on (default {backends.DEFAULT_BACKEND}: the simulated work cell)",
         )
 
     run = add_command("run", "run a tree file in the simulated work cell (headless by default)")
@@ -295,6 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=1800.0,
         help="stop after this much world time (default 1800 s)",
     )
+    add_backend(run)
     run.set_defaults(handler=_run)
 
     show = add_command(
@@ -313,7 +328,7 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 
-    rows_help = "\n".join(f"  {row:<16} {ROW_LABELS.get(row, '')}" for row in ROWS)
+    rows_help = "\n".join(f"  {row:<16} {row_labels.get(row, '')}" for row in rows)
     experiment = add_command(
         "experiment",
         "reproduce the paper's Table 1 and Fig. 4 in simulation",
@@ -321,7 +336,7 @@ def build_parser() -> argparse.ArgumentParser:
         "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
     )
     experiment.add_argument(
-        "--rows", default=",".join(ROWS), help=f"comma-separated rows, listed below (default: all {len(ROWS)})"
+        "--rows", default=",".join(rows), help=f"comma-separated rows, listed below (default: all {len(rows)})"
     )
     experiment.add_argument("--trials", type=_whole(1), default=100, help="trials per row (default 100)")
     experiment.add_argument("--seed", type=_whole(0), default=0, help="experiment seed, 0 or more (default 0)")
@@ -334,11 +349,13 @@ def build_parser() -> argparse.ArgumentParser:
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
+    add_backend(experiment)
     experiment.set_defaults(handler=_experiment)
 
     info = add_command(
         "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"
     )
+    add_backend(info)
     info.set_defaults(handler=_info)
     return parser
 

@@ -740,9 +740,9 @@ def load_module(path: str | Path) -> ModuleType:
                 f"{path}: the simulator places cubes from the plan of an <Arrangement> root; "
                 f"this tree's root is <{model_of(text_root).tag}>"
             )
-        from bt_arrange_sim.scenes import scatter  # the simulator's convention, loaded only to run
+        from bt_arrange import backends  # the default backend's convention, loaded only to run
 
-        return scatter([t.colour for t in text_root.targets], seed, avoid=text_root.targets)
+        return backends.load().scatter([t.colour for t in text_root.targets], seed, avoid=text_root.targets)
 
     module.create_root = create_root  # type: ignore[attr-defined]
     module.create_scene = create_scene  # type: ignore[attr-defined]
