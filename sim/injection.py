@@ -576,19 +576,8 @@ class TransportSlip(Injector):
             self._begin()
 
     def _set_pad_friction(self, friction: float) -> None:
-        """Give both pads ``friction`` and make the held cube's contacts take it at once.
-
-        Bullet keeps the friction a contact point was made with for as long as the point persists
-        (a held cube's do, for seconds), so the pads' contact points with the cube are dropped, by
-        filtering the pair out and back in, and made afresh at the next physics step.
-        """
-        cell = self.run.cell
-        contact = dataclasses.replace(cell.config.physics.pad_contact, lateral_friction=friction)
-        cube = cell.cubes[self.cube]
-        for finger in cell.finger_joint_indices:
-            contact.apply(cell.client, cell.robot_id, finger)
-            cell.client.setCollisionFilterPair(cell.robot_id, cube, finger, -1, 0)
-            cell.client.setCollisionFilterPair(cell.robot_id, cube, finger, -1, 1)
+        """Give both pads ``friction``, effective at once for the held cube (``WorkCell.set_pad_friction``)."""
+        self.run.cell.set_pad_friction(self.cube, friction)
 
     def _cube_in_tcp(self) -> np.ndarray:
         cell = self.run.cell
@@ -656,7 +645,7 @@ class ReleaseStick(Injector):
 
     def _finger_state(self, finger: int) -> float:
         cell = self.run.cell
-        return float(cell.client.getJointState(cell.robot_id, finger)[0])
+        return cell.finger_opening_m(finger)
 
     def _begin(self) -> None:
         cell = self.run.cell
@@ -665,7 +654,7 @@ class ReleaseStick(Injector):
         finger = cell.finger_joint_indices[side]
         tcp = cell.arm.tcp_pose()
         closing = _horizontal(tcp.rotation[:, 0])
-        pad = np.array(cell.client.getLinkState(cell.robot_id, finger, computeForwardKinematics=True)[4])
+        pad = cell.finger_pad_position_m(finger)
         direction = closing * math.copysign(1.0, float((pad - tcp.position_m)[:2] @ closing))
         self.fired = True
         self._drag = {
@@ -800,9 +789,9 @@ class ReleaseTilt(Injector):
         """The cube's rotation after the tilt, and its current position."""
         assert self._draw is not None
         axis_rad, tilt_rad = self._draw
-        position, orientation = self.run.cell.client.getBasePositionAndOrientation(self.run.cell.cubes[self.cube])
+        truth = self.run.cell.cube_pose_truth(self.cube)
         axis = np.array([math.cos(axis_rad), math.sin(axis_rad), 0.0])
-        return _axis_angle(axis, tilt_rad) @ quaternion_to_matrix(orientation), np.array(position)
+        return _axis_angle(axis, tilt_rad) @ quaternion_to_matrix(truth.quaternion_xyzw), truth.position_m.copy()
 
     def _pads_clear(self) -> bool:
         cell = self.run.cell
@@ -812,7 +801,7 @@ class ReleaseTilt(Injector):
         half_edge_m = self.run.context.settings.cube_edge_m / 2
         centre_off_m = abs(float((position - tcp.position_m) @ closing))
         reach = half_edge_m * float(np.sum(np.abs(rotation.T @ closing))) + centre_off_m
-        pads = [float(cell.client.getJointState(cell.robot_id, f)[0]) for f in cell.finger_joint_indices]
+        pads = [cell.finger_opening_m(f) for f in cell.finger_joint_indices]
         return min(pads) >= reach + self.PAD_GAP_M
 
     def _tilt(self) -> None:
@@ -822,7 +811,7 @@ class ReleaseTilt(Injector):
         lowest_m = self.run.context.settings.cube_edge_m / 2 * float(np.sum(np.abs(rotation[2, :])))
         z = max(float(position[2]), lowest_m + 1e-4)
         moved = Pose.from_rotation([position[0], position[1], z], rotation)
-        cell.client.resetBasePositionAndOrientation(cell.cubes[self.cube], moved.position_m, moved.quaternion_xyzw)
+        cell.place_cube_truth(self.cube, moved)
         self.fired = True
         axis_rad, tilt_rad = self._draw
         self.details.update(
