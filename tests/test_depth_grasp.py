@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import py_trees
@@ -337,3 +338,14 @@ def test_transfer_located_by_depth_mirrors_transfer():
     assert isinstance(pick, Pick) and isinstance(guard, GraspGuard)
     with pytest.raises(PlanError, match="max_regrasps"):
         transfer(Target("red", 0.5, 0.1), max_regrasps=-1, locate=by_depth())
+
+
+def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # issue 9, item 8: no import circle
+    import subprocess
+    import sys
+
+    code = "import sys, bt_arrange.behaviours.grasp_estimation\nprint('bt_arrange.trees' in sys.modules)\n"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert result.stdout.strip() == "False"
+    source = (Path(__file__).resolve().parents[1] / "bt_arrange" / "behaviours" / "grasp_estimation.py").read_text()
+    assert "bt_arrange.trees import" not in source
