@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import json
 import time
+import uuid
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -70,9 +72,9 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         self.transitions: list[Transition] = []
         #: The changes of the last tick (``finalise`` fills it, ``take`` empties it).
         self.pending: list[Transition] = []
-        #: Every node seen, by its id (as text): ``node(transition)`` looks them up.
+        #: Every node that changed status, by its id (as text): ``node(transition)`` looks them up.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {}
-        self._last: dict[str, Status] = {}
+        self._last: dict[uuid.UUID, Status] = {}
         self._visited: list[py_trees.behaviour.Behaviour] = []
         self._file: IO[str] | None = None
 
@@ -94,27 +96,25 @@ class TransitionLog(py_trees.visitors.VisitorBase):
     # -- looking and logging -------------------------------------------------------------------
 
     def look(self, nodes: Iterable[py_trees.behaviour.Behaviour], time_s: float) -> list[Transition]:
-        """Compare ``nodes``, and the children of any of them that held a status, with the last look."""
+        """Compare ``nodes``, and the children of any of them that changed unseen, with the last look."""
         changes: list[Transition] = []
-        seen: set[str] = set()
-        queue = list(nodes)
+        last = self._last
+        seen: set[uuid.UUID] = set()
+        queue = deque(nodes)
         while queue:
-            node = queue.pop(0)
-            key = str(node.id)
-            if key in seen:
+            node = queue.popleft()
+            if node.id in seen:
                 continue
-            seen.add(key)
-            self.nodes[key] = node
-            before = self._last.get(key, Status.INVALID)
+            seen.add(node.id)
+            before = last.get(node.id, Status.INVALID)
             if node.status != before:
                 changes.append(self._transition(node, before, time_s))
-                self._last[key] = node.status
-            # A child stopped without a tick: only below a node ticked or stopped now, and only one that held a status.
-            queue.extend(
-                child for child in node.children if self._last.get(str(child.id), Status.INVALID) != child.status
-            )
-        self.pending.extend(changes)
+                last[node.id] = node.status
+            # A child changes without a tick only when a parent stops it (to INVALID): so only below a node
+            # ticked or stopped now, and only a child whose status differs from the last look.
+            queue.extend(c for c in node.children if last.get(c.id, Status.INVALID) != c.status)
         if changes:
+            self.pending.extend(changes)
             self.transitions.extend(changes)
             self._write(changes)
         return changes
@@ -135,6 +135,8 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         return self.nodes.get(transition.node_id)
 
     def _transition(self, node: py_trees.behaviour.Behaviour, before: Status, time_s: float) -> Transition:
+        node_id = str(node.id)
+        self.nodes[node_id] = node
         return Transition(
             time_s=round(time_s, 4),
             behaviour=node.name,
@@ -142,7 +144,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             old=before.value,
             new=node.status.value,
             feedback=node.feedback_message,
-            node_id=str(node.id),
+            node_id=node_id,
             obj=object_of(node),
         )
 
