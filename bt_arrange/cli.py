@@ -1,6 +1,6 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
+    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
@@ -23,8 +23,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, NoReturn
 
-from bt_arrange import treefile
-from bt_arrange.errors import BtArrangeError
+from bt_arrange import backends, treefile
+from bt_arrange.backends import Backend, Experiment, RunReport
+from bt_arrange.errors import BackendError, BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
 EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
@@ -95,55 +96,38 @@ def _check_threshold_option(threshold_mm: float | None) -> None:
 
 CELL_HELP = (
     "the work cell: ideal (default; today's simulated cell), real (the paper's real cell's errors, "
-    "docs/simulation.md) or FILE.toml with your own values"
+    "docs/simulation.md) or FILE.toml with your own values (the sim backend)"
 )
 
 
-def _info(_: argparse.Namespace) -> int:
+def _info(args: argparse.Namespace) -> int:
     print(f"bt-arrange {metadata.version('bt-arrange')}")
     for package in STACK:
         try:
             print(f"  {package} {metadata.version(package)}")
         except metadata.PackageNotFoundError:
             print(f"  {package} missing (pip install -e . installs it)")
-    from bt_arrange.motion import default_urdf_path
-    from bt_arrange_sim import WorkCell
-
-    with WorkCell() as cell:
-        cell.settle(0.1)
-        print(f"  robot description: {default_urdf_path()}")
-        print(f"  headless work cell: ok (TCP at {cell.arm.tcp_pose()})")
+    for line in backends.load(args.backend).check():
+        print(f"  {line}")
     return EXIT_OK
-
-
-def _cell_option(text: str) -> Any:
-    """``--cell``: the checked errors of ``ideal``, ``real`` or a ``.toml`` file (one-line error otherwise)."""
-    from bt_arrange_sim.realcell import parse_cell
-
-    try:
-        return parse_cell(text)
-    except BtArrangeError as error:
-        raise BtArrangeError(f"--cell {text}: {error}") from error
 
 
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
-    errors = _cell_option(args.cell)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     starts = treefile.scene(module, args.seed)
 
-    from bt_arrange_sim.cell import CellConfig
-    from bt_arrange_sim.runs import SimulatedRun
-
-    with SimulatedRun(
+    backend = backends.load(args.backend)
+    with backend.open_run(
         root,
         starts,
-        cell_config=CellConfig(errors=errors.with_run_seed(args.seed)),
         gui=args.gui,
         record_dir=args.record,
         time_limit_s=args.time_limit_s,
         title=Path(args.tree_file).name,
+        # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+        **({"cell": args.cell, "run_seed": args.seed} if args.cell != "ideal" else {}),
     ) as run:
         if args.live:
             from bt_arrange.display import LiveView
@@ -160,7 +144,7 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
 
 
-def _print_report(report: Any, args: argparse.Namespace) -> None:
+def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
@@ -203,18 +187,39 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
     )
 
 
+def _experiment_of(backend: Backend) -> Experiment:
+    experiment = backend.experiment
+    if experiment is None:
+        raise BackendError(f"backend {backend.name!r} cannot run the experiment")
+    return experiment
+
+
+def _cell_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
+    """``--cell`` and ``--strategy`` checked by the backend's experiment; only non-defaults are passed on."""
+    options = {
+        key: value
+        for key, value, default in (("cell", args.cell, "ideal"), ("strategy", args.strategy, "paper"))
+        if value != default
+    }
+    check = getattr(experiment, "check_options", None)
+    if options and check is None:
+        raise BackendError(f"backend {backend.name!r} has no {', '.join('--' + key for key in options)}")
+    if check is not None:
+        check(cell=args.cell, strategy=args.strategy)
+    return options
+
+
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from bt_arrange_sim.experiment import markdown_table, parse_rows, run_experiment
-    from bt_arrange_sim.runs import prepare_record_dir
-
+    backend = backends.load(args.backend)
+    experiment = _experiment_of(backend)
     # Every option is checked before the progress bar is drawn or a worker starts.
-    rows = parse_rows(args.rows)
+    rows = experiment.parse_rows(args.rows)
     _check_threshold_option(args.threshold_mm)
-    _cell_option(args.cell)
+    cell_options = _cell_options(backend, experiment, args)
     try:
-        prepare_record_dir(args.out)
+        backend.prepare_out(args.out)
     except BtArrangeError as error:
         raise BtArrangeError(f"--out {args.out}: {error}") from error
     bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
@@ -225,7 +230,7 @@ def _experiment(args: argparse.Namespace) -> int:
         bar.refresh()
 
     try:
-        summary = run_experiment(
+        summary = experiment.run_experiment(
             rows,
             args.trials,
             args.seed,
@@ -233,12 +238,11 @@ def _experiment(args: argparse.Namespace) -> int:
             args.out,
             workers=args.workers,
             on_trial=progress,
-            cell=args.cell,
-            strategy=args.strategy,
+            **cell_options,
         )
     finally:
         bar.close()
-    print(markdown_table(summary), end="")
+    print(experiment.markdown_table(summary), end="")
     print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {args.out}")
     return EXIT_OK
 
@@ -279,9 +283,14 @@ def _show_xml(root: Any, args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with one sub-command per job."""
-    # The experiment's rows come from its registry: bt_arrange_sim.experiment imports neither
-    # pybullet nor matplotlib at module level, so building the help starts no simulator.
-    from bt_arrange_sim.experiment import ROW_LABELS, ROWS
+    # The experiment's rows come from the default backend's registry of rows; loading it starts
+    # no simulator (the sim backend imports neither pybullet nor matplotlib at module level).
+    try:
+        default_experiment = backends.load().experiment
+    except BtArrangeError:
+        default_experiment = None
+    rows = tuple(default_experiment.ROWS) if default_experiment is not None else ()
+    row_labels = dict(default_experiment.ROW_LABELS) if default_experiment is not None else {}
 
     parser = _Parser(
         prog="bt-arrange",
@@ -299,6 +308,14 @@ def build_parser() -> argparse.ArgumentParser:
             description=help_text,
             epilog=epilog,
             formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+
+    def add_backend(command: argparse.ArgumentParser) -> None:
+        command.add_argument(
+            "--backend",
+            default=backends.DEFAULT_BACKEND,
+            metavar="NAME",
+            help=f"what to run on (default {backends.DEFAULT_BACKEND}: the simulated work cell)",
         )
 
     run = add_command("run", "run a tree file in the simulated work cell (headless by default)")
@@ -325,6 +342,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=1800.0,
         help="stop after this much world time (default 1800 s)",
     )
+    add_backend(run)
     run.add_argument("--cell", default="ideal", help=CELL_HELP)
     run.set_defaults(handler=_run)
 
@@ -344,7 +362,7 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 
-    rows_help = "\n".join(f"  {row:<16} {ROW_LABELS.get(row, '')}" for row in ROWS)
+    rows_help = "\n".join(f"  {row:<16} {row_labels.get(row, '')}" for row in rows)
     experiment = add_command(
         "experiment",
         "reproduce the paper's Table 1 and Fig. 4 in simulation",
@@ -352,7 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
         "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
     )
     experiment.add_argument(
-        "--rows", default=",".join(ROWS), help=f"comma-separated rows, listed below (default: all {len(ROWS)})"
+        "--rows", default=",".join(rows), help=f"comma-separated rows, listed below (default: all {len(rows)})"
     )
     experiment.add_argument("--trials", type=_whole(1), default=100, help="trials per row (default 100)")
     experiment.add_argument("--seed", type=_whole(0), default=0, help="experiment seed, 0 or more (default 0)")
@@ -365,6 +383,7 @@ def build_parser() -> argparse.ArgumentParser:
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
+    add_backend(experiment)
     experiment.add_argument("--cell", default="ideal", help=CELL_HELP)
     experiment.add_argument(
         "--strategy",
@@ -377,6 +396,7 @@ def build_parser() -> argparse.ArgumentParser:
     info = add_command(
         "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"
     )
+    add_backend(info)
     info.set_defaults(handler=_info)
     return parser
 

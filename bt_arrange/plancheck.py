@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
@@ -110,10 +111,6 @@ class CameraView:
         return (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
-def _finite(value: Any) -> bool:
-    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
-
-
 def _start_name(start: Any) -> str:
     return getattr(start, "name", None) or start.colour
 
@@ -140,9 +137,7 @@ def check_scene(
         if not isinstance(colour, str):
             raise PlanError(f"cube {index} of the scene is {start!r}, not a cube start (colour, x_m, y_m, yaw_rad)")
         for field in ("x_m", "y_m", "yaw_rad"):
-            value = getattr(start, field, None)
-            if not _finite(value):
-                raise PlanError(f"cube {index} of the scene ({colour}): {field}={value!r} is not a finite number")
+            finite_number(field, getattr(start, field, None), where=f"cube {index} of the scene ({colour}): ")
         name = getattr(start, "name", None)
         if name is not None and (not isinstance(name, str) or not name):
             raise PlanError(f"cube {index} of the scene ({colour}): name={name!r} is not a non-empty string")

@@ -48,7 +48,7 @@ import py_trees
 from py_trees.common import ParallelPolicy
 
 from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push
-from bt_arrange.decorators import RetryUntilThreshold
+from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import BtArrangeError, TreeFileError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.trees import Arrangement, Target, validate_targets
@@ -284,16 +284,17 @@ register(
 )
 register(
     NodeModel(
+        # The tag keeps the decorator's former name: XML files written with it stay readable.
         "RetryUntilThreshold",
         "Decorator",
-        RetryUntilThreshold,
+        RepeatUntilWithin,
         (
             Port("offset_key", STRING, description="blackboard key of the offset [mm]"),
             Port("threshold_mm", DOUBLE, description="succeed once the offset is under this [mm]"),
             Port("max_attempts", INT, 10, "corrections before giving up"),
             Port("corrections_key", STRING, "", "blackboard key counting the corrections (empty: none)"),
         ),
-        lambda name, v, children: RetryUntilThreshold(
+        lambda name, v, children: RepeatUntilWithin(
             name,
             _only(children),
             offset_key=v["offset_key"],
@@ -739,9 +740,9 @@ def load_module(path: str | Path) -> ModuleType:
                 f"{path}: the simulator places cubes from the plan of an <Arrangement> root; "
                 f"this tree's root is <{model_of(text_root).tag}>"
             )
-        from bt_arrange_sim.scenes import scatter  # the simulator's convention, loaded only to run
+        from bt_arrange import backends  # the default backend's convention, loaded only to run
 
-        return scatter([t.colour for t in text_root.targets], seed, avoid=text_root.targets)
+        return backends.load().scatter([t.colour for t in text_root.targets], seed, avoid=text_root.targets)
 
     module.create_root = create_root  # type: ignore[attr-defined]
     module.create_scene = create_scene  # type: ignore[attr-defined]

@@ -395,6 +395,35 @@ class WorkCell:
         moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
         self.client.resetBasePositionAndOrientation(self.cubes[name], moved.position_m, moved.quaternion_xyzw)
 
+    def place_cube_truth(self, name: str, pose: Pose) -> None:
+        """Error injection: put a cube at ``pose`` (a tilt, a drag by a sticking finger); it moves on by physics.
+
+        The robot learns of it only through its camera. Never used to steer or to fake a result.
+        """
+        self.client.resetBasePositionAndOrientation(self.cubes[name], pose.position_m, pose.quaternion_xyzw)
+
+    def finger_opening_m(self, finger: int) -> float:
+        """True position of one finger joint (``finger_joint_indices``): its pad's distance from the centre."""
+        return float(self.client.getJointState(self.robot_id, finger)[0])
+
+    def finger_pad_position_m(self, finger: int) -> np.ndarray:
+        """True world position of one finger's link (its pad), for error injection."""
+        return np.array(self.client.getLinkState(self.robot_id, finger, computeForwardKinematics=True)[4])
+
+    def set_pad_friction(self, cube: str, lateral_friction: float) -> None:
+        """Error injection: give both pads ``lateral_friction`` and make a held cube's contacts take it at once.
+
+        Bullet keeps the friction a contact point was made with for as long as the point persists
+        (a held cube's do, for seconds), so the pads' contact points with the cube are dropped, by
+        filtering the pair out and back in, and made afresh at the next physics step.
+        """
+        contact = dataclasses.replace(self.config.physics.pad_contact, lateral_friction=lateral_friction)
+        body = self.cubes[cube]
+        for finger in self.finger_joint_indices:
+            contact.apply(self.client, self.robot_id, finger)
+            self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 0)
+            self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 1)
+
     def add_cubes(self, starts: Iterable[CubeStart]) -> None:
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""
         for start in starts:

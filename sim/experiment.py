@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bt_arrange.checks import whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.trees import check_threshold
 
@@ -129,6 +130,21 @@ def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazi
     return CellConfig(errors=errors.with_run_seed(run_seed))
 
 
+def check_options(cell: str = "ideal", strategy: str = "paper") -> None:
+    """``--cell`` and ``--strategy``, checked before anything runs; a one-line ``PlanError`` otherwise."""
+    from bt_arrange.trees import check_strategy
+    from bt_arrange_sim.realcell import parse_cell
+
+    try:
+        check_strategy(strategy)
+    except PlanError as error:
+        raise PlanError(f"--strategy {strategy!r}: {error}") from error
+    try:
+        parse_cell(cell)
+    except PlanError as error:
+        raise PlanError(f"--cell {cell}: {error}") from error
+
+
 def row_injectors(row: str) -> list:
     """The errors a row injects: the paper's picking errors, right after detection, before the grasp."""
     if row == "translation":
@@ -144,22 +160,10 @@ def row_injectors(row: str) -> list:
 
 def _depth_grasp_tree(target, threshold_mm: float, seed: int, strategy: str = "paper"):  # noqa: ANN001, ANN202
     """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
-    import py_trees
+    from bt_arrange.behaviours import MoveHome
+    from bt_arrange.trees import Arrangement, arrange_one, by_depth
 
-    from bt_arrange.behaviours import Inspect, MoveHome
-    from bt_arrange.behaviours.grasp_estimation import transfer_with_depth_grasp
-    from bt_arrange.trees import Arrangement, correction, set_target
-
-    arrange = py_trees.composites.Sequence(
-        name=f"arrange {target.obj}",
-        memory=True,
-        children=[
-            set_target(target),
-            transfer_with_depth_grasp(target, seed=seed),
-            Inspect(f"inspect {target.obj} after placing", target.obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes=10, strategy=strategy),
-        ],
-    )
+    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed), strategy=strategy)
     return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)
 
 
@@ -196,8 +200,7 @@ def run_experiment(
     reports progress.
     """
     rows = list(rows)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise PlanError(f"--seed {seed!r} must be a whole number, 0 or more")
+    whole_number("--seed", seed, style="unit")
     try:
         check_threshold(threshold_mm)
     except PlanError as error:
@@ -206,17 +209,7 @@ def run_experiment(
         raise PlanError(f"--trials must be at least 1, got {trials}")
     if workers < 1:
         raise PlanError(f"--workers must be at least 1, got {workers}")
-    from bt_arrange.trees import check_strategy
-    from bt_arrange_sim.realcell import parse_cell
-
-    try:
-        check_strategy(strategy)
-    except PlanError as error:
-        raise PlanError(f"--strategy {strategy!r}: {error}") from error
-    try:
-        parse_cell(cell)
-    except PlanError as error:
-        raise PlanError(f"--cell {cell}: {error}") from error
+    check_options(cell, strategy)
     out_dir.mkdir(parents=True, exist_ok=True)
     trials_path = out_dir / "trials.jsonl"
     existing = read_trials(trials_path)

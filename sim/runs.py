@@ -13,16 +13,19 @@ import os
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import py_trees
-from py_trees.common import Status
+from py_trees.common import Access, Status
 
-from bt_arrange.behaviours import Context, Inspect, keys
+from bt_arrange.behaviours import Context, Detect, EstimateGraspFromDepth, GraspGuard, Inspect, Pick, Place, Push, keys
+from bt_arrange.checks import positive_number
+from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.plancheck import check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
-from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.settings import CUBE_COLOURS_RGB
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
@@ -31,17 +34,16 @@ from bt_arrange_sim.scenes import CubeStart
 #: World time the scene settles for before the tree starts (cubes dropped onto the table come to rest).
 SETTLE_S = 0.3
 
-#: Behaviours whose failure explains why an object was not finished.
-_REASON_KINDS = {
-    "Detect",
-    "EstimateGraspFromDepth",
-    "Inspect",
-    "Pick",
-    "Place",
-    "Push",
-    "RetryUntilThreshold",
-    "GraspGuard",
-}
+#: Behaviours whose failure explains why an object was not finished (each knows its ``obj``).
+REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
+    Detect,  # and Inspect, a Detect
+    EstimateGraspFromDepth,
+    Pick,
+    Place,
+    Push,
+    RepeatUntilWithin,
+    GraspGuard,
+)
 
 
 @dataclass
@@ -112,10 +114,7 @@ class SimulatedRun:
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
-        if isinstance(time_limit_s, bool) or not isinstance(time_limit_s, (int, float)) or not time_limit_s > 0:
-            raise PlanError(f"time limit {time_limit_s!r} s must be a positive number of seconds")
-        if not math.isfinite(time_limit_s):
-            raise PlanError(f"time limit {time_limit_s!r} s must be a finite number of seconds")
+        positive_number("time limit", time_limit_s, "s", style="unit")
         cell_config = cell_config or CellConfig()
         # Everything a user can get wrong is checked here, before the world is built.
         scene = list(starts)
@@ -128,10 +127,8 @@ class SimulatedRun:
         if gui:
             require_display()
         self.root = root
-        # The Inspects that record the after-placing figures, by their own flag rather than their names.
-        self._after_placing_inspects = {
-            node.name: node.obj for node in root.iterate() if isinstance(node, Inspect) and node.after_placing
-        }
+        #: Every node of the tree by its id (as text): transitions name their node by it.
+        self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
         self.cell = WorkCell(cell_config, gui=gui)
         self.cell.add_cubes(scene)
         self.cell.settle(SETTLE_S)
@@ -205,7 +202,9 @@ class SimulatedRun:
             hook(transition)
         if transition.new != Status.SUCCESS.value:
             return
-        obj = self._after_placing_inspects.get(transition.behaviour) if transition.kind == "Inspect" else None
+        node = self.node(transition)
+        # The Inspects that record the after-placing figures, by their own flag rather than their names.
+        obj = node.obj if isinstance(node, Inspect) and node.after_placing else None
         if obj is not None and isinstance(self.root, Arrangement):
             for target in self.root.targets:
                 if target.obj == obj:
@@ -214,8 +213,12 @@ class SimulatedRun:
             return
         if obj is not None:
             self._save_image(f"after_placing_{obj}")
-        elif transition.behaviour == "place all":
+        elif isinstance(self.root, Arrangement) and node is not None and node is self.root.place_all:
             self._save_image("after_placing")
+
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour of the tree a transition is about (by its ``node_id``), or None."""
+        return self.nodes.get(transition.node_id)
 
     def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
         if self.replay is not None:
@@ -236,11 +239,11 @@ class SimulatedRun:
     def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
         if not isinstance(self.root, Arrangement):
             return []
-        storage = py_trees.blackboard.Blackboard.storage
+        report = py_trees.blackboard.Client(name="report")
         outcomes = []
         for target in self.root.targets:
-            placed = storage.get(keys.key(target.obj, keys.PLACED_OFFSET_MM))
-            final = storage.get(keys.key(target.obj, keys.OFFSET_MM))
+            placed = _get(report, keys.key(target.obj, keys.PLACED_OFFSET_MM))
+            final = _get(report, keys.key(target.obj, keys.OFFSET_MM))
             status = self._status(final)
             outcomes.append(
                 ObjectOutcome(
@@ -250,12 +253,22 @@ class SimulatedRun:
                     final_offset_mm=_rounded(final),
                     final_offset_truth_mm=round(self._truth_offset_mm(target), 4),
                     placed_offset_truth_mm=_rounded(self._placed_truth_mm.get(target.obj)),
-                    pushes=int(storage.get(keys.key(target.obj, keys.CORRECTIONS), 0) or 0),
+                    pushes=int(_get(report, keys.key(target.obj, keys.CORRECTIONS)) or 0),
                     status=status,
-                    reason="" if status == "within" else (_last_failure(transitions, target.obj) or stopped),
+                    reason="" if status == "within" else (self._last_failure(transitions, target.obj) or stopped),
                 )
             )
         return outcomes
+
+    def _last_failure(self, transitions: list[Transition], obj: str) -> str:
+        """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
+        for transition in reversed(transitions):
+            if transition.new != Status.FAILURE.value:
+                continue
+            node = self.node(transition)
+            if isinstance(node, REASON_TYPES) and object_of(node) == obj:
+                return transition.feedback
+        return ""
 
     def _status(self, final_offset_mm: float | None) -> str:
         assert isinstance(self.root, Arrangement)
@@ -286,13 +299,7 @@ def _rounded(value: float | None) -> float | None:
     return None if value is None else round(float(value), 4)
 
 
-def _last_failure(transitions: list[Transition], obj: str) -> str:
-    """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
-    for transition in reversed(transitions):
-        if (
-            transition.new == Status.FAILURE.value
-            and transition.kind in _REASON_KINDS
-            and obj in transition.behaviour.split()
-        ):
-            return transition.feedback
-    return ""
+def _get(client: py_trees.blackboard.Client, key: str) -> Any:
+    """A value through a report's client (registered to read ``key``), or None when nothing wrote it."""
+    client.register_key(key, access=Access.READ)
+    return client.get(key) if client.exists(key) else None

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bt_arrange.checks import whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.plancheck import CameraView
 from bt_arrange.settings import CUBE_EDGE_M
@@ -46,8 +47,7 @@ def scatter(
     ``avoid`` holds things with ``x_m`` and ``y_m`` (targets) that the cubes keep clear of; ``view``
     is the camera's view every cube must be seen in (default: the default cell's camera).
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise PlanError(f"seed {seed!r} must be a whole number, 0 or more")
+    whole_number("seed", seed, style="unit")
     if view is None:
         from bt_arrange_sim.cell import CameraConfig
 

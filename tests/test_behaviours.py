@@ -37,11 +37,13 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    Stage,
     StagedBehaviour,
     keys,
     offset_in_target_frame_mm,
+    stages,
 )
-from bt_arrange.errors import BtArrangeError, UnreachableError
+from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
 from bt_arrange.robot import PixelWindow
@@ -183,7 +185,7 @@ def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
     run = tick_until_done(set_up(MoveHome("park"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "at home, out of the camera's view"
-    assert {t.feedback for t in run.running} == {"move home"}
+    assert {t.feedback for t in run.running} == {stages.MOVE_HOME}
     assert_never_blocks(run)
     arm = fake_arm(context)
     assert len(arm.commands) > 50, "a joint motion of a second or more, one setpoint per control period"
@@ -215,7 +217,7 @@ def test_detect_parks_the_arm_before_looking(clock) -> None:
     context = make_context(clock, q=AWAY_Q, cubes=[cube("green", 0.5, 0.0)])
     run = tick_until_done(set_up(Detect("detect green", "green"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
-    assert run.ticks[0].feedback == "move out of the camera's view"
+    assert run.ticks[0].feedback == stages.PARK
     assert_never_blocks(run)
     camera = fake_camera(context)
     assert len(camera.captures) == 2, "a binned full view to find the cube, a window to measure it"
@@ -355,13 +357,13 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "holding red, fingers 50.0 mm apart"
     assert_never_blocks(run)
-    stages = list(dict.fromkeys(t.feedback for t in run.running))
-    assert stages == [
-        "move above the cube",
-        "wait for the fingers to open",
-        "descend to the cube",
-        "close on the cube",
-        "lift the cube",
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen == [
+        stages.MOVE_ABOVE_CUBE,
+        stages.WAIT_FOR_OPEN_FINGERS,
+        stages.DESCEND_TO_CUBE,
+        stages.CLOSE_ON_CUBE,
+        stages.LIFT_CUBE,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [
@@ -383,7 +385,7 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
         "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
     )
     feedback = [t.feedback for t in run.ticks]
-    assert feedback.index("let go of a bad grasp") < feedback.index("lift the cube"), "lets go before lifting"
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
     assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.approach_height_m, abs=1e-6), "lifted clear"
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
@@ -395,7 +397,7 @@ def test_pick_that_holds_a_turned_cube_by_its_corners_lets_go_and_fails(clock) -
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback.startswith("the pads hold the cube across its corners: 68.0 mm apart")
-    assert "let go of a bad grasp" in [t.feedback for t in run.ticks]
+    assert stages.LET_GO_OF_BAD_GRASP in [t.feedback for t in run.ticks]
 
 
 @pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])
@@ -405,7 +407,7 @@ def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, ma
         ArmKinematics().check_reachable(gripper_down_pose(FAR_X_M, 0.0, SETTINGS.approach_height_m))
     run = tick_until_done(set_up(make(f"{make.__name__} red", "red"), context), context)
     assert [t.status for t in run.ticks] == [Status.FAILURE], "fails on its first tick"
-    first_move = "move above the cube" if make is Pick else "carry above the target"
+    first_move = stages.MOVE_ABOVE_CUBE if make is Pick else stages.CARRY_ABOVE_TARGET
     assert run.feedback.startswith(f"{first_move}: ")
     assert str(unreachable.value).split(" is out of reach")[1] in run.feedback
     assert fake_arm(context).commands == []
@@ -416,8 +418,8 @@ def test_fingers_that_never_stop_fail_after_the_gripper_timeout(clock) -> None:
     write({"/red/pose": cube_pose(0.5, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
-    assert run.feedback.startswith("wait for the fingers to open: fingers still moving after 2.0 s (limit 2.0 s)")
-    waiting = [t for t in run.ticks if t.feedback == "wait for the fingers to open"]
+    assert run.feedback.startswith(f"{stages.WAIT_FOR_OPEN_FINGERS}: fingers still moving after 2.0 s (limit 2.0 s)")
+    waiting = [t for t in run.ticks if t.feedback == stages.WAIT_FOR_OPEN_FINGERS]
     waited_s = run.ticks[-1].time_s - waiting[0].time_s
     assert SETTINGS.gripper_timeout_s < waited_s <= SETTINGS.gripper_timeout_s + 2 * fake_arm(context).control_period_s
     assert all(t.arm_commands == 0 for t in waiting)
@@ -441,10 +443,10 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     assert run.feedback == "red released at its target"
     assert_never_blocks(run)
     assert list(dict.fromkeys(t.feedback for t in run.running)) == [
-        "carry above the target",
-        "lower the cube to the table",
-        "release the cube",
-        "retreat",
+        stages.CARRY_ABOVE_TARGET,
+        stages.LOWER_CUBE,
+        stages.RELEASE_CUBE,
+        stages.RETREAT,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [("open", SETTINGS.open_width_m)]
@@ -543,7 +545,7 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     towards = np.array(direction)
     across = np.array([-towards[1], towards[0]])
 
-    run = tick_until_done(push, context, until=after("wait for the fingers"))
+    run = tick_until_done(push, context, until=after(stages.WAIT_FOR_FINGERS))
     assert run.status == Status.RUNNING, run.feedback
     assert_never_blocks(run)
     behind = arm.tcp_pose()
@@ -579,8 +581,8 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
 @pytest.mark.parametrize(
     ("make", "during"),
     [
-        (lambda: MoveHome("park"), "move home"),
-        (lambda: Pick("pick red", "red"), "descend to the cube"),
+        (lambda: MoveHome("park"), stages.MOVE_HOME),
+        (lambda: Pick("pick red", "red"), stages.DESCEND_TO_CUBE),
     ],
     ids=["joint motion", "straight line"],
 )
@@ -595,7 +597,7 @@ def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_re
 
     behaviour.stop(Status.INVALID)
     assert behaviour.status == Status.INVALID
-    assert behaviour.feedback_message == "interrupted"
+    assert behaviour.feedback_message == stages.INTERRUPTED
     assert context.brake.active
     braking = brake_until_idle(context)
     assert_comes_to_rest(braking)
@@ -606,14 +608,14 @@ def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_re
 def test_a_behaviour_started_while_the_arm_brakes_waits_for_it(clock) -> None:
     context = make_context(clock, q=AWAY_Q)
     first = set_up(MoveHome("park"), context)
-    tick_until_done(first, context, until=after("move home", 40))
+    tick_until_done(first, context, until=after(stages.MOVE_HOME, 40))
     first.stop(Status.INVALID)
     arm = fake_arm(context)
 
     second = set_up(MoveHome("park again"), context)
     run = tick_until_done(second, context)
     assert run.status == Status.SUCCESS, run.feedback
-    waiting = [t for t in run.ticks if t.feedback == "waiting for the arm to stop"]
+    waiting = [t for t in run.ticks if t.feedback == stages.WAITING_FOR_BRAKE]
     assert len(waiting) > 10
     assert run.ticks[: len(waiting)] == waiting, "it waits first, then moves"
     assert all(t.arm_commands == 0 for t in waiting), "only the brake commands the arm meanwhile"
@@ -654,7 +656,7 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
     run = tick_until_done(guard, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert place.status == Status.SUCCESS
-    assert run.ticks[0].feedback == "holding; carry above the target"
+    assert run.ticks[0].feedback == f"holding; {stages.CARRY_ABOVE_TARGET}"
     assert all(t.feedback.startswith("holding; ") for t in run.ticks)
     assert_never_blocks(run)
 
@@ -662,9 +664,9 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
 def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
     context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
     guard, place = guarded_place(context)
-    run = tick_until_done(guard, context, until=after("holding; carry above the target", 50))
+    run = tick_until_done(guard, context, until=after(f"holding; {stages.CARRY_ABOVE_TARGET}", 50))
     assert guard.status == Status.RUNNING and place.status == Status.RUNNING
-    assert run.feedback == "holding; carry above the target"
+    assert run.feedback == f"holding; {stages.CARRY_ABOVE_TARGET}"
 
     gripper = fake_gripper(context)
     gripper.slip()
@@ -680,7 +682,7 @@ def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
             break
     assert guard.status == Status.FAILURE
     assert place.status == Status.INVALID, "the child is interrupted"
-    assert place.feedback_message == "interrupted"
+    assert place.feedback_message == stages.INTERRUPTED
     assert guard.feedback_message.startswith("the cube left the gripper: fingers at ")
     assert guard.feedback_message.endswith("mm, under the 47.0 mm of a held cube")
     assert context.brake.active, "the carry motion goes to the brake"
@@ -695,6 +697,49 @@ def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
     assert guard.feedback_message == "the cube left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held cube"
     assert place.status == Status.INVALID, "the child never ran"
     assert fake_arm(context).commands == []
+
+
+def test_an_error_raised_mid_motion_is_a_failure_with_the_reason_and_the_motion_goes_to_the_brake(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    behaviour = set_up(MoveHome("park"), context)
+    run = tick_until_done(behaviour, context, until=after(stages.MOVE_HOME, 30))
+    assert run.status == Status.RUNNING
+    assert speeds(fake_arm(context).commands[-1:])[0] > 0.1, "at speed when the error comes"
+    motion = behaviour._stages[behaviour._index].motion
+    step = motion.step
+
+    def fails_once():
+        motion.step = step  # the brake steps the same motion afterwards
+        raise MotionError("joint motion failed at t = 0.300 s: ruckig Error")
+
+    motion.step = fails_once
+    behaviour.tick_once()
+    assert behaviour.status == Status.FAILURE
+    assert behaviour.feedback_message == f"{stages.MOVE_HOME}: joint motion failed at t = 0.300 s: ruckig Error"
+    assert context.brake.active, "the motion was handed to the brake"
+    assert_comes_to_rest(brake_until_idle(context))
+
+
+def test_a_stage_without_poll_cannot_be_made() -> None:
+    class Forgetful(Stage):
+        pass
+
+    with pytest.raises(TypeError, match="abstract"):
+        Forgetful("forgot to poll")  # type: ignore[abstract]
+
+
+def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
+    push = Push("push red", "red")
+    assert isinstance(push.blackboard, py_trees.blackboard.Client)
+    assert set(push.blackboard.read) >= {"/red/pose", "/red/target", "/red/offset_xy_mm", "/red/push_axis"}
+    assert set(push.blackboard.write) == {"/red/push_axis"}
+    inspect = Inspect("inspect red", "red", after_placing=True)
+    assert set(inspect.blackboard.write) == {
+        "/red/pose",
+        "/red/offset_mm",
+        "/red/offset_xy_mm",
+        "/red/placed_offset_mm",
+    }
 
 
 # -- the learned push strategy (ours; the paper's stays the default) ----------------------------

@@ -116,7 +116,7 @@ def test_run_json_reports_every_object(capsys, tmp_path):
     recorded = {p.name for p in (tmp_path / "rec").iterdir()}
     assert {"before_picking.png", "after_placing_red.png", "after_pushing.png", "transitions.jsonl"} <= recorded
     first = json.loads((tmp_path / "rec" / "transitions.jsonl").read_text().splitlines()[0])
-    assert set(first) == {"time_s", "behaviour", "kind", "old", "new", "feedback"}
+    assert set(first) == {"time_s", "behaviour", "kind", "old", "new", "feedback", "node_id", "obj"}
 
 
 def test_run_exits_1_and_says_so_on_the_last_line_when_an_object_is_not_within(capsys):

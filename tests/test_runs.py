@@ -6,6 +6,8 @@ milliseconds and can tell whether a world was ever built.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import py_trees
 import pytest
 from fakes import FakeClock, cube, make_context
@@ -64,7 +66,11 @@ def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(fake
     inspect = Inspect("look at red once it is down", "red", after_placing=True)
     root = Arrangement("mine", [set_target(RED), transfer(RED), inspect], [RED], 1.0)
     run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target"))
+    run._on_transition(
+        Transition(
+            1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red"
+        )
+    )
     assert run._placed_truth_mm["red"] == pytest.approx(223.607, abs=1e-3)  # the fake cube still at its start
     assert (tmp_path / "after_placing_red.png").is_file()
 
@@ -73,7 +79,7 @@ def test_an_inspect_that_does_not_record_placing_is_not_taken_for_one(fake_cell,
     inspect = Inspect("inspect red after placing", "red")  # the name says so, the flag does not
     root = Arrangement("mine", [set_target(RED), inspect], [RED], 1.0)
     run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", ""))
+    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "", str(inspect.id), "red"))
     assert run._placed_truth_mm == {}
 
 
@@ -132,3 +138,26 @@ def test_the_window_without_a_display_is_refused_first(fake_cell, monkeypatch) -
     with pytest.raises(PlanError, match=r"^the pybullet window \(--gui\) needs a display, and DISPLAY is not set"):
         runs.SimulatedRun(arrangement([RED]), [RED_START], gui=True)
     assert fake_cell.built == []
+
+
+def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  # issue 9, item 1
+    target = Target("red", 0.50, 0.0, name="red cube")
+    start = CubeStart("red", 0.40, -0.20, 0.0, name="red cube")
+    with runs.SimulatedRun(arrangement([target], max_regrasps=0), [start]) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert red.name == "red cube" and red.status == "failed"
+    # The fake gripper closes on nothing: Pick's reason, found by the node's type and object.
+    assert red.reason.startswith("no cube between the pads"), red.reason
+
+
+def test_the_injectors_find_a_node_by_type_and_object_not_by_name() -> None:  # issue 9, item 1
+    from bt_arrange import treefile
+    from bt_arrange.behaviours import Place
+    from bt_arrange_sim.injection import _NodeFinder
+
+    root = treefile.build_root(treefile.load(Path(__file__).resolve().parents[1] / "trees" / "row_of_three.py"))
+    named = [node for node in root.iterate() if node.name == "place red"]
+    assert len(named) == 2 and {type(node) for node in named} == {Place, py_trees.composites.Sequence}
+    found = _NodeFinder(Place, "red")(root)
+    assert isinstance(found, Place) and found.obj == "red"

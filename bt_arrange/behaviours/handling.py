@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 import py_trees
-from py_trees.common import Access, Status
+from py_trees.common import Status
 
 from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
@@ -60,8 +61,7 @@ class Pick(StagedBehaviour):
     def __init__(self, name: str, obj: str) -> None:
         super().__init__(name)
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
+        self.reads(keys.key(obj, keys.POSE))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
 
@@ -72,16 +72,16 @@ class Pick(StagedBehaviour):
         x, y = pose.x_m, pose.y_m
         yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
         return [
-            GripperStage("open the gripper", lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
-            MoveStage("move above the cube", _to_pose(x, y, s.approach_height_m, yaw)),
-            GripperStage("wait for the fingers to open", lambda c: None),
-            MoveStage("descend to the cube", _line_to(x, y, s.grasp_height_m, yaw)),
-            GripperStage("close on the cube", lambda c: c.robot.gripper.close(s.grip_force_n)),
-            InstantStage("check the grasp", self._check_grasp),
+            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
+            MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, s.approach_height_m, yaw)),
+            GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
+            MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, s.grasp_height_m, yaw)),
+            GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
+            InstantStage(stage.CHECK_GRASP, self._check_grasp),
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
-            OnlyIf(GripperStage("let go of a bad grasp", lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
-            MoveStage("lift the cube", _line_to(x, y, s.approach_height_m, yaw)),
-            InstantStage("confirm the grasp", lambda c: self.bad_grasp),
+            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
+            MoveStage(stage.LIFT_CUBE, _line_to(x, y, s.approach_height_m, yaw)),
+            InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
 
     def _bad(self, context: Context) -> bool:
@@ -117,8 +117,7 @@ class Place(StagedBehaviour):
     def __init__(self, name: str, obj: str) -> None:
         super().__init__(name)
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
+        self.reads(keys.key(obj, keys.TARGET))
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -128,10 +127,10 @@ class Place(StagedBehaviour):
         # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
         yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
         return [
-            MoveStage("carry above the target", _to_pose(x, y, s.approach_height_m, yaw)),
-            MoveStage("lower the cube to the table", _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
-            GripperStage("release the cube", lambda c: c.robot.gripper.open(s.open_width_m)),
-            MoveStage("retreat", _line_to(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.LOWER_CUBE, _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(s.open_width_m)),
+            MoveStage(stage.RETREAT, _line_to(x, y, s.approach_height_m, yaw)),
         ]
 
     def success_message(self) -> str:
@@ -166,17 +165,14 @@ class Push(StagedBehaviour):
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
         self.strategy = strategy
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.OFFSET_XY_MM), access=Access.READ)
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
         # Push reads the axis it alternates from and writes the next one.
-        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.WRITE)
+        self.reads(keys.key(obj, keys.PUSH_AXIS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS))
         if strategy == "learned":
             for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
-                self.blackboard.register_key(keys.key(obj, field), access=Access.READ)
-                self.blackboard.register_key(keys.key(obj, field), access=Access.WRITE)
+                self.reads(keys.key(obj, field))
+                self.writes(keys.key(obj, field))
         self.pushed: tuple[str, float] | None = None
 
     def stages(self, context: Context) -> list[Stage]:
@@ -192,7 +188,7 @@ class Push(StagedBehaviour):
         else:
             axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
             distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
-        self.blackboard.set(axis_key, "y" if axis == "x" else "x", overwrite=True)
+        self.write(axis_key, "y" if axis == "x" else "x")
         self.pushed = (axis, distance_m)
         if abs(distance_m) < s.min_push_m:
             return []
@@ -207,16 +203,13 @@ class Push(StagedBehaviour):
         end = centre - direction * s.push_reach_m + direction * abs(distance_m)
         back = end - direction * s.push_clearance_m
         return [
-            GripperStage("set the push opening", lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
-            MoveStage("move behind the cube", _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
-            GripperStage("wait for the fingers", lambda c: None),
-            MoveStage("lower the fingers", _line_to(begin[0], begin[1], s.push_height_m, yaw)),
-            MoveStage(
-                f"push {abs(distance_m) * 1000:.2f} mm along {axis}",
-                _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True),
-            ),
-            MoveStage("back off", _line_to(back[0], back[1], s.push_height_m, yaw)),
-            MoveStage("lift the fingers", _line_to(back[0], back[1], s.approach_height_m, yaw)),
+            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
+            MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
+            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
+            MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], s.push_height_m, yaw)),
+            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True)),
+            MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], s.push_height_m, yaw)),
+            MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], s.approach_height_m, yaw)),
         ]
 
     def _learned_push(self, offset_xy_mm: tuple[float, float], min_push_mm: float) -> tuple[str, float]:
@@ -225,11 +218,11 @@ class Push(StagedBehaviour):
         known = tuple(self.blackboard.get(bias_key)) if self.blackboard.exists(bias_key) else (0.0, 0.0)
         last = self.blackboard.get(last_key) if self.blackboard.exists(last_key) else None
         bias, axis, distance_mm = self.plan_learned(offset_xy_mm, (known[0], known[1]), last, min_push_mm)
-        self.blackboard.set(bias_key, bias, overwrite=True)
+        self.write(bias_key, bias)
         index = 0 if axis == "x" else 1
         # Where this push aims the cube, relative to the target along its axis: the bias short of it.
         aim_mm = -bias[index] if abs(distance_mm) >= min_push_mm else None
-        self.blackboard.set(last_key, (axis, aim_mm), overwrite=True)
+        self.write(last_key, (axis, aim_mm))
         return axis, distance_mm / 1000
 
     @staticmethod
@@ -284,8 +277,10 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     the cube again instead of placing air.
     """
 
-    def __init__(self, name: str, child: py_trees.behaviour.Behaviour) -> None:
+    def __init__(self, name: str, child: py_trees.behaviour.Behaviour, obj: str | None = None) -> None:
         super().__init__(name=name, child=child, condition=self._holding)
+        #: The object held: ``obj``, else the child's (a Place knows its object).
+        self.obj: str | None = obj if obj is not None else getattr(child, "obj", None)
         self.context: Context | None = None
 
     def setup(self, **kwargs: object) -> None:

@@ -29,3 +29,11 @@ LAST_PUSH = "last_push"
 def key(obj: str, field: str) -> str:
     """The absolute blackboard key of ``field`` for object ``obj``."""
     return f"/{obj}/{field}"
+
+
+def object_of_key(absolute_key: str) -> str | None:
+    """The object of a key built by ``key`` (``/red/offset_mm`` -> ``red``), or None for another key."""
+    parts = absolute_key.split("/")
+    if len(parts) == 3 and parts[0] == "" and parts[1] and parts[2]:
+        return parts[1]
+    return None

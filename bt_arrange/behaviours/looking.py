@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from py_trees.common import Access
 
 from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
@@ -25,7 +25,7 @@ LOCATED_MARGIN_M = 0.015
 EXPECTED_MARGIN_M = 0.02
 
 
-def park_stage(name: str = "move out of the camera's view") -> MoveStage:
+def park_stage(name: str = stage.PARK) -> MoveStage:
     """A joint motion home, or nothing when the arm is already there."""
 
     def plan(context: Context, q: np.ndarray):  # noqa: ANN202 - a Motion
@@ -93,7 +93,7 @@ class MoveHome(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """One joint motion, or none when parked."""
-        return [] if is_parked(context) else [park_stage("move home")]
+        return [] if is_parked(context) else [park_stage(stage.MOVE_HOME)]
 
     def success_message(self) -> str:
         """Feedback once home."""
@@ -113,14 +113,13 @@ class Detect(StagedBehaviour):
         super().__init__(name)
         self.obj = obj
         self.colour = colour or obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.WRITE)
+        self.writes(keys.key(obj, keys.POSE))
         self.found: Pose | None = None
 
     def stages(self, context: Context) -> list[Stage]:
         """Park if needed, then look."""
         context.detector.colours[self.colour]  # raises PerceptionError for an unknown colour
-        looking = InstantStage(f"look for {self.colour}", self._look)
+        looking = InstantStage(stage.look_for(self.colour), self._look)
         return [looking] if is_parked(context) else [park_stage(), looking]
 
     def expected_xy_m(self) -> tuple[float, float] | None:
@@ -132,7 +131,7 @@ class Detect(StagedBehaviour):
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
-        self.blackboard.set(keys.key(self.obj, keys.POSE), detection.pose_world, overwrite=True)
+        self.write(keys.key(self.obj, keys.POSE), detection.pose_world)
         self.on_found(detection.pose_world)
         return None
 
@@ -161,11 +160,10 @@ class Inspect(Detect):
     def __init__(self, name: str, obj: str, colour: str | None = None, after_placing: bool = False) -> None:
         super().__init__(name, obj, colour)
         self.after_placing = after_placing
-        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.OFFSET_MM), access=Access.WRITE)
-        self.blackboard.register_key(keys.key(obj, keys.OFFSET_XY_MM), access=Access.WRITE)
+        self.reads(keys.key(obj, keys.TARGET))
+        self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM))
         if after_placing:
-            self.blackboard.register_key(keys.key(obj, keys.PLACED_OFFSET_MM), access=Access.WRITE)
+            self.writes(keys.key(obj, keys.PLACED_OFFSET_MM))
         self.offset_mm: float | None = None
 
     def expected_xy_m(self) -> tuple[float, float] | None:
@@ -178,10 +176,10 @@ class Inspect(Detect):
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         dx_mm, dy_mm = offset_in_target_frame_mm(target, pose)
         self.offset_mm = math.hypot(dx_mm, dy_mm)
-        self.blackboard.set(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm, overwrite=True)
-        self.blackboard.set(keys.key(self.obj, keys.OFFSET_XY_MM), (dx_mm, dy_mm), overwrite=True)
+        self.write(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm)
+        self.write(keys.key(self.obj, keys.OFFSET_XY_MM), (dx_mm, dy_mm))
         if self.after_placing:
-            self.blackboard.set(keys.key(self.obj, keys.PLACED_OFFSET_MM), self.offset_mm, overwrite=True)
+            self.write(keys.key(self.obj, keys.PLACED_OFFSET_MM), self.offset_mm)
 
     def success_message(self) -> str:
         """Feedback with the offset."""

@@ -41,9 +41,21 @@ def _check_positive_at_most(what: str, value: float, cap: float, unit: str) -> f
     """Return ``value`` as a float, or raise ``OutOfRangeError`` unless ``0 < value <= cap``."""
     value = float(value)
     if not math.isfinite(value) or value <= 0.0:
-        raise OutOfRangeError(f"{what} {value:g} {unit} must be positive (limit: 0 < value <= {cap:g} {unit})")
+        raise OutOfRangeError(
+            f"{what} {value:g} {unit} must be positive (limit: 0 < value <= {cap:g} {unit})",
+            field=what,
+            value=value,
+            limit=cap,
+            unit=unit,
+        )
     if value > cap:
-        raise OutOfRangeError(f"{what} {value:g} {unit} is above the hardware limit {cap:g} {unit}")
+        raise OutOfRangeError(
+            f"{what} {value:g} {unit} is above the hardware limit {cap:g} {unit}",
+            field=what,
+            value=value,
+            limit=cap,
+            unit=unit,
+        )
     return value
 
 
@@ -137,7 +149,11 @@ class JointLimits:
         for name, value, lower, upper in zip(ARM_JOINT_NAMES, values, self.lower_rad, self.upper_rad, strict=True):
             if not math.isfinite(value) or not lower <= value <= upper:
                 raise UnreachableError(
-                    f"{what}: {name} = {value:.4f} rad is outside the joint limits [{lower:.4f}, {upper:.4f}] rad"
+                    f"{what}: {name} = {value:.4f} rad is outside the joint limits [{lower:.4f}, {upper:.4f}] rad",
+                    joint=name,
+                    bound=(lower, upper),
+                    value=value,
+                    unit="rad",
                 )
 
 

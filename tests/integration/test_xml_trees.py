@@ -22,6 +22,11 @@ def run(path: Path) -> tuple[dict, list[dict]]:
     return report.to_dict(), [asdict(t) for t in report.transitions]
 
 
+def same_node(transition: dict) -> dict:
+    """A transition without its node id: the id names a node of one tree, and these are two trees."""
+    return {k: v for k, v in transition.items() if k != "node_id"}
+
+
 def without_wall_time(report: dict) -> dict:
     return {k: v for k, v in report.items() if k != "wall_seconds"}
 
@@ -39,5 +44,5 @@ def test_the_xml_tree_runs_as_its_python_file(stem, request):
     assert xml_report["tree_status"] == "SUCCESS"
     assert len(xml_transitions) == len(python_transitions) > 20
     for xml_t, python_t in zip(xml_transitions, python_transitions, strict=True):
-        assert xml_t == python_t
+        assert same_node(xml_t) == same_node(python_t)
     assert json.dumps(without_wall_time(xml_report)) == json.dumps(without_wall_time(python_report))
