@@ -1,13 +1,16 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
-    bt-arrange show TREE_FILE [--format text|dot|png|svg] [--blackboard] [--out FILE]
-    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.25,0.5,1,2]
+    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
+                   [--gui] [--live] [--record DIR] [--json]
+    bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
+    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
+                          [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
-tree-file or plan error (a one-line message, never a traceback), 130 when interrupted.
+tree-file or plan error (a one-line message, never a traceback), 130 when interrupted, 141 when
+the reader of the output went away (``| head``).
 """
 
 from __future__ import annotations
@@ -15,50 +18,123 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
-from bt_arrange import treefile
-from bt_arrange.errors import BtArrangeError
+from bt_arrange import backends, treefile
+from bt_arrange.backends import Backend, Experiment, RunReport
+from bt_arrange.errors import BackendError, BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
-EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+EXIT_CODES_HELP = """exit status:
+  0    every object ended within the threshold (measured by the camera)
+  1    an object did not (outside, failed, or the time limit stopped the run)
+  2    a usage, tree-file or plan error: one line on stderr, before anything moves
+  130  interrupted (Ctrl-C); what was logged so far is kept
+  141  the reader of the output went away (e.g. | head)"""
 
 
-def _info(_: argparse.Namespace) -> int:
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (the usage is one ``--help`` away), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print one line and exit with the usage status."""
+        self.exit(
+            EXIT_USAGE,
+            f"bt-arrange: error: {self.prog.removeprefix('bt-arrange').strip() or 'usage'}: "
+            f"{message} (see {self.prog} --help)\n",
+        )
+
+
+def _whole(minimum: int) -> Any:
+    """An argparse type: a whole number of at least ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value} must be {minimum} or more")
+        return value
+
+    return parse
+
+
+def _positive_seconds(text: str) -> float:
+    """An argparse type: a positive, finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive number of seconds")
+    return value
+
+
+def _millimetres(text: str) -> float:
+    """An argparse type: a number (the plan check decides whether a push can correct it)."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of millimetres") from None
+
+
+def _check_threshold_option(threshold_mm: float | None) -> None:
+    if threshold_mm is None:
+        return
+    from bt_arrange.trees import check_threshold
+
+    try:
+        check_threshold(threshold_mm)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
+
+
+CELL_HELP = (
+    "the work cell: ideal (default; today's simulated cell), real (the paper's real cell's errors, "
+    "docs/simulation.md) or FILE.toml with your own values (the sim backend)"
+)
+
+
+def _info(args: argparse.Namespace) -> int:
     print(f"bt-arrange {metadata.version('bt-arrange')}")
     for package in STACK:
         try:
             print(f"  {package} {metadata.version(package)}")
         except metadata.PackageNotFoundError:
             print(f"  {package} missing (pip install -e . installs it)")
-    from bt_arrange.motion import default_urdf_path
-    from bt_arrange_sim import WorkCell
-
-    with WorkCell() as cell:
-        cell.settle(0.1)
-        print(f"  robot description: {default_urdf_path()}")
-        print(f"  headless work cell: ok (TCP at {cell.arm.tcp_pose()})")
+    for line in backends.load(args.backend).check():
+        print(f"  {line}")
     return EXIT_OK
 
 
 def _run(args: argparse.Namespace) -> int:
-    if args.threshold_mm is not None and not (math.isfinite(args.threshold_mm) and args.threshold_mm > 0):
-        raise BtArrangeError(f"--threshold-mm {args.threshold_mm:g} must be a positive number of millimetres")
+    _check_threshold_option(args.threshold_mm)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     starts = treefile.scene(module, args.seed)
 
-    from bt_arrange_sim.runs import SimulatedRun
-
-    with SimulatedRun(root, starts, gui=args.gui, record_dir=args.record, time_limit_s=args.time_limit_s) as run:
+    backend = backends.load(args.backend)
+    with backend.open_run(
+        root,
+        starts,
+        gui=args.gui,
+        record_dir=args.record,
+        time_limit_s=args.time_limit_s,
+        title=Path(args.tree_file).name,
+        # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+        **({"cell": args.cell, "run_seed": args.seed} if args.cell != "ideal" else {}),
+    ) as run:
         if args.live:
             from bt_arrange.display import LiveView
 
             view = LiveView(sys.stderr if args.json else sys.stdout)
-            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.cell.clock.now()))
+            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.elapsed_s()))
         report = run.run()
         if args.live:
             view.close()
@@ -69,7 +145,7 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
 
 
-def _print_report(report: Any, args: argparse.Namespace) -> None:
+def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
@@ -96,83 +172,118 @@ def _print_report(report: Any, args: argparse.Namespace) -> None:
             f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
             f"truth = the simulator's ground truth (evaluation only); threshold {report.threshold_mm:g} mm"
         )
+    if args.record:
+        print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
-    ending = "stopped at the time limit" if report.timed_out else report.tree_status
+    ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
+    if report.objects:
+        within = sum(o.status == "within" for o in report.objects)
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm; "
+    else:
+        verdict = ""
+    # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
     print(
-        f"{Path(args.tree_file).name}: {ending} after {report.sim_seconds:.1f} s of world time "
+        f"{Path(args.tree_file).name}: {verdict}{ending} after {report.sim_seconds:.1f} s of world time "
         f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
     )
-    if args.record:
-        print(f"recorded images, report.json and transitions.jsonl in {args.record}")
+
+
+def _experiment_of(backend: Backend) -> Experiment:
+    experiment = backend.experiment
+    if experiment is None:
+        raise BackendError(f"backend {backend.name!r} cannot run the experiment")
+    return experiment
+
+
+#: The experiment's options beyond the Protocol's arguments, with their defaults: only a value other
+#: than its default is passed on, so a backend that has not these options need not know them.
+EXPERIMENT_OPTIONS = (
+    ("cell", "ideal"),
+    ("strategy", "paper"),
+    ("thresholds", None),
+    ("executor", "local"),
+    ("scheduler", None),
+)
+
+
+def _experiment_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
+    """The experiment's options (``EXPERIMENT_OPTIONS``), checked by the backend's ``check_options``.
+
+    Only non-defaults are passed on; ``--workers`` is one of the Protocol's own arguments.
+    """
+    options = {key: getattr(args, key) for key, default in EXPERIMENT_OPTIONS if getattr(args, key) != default}
+    check = getattr(experiment, "check_options", None)
+    if options and check is None:
+        raise BackendError(f"backend {backend.name!r} has no {', '.join('--' + key for key in options)}")
+    if check is not None:
+        check(
+            cell=args.cell,
+            strategy=args.strategy,
+            workers=args.workers,
+            **{key: value for key, value in options.items() if key not in ("cell", "strategy")},
+        )
+    return options
+
+
+def _print_experiment(experiment: Experiment, summary: list[dict[str, Any]], out: Path) -> None:
+    print(experiment.markdown_table(summary), end="")
+    if any("folder" in row for row in summary):
+        print(
+            f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
+            f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
+        )
+    else:
+        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {out}")
 
 
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from bt_arrange_sim.executors import check_choice, open_executor
-    from bt_arrange_sim.experiment import (
-        CampaignIncompleteError,
-        combinations,
-        markdown_table,
-        parse_rows,
-        parse_thresholds,
-        run_campaign,
-    )
-
-    rows = parse_rows(args.rows)
+    backend = backends.load(args.backend)
+    experiment = _experiment_of(backend)
+    # Every option is checked before the progress bar is drawn or a worker starts.
+    rows = experiment.parse_rows(args.rows)
     if args.thresholds is not None and args.threshold_mm is not None:
         raise BtArrangeError("give --threshold-mm or --thresholds, not both")
-    if args.thresholds is not None:
-        thresholds = parse_thresholds(args.thresholds)
-    else:
-        threshold_mm = 1.0 if args.threshold_mm is None else args.threshold_mm
-        if not (math.isfinite(threshold_mm) and threshold_mm > 0):
-            raise BtArrangeError(f"--threshold-mm {threshold_mm:g} must be a positive number of millimetres")
-        thresholds = [threshold_mm]
-    if args.trials < 1:
-        raise BtArrangeError(f"--trials must be at least 1, got {args.trials}")
-    check_choice(args.executor, args.workers, args.scheduler)
-    combos = combinations(thresholds)
-    # A --thresholds campaign keeps one folder per combination; a single --threshold-mm writes into --out.
-    flat = args.thresholds is None
-    bar = tqdm(total=len(rows) * args.trials * len(combos), unit="trial", desc="trials", file=sys.stderr)
+    _check_threshold_option(args.threshold_mm)
+    options = _experiment_options(backend, experiment, args)
+    try:
+        backend.prepare_out(args.out)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--out {args.out}: {error}") from error
+    # The total grows to the campaign's size (thresholds x cells) with the first finished trial.
+    bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
 
     def progress(record: dict, done: int, total: int) -> None:
+        bar.total = total
         bar.n = done
-        bar.set_postfix_str(
-            f"{record['row']} #{record['trial']} at {record['threshold_mm']:g} mm: {record['status']}", refresh=False
+        where = f"{record['threshold_mm']:g} mm" + (
+            f", {record['cell']} cell" if record.get("cell", "ideal") != "ideal" else ""
         )
+        bar.set_postfix_str(f"{record['row']} #{record['trial']} at {where}: {record['status']}", refresh=False)
         bar.refresh()
 
     try:
-        with open_executor(args.executor, args.workers, args.scheduler) as executor:
-            result = run_campaign(
-                rows,
-                args.trials,
-                args.seed,
-                combos,
-                args.out,
-                workers=args.workers,
-                executor=executor,
-                on_trial=progress,
-                flat=flat,
-            )
+        summary = experiment.run_experiment(
+            rows,
+            args.trials,
+            args.seed,
+            1.0 if args.threshold_mm is None else args.threshold_mm,
+            args.out,
+            workers=args.workers,
+            on_trial=progress,
+            **options,
+        )
+    except BtArrangeError as error:
+        # Trials lost (a worker died): what did finish is written and printed, then the one-line error.
+        finished = getattr(error, "summary", None)
+        if finished:
+            bar.close()
+            _print_experiment(experiment, finished, args.out)
+        raise
     finally:
         bar.close()
-    for combination, summary in result.summaries.items():
-        folder = result.folders[combination]
-        if not flat:
-            print(f"## threshold {combination.threshold_mm:g} mm ({folder})\n")
-        print(markdown_table(summary))
-        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {folder}\n")
-    if not flat:
-        print(f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {args.out}")
-    if result.lost:
-        spec, error = result.lost[0]
-        raise CampaignIncompleteError(
-            f"{len(result.lost)} trial(s) did not finish (first: {spec.row} #{spec.index}: {error}); "
-            "what finished is written: rerun the same command to complete the rest"
-        )
+    _print_experiment(experiment, summary, args.out)
     return EXIT_OK
 
 
@@ -181,52 +292,132 @@ def _show(args: argparse.Namespace) -> int:
 
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module)
+    if args.format == "xml":
+        return _show_xml(root, args)
     result = render_tree(root, args.format, blackboard=args.blackboard, out=args.out, name=Path(args.tree_file).stem)
     if args.format in ("text", "dot") and args.out is None:
         print(result)
     else:
-        print(f"wrote {result}")
+        # render_tree returns the text itself for text and dot, the picture's path otherwise.
+        print(f"wrote {args.out if args.out is not None else result}")
+    return EXIT_OK
+
+
+def _show_xml(root: Any, args: argparse.Namespace) -> int:
+    from bt_arrange import xmltree
+
+    stem = Path(args.tree_file).stem
+    text = xmltree.to_xml(
+        root, tree_id=stem, comment=f"generated from {Path(args.tree_file).name} by bt-arrange show (format xml)"
+    )
+    if args.out is None:
+        print(text, end="")
+        return EXIT_OK
+    try:
+        args.out.write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise BtArrangeError(f"cannot write {args.out}: {error.strerror}") from error
+    print(f"wrote {args.out}")
     return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="bt-arrange", description="Behaviour trees for precise robotic arrangement.")
+    # The experiment's rows come from the default backend's registry of rows; loading it starts
+    # no simulator (the sim backend imports neither pybullet nor matplotlib at module level).
+    try:
+        default_experiment = backends.load().experiment
+    except BtArrangeError:
+        default_experiment = None
+    rows = tuple(default_experiment.ROWS) if default_experiment is not None else ()
+    default_rows = tuple(getattr(default_experiment, "DEFAULT_ROWS", rows))
+    row_labels = dict(default_experiment.ROW_LABELS) if default_experiment is not None else {}
+
+    parser = _Parser(
+        prog="bt-arrange",
+        description="Behaviour trees for precise robotic arrangement.",
+        epilog=EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"%(prog)s {metadata.version('bt-arrange')}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    run = commands.add_parser("run", help="run a tree file in the simulated work cell (headless by default)")
-    run.add_argument("tree_file", metavar="TREE_FILE", help="a Python file exposing create_root() and create_scene()")
-    run.add_argument("--seed", type=int, default=0, help="seed of the scene (where the cubes start); default 0")
-    run.add_argument("--threshold-mm", type=float, help="accuracy threshold in mm (the tree file's default if absent)")
+    def add_command(name: str, help_text: str, epilog: str = EXIT_CODES_HELP) -> argparse.ArgumentParser:
+        return commands.add_parser(
+            name,
+            help=help_text,
+            description=help_text,
+            epilog=epilog,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+
+    def add_backend(command: argparse.ArgumentParser) -> None:
+        command.add_argument(
+            "--backend",
+            default=backends.DEFAULT_BACKEND,
+            metavar="NAME",
+            help=f"what to run on (default {backends.DEFAULT_BACKEND}: the simulated work cell)",
+        )
+
+    run = add_command("run", "run a tree file in the simulated work cell (headless by default)")
+    run.add_argument(
+        "tree_file",
+        metavar="TREE_FILE",
+        help="a Python file exposing create_root() and create_scene(), or a BehaviorTree.CPP .xml tree",
+    )
+    run.add_argument(
+        "--seed", type=_whole(0), default=0, help="seed of the scene (where the cubes start), 0 or more; default 0"
+    )
+    run.add_argument(
+        "--threshold-mm", type=_millimetres, help="accuracy threshold in mm (the tree file's default if absent)"
+    )
     run.add_argument("--gui", action="store_true", help="open the pybullet window (needs a display)")
     run.add_argument("--live", action="store_true", help="redraw the tree with its statuses while it runs")
-    run.add_argument("--record", type=Path, metavar="DIR", help="save top-camera images and the transition log")
+    run.add_argument(
+        "--record", type=Path, metavar="DIR", help="save top-camera images, the transition log and replay.html"
+    )
     run.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     run.add_argument(
-        "--time-limit-s", type=float, default=1800.0, help="stop after this much world time (default 1800 s)"
+        "--time-limit-s",
+        type=_positive_seconds,
+        default=1800.0,
+        help="stop after this much world time (default 1800 s)",
     )
+    add_backend(run)
+    run.add_argument("--cell", default="ideal", help=CELL_HELP)
     run.set_defaults(handler=_run)
 
-    show = commands.add_parser("show", help="draw a tree file's tree without starting a simulator")
+    show = add_command(
+        "show",
+        "draw a tree file's tree without starting a simulator",
+        "exit status: 0 drawn, 2 a usage or tree-file error",
+    )
     show.add_argument("tree_file", metavar="TREE_FILE")
-    show.add_argument("--format", choices=("text", "dot", "png", "svg"), default="text", help="default text")
+    show.add_argument(
+        "--format",
+        choices=("text", "dot", "png", "svg", "xml"),
+        default="text",
+        help="default text; xml: BehaviorTree.CPP v4 for Groot2",
+    )
     show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 
-    experiment = commands.add_parser(
-        "experiment", help="reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask"
+    rows_help = "\n".join(f"  {row:<16} {row_labels.get(row, '')}" for row in rows)
+    experiment = add_command(
+        "experiment",
+        "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
+        f"rows (--rows):\n{rows_help}\n\n"
+        "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
     )
     experiment.add_argument(
         "--rows",
-        default="system,translation,orientation,grasp-estimator",
-        help="comma-separated rows: system, translation, orientation, grasp-estimator, perception, surface, "
-        "slip, sticking, release, tilt, all (default: Table 1's four)",
+        default=",".join(default_rows),
+        help=f"comma-separated rows, listed below (default: {','.join(default_rows)})",
     )
-    experiment.add_argument("--trials", type=int, default=100, help="trials per row (default 100)")
-    experiment.add_argument("--seed", type=int, default=0, help="experiment seed (default 0)")
-    experiment.add_argument("--threshold-mm", type=float, help="accuracy threshold in mm (default 1)")
+    experiment.add_argument("--trials", type=_whole(1), default=100, help="trials per row (default 100)")
+    experiment.add_argument("--seed", type=_whole(0), default=0, help="experiment seed, 0 or more (default 0)")
+    experiment.add_argument("--threshold-mm", type=_millimetres, help="accuracy threshold in mm (default 1)")
     experiment.add_argument(
         "--thresholds", metavar="MM,MM,...", help="sweep: comma-separated thresholds in mm, one folder each"
     )
@@ -234,7 +425,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--executor", default="local", choices=("local", "dask"), help="local process pool (default) or Dask"
     )
     experiment.add_argument(
-        "--workers", type=int, default=1, help="worker processes (local pool or Dask LocalCluster), default 1"
+        "--workers",
+        type=_whole(1),
+        default=1,
+        help="worker processes (local pool or Dask LocalCluster), each with its own world (default 1)",
     )
     experiment.add_argument(
         "--scheduler", metavar="tcp://HOST:PORT", help="with --executor dask: an existing cluster's scheduler"
@@ -242,9 +436,22 @@ def build_parser() -> argparse.ArgumentParser:
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
+    add_backend(experiment)
+    experiment.add_argument(
+        "--cell", default="ideal", help=CELL_HELP + "; several, comma-separated (ideal,real), one folder each"
+    )
+    experiment.add_argument(
+        "--strategy",
+        choices=("paper", "learned"),
+        default="paper",
+        help="push strategy: paper (alternating x/y, Table 1's; default) or learned (docs/experiments.md)",
+    )
     experiment.set_defaults(handler=_experiment)
 
-    info = commands.add_parser("info", help="library versions, and a check that a headless cell starts")
+    info = add_command(
+        "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"
+    )
+    add_backend(info)
     info.set_defaults(handler=_info)
     return parser
 
@@ -253,7 +460,14 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bt-arrange`` console script."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.handler(args))
+        code = int(args.handler(args))
+        sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
+        return code
+    except BrokenPipeError:
+        # The reader (| head) has what it wanted; point stdout at nothing so the exit flush is quiet.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE

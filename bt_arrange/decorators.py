@@ -1,9 +1,13 @@
-"""RetryUntilThreshold: re-run a correction until an offset on the blackboard is under a threshold.
+"""RepeatUntilWithin: repeat a correction until an offset on the blackboard is within a threshold.
 
 The paper's inner loop (Algorithm 1, lines 11-15) as a py_trees decorator::
 
     while offset >= threshold:
         push; inspect (which writes the new offset)
+
+It behaves like py_trees' ``Repeat`` (a success of the child runs it again, a failure ends the
+loop), with the offset checked before each run, not like ``Retry`` (which runs again on failure).
+``RetryUntilThreshold`` is its former name, kept as an alias.
 """
 
 from __future__ import annotations
@@ -13,10 +17,11 @@ from collections.abc import Iterator
 import py_trees
 from py_trees.common import Access, Status
 
-from bt_arrange.errors import PlanError
+from bt_arrange.behaviours import keys
+from bt_arrange.checks import positive_number, whole_number
 
 
-class RetryUntilThreshold(py_trees.decorators.Decorator):
+class RepeatUntilWithin(py_trees.decorators.Decorator):
     """Run the child until the blackboard value at ``offset_key`` drops below ``threshold_mm``.
 
     - Before each run of the child: SUCCESS at once when the offset is already under the
@@ -25,6 +30,8 @@ class RetryUntilThreshold(py_trees.decorators.Decorator):
       counts one correction, recorded at ``corrections_key`` when given.
     - FAILURE with the residual offset in the feedback message once ``max_attempts`` corrections
       left it above the threshold; FAILURE with the child's reason when the child fails.
+
+    ``obj`` names the object corrected, for reports that look for the reason an object failed.
     """
 
     def __init__(
@@ -35,16 +42,17 @@ class RetryUntilThreshold(py_trees.decorators.Decorator):
         threshold_mm: float,
         max_attempts: int,
         corrections_key: str | None = None,
+        obj: str | None = None,
     ) -> None:
-        if isinstance(threshold_mm, bool) or not isinstance(threshold_mm, (int, float)) or not threshold_mm > 0:
-            raise PlanError(f"threshold {threshold_mm!r} mm must be a positive number of millimetres")
-        if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 0:
-            raise PlanError(f"max_attempts {max_attempts!r} must be a whole number, 0 or more")
+        positive_number("threshold", threshold_mm, "mm", style="unit", finite=False)
+        whole_number("max_attempts", max_attempts, style="unit")
         super().__init__(name=name, child=child)
         self.offset_key = offset_key
         self.threshold_mm = float(threshold_mm)
         self.max_attempts = max_attempts
         self.corrections_key = corrections_key
+        #: The object corrected: ``obj``, else the one whose offset it watches (``/<obj>/offset_mm``).
+        self.obj = obj if obj is not None else keys.object_of_key(offset_key)
         self.attempts = 0
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
@@ -118,3 +126,7 @@ class RetryUntilThreshold(py_trees.decorators.Decorator):
     def _record(self) -> None:
         if self.corrections_key is not None:
             self.blackboard.set(self.corrections_key, self.attempts, overwrite=True)
+
+
+#: The former name of ``RepeatUntilWithin`` (it repeats on success, like py_trees' ``Repeat``).
+RetryUntilThreshold = RepeatUntilWithin

@@ -1,14 +1,41 @@
 """The exception family of bt-arrange: everything it raises on purpose is a ``BtArrangeError``.
 
 Behaviours turn these into FAILURE with a feedback message; the CLI turns them into a
-one-line error and a non-zero exit. Messages name the offending value and the limit.
+one-line error and a non-zero exit. Messages name the offending value and the limit, and the
+errors carry them as attributes too (as pink's do), so a caller can act on them without parsing
+the text: ``error.field``, ``error.value``, ``error.limit``, ``error.unit``; ``UnreachableError``
+also ``error.pose``, ``error.joint`` and ``error.bound`` (the ``(lower, upper)`` range).
+
+The errors of a bad value also inherit ``ValueError`` (``PlanError``, ``OutOfRangeError``,
+``GeometryError``), so callers that caught ``ValueError`` keep working.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class BtArrangeError(Exception):
-    """Root of every error bt-arrange raises on purpose."""
+    """Root of every error bt-arrange raises on purpose.
+
+    ``field`` names what was wrong (an argument, a setting, a joint), ``value`` the offending
+    value, ``limit`` the bound it broke and ``unit`` their unit; each is ``None`` when unknown.
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        field: str | None = None,
+        value: Any = None,
+        limit: Any = None,
+        unit: str | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.field = field
+        self.value = value
+        self.limit = limit
+        self.unit = unit
 
 
 class PlanError(BtArrangeError, ValueError):
@@ -19,8 +46,32 @@ class OutOfRangeError(BtArrangeError, ValueError):
     """A command value (a gripper width, a force, a limit) lies outside what the hardware allows."""
 
 
+class GeometryError(BtArrangeError, ValueError):
+    """A pose, a rotation or a joint vector that is not one (not finite, a zero quaternion, a wrong shape)."""
+
+
 class UnreachableError(BtArrangeError):
-    """The arm cannot reach a pose: too far, below the table, or outside the joint limits."""
+    """The arm cannot reach a pose: too far, below the table, or outside the joint limits.
+
+    ``pose`` is the target pose when one was asked for, ``joint`` the joint out of its range and
+    ``bound`` that range ``(lower, upper)`` in radians.
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        pose: Any = None,
+        joint: str | None = None,
+        bound: tuple[float, float] | None = None,
+        value: Any = None,
+        limit: Any = None,
+        unit: str | None = None,
+    ) -> None:
+        super().__init__(message, field=joint, value=value, limit=limit if limit is not None else bound, unit=unit)
+        self.pose = pose
+        self.joint = joint
+        self.bound = bound
 
 
 class MotionError(BtArrangeError):
@@ -33,3 +84,11 @@ class PerceptionError(BtArrangeError):
 
 class TreeFileError(BtArrangeError):
     """A tree file cannot be loaded, or does not provide what the command needs."""
+
+
+class DisplayError(BtArrangeError):
+    """A tree cannot be drawn as asked (an unknown format, no Graphviz, a file that cannot be written)."""
+
+
+class BackendError(BtArrangeError):
+    """No backend of that name is installed, or it does not offer what the command needs."""

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bt_arrange.errors import GeometryError
+
 FloatArray = NDArray[np.float64]
 
 
@@ -88,7 +90,11 @@ class Pose:
         quaternion = np.asarray(self.quaternion_xyzw, dtype=float).reshape(4)
         norm = np.linalg.norm(quaternion)
         if not np.isfinite(position).all() or not np.isfinite(norm) or norm < 1e-9:
-            raise ValueError(f"invalid pose: position {position}, quaternion {quaternion}")
+            raise GeometryError(
+                f"invalid pose: position {position}, quaternion {quaternion}",
+                field="pose",
+                value=(position, quaternion),
+            )
         object.__setattr__(self, "position_m", position)
         object.__setattr__(self, "quaternion_xyzw", quaternion / norm)
 

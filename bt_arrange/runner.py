@@ -2,28 +2,38 @@
 
 The runner ticks the tree, lets the context's brake finish any interrupted motion, then steps
 the world by one control period, until the root finishes or a limit of world time passes. Each
-change of a behaviour's status is a ``Transition``; a ``TransitionLog`` writes them as JSON lines
-as they happen, so an interrupted run keeps what it logged.
+change of a behaviour's status is a ``Transition``; a ``TransitionLog`` (a py_trees visitor of the
+tree) writes them as JSON lines as they happen, so an interrupted run keeps what it logged.
 """
 
 from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+import uuid
+from collections import deque
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO
 
 import py_trees
+import py_trees.visitors
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context
+from bt_arrange.robot import Clock
 
 
 @dataclass(frozen=True)
 class Transition:
-    """One behaviour changing status, at a moment of world time."""
+    """One behaviour changing status, at a moment of world time.
+
+    ``behaviour`` is the node's name and ``kind`` its class name, for people reading the log;
+    programs select by ``node_id`` (the py_trees ``Behaviour.id``, as text), which
+    ``TransitionLog.node(transition)`` and ``Runner.node(transition)`` turn back into the node,
+    and by ``obj``, the object the node handles (``None`` for a node of no single object).
+    """
 
     time_s: float
     behaviour: str
@@ -31,42 +41,112 @@ class Transition:
     old: str
     new: str
     feedback: str
+    node_id: str = ""
+    obj: str | None = None
 
     def to_json(self) -> str:
         """One line of the transition log."""
         return json.dumps(asdict(self))
 
 
-class TransitionLog:
-    """Watches every behaviour of a tree and records status changes (JSON lines when given a path)."""
+def object_of(node: py_trees.behaviour.Behaviour) -> str | None:
+    """The object a behaviour handles (its ``obj``: Detect, Pick, GraspGuard, RepeatUntilWithin, ...), or None."""
+    obj = getattr(node, "obj", None)
+    return obj if isinstance(obj, str) else None
 
-    def __init__(self, path: Path | str | None = None) -> None:
+
+class TransitionLog(py_trees.visitors.VisitorBase):
+    """A py_trees visitor that records every status change of a tree (JSON lines when given a path).
+
+    Add it with ``tree.add_visitor(log)`` (the ``Runner`` does): py_trees hands it each behaviour
+    as it is ticked. A behaviour can also change without being ticked, when a parent stops it
+    (an interruption, a reset: always to INVALID); so after the tick the log looks below the
+    ticked nodes, and below the nodes just stopped, for children that held a status. It does not
+    walk the whole tree every tick. ``clock`` (anything with ``now()``, seconds) stamps the changes.
+    """
+
+    def __init__(self, path: Path | str | None = None, clock: Clock | None = None) -> None:
+        super().__init__(full=False)
         self.path = Path(path) if path is not None else None
+        self.clock = clock
         self.transitions: list[Transition] = []
-        self._last: dict[int, Status] = {}
+        #: The changes of the last tick (``finalise`` fills it, ``take`` empties it).
+        self.pending: list[Transition] = []
+        #: Every node that changed status, by its id (as text): ``node(transition)`` looks them up.
+        self.nodes: dict[str, py_trees.behaviour.Behaviour] = {}
+        self._last: dict[uuid.UUID, Status] = {}
+        self._visited: list[py_trees.behaviour.Behaviour] = []
         self._file: IO[str] | None = None
 
-    def observe(self, root: py_trees.behaviour.Behaviour, time_s: float) -> list[Transition]:
-        """Compare every node's status with the last look; log and return the changes."""
-        changes = []
-        for node in root.iterate():
-            before = self._last.get(id(node), Status.INVALID)
+    # -- the visitor ---------------------------------------------------------------------------
+
+    def initialise(self) -> None:
+        """Before a tick: nothing visited yet."""
+        self._visited = []
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        """A behaviour was ticked; its status is read after the tick (a parent may still stop it)."""
+        self._visited.append(behaviour)
+
+    def finalise(self) -> None:
+        """After a tick: log what changed among the ticked nodes and the nodes stopped below them."""
+        self.look(self._visited, self.clock.now() if self.clock is not None else 0.0)
+        self._visited = []
+
+    # -- looking and logging -------------------------------------------------------------------
+
+    def look(self, nodes: Iterable[py_trees.behaviour.Behaviour], time_s: float) -> list[Transition]:
+        """Compare ``nodes``, and the children of any of them that changed unseen, with the last look."""
+        changes: list[Transition] = []
+        last = self._last
+        seen: set[uuid.UUID] = set()
+        queue = deque(nodes)
+        while queue:
+            node = queue.popleft()
+            if node.id in seen:
+                continue
+            seen.add(node.id)
+            before = last.get(node.id, Status.INVALID)
             if node.status != before:
-                changes.append(
-                    Transition(
-                        time_s=round(time_s, 4),
-                        behaviour=node.name,
-                        kind=type(node).__name__,
-                        old=before.value,
-                        new=node.status.value,
-                        feedback=node.feedback_message,
-                    )
-                )
-                self._last[id(node)] = node.status
+                changes.append(self._transition(node, before, time_s))
+                last[node.id] = node.status
+            # A child changes without a tick only when a parent stops it (to INVALID): so only below a node
+            # ticked or stopped now, and only a child whose status differs from the last look.
+            queue.extend(c for c in node.children if last.get(c.id, Status.INVALID) != c.status)
         if changes:
+            self.pending.extend(changes)
             self.transitions.extend(changes)
             self._write(changes)
         return changes
+
+    def observe(self, root: py_trees.behaviour.Behaviour, time_s: float) -> list[Transition]:
+        """Compare every node of the tree with the last look (for a tree ticked without this visitor)."""
+        changes = self.look(root.iterate(), time_s)
+        self.take()
+        return changes
+
+    def take(self) -> list[Transition]:
+        """The changes logged since the last ``take``, oldest first."""
+        changes, self.pending = self.pending, []
+        return changes
+
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour a transition is about (None for a node this log never saw)."""
+        return self.nodes.get(transition.node_id)
+
+    def _transition(self, node: py_trees.behaviour.Behaviour, before: Status, time_s: float) -> Transition:
+        node_id = str(node.id)
+        self.nodes[node_id] = node
+        return Transition(
+            time_s=round(time_s, 4),
+            behaviour=node.name,
+            kind=type(node).__name__,
+            old=before.value,
+            new=node.status.value,
+            feedback=node.feedback_message,
+            node_id=node_id,
+            obj=object_of(node),
+        )
 
     def _write(self, changes: list[Transition]) -> None:
         if self.path is None:
@@ -125,12 +205,39 @@ class Runner:
         self.on_transition = on_transition
         self.on_tick = on_tick
         self.tree = py_trees.trees.BehaviourTree(root)
+        if self.log.clock is None:
+            self.log.clock = context.robot.clock
+        self.tree.add_visitor(self.log)
         self._is_set_up = False
+
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour a transition is about, by its id."""
+        return self.log.node(transition)
 
     def setup(self) -> None:
         """Hand the context to every behaviour (``setup(context=...)``)."""
         self.tree.setup(context=self.context)
         self._is_set_up = True
+
+    def tick_tree(self) -> None:
+        """Tick the tree once, handing the ticked behaviours to its visitors (the log among them).
+
+        Through ``BehaviourTree.tick`` when a full visitor or a tick handler was added to
+        ``self.tree``; otherwise the same steps without the walk over every node that
+        ``BehaviourTree.tick`` makes for full visitors even when there are none.
+        """
+        tree = self.tree
+        if tree.pre_tick_handlers or tree.post_tick_handlers or any(v.full for v in tree.visitors):
+            tree.tick()
+            return
+        for visitor in tree.visitors:
+            visitor.initialise()
+        for node in self.root.tick():
+            for visitor in tree.visitors:
+                node.visit(visitor)
+        for visitor in tree.visitors:
+            visitor.finalise()
+        tree.count += 1
 
     def run(self) -> RunResult:
         """Tick until the root succeeds or fails, or the world-time limit passes."""
@@ -143,9 +250,9 @@ class Runner:
         timed_out = False
         try:
             while True:
-                self.tree.tick()
+                self.tick_tree()
                 ticks += 1
-                for transition in self.log.observe(self.root, clock.now()):
+                for transition in self.log.take():
                     if self.on_transition is not None:
                         self.on_transition(transition)
                 if self.on_tick is not None:
@@ -156,7 +263,8 @@ class Runner:
                 if clock.now() - start_s >= self.time_limit_s:
                     timed_out = True
                     self.root.stop(Status.INVALID)
-                    self.log.observe(self.root, clock.now())
+                    self.log.look([self.root], clock.now())
+                    self.log.take()
                     break
                 self.step_world()
         finally:

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from bt_arrange.errors import OutOfRangeError
+from bt_arrange.motion.limits import CartesianLimits
 from bt_arrange.robot import GRIPPER_FORCE_RANGE_N, GRIPPER_MAX_WIDTH_M
 
 #: Edge length of the paper's cubes, in metres.
@@ -30,8 +32,10 @@ class ManipulationSettings:
     """
 
     cube_edge_m: float = CUBE_EDGE_M
-    #: TCP height for moves above the table: pads 10 cm clear of a resting cube's top.
-    approach_height_m: float = 0.12
+    #: TCP height for moves above the table: the pads' bottoms 3 cm clear of a resting cube's top,
+    #: a held cube's bottom 2.5 cm (joint-space moves between two such poses did not dip below it
+    #: in the four-cube tree). Lower means shorter descents and lifts.
+    approach_height_m: float = 0.10
     grasp_height_m: float = CUBE_EDGE_M / 2
     #: The held cube is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
@@ -53,8 +57,11 @@ class ManipulationSettings:
     push_clearance_m: float = 0.010
     #: A push shorter than this along the alternated axis gives way to the other axis.
     min_push_m: float = 0.0002
-    #: After a motion, the arm gets this long to settle before the next step.
-    settle_s: float = 0.15
+    #: The line that pushes: slower than the planner's lines, so the cube stops when the pads do.
+    push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
+    #: After a motion, the arm gets this long to settle before the next step (the position-controlled
+    #: joints lag their setpoints by a fraction of a millimetre at the end of a jerk-limited motion).
+    settle_s: float = 0.05
     #: The fingers must stop within this time after an open or close command.
     gripper_timeout_s: float = 2.0
 
@@ -72,6 +79,17 @@ class ManipulationSettings:
     def push_opening_m(self) -> float:
         """Opening for a push: both pads meet the face near its edges (the paper's width - thickness)."""
         return self.cube_edge_m - self.pad_thickness_m
+
+    @property
+    def min_threshold_mm(self) -> float:
+        """The smallest threshold a push is sure to correct, in millimetres.
+
+        An offset at the threshold may lie diagonally: ``threshold / sqrt(2)`` along each axis.
+        Push skips an axis whose offset is below ``min_push_m``, so below ``sqrt(2) * min_push_m``
+        an offset over the threshold could leave both axes without a push, and every "correction"
+        would leave the cube where it is.
+        """
+        return math.sqrt(2.0) * self.min_push_m * 1000
 
     @property
     def push_reach_m(self) -> float:

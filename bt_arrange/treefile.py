@@ -3,6 +3,9 @@
 A tree file exposes ``create_root(...)`` returning a py_trees behaviour, and, to run in the
 simulator, ``create_scene(seed)`` returning where the cubes start. Its own folder is on
 ``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
+
+A ``.xml`` file is a BehaviorTree.CPP tree, read as data by ``bt_arrange.xmltree`` (no code of
+the file runs) into a module with the same two functions.
 """
 
 from __future__ import annotations
@@ -20,12 +23,16 @@ from bt_arrange.errors import BtArrangeError, TreeFileError
 
 
 def load(path: str | Path) -> ModuleType:
-    """Import the tree file at ``path``."""
+    """Import the tree file at ``path`` (a ``.py`` file), or read it (a BehaviorTree.CPP ``.xml`` file)."""
     path = Path(path)
     if not path.is_file():
         raise TreeFileError(f"tree file {path} not found")
+    if path.suffix == ".xml":
+        from bt_arrange import xmltree
+
+        return xmltree.load_module(path)
     if path.suffix != ".py":
-        raise TreeFileError(f"tree file {path} is not a Python file (.py)")
+        raise TreeFileError(f"tree file {path} is neither a Python file (.py) nor a BehaviorTree.CPP XML tree (.xml)")
     spec = importlib.util.spec_from_file_location(f"bt_arrange_tree_{path.stem}", path)
     if spec is None or spec.loader is None:
         raise TreeFileError(f"cannot load tree file {path}")

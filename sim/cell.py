@@ -10,6 +10,7 @@ see the world through the camera, like the robot in the paper.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import os
 import sys
@@ -18,13 +19,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
-from bt_arrange.robot import Robot
+from bt_arrange.plancheck import CameraView
+from bt_arrange.robot import CameraIntrinsics, Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
+from bt_arrange_sim.realcell import RealCellErrors, hand_eye_base_pose, write_perturbed_urdf
 from bt_arrange_sim.scenes import CubeStart
 
 #: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
@@ -54,7 +58,11 @@ class PhysicsConfig:
     arm_velocity_gain: float = 1.0
     finger_position_gain: float = 0.2
     finger_open_force_n: float = 40.0
+    #: Closing speed: faster closes (0.1 m/s) left the force-limited fingers trembling on the cube
+    #: for longer than the grasp's timeout in one trial of four.
     gripper_speed_m_s: float = 0.05
+    #: Opening speed: the 2F-85's fastest; letting go faster did not move the released cube more.
+    gripper_open_speed_m_s: float = 0.15
     gear_max_force_n: float = 200.0
     gear_erp: float = 0.8
     cube_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001)
@@ -93,6 +101,20 @@ class CameraConfig:
     #: (0.25 mm); a few degrees give every edge a staircase to measure below a pixel.
     roll_deg: float = 3.0
 
+    def calibrated_intrinsics(self) -> CameraIntrinsics:
+        """The intrinsics of the rendered image, as a calibration would find them.
+
+        TinyRenderer decides a pixel's coverage at its corner, not its centre, and flips rows:
+        the rendered image sits half a pixel right of and half a pixel above the nominal
+        pinhole (measured: +0.52, -0.59 px on blob centroids).
+        """
+        nominal = CameraIntrinsics.from_fov(self.width_px, self.height_px, self.horizontal_fov_deg)
+        return dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
+
+    def view(self) -> CameraView:
+        """What this camera sees, for the plan check (no world needed)."""
+        return CameraView(self.calibrated_intrinsics(), self.pose_world())
+
     def pose_world(self) -> Pose:
         """``T_W_C`` in the OpenCV optical frame: x right (about world -y), y down (about world -x), z forward."""
         square = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -108,6 +130,34 @@ class CellConfig:
     camera_noise: CameraNoiseConfig = field(default_factory=CameraNoiseConfig)
     table_size_m: tuple[float, float] = (1.3, 1.4)
     table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
+    #: A real cell's errors (``bt_arrange_sim.realcell``); all off by default: the ideal cell.
+    errors: RealCellErrors = field(default_factory=RealCellErrors)
+
+    @classmethod
+    def ideal(cls) -> CellConfig:
+        """Today's simulated cell, exactly (no real-cell error term on)."""
+        return cls()
+
+    @classmethod
+    def real(cls, cell_seed: int = 0) -> CellConfig:
+        """The paper's real cell: ``realcell.real()``'s error terms (docs/simulation.md)."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.real(cell_seed))
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike[str]) -> CellConfig:
+        """A cell with the user's own error values (``realcell.load_toml``; a ``PlanError`` names a bad key)."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.load_toml(path))
+
+    @classmethod
+    def named(cls, name: str) -> CellConfig:
+        """``ideal``, ``real`` or a ``.toml`` file, as ``--cell`` takes it."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.parse_cell(name))
 
 
 @contextlib.contextmanager
@@ -125,6 +175,59 @@ def _quiet_connect() -> Iterator[None]:
         os.close(devnull)
 
 
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    """Silence C-level stderr while pybullet is first imported.
+
+    pybullet prints its build time there, which broke the experiment's progress bar (drawn on
+    stderr) once per worker.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def import_pybullet():  # noqa: ANN201 - the pybullet module
+    """``import pybullet`` without its build-time banner on stderr."""
+    if "pybullet" in sys.modules:
+        return sys.modules["pybullet"]
+    with _quiet_stderr():
+        import pybullet
+    return pybullet
+
+
+def require_display() -> None:
+    """Raise a ``PlanError`` when the pybullet window (``gui=True``) cannot open: no X or Wayland display.
+
+    Without one, pybullet prints an X error and ends the process itself, with no chance to say why.
+    """
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise PlanError(
+            "the pybullet window (--gui) needs a display, and DISPLAY is not set: run headless "
+            "(without --gui), or under a virtual display: xvfb-run bt-arrange run ... --gui"
+        )
+
+
+_HAND_EYE: dict[str, tuple[np.ndarray, float]] = {}
+
+
+def _cached_hand_eye(urdf_path: os.PathLike[str] | str) -> tuple[np.ndarray, float]:
+    """``realcell.hand_eye_base_pose`` once per process and URDF (it solves 40 IK problems)."""
+    key = str(urdf_path)
+    if key not in _HAND_EYE:
+        from pathlib import Path
+
+        _HAND_EYE[key] = hand_eye_base_pose(Path(key))
+    return _HAND_EYE[key]
+
+
 class WorkCell:
     """One simulated work cell with its own physics world.
 
@@ -135,7 +238,9 @@ class WorkCell:
     FINGER_JOINTS = FINGER_JOINT_NAMES
 
     def __init__(self, config: CellConfig | None = None, gui: bool = False) -> None:
-        import pybullet
+        if gui:
+            require_display()
+        pybullet = import_pybullet()
         from pybullet_utils.bullet_client import BulletClient
 
         self.config = config or CellConfig()
@@ -150,9 +255,22 @@ class WorkCell:
         self._steps = 0
         self.cubes: dict[str, int] = {}
         self.table_id = self._create_table()
+        errors = self.config.errors
+        # A real cell's arm: the perturbed URDF (the planner keeps the nominal one), mounted where
+        # the hand-eye calibration puts it (absorbing the arm's mean error over the workspace).
+        self.urdf_path = write_perturbed_urdf(errors) if errors.enabled else None
+        base_position, base_yaw = (0.0, 0.0, 0.0), 0.0
+        if self.urdf_path is not None and errors.kinematics.enabled and errors.kinematics.hand_eye_absorbs_mean:
+            translation, base_yaw = _cached_hand_eye(self.urdf_path)
+            base_position = (float(translation[0]), float(translation[1]), float(translation[2]))
         self.robot_id = self.client.loadURDF(
-            str(default_urdf_path()), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE
+            str(self.urdf_path or default_urdf_path()),
+            basePosition=list(base_position),
+            baseOrientation=list(self.client.getQuaternionFromEuler((0.0, 0.0, base_yaw))),
+            useFixedBase=True,
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
         )
+        self._edge_rng = errors.rng("objects", per_run=True)
         self._joint_index = {
             self.client.getJointInfo(self.robot_id, i)[1].decode(): i
             for i in range(self.client.getNumJoints(self.robot_id))
@@ -168,7 +286,16 @@ class WorkCell:
         self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
         self.tcp_link_index = self._link_index[TCP_FRAME]
         self._configure_gripper()
-        self.camera_noise = CameraNoise(self.config.camera_noise)
+        noise = self.config.camera_noise
+        if errors.imaging.enabled:
+            imaging = errors.imaging
+            noise = CameraNoiseConfig(
+                sensor_sigma=imaging.sensor_sigma,
+                blur_sigma_px=imaging.blur_sigma_px,
+                brightness_jitter=imaging.exposure_jitter,
+                seed=int(errors.rng("imaging", per_run=True).integers(2**31)),
+            )
+        self.camera_noise = CameraNoise(noise)
         self.clock = SimClock(self)
         self.arm = SimArm(self)
         self.gripper = SimGripper(self)
@@ -190,9 +317,20 @@ class WorkCell:
 
     def step(self, control_periods: int = 1) -> None:
         """Advance the world by whole control periods (each several physics steps)."""
-        for _ in range(control_periods * self._substeps):
-            self.client.stepSimulation()
+        friction = self.config.errors.friction.enabled
+        for _ in range(control_periods):
+            if friction:
+                self._apply_friction_field()
+            for _ in range(self._substeps):
+                self.client.stepSimulation()
         self._steps += control_periods * self._substeps
+
+    def _apply_friction_field(self) -> None:
+        """A real cell's table: each cube's friction is the field's where it lies (new contacts take it)."""
+        nominal = self.config.physics.cube_contact.lateral_friction
+        for body in self.cubes.values():
+            (x, y, _), _ = self.client.getBasePositionAndOrientation(body)
+            self.client.changeDynamics(body, -1, lateralFriction=nominal * self.config.errors.friction_scale(x, y))
 
     def settle(self, seconds: float = 0.5) -> None:
         """Let the world run with the current commands, e.g. after adding cubes."""
@@ -221,9 +359,14 @@ class WorkCell:
         name = name or colour
         if name in self.cubes:
             raise ValueError(f"a cube named {name!r} is already in the cell")
-        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE_EDGE_M / 2)
+        objects = self.config.errors.objects
+        # A real cell's cubes: each edge off by its tolerance (the perception assumes the nominal edge).
+        edge_m = CUBE_EDGE_M + (
+            float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
+        )
+        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=edge_m / 2)
         self.cubes[name] = create_cube(
-            self.client, colour, pose.position_m, pose.quaternion_xyzw, self.config.physics.cube_contact
+            self.client, colour, pose.position_m, pose.quaternion_xyzw, self.config.physics.cube_contact, edge_m=edge_m
         )
         return name
 
@@ -251,6 +394,35 @@ class WorkCell:
         pose = self.cube_pose_truth(name)
         moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
         self.client.resetBasePositionAndOrientation(self.cubes[name], moved.position_m, moved.quaternion_xyzw)
+
+    def place_cube_truth(self, name: str, pose: Pose) -> None:
+        """Error injection: put a cube at ``pose`` (a tilt, a drag by a sticking finger); it moves on by physics.
+
+        The robot learns of it only through its camera. Never used to steer or to fake a result.
+        """
+        self.client.resetBasePositionAndOrientation(self.cubes[name], pose.position_m, pose.quaternion_xyzw)
+
+    def finger_opening_m(self, finger: int) -> float:
+        """True position of one finger joint (``finger_joint_indices``): its pad's distance from the centre."""
+        return float(self.client.getJointState(self.robot_id, finger)[0])
+
+    def finger_pad_position_m(self, finger: int) -> np.ndarray:
+        """True world position of one finger's link (its pad), for error injection."""
+        return np.array(self.client.getLinkState(self.robot_id, finger, computeForwardKinematics=True)[4])
+
+    def set_pad_friction(self, cube: str, lateral_friction: float) -> None:
+        """Error injection: give both pads ``lateral_friction`` and make a held cube's contacts take it at once.
+
+        Bullet keeps the friction a contact point was made with for as long as the point persists
+        (a held cube's do, for seconds), so the pads' contact points with the cube are dropped, by
+        filtering the pair out and back in, and made afresh at the next physics step.
+        """
+        contact = dataclasses.replace(self.config.physics.pad_contact, lateral_friction=lateral_friction)
+        body = self.cubes[cube]
+        for finger in self.finger_joint_indices:
+            contact.apply(self.client, self.robot_id, finger)
+            self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 0)
+            self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 1)
 
     def add_cubes(self, starts: Iterable[CubeStart]) -> None:
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""
@@ -297,8 +469,17 @@ class WorkCell:
             parentFramePosition=[0, 0, 0],
             childFramePosition=[0, 0, 0],
         )
-        self.client.changeConstraint(
-            self.gear_constraint_id, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=physics.gear_erp
-        )
+        gripper = self.config.errors.gripper
+        # A real cell's linkage has play: a softer coupling (the fitted figure of realcell.GripperError).
+        erp = gripper.coupling_erp if gripper.enabled else physics.gear_erp
+        self.client.changeConstraint(self.gear_constraint_id, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=erp)
         for finger in self.finger_joint_indices:
             physics.pad_contact.apply(self.client, self.robot_id, finger)
+            if gripper.enabled and gripper.pad_stiffness_n_m > 0:
+                # Silicone pads: a compliant contact instead of pybullet's rigid one.
+                self.client.changeDynamics(
+                    self.robot_id,
+                    finger,
+                    contactStiffness=gripper.pad_stiffness_n_m,
+                    contactDamping=gripper.pad_damping_n_s_m,
+                )

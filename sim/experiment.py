@@ -2,9 +2,9 @@
 
 Each row runs its trials with a single-cube arrangement (a random start and a random target per
 trial, both seeded from the experiment's seed, the row and the trial number), with the row's
-injected errors. A campaign is the product of its lists (today the thresholds; cells and objects
-join the same way): every combination gets its own folder with ``trials.jsonl``, the summaries
-and Fig. 4. Each finished trial is appended at once; a rerun into the same folder runs only the
+injected errors. A campaign is the product of its lists (the thresholds and the cells; objects
+would join the same way): every combination gets its own folder with ``trials.jsonl``, the
+summaries and Fig. 4. Each finished trial is appended at once; a rerun into the same folder runs only the
 trials missing there. Offsets are the camera's measurements, as in the paper; the simulator's
 ground truth is recorded beside them.
 
@@ -15,6 +15,7 @@ its ``TrialSpec``, so the records are the same (order and wall times aside) what
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import itertools
 import json
@@ -28,7 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.trees import check_threshold
 
 #: Rows: Table 1's four in the paper's order, then every other error of the paper's Sec. 3 alone,
 #: then all of them at once. The position seeds a row's trials: append new rows, never reorder.
@@ -47,6 +50,8 @@ ROWS = (
 )
 #: The default rows: the paper's Table 1.
 TABLE1_ROWS = ROWS[:4]
+#: The rows ``bt-arrange experiment`` runs without ``--rows``.
+DEFAULT_ROWS = TABLE1_ROWS
 ROW_LABELS = {
     "system": "1) System accuracy",
     "translation": "2) Translation error",
@@ -107,33 +112,56 @@ class TrialSpec:
     index: int
     seed: int
     threshold_mm: float
+    #: The cell: ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell.parse_cell``).
+    cell: str = "ideal"
+    #: The push strategy: ``paper`` (Table 1's) or ``learned`` (``bt_arrange.behaviours.Push``).
+    strategy: str = "paper"
 
 
 @dataclass(frozen=True)
 class Combination:
-    """One point of a campaign's product of lists (today: the threshold; cells and objects join here)."""
+    """One point of a campaign's product of lists: a threshold and a cell (objects would join here).
+
+    The push strategy is one value for the whole campaign; it is carried here so every trial and
+    every folder's records name it.
+    """
 
     threshold_mm: float
+    #: ``ideal``, ``real`` or a ``.toml`` file, as given to ``--cell``.
+    cell: str = "ideal"
+    strategy: str = "paper"
 
     @property
     def folder(self) -> str:
-        """The combination's folder name inside the campaign folder."""
-        return f"threshold-{self.threshold_mm:g}mm"
+        """The combination's folder name inside the campaign folder (the ideal cell is not named)."""
+        name = f"threshold-{self.threshold_mm:g}mm"
+        return name if self.cell == "ideal" else f"{name}-cell-{cell_label(self.cell)}"
 
     def spec(self, row: str, index: int, seed: int) -> TrialSpec:
         """The trial ``index`` of ``row`` under this combination."""
-        return TrialSpec(row, index, seed, self.threshold_mm)
+        return TrialSpec(row, index, seed, self.threshold_mm, self.cell, self.strategy)
 
     def owns(self, record: dict) -> bool:
-        """True when ``record`` is a trial of this combination."""
-        return record.get("threshold_mm") == self.threshold_mm
+        """True when ``record`` is a trial of this combination (records before ``cell`` were the ideal cell's)."""
+        return (
+            record.get("threshold_mm") == self.threshold_mm
+            and record.get("cell", "ideal") == self.cell
+            and record.get("strategy", "paper") == self.strategy
+        )
 
 
-def combinations(thresholds_mm: Sequence[float]) -> list[Combination]:
-    """The campaign: the product of the lists (one list today), in order, duplicates removed."""
+def cell_label(cell: str) -> str:
+    """A cell's short name for folders and headings: ``ideal``, ``real``, or a TOML file's stem."""
+    return Path(cell).stem if cell.endswith(".toml") else cell
+
+
+def combinations(
+    thresholds_mm: Sequence[float], cells: Sequence[str] = ("ideal",), strategy: str = "paper"
+) -> list[Combination]:
+    """The campaign: the product of the lists (thresholds, then cells), in order, duplicates removed."""
     seen: list[Combination] = []
-    for (threshold_mm,) in itertools.product(thresholds_mm):
-        combination = Combination(float(threshold_mm))
+    for threshold_mm, cell in itertools.product(thresholds_mm, cells):
+        combination = Combination(float(threshold_mm), cell, strategy)
         if combination not in seen:
             seen.append(combination)
     return seen
@@ -151,7 +179,7 @@ def parse_rows(text: str) -> list[str]:
 
 
 def parse_thresholds(text: str) -> list[float]:
-    """Thresholds in mm from a comma-separated list (``0.25,0.5,1,2``); a ``PlanError`` names a bad one."""
+    """Thresholds in mm from a comma-separated list (``0.29,0.5,1,2``); a ``PlanError`` names a bad one."""
     values = []
     for item in (part.strip() for part in text.split(",")):
         if not item:
@@ -162,10 +190,32 @@ def parse_thresholds(text: str) -> list[float]:
             raise PlanError(f"--thresholds: {item!r} is not a number of millimetres") from None
         if not (math.isfinite(value) and value > 0):
             raise PlanError(f"--thresholds: {item} must be a positive number of millimetres")
+        try:
+            check_threshold(value)
+        except PlanError as error:
+            raise PlanError(f"--thresholds {item}: {error}") from error
         values.append(value)
     if not values:
-        raise PlanError("--thresholds is empty; give millimetres such as 0.25,0.5,1,2")
+        raise PlanError("--thresholds is empty; give millimetres such as 0.29,0.5,1,2")
     return values
+
+
+def parse_cells(cells: str | Sequence[str]) -> list[str]:
+    """Cells from ``--cell`` (``ideal``, ``real``, ``FILE.toml``, or several: ``ideal,real``), each checked."""
+    from bt_arrange_sim.realcell import parse_cell
+
+    items = [part.strip() for part in cells.split(",")] if isinstance(cells, str) else [str(c) for c in cells]
+    items = [item for item in items if item]
+    if not items:
+        raise PlanError(
+            f"--cell {cells!r} is empty; choose ideal or real, or give a .toml file (or several: ideal,real)"
+        )
+    for item in items:
+        try:
+            parse_cell(item)
+        except PlanError as error:
+            raise PlanError(f"--cell {item}: {error}") from error
+    return list(dict.fromkeys(items))
 
 
 def run_trial(spec: TrialSpec) -> dict:
@@ -189,12 +239,12 @@ def _run_trial(spec: TrialSpec) -> dict:
     )
     starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target])
     if spec.row == "grasp-estimator":
-        root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)))
+        root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)), spec.strategy)
     else:
-        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10)
+        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
     injectors = row_injectors(spec.row)
     injection_seed = int(rng.integers(2**31))
-    with SimulatedRun(root, starts) as run:
+    with SimulatedRun(root, starts, cell_config=_cell_config(spec)) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
@@ -207,6 +257,8 @@ def _run_trial(spec: TrialSpec) -> dict:
         "trial": spec.index,
         "seed": spec.seed,
         "threshold_mm": spec.threshold_mm,
+        "cell": spec.cell,
+        "strategy": spec.strategy,
         "target": [round(v, 6) for v in outcome.target],
         "placed_mm": outcome.placed_offset_mm,
         "pushed_mm": outcome.final_offset_mm,
@@ -223,6 +275,67 @@ def _run_trial(spec: TrialSpec) -> dict:
     }
 
 
+def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazily: pybullet)
+    """The trial's cell; a real cell's per-run errors are seeded from the trial, apart from its draws."""
+    from bt_arrange_sim.cell import CellConfig
+    from bt_arrange_sim.realcell import parse_cell
+
+    errors = parse_cell(spec.cell)
+    if not errors.enabled:
+        return CellConfig()
+    run_seed = int(np.random.default_rng([spec.seed, ROWS.index(spec.row), spec.index, 12]).integers(2**31))
+    return CellConfig(errors=errors.with_run_seed(run_seed))
+
+
+def check_options(
+    cell: str | Sequence[str] = "ideal",
+    strategy: str = "paper",
+    thresholds: str | Sequence[float] | None = None,
+    executor: str | Executor | None = "local",
+    workers: int = 1,
+    scheduler: str | None = None,
+) -> None:
+    """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
+
+    ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, and ``--executor`` with
+    ``--workers`` and ``--scheduler``.
+    """
+    _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler)
+
+
+def _plan(
+    threshold_mm: float,
+    cell: str | Sequence[str],
+    strategy: str,
+    thresholds: str | Sequence[float] | None,
+    executor: str | Executor | None,
+    workers: int,
+    scheduler: str | None,
+) -> tuple[list[Combination], bool]:
+    """The campaign's combinations, and whether its one combination is written straight into ``out_dir``."""
+    from bt_arrange.trees import check_strategy
+    from bt_arrange_sim.executors import check_choice
+
+    try:
+        check_strategy(strategy)
+    except PlanError as error:
+        raise PlanError(f"--strategy {strategy!r}: {error}") from error
+    cells = parse_cells(cell)
+    if thresholds is None:
+        sweep = [threshold_mm]
+    elif isinstance(thresholds, str):
+        sweep = parse_thresholds(thresholds)
+    else:
+        sweep = parse_thresholds(",".join(repr(float(t)) for t in thresholds))
+    if isinstance(executor, str) or executor is None:
+        check_choice(executor or "local", workers, scheduler)
+    elif scheduler is not None:
+        raise PlanError("--scheduler needs --executor dask")
+    # A sweep, or several cells, keeps one folder per combination; one threshold and one cell write into out_dir.
+    flat = thresholds is None and len(cells) == 1
+    return combinations(sweep, cells, strategy), flat
+
+
 def row_injectors(row: str) -> list:
     """The errors a row injects (``ROW_INJECTORS``), each at its default magnitude, fresh for one run."""
     specs = ROW_INJECTORS[row]
@@ -233,24 +346,12 @@ def row_injectors(row: str) -> list:
     return make_injectors(specs)
 
 
-def _depth_grasp_tree(target, threshold_mm: float, seed: int):  # noqa: ANN001, ANN202 - py_trees types
+def _depth_grasp_tree(target, threshold_mm: float, seed: int, strategy: str = "paper"):  # noqa: ANN001, ANN202
     """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
-    import py_trees
+    from bt_arrange.behaviours import MoveHome
+    from bt_arrange.trees import Arrangement, arrange_one, by_depth
 
-    from bt_arrange.behaviours import Inspect, MoveHome
-    from bt_arrange.behaviours.grasp_estimation import transfer_with_depth_grasp
-    from bt_arrange.trees import Arrangement, correction, set_target
-
-    arrange = py_trees.composites.Sequence(
-        name=f"arrange {target.obj}",
-        memory=True,
-        children=[
-            set_target(target),
-            transfer_with_depth_grasp(target, seed=seed),
-            Inspect(f"inspect {target.obj} after placing", target.obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes=10),
-        ],
-    )
+    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed), strategy=strategy)
     return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)
 
 
@@ -268,7 +369,14 @@ def read_trials(path: Path) -> list[dict]:
 
 
 class CampaignIncompleteError(BtArrangeError):
-    """Some trials did not come back (a worker died, the cluster went away); a rerun completes them."""
+    """Some trials did not come back (a worker died, the cluster went away); a rerun completes them.
+
+    ``summary`` holds what ``run_experiment`` would have returned, for the trials that did finish.
+    """
+
+    def __init__(self, message: str, *, summary: list[dict] | None = None) -> None:
+        super().__init__(message)
+        self.summary = summary or []
 
 
 @dataclass
@@ -288,31 +396,59 @@ def run_experiment(
     out_dir: Path,
     *,
     workers: int = 1,
-    executor: Executor | None = None,
+    executor: str | Executor | None = "local",
     on_trial: Callable[[dict, int, int], None] | None = None,
+    cell: str | Sequence[str] = "ideal",
+    strategy: str = "paper",
+    thresholds: str | Sequence[float] | None = None,
+    scheduler: str | None = None,
 ) -> list[dict]:
-    """One combination written straight into ``out_dir``: run the missing trials, return the summary.
+    """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
-    ``executor`` (any ``concurrent.futures.Executor``) runs the trials; by default a process pool
-    of ``workers`` processes, each trial in its own pybullet world. ``on_trial(record, done, total)``
-    reports progress. Raises ``CampaignIncompleteError`` when a trial did not come back (after
-    writing what did).
+    - ``thresholds`` (``"0.29,0.5,1"`` or a sequence, in mm) sweeps the threshold and replaces
+      ``threshold_mm``; ``cell`` is one cell (``ideal``, ``real``, ``FILE.toml``) or several
+      (``"ideal,real"`` or a sequence). The campaign is their product. One threshold and one cell
+      (no ``thresholds``) write straight into ``out_dir``; otherwise every combination gets its
+      folder (``Combination.folder``), ``out_dir`` gets ``campaign.json`` and ``thresholds.png``, and
+      each returned row also names its ``threshold_mm``, ``cell`` and ``folder``.
+    - ``executor``: ``"local"`` (a process pool of ``workers`` processes, each trial in its own
+      pybullet world; one worker runs in this process), ``"dask"`` (``bt_arrange_sim.executors``:
+      a ``LocalCluster`` of ``workers``, or the cluster at ``scheduler``), or any
+      ``concurrent.futures.Executor``.
+    - ``on_trial(record, done, total)`` reports progress.
+
+    Raises ``CampaignIncompleteError`` (with the summary of what finished) when a trial did not come
+    back, after writing what did.
     """
-    combination = Combination(float(threshold_mm))
-    result = run_campaign(
-        rows, trials, seed, [combination], out_dir, workers=workers, executor=executor, on_trial=on_trial, flat=True
-    )
-    _raise_if_lost(result)
-    return result.summaries[combination]
+    whole_number("--seed", seed, style="unit")
+    try:
+        check_threshold(threshold_mm)
+    except PlanError as error:
+        raise PlanError(f"--threshold-mm {threshold_mm!r}: {error}") from error
+    combos, flat = _plan(threshold_mm, cell, strategy, thresholds, executor, workers, scheduler)
+    if executor == "dask":
+        from bt_arrange_sim import executors
 
-
-def _raise_if_lost(result: CampaignResult) -> None:
-    if result.lost:
-        spec, error = result.lost[0]
-        raise CampaignIncompleteError(
-            f"{len(result.lost)} trial(s) did not finish (first: {spec.row} #{spec.index}: {error}); "
-            "what finished is written: rerun the same command to complete the rest"
+        opened: contextlib.AbstractContextManager[Executor | None] = executors.open_executor("dask", workers, scheduler)
+    else:
+        # "local" is this module's own process pool (run_campaign makes it from ``workers``).
+        opened = contextlib.nullcontext(None if isinstance(executor, str) else executor)
+    with opened as pool:
+        result = run_campaign(
+            rows, trials, seed, combos, out_dir, workers=workers, executor=pool, on_trial=on_trial, flat=flat
         )
+    if flat:
+        summary = result.summaries[combos[0]]
+    else:
+        summary = campaign_rows(result.summaries, result.folders)
+    if result.lost:
+        spec, reason = result.lost[0]
+        raise CampaignIncompleteError(
+            f"{len(result.lost)} trial(s) did not finish (first: {spec.row} #{spec.index}: {reason}); "
+            "what finished is written: rerun the same command to complete the rest",
+            summary=summary,
+        )
+    return summary
 
 
 def run_campaign(
@@ -337,10 +473,16 @@ def run_campaign(
     """
     rows = list(rows)
     combos = list(combos)
+    whole_number("--seed", seed, style="unit")
     if trials < 1:
         raise PlanError(f"--trials must be at least 1, got {trials}")
     if workers < 1:
         raise PlanError(f"--workers must be at least 1, got {workers}")
+    for combination in combos:
+        try:
+            check_threshold(combination.threshold_mm)
+        except PlanError as error:
+            raise PlanError(f"threshold {combination.threshold_mm:g} mm: {error}") from error
     if flat and len(combos) != 1:
         raise PlanError("a flat experiment folder holds one combination; use a campaign folder for several")
     folders = {c: out_dir if flat else out_dir / c.folder for c in combos}
@@ -353,8 +495,10 @@ def run_campaign(
             if record.get("seed") != seed or not combination.owns(record):
                 raise PlanError(
                     f"{folder / 'trials.jsonl'} holds trials of another experiment (seed {record.get('seed')}, "
-                    f"threshold {record.get('threshold_mm')} mm); choose another --out for seed {seed}, "
-                    f"threshold {combination.threshold_mm:g} mm"
+                    f"threshold {record.get('threshold_mm')} mm, cell {record.get('cell', 'ideal')}, strategy "
+                    f"{record.get('strategy', 'paper')}); choose another --out for seed {seed}, "
+                    f"threshold {combination.threshold_mm:g} mm, cell {combination.cell}, "
+                    f"strategy {combination.strategy}"
                 )
         done = {(record["row"], record["trial"]) for record in existing}
         # Trial by trial across the rows: an interrupted campaign has measured every row about as often.
@@ -414,13 +558,24 @@ def run_campaign(
     return CampaignResult(summaries, folders, sorted(lost, key=lambda item: (item[0].row, item[0].index)))
 
 
-def write_campaign(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path], out_dir: Path) -> None:
-    """``campaign.json`` (every combination's summary rows, with its folder) and ``thresholds.png``."""
-    rows = [
-        {"threshold_mm": c.threshold_mm, "folder": folders[c].name, **row}
+def campaign_rows(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path]) -> list[dict]:
+    """Every combination's summary rows, each with its threshold, cell, strategy and folder name."""
+    return [
+        {
+            "threshold_mm": c.threshold_mm,
+            "cell": c.cell,
+            "strategy": c.strategy,
+            "folder": folders[c].name,
+            **row,
+        }
         for c, summary in summaries.items()
         for row in summary
     ]
+
+
+def write_campaign(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path], out_dir: Path) -> None:
+    """``campaign.json`` (every combination's summary rows, with its folder) and ``thresholds.png``."""
+    rows = campaign_rows(summaries, folders)
     (out_dir / "campaign.json").write_text(json.dumps(rows, indent=2) + "\n")
     plot_thresholds(rows, out_dir / "thresholds.png")
 
@@ -434,10 +589,20 @@ def plot_thresholds(rows: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, (offset_ax, pushes_ax) = plt.subplots(1, 2, figsize=(10.5, 4.4))
-    for name in dict.fromkeys(r["row"] for r in rows):
-        mine = sorted((r for r in rows if r["row"] == name and r["pushed_mean_mm"] is not None), key=_threshold)
+    cells = list(dict.fromkeys(r.get("cell", "ideal") for r in rows))
+    for row_name, cell in itertools.product(dict.fromkeys(r["row"] for r in rows), cells):
+        mine = sorted(
+            (
+                r
+                for r in rows
+                if r["row"] == row_name and r.get("cell", "ideal") == cell and r["pushed_mean_mm"] is not None
+            ),
+            key=_threshold,
+        )
         if not mine:
             continue
+        # One line per row, and per cell when the campaign has several.
+        name = row_name if len(cells) == 1 else f"{row_name} ({cell_label(cell)})"
         thresholds = [r["threshold_mm"] for r in mine]
         (line,) = offset_ax.plot(thresholds, [r["pushed_mean_mm"] for r in mine], "o-", label=name)
         offset_ax.plot(thresholds, [r["pushed_max_mm"] for r in mine], "v:", color=line.get_color(), alpha=0.7)
@@ -513,7 +678,25 @@ def write_summary(summary: list[dict], out_dir: Path) -> None:
 
 
 def markdown_table(summary: list[dict]) -> str:
-    """Table 1 as Markdown: ours (camera) beside the paper's simulation, mean ± std in mm."""
+    """Table 1 as Markdown: ours (camera) beside the paper's simulation, mean ± std in mm.
+
+    A campaign's rows (``run_experiment`` with several combinations: each row names its ``folder``)
+    give one table per combination, under a heading naming its threshold, cell and folder.
+    """
+    if any("folder" in s for s in summary):
+        parts = []
+        for folder in dict.fromkeys(s["folder"] for s in summary):
+            mine = [s for s in summary if s["folder"] == folder]
+            first = mine[0]
+            parts.append(
+                f"## threshold {first['threshold_mm']:g} mm, cell {cell_label(first['cell'])}, "
+                f"strategy {first['strategy']} ({folder})\n\n" + _table(mine)
+            )
+        return "\n".join(parts)
+    return _table(summary)
+
+
+def _table(summary: list[dict]) -> str:
 
     def pm(mean: float | None, std: float | None) -> str:
         return "-" if mean is None or std is None else f"{mean:.2f} ± {std:.2f}"

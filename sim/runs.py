@@ -8,31 +8,42 @@ beside what the simulator knows (ground truth, labelled as such, for evaluation 
 from __future__ import annotations
 
 import json
+import math
+import os
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import py_trees
-from py_trees.common import Status
+from py_trees.common import Access, Status
 
-from bt_arrange.behaviours import Context, keys
+from bt_arrange.behaviours import Context, Detect, EstimateGraspFromDepth, GraspGuard, Inspect, Pick, Place, Push, keys
+from bt_arrange.checks import positive_number
+from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.plancheck import check_plan, check_scene
+from bt_arrange.replay import ReplayRecorder
+from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
+from bt_arrange.settings import CUBE_COLOURS_RGB
 from bt_arrange.trees import Arrangement, Target
-from bt_arrange_sim.cell import CellConfig, WorkCell
+from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
 from bt_arrange_sim.scenes import CubeStart
 
-#: Behaviours whose failure explains why an object was not finished.
-_REASON_KINDS = {
-    "Detect",
-    "EstimateGraspFromDepth",
-    "Inspect",
-    "Pick",
-    "Place",
-    "Push",
-    "RetryUntilThreshold",
-    "GraspGuard",
-}
+#: World time the scene settles for before the tree starts (cubes dropped onto the table come to rest).
+SETTLE_S = 0.3
+
+#: Behaviours whose failure explains why an object was not finished (each knows its ``obj``).
+REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
+    Detect,  # and Inspect, a Detect
+    EstimateGraspFromDepth,
+    Pick,
+    Place,
+    Push,
+    RepeatUntilWithin,
+    GraspGuard,
+)
 
 
 @dataclass
@@ -72,7 +83,9 @@ class SimulationReport:
     def to_dict(self) -> dict:
         """The ``--json`` form of the report."""
         return {
-            "objects": [asdict(o) for o in self.objects],
+            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
+            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "tree_status": self.tree_status,
             "timed_out": self.timed_out,
@@ -97,24 +110,51 @@ class SimulatedRun:
         gui: bool = False,
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        title: str | None = None,
     ) -> None:
+        if not isinstance(root, py_trees.behaviour.Behaviour):
+            raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
+        positive_number("time limit", time_limit_s, "s", style="unit")
+        cell_config = cell_config or CellConfig()
+        # Everything a user can get wrong is checked here, before the world is built.
+        scene = list(starts)
+        view = cell_config.camera.view()
+        if isinstance(root, Arrangement):
+            check_plan(root.targets, threshold_mm=root.threshold_mm, starts=scene, view=view, colours=CUBE_COLOURS_RGB)
+        else:
+            check_scene(scene, view=view, colours=CUBE_COLOURS_RGB)
+        self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
+        if gui:
+            require_display()
         self.root = root
+        #: Every node of the tree by its id (as text): transitions name their node by it.
+        self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
         self.cell = WorkCell(cell_config, gui=gui)
-        self.cell.add_cubes(starts)
-        self.cell.settle(0.3)
+        self.cell.add_cubes(scene)
+        self.cell.settle(SETTLE_S)
+        #: World time when the tree starts: the report and the live view count from here.
+        self.start_s = self.cell.clock.now()
         self.context = Context.create(self.cell.robot)
-        self.record_dir = Path(record_dir) if record_dir is not None else None
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+        #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
+        self.runner_hooks: list[Callable[[Runner], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
+        #: What the replay page shows (recorded runs only), and its heading.
+        self.replay: ReplayRecorder | None = None
+        self.title = title or root.name
+
+    def elapsed_s(self) -> float:
+        """World time since the tree started (the settling of the scene excluded), as the report counts it."""
+        return self.cell.clock.now() - self.start_s
 
     def run(self) -> SimulationReport:
         """Tick the tree to the end; returns the report. The cell stays open for inspection."""
         py_trees.blackboard.Blackboard.clear()
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
-            self.record_dir.mkdir(parents=True, exist_ok=True)
+            self.replay = ReplayRecorder(self.root)
             self._save_image("before_picking")
         runner = Runner(
             self.root,
@@ -125,11 +165,15 @@ class SimulatedRun:
             on_transition=self._on_transition,
             on_tick=self._on_tick,
         )
+        for hook in self.runner_hooks:
+            hook(runner)
         result = runner.run()
         if self.record_dir is not None:
             self._save_image("after_pushing")
+            assert self.replay is not None
+            self.replay.observe(self.cell.clock.now())  # a stop at the time limit comes after the last tick
         report = SimulationReport(
-            objects=self._outcomes(result.transitions),
+            objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
             tree_status=result.status.value,
             threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
             sim_seconds=result.sim_seconds,
@@ -139,6 +183,8 @@ class SimulatedRun:
         )
         if self.record_dir is not None:
             (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+            assert self.replay is not None
+            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
         return report
 
     def close(self) -> None:
@@ -156,21 +202,27 @@ class SimulatedRun:
             hook(transition)
         if transition.new != Status.SUCCESS.value:
             return
-        placed = transition.kind == "Inspect" and transition.behaviour.endswith(" after placing")
-        if placed and isinstance(self.root, Arrangement):
-            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+        node = self.node(transition)
+        # The Inspects that record the after-placing figures, by their own flag rather than their names.
+        obj = node.obj if isinstance(node, Inspect) and node.after_placing else None
+        if obj is not None and isinstance(self.root, Arrangement):
             for target in self.root.targets:
                 if target.obj == obj:
                     self._placed_truth_mm[obj] = self._truth_offset_mm(target)
         if self.record_dir is None:
             return
-        if placed:
-            obj = transition.behaviour.removeprefix("inspect ").removesuffix(" after placing")
+        if obj is not None:
             self._save_image(f"after_placing_{obj}")
-        elif transition.behaviour == "place all":
+        elif isinstance(self.root, Arrangement) and node is not None and node is self.root.place_all:
             self._save_image("after_placing")
 
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour of the tree a transition is about (by its ``node_id``), or None."""
+        return self.nodes.get(transition.node_id)
+
     def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        if self.replay is not None:
+            self.replay.observe(self.cell.clock.now())
         for hook in self.tick_hooks:
             hook(root)
 
@@ -179,16 +231,19 @@ class SimulatedRun:
 
         assert self.record_dir is not None
         frame = self.cell.camera.capture()
-        cv2.imwrite(str(self.record_dir / f"{stem}.png"), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        path = self.record_dir / f"{stem}.png"
+        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        if self.replay is not None:
+            self.replay.add_image(self.cell.clock.now(), stem.replace("_", " "), path)
 
-    def _outcomes(self, transitions: list[Transition]) -> list[ObjectOutcome]:
+    def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
         if not isinstance(self.root, Arrangement):
             return []
-        storage = py_trees.blackboard.Blackboard.storage
+        report = py_trees.blackboard.Client(name="report")
         outcomes = []
         for target in self.root.targets:
-            placed = storage.get(keys.key(target.obj, keys.PLACED_OFFSET_MM))
-            final = storage.get(keys.key(target.obj, keys.OFFSET_MM))
+            placed = _get(report, keys.key(target.obj, keys.PLACED_OFFSET_MM))
+            final = _get(report, keys.key(target.obj, keys.OFFSET_MM))
             status = self._status(final)
             outcomes.append(
                 ObjectOutcome(
@@ -198,12 +253,22 @@ class SimulatedRun:
                     final_offset_mm=_rounded(final),
                     final_offset_truth_mm=round(self._truth_offset_mm(target), 4),
                     placed_offset_truth_mm=_rounded(self._placed_truth_mm.get(target.obj)),
-                    pushes=int(storage.get(keys.key(target.obj, keys.CORRECTIONS), 0) or 0),
+                    pushes=int(_get(report, keys.key(target.obj, keys.CORRECTIONS)) or 0),
                     status=status,
-                    reason="" if status == "within" else _last_failure(transitions, target.obj),
+                    reason="" if status == "within" else (self._last_failure(transitions, target.obj) or stopped),
                 )
             )
         return outcomes
+
+    def _last_failure(self, transitions: list[Transition], obj: str) -> str:
+        """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
+        for transition in reversed(transitions):
+            if transition.new != Status.FAILURE.value:
+                continue
+            node = self.node(transition)
+            if isinstance(node, REASON_TYPES) and object_of(node) == obj:
+                return transition.feedback
+        return ""
 
     def _status(self, final_offset_mm: float | None) -> str:
         assert isinstance(self.root, Arrangement)
@@ -216,17 +281,25 @@ class SimulatedRun:
         return PlanarPose(x, y).distance_to(target.planar) * 1000
 
 
+def prepare_record_dir(path: Path | str) -> Path:
+    """Make the folder ``--record`` writes to, or a ``PlanError`` saying why it cannot be used."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise PlanError(f"cannot record into {folder}: it is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise PlanError(f"cannot record into {folder}: {error.strerror or error}") from error
+    if not os.access(folder, os.W_OK):
+        raise PlanError(f"cannot record into {folder}: the folder is not writable")
+    return folder
+
+
 def _rounded(value: float | None) -> float | None:
     return None if value is None else round(float(value), 4)
 
 
-def _last_failure(transitions: list[Transition], obj: str) -> str:
-    """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
-    for transition in reversed(transitions):
-        if (
-            transition.new == Status.FAILURE.value
-            and transition.kind in _REASON_KINDS
-            and obj in transition.behaviour.split()
-        ):
-            return transition.feedback
-    return ""
+def _get(client: py_trees.blackboard.Client, key: str) -> Any:
+    """A value through a report's client (registered to read ``key``), or None when nothing wrote it."""
+    client.register_key(key, access=Access.READ)
+    return client.get(key) if client.exists(key) else None

@@ -9,7 +9,8 @@ Each fake implements its protocol of ``bt_arrange.robot`` and records what it wa
   ``object_width_m`` (a cube between the pads) or at 0 (nothing); ``slip()`` lets the cube go,
   ``stuck=True`` makes the fingers never report standing still.
 - ``FakeCamera``: frames rendered by ``bt_arrange.perception.synthetic`` for a list of cubes, at a
-  reduced resolution (960 x 540, about 20 ms per frame and detection).
+  reduced resolution (960 x 540, about 20 ms per frame and detection); a window renders only its
+  pixels, through the window's intrinsics.
 
 ``make_context()`` puts them together with the real ``MotionPlanner`` and ``CubeDetector``;
 ``tick_until_done()`` drives a behaviour the way the runner does: tick, brake step, clock step.
@@ -42,6 +43,7 @@ from bt_arrange.robot import (
     GRIPPER_MAX_WIDTH_M,
     CameraFrame,
     CameraIntrinsics,
+    PixelWindow,
     Robot,
 )
 from bt_arrange.settings import ManipulationSettings
@@ -233,16 +235,20 @@ class FakeCamera:
         self._arm = arm
         #: (world time, arm joints or None) of every capture.
         self.captures: list[tuple[float, FloatArray | None]] = []
+        #: The window of every capture (None: the full image), in the order of ``captures``.
+        self.windows: list[PixelWindow | None] = []
 
     @property
     def intrinsics(self) -> CameraIntrinsics:
         """Pinhole intrinsics of the rendered frames."""
         return self._intrinsics
 
-    def capture(self, with_depth: bool = False) -> CameraFrame:
-        """Render the cubes as they are now (no depth)."""
+    def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
+        """Render the cubes as they are now (no depth): the full image, or only ``window``."""
         self.captures.append((self._clock.now(), None if self._arm is None else self._arm.joint_positions()))
-        frame = render_frame(self.cubes, self._intrinsics, self.pose_world, supersample=4)
+        self.windows.append(window)
+        intrinsics = self._intrinsics if window is None else self._intrinsics.windowed(window)
+        frame = render_frame(self.cubes, intrinsics, self.pose_world, supersample=4)
         return CameraFrame(frame.rgb, None, frame.intrinsics, frame.camera_pose_world, self._clock.now())
 
 

@@ -37,13 +37,16 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    Stage,
     StagedBehaviour,
     keys,
     offset_in_target_frame_mm,
+    stages,
 )
-from bt_arrange.errors import BtArrangeError, UnreachableError
+from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
-from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
+from bt_arrange.robot import PixelWindow
 from bt_arrange.settings import ManipulationSettings
 
 SETTINGS = ManipulationSettings()
@@ -182,7 +185,7 @@ def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
     run = tick_until_done(set_up(MoveHome("park"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "at home, out of the camera's view"
-    assert {t.feedback for t in run.running} == {"move home"}
+    assert {t.feedback for t in run.running} == {stages.MOVE_HOME}
     assert_never_blocks(run)
     arm = fake_arm(context)
     assert len(arm.commands) > 50, "a joint motion of a second or more, one setpoint per control period"
@@ -214,14 +217,18 @@ def test_detect_parks_the_arm_before_looking(clock) -> None:
     context = make_context(clock, q=AWAY_Q, cubes=[cube("green", 0.5, 0.0)])
     run = tick_until_done(set_up(Detect("detect green", "green"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
-    assert run.ticks[0].feedback == "move out of the camera's view"
+    assert run.ticks[0].feedback == stages.PARK
     assert_never_blocks(run)
-    captures = fake_camera(context).captures
-    assert len(captures) == 1
-    time_s, q = captures[0]
-    assert q is not None
-    np.testing.assert_allclose(q, context.home_q, atol=1e-9)
-    assert time_s > fake_arm(context).commands[-1].time_s, "the camera looks once the arm stands still at home"
+    camera = fake_camera(context)
+    assert len(camera.captures) == 2, "a binned full view to find the cube, a window to measure it"
+    search, measure = camera.windows
+    assert search == PixelWindow.full(camera.intrinsics, search.binning) and search.binning > 1
+    assert measure is not None and measure.binning == 1
+    assert measure.width_px * measure.height_px < 0.1 * camera.intrinsics.width_px * camera.intrinsics.height_px
+    for time_s, q in camera.captures:
+        assert q is not None
+        np.testing.assert_allclose(q, context.home_q, atol=1e-9)
+        assert time_s > fake_arm(context).commands[-1].time_s, "the camera looks once the arm stands still at home"
 
 
 @pytest.mark.parametrize(
@@ -300,6 +307,45 @@ def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(cloc
     assert not exists("/red/placed_offset_mm")
 
 
+def test_inspect_looks_through_a_window_around_the_target_only(clock) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.507, 0.004, 0.3), cube("blue", 0.4, 0.15)])
+    write({"/red/target": PlanarPose(0.5, 0.0)})
+    run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    camera = fake_camera(context)
+    (window,) = camera.windows
+    assert window is not None and window.binning == 1
+    assert window.width_px * window.height_px < 0.1 * camera.intrinsics.width_px * camera.intrinsics.height_px
+    assert read("/red/offset_mm") == pytest.approx(math.hypot(7.0, 4.0), abs=0.3)
+
+
+def test_inspect_searches_the_whole_view_for_a_cube_far_from_its_target(clock) -> None:
+    context = make_context(clock, cubes=[cube("red", 0.62, -0.2, 0.3)])
+    write({"/red/target": PlanarPose(0.5, 0.0)})
+    run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    target_window, search, measure = fake_camera(context).windows
+    assert target_window is not None and search is not None and measure is not None
+    assert search.binning > 1 and measure.binning == 1 and measure != target_window
+    pose = read("/red/pose")
+    assert 1000 * math.hypot(pose.x_m - 0.62, pose.y_m + 0.2) < 0.5
+
+
+def test_a_detection_in_a_window_is_the_full_frames(clock) -> None:
+    context = make_context(clock, cubes=[cube("green", 0.47, 0.06, 0.4)])
+    camera, detector = fake_camera(context), context.detector
+    window = detector.window_around(camera.intrinsics, camera.pose_world, 0.47, 0.06, 0.06)
+    assert window is not None
+    in_full, in_window = (
+        detector.detect(camera.capture(), "green"),
+        detector.detect(camera.capture(window=window), "green"),
+    )
+    assert in_full.found and in_window.found
+    assert (
+        1000 * math.hypot(in_full.planar.x_m - in_window.planar.x_m, in_full.planar.y_m - in_window.planar.y_m) < 0.01
+    )
+
+
 # -- Pick ----------------------------------------------------------------------------------------
 
 
@@ -311,13 +357,13 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "holding red, fingers 50.0 mm apart"
     assert_never_blocks(run)
-    stages = list(dict.fromkeys(t.feedback for t in run.running))
-    assert stages == [
-        "move above the cube",
-        "wait for the fingers to open",
-        "descend to the cube",
-        "close on the cube",
-        "lift the cube",
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen == [
+        stages.MOVE_ABOVE_CUBE,
+        stages.WAIT_FOR_OPEN_FINGERS,
+        stages.DESCEND_TO_CUBE,
+        stages.CLOSE_ON_CUBE,
+        stages.LIFT_CUBE,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [
@@ -339,7 +385,7 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
         "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
     )
     feedback = [t.feedback for t in run.ticks]
-    assert feedback.index("let go of a bad grasp") < feedback.index("lift the cube"), "lets go before lifting"
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
     assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.approach_height_m, abs=1e-6), "lifted clear"
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
@@ -351,7 +397,7 @@ def test_pick_that_holds_a_turned_cube_by_its_corners_lets_go_and_fails(clock) -
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback.startswith("the pads hold the cube across its corners: 68.0 mm apart")
-    assert "let go of a bad grasp" in [t.feedback for t in run.ticks]
+    assert stages.LET_GO_OF_BAD_GRASP in [t.feedback for t in run.ticks]
 
 
 @pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])
@@ -361,7 +407,7 @@ def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, ma
         ArmKinematics().check_reachable(gripper_down_pose(FAR_X_M, 0.0, SETTINGS.approach_height_m))
     run = tick_until_done(set_up(make(f"{make.__name__} red", "red"), context), context)
     assert [t.status for t in run.ticks] == [Status.FAILURE], "fails on its first tick"
-    first_move = "move above the cube" if make is Pick else "carry above the target"
+    first_move = stages.MOVE_ABOVE_CUBE if make is Pick else stages.CARRY_ABOVE_TARGET
     assert run.feedback.startswith(f"{first_move}: ")
     assert str(unreachable.value).split(" is out of reach")[1] in run.feedback
     assert fake_arm(context).commands == []
@@ -372,8 +418,8 @@ def test_fingers_that_never_stop_fail_after_the_gripper_timeout(clock) -> None:
     write({"/red/pose": cube_pose(0.5, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
-    assert run.feedback.startswith("wait for the fingers to open: fingers still moving after 2.0 s (limit 2.0 s)")
-    waiting = [t for t in run.ticks if t.feedback == "wait for the fingers to open"]
+    assert run.feedback.startswith(f"{stages.WAIT_FOR_OPEN_FINGERS}: fingers still moving after 2.0 s (limit 2.0 s)")
+    waiting = [t for t in run.ticks if t.feedback == stages.WAIT_FOR_OPEN_FINGERS]
     waited_s = run.ticks[-1].time_s - waiting[0].time_s
     assert SETTINGS.gripper_timeout_s < waited_s <= SETTINGS.gripper_timeout_s + 2 * fake_arm(context).control_period_s
     assert all(t.arm_commands == 0 for t in waiting)
@@ -397,10 +443,10 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     assert run.feedback == "red released at its target"
     assert_never_blocks(run)
     assert list(dict.fromkeys(t.feedback for t in run.running)) == [
-        "carry above the target",
-        "lower the cube to the table",
-        "release the cube",
-        "retreat",
+        stages.CARRY_ABOVE_TARGET,
+        stages.LOWER_CUBE,
+        stages.RELEASE_CUBE,
+        stages.RETREAT,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [("open", SETTINGS.open_width_m)]
@@ -458,6 +504,19 @@ def test_push_falls_back_to_the_other_axis_when_the_preferred_offset_is_below_mi
     assert read("/red/push_axis") == "x", "the next push goes along the other axis again"
 
 
+def test_the_push_itself_runs_at_the_slower_push_limits(context: Context) -> None:
+    push = push_setup(context, cube_pose(0.5, 0.0), 0.0, (6.0, 0.0))
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    lines = {
+        stage.name: stage.motion for stage in push._stages if isinstance(getattr(stage, "motion", None), LinearMotion)
+    }
+    pushing = lines["push 6.00 mm along x"]
+    assert pushing.cartesian_limits.velocity_m_s <= SETTINGS.push_limits.velocity_m_s
+    assert SETTINGS.push_limits.velocity_m_s < context.planner.cartesian_limits.velocity_m_s
+    assert lines["lower the fingers"].cartesian_limits.velocity_m_s > SETTINGS.push_limits.velocity_m_s
+
+
 def test_push_with_nothing_to_push_succeeds_without_moving(context: Context) -> None:
     run = tick_until_done(push_setup(context, cube_pose(0.5, 0.0), 0.0, (0.1, 0.15)), context)
     assert [t.status for t in run.ticks] == [Status.SUCCESS]
@@ -486,7 +545,7 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     towards = np.array(direction)
     across = np.array([-towards[1], towards[0]])
 
-    run = tick_until_done(push, context, until=after("wait for the fingers"))
+    run = tick_until_done(push, context, until=after(stages.WAIT_FOR_FINGERS))
     assert run.status == Status.RUNNING, run.feedback
     assert_never_blocks(run)
     behind = arm.tcp_pose()
@@ -522,8 +581,8 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
 @pytest.mark.parametrize(
     ("make", "during"),
     [
-        (lambda: MoveHome("park"), "move home"),
-        (lambda: Pick("pick red", "red"), "descend to the cube"),
+        (lambda: MoveHome("park"), stages.MOVE_HOME),
+        (lambda: Pick("pick red", "red"), stages.DESCEND_TO_CUBE),
     ],
     ids=["joint motion", "straight line"],
 )
@@ -538,7 +597,7 @@ def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_re
 
     behaviour.stop(Status.INVALID)
     assert behaviour.status == Status.INVALID
-    assert behaviour.feedback_message == "interrupted"
+    assert behaviour.feedback_message == stages.INTERRUPTED
     assert context.brake.active
     braking = brake_until_idle(context)
     assert_comes_to_rest(braking)
@@ -549,14 +608,14 @@ def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_re
 def test_a_behaviour_started_while_the_arm_brakes_waits_for_it(clock) -> None:
     context = make_context(clock, q=AWAY_Q)
     first = set_up(MoveHome("park"), context)
-    tick_until_done(first, context, until=after("move home", 40))
+    tick_until_done(first, context, until=after(stages.MOVE_HOME, 40))
     first.stop(Status.INVALID)
     arm = fake_arm(context)
 
     second = set_up(MoveHome("park again"), context)
     run = tick_until_done(second, context)
     assert run.status == Status.SUCCESS, run.feedback
-    waiting = [t for t in run.ticks if t.feedback == "waiting for the arm to stop"]
+    waiting = [t for t in run.ticks if t.feedback == stages.WAITING_FOR_BRAKE]
     assert len(waiting) > 10
     assert run.ticks[: len(waiting)] == waiting, "it waits first, then moves"
     assert all(t.arm_commands == 0 for t in waiting), "only the brake commands the arm meanwhile"
@@ -597,7 +656,7 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
     run = tick_until_done(guard, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert place.status == Status.SUCCESS
-    assert run.ticks[0].feedback == "holding; carry above the target"
+    assert run.ticks[0].feedback == f"holding; {stages.CARRY_ABOVE_TARGET}"
     assert all(t.feedback.startswith("holding; ") for t in run.ticks)
     assert_never_blocks(run)
 
@@ -605,9 +664,9 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
 def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
     context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
     guard, place = guarded_place(context)
-    run = tick_until_done(guard, context, until=after("holding; carry above the target", 50))
+    run = tick_until_done(guard, context, until=after(f"holding; {stages.CARRY_ABOVE_TARGET}", 50))
     assert guard.status == Status.RUNNING and place.status == Status.RUNNING
-    assert run.feedback == "holding; carry above the target"
+    assert run.feedback == f"holding; {stages.CARRY_ABOVE_TARGET}"
 
     gripper = fake_gripper(context)
     gripper.slip()
@@ -623,7 +682,7 @@ def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
             break
     assert guard.status == Status.FAILURE
     assert place.status == Status.INVALID, "the child is interrupted"
-    assert place.feedback_message == "interrupted"
+    assert place.feedback_message == stages.INTERRUPTED
     assert guard.feedback_message.startswith("the cube left the gripper: fingers at ")
     assert guard.feedback_message.endswith("mm, under the 47.0 mm of a held cube")
     assert context.brake.active, "the carry motion goes to the brake"
@@ -638,3 +697,92 @@ def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
     assert guard.feedback_message == "the cube left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held cube"
     assert place.status == Status.INVALID, "the child never ran"
     assert fake_arm(context).commands == []
+
+
+def test_an_error_raised_mid_motion_is_a_failure_with_the_reason_and_the_motion_goes_to_the_brake(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    behaviour = set_up(MoveHome("park"), context)
+    run = tick_until_done(behaviour, context, until=after(stages.MOVE_HOME, 30))
+    assert run.status == Status.RUNNING
+    assert speeds(fake_arm(context).commands[-1:])[0] > 0.1, "at speed when the error comes"
+    motion = behaviour._stages[behaviour._index].motion
+    step = motion.step
+
+    def fails_once():
+        motion.step = step  # the brake steps the same motion afterwards
+        raise MotionError("joint motion failed at t = 0.300 s: ruckig Error")
+
+    motion.step = fails_once
+    behaviour.tick_once()
+    assert behaviour.status == Status.FAILURE
+    assert behaviour.feedback_message == f"{stages.MOVE_HOME}: joint motion failed at t = 0.300 s: ruckig Error"
+    assert context.brake.active, "the motion was handed to the brake"
+    assert_comes_to_rest(brake_until_idle(context))
+
+
+def test_a_stage_without_poll_cannot_be_made() -> None:
+    class Forgetful(Stage):
+        pass
+
+    with pytest.raises(TypeError, match="abstract"):
+        Forgetful("forgot to poll")  # type: ignore[abstract]
+
+
+def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
+    push = Push("push red", "red")
+    assert isinstance(push.blackboard, py_trees.blackboard.Client)
+    assert set(push.blackboard.read) >= {"/red/pose", "/red/target", "/red/offset_xy_mm", "/red/push_axis"}
+    assert set(push.blackboard.write) == {"/red/push_axis"}
+    inspect = Inspect("inspect red", "red", after_placing=True)
+    assert set(inspect.blackboard.write) == {
+        "/red/pose",
+        "/red/offset_mm",
+        "/red/offset_xy_mm",
+        "/red/placed_offset_mm",
+    }
+
+
+# -- the learned push strategy (ours; the paper's stays the default) ----------------------------
+
+
+def test_learned_push_goes_along_the_larger_offset_first() -> None:
+    assert Push.plan_learned((0.5, -3.0), (0.0, 0.0), None, 0.2) == ((0.0, 0.0), "y", -3.0)
+    assert Push.plan_learned((2.0, 1.0), (0.0, 0.0), None, 0.2) == ((0.0, 0.0), "x", 2.0)
+
+
+def test_learned_push_learns_where_the_last_push_landed_and_aims_short_by_it() -> None:
+    # The last push along x aimed at the target (aim 0) and the cube stopped 0.6 mm past it
+    # (offset -0.6 mm): pushes along x land 0.6 mm beyond their aim.
+    bias, axis, distance = Push.plan_learned((-0.6, 0.1), (0.0, 0.0), ("x", 0.0), 0.2)
+    assert bias == pytest.approx((0.6, 0.0))
+    assert axis == "x"
+    assert distance == pytest.approx(-1.2), "aim 0.6 mm short of the target, from 0.6 mm past it"
+    # Aimed 0.6 mm short and landed on the target: the bias stays 0.6 mm.
+    bias, _, _ = Push.plan_learned((0.0, 0.1), bias, ("x", -0.6), 0.2)
+    assert bias == pytest.approx((0.6, 0.0))
+
+
+def test_learned_push_that_fell_short_of_the_cube_reaches_further_next_time() -> None:
+    # Aimed at the target, but the cube did not move from 0.3 mm short: push further.
+    bias, axis, distance = Push.plan_learned((0.3, 0.0), (0.0, 0.0), ("x", 0.0), 0.2)
+    assert bias == pytest.approx((-0.3, 0.0))
+    assert (axis, distance) == ("x", pytest.approx(0.6))
+
+
+def test_learned_push_keeps_its_bias_on_the_blackboard_between_pushes(context: Context) -> None:
+    write({"/red/pose": cube_pose(0.5, 0.0), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)})
+    run = tick_until_done(set_up(Push("push red", "red", strategy="learned"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed +3.00 mm along x"
+    assert read("/red/last_push") == ("x", -0.0)
+    # The camera then sees the cube 0.4 mm past the target along x, 1 mm short along y.
+    write({"/red/offset_xy_mm": (-0.4, 1.0)})
+    run = tick_until_done(set_up(Push("push red", "red", strategy="learned"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert read("/red/push_bias_mm") == pytest.approx((0.4, 0.0))
+    assert run.feedback == "pushed +1.00 mm along y"
+
+
+def test_an_unknown_push_strategy_is_a_clear_error() -> None:
+    with pytest.raises(BtArrangeError, match="push strategy 'magic': choose one of paper, learned"):
+        Push("push red", "red", strategy="magic")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import py_trees
@@ -17,7 +18,7 @@ from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import keys
-from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth, transfer_with_depth_grasp
+from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.behaviours.handling import GraspGuard, Pick
 from bt_arrange.errors import PerceptionError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
@@ -26,7 +27,7 @@ from bt_arrange.perception import Detection, DetectionStatus
 from bt_arrange.perception.depth_grasp import SOURCE, DepthGraspConfig, DepthGraspEstimator, scaled_intrinsics
 from bt_arrange.perception.synthetic import sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
-from bt_arrange.trees import Target
+from bt_arrange.trees import Target, by_depth, transfer
 
 #: Rendered wider than the sensor's 1024 px, so the estimator resamples like it does the cell's frames.
 WIDTH_PX, HEIGHT_PX = 1280, 720
@@ -328,12 +329,23 @@ def test_the_hint_is_used_and_the_seed_restarts_at_setup():
         EstimateGraspFromDepth("bad", "blue", near_xy_m=(0.5,))  # type: ignore[arg-type]
 
 
-def test_transfer_with_depth_grasp_mirrors_transfer():
-    tree = transfer_with_depth_grasp(Target("red", 0.5, 0.1), max_regrasps=2, seed=4)
+def test_transfer_located_by_depth_mirrors_transfer():
+    tree = transfer(Target("red", 0.5, 0.1), max_regrasps=2, locate=by_depth(seed=4))
     assert isinstance(tree, py_trees.decorators.Retry)
     assert tree.num_failures == 3
     estimate, pick, guard = tree.decorated.children
     assert isinstance(estimate, EstimateGraspFromDepth) and estimate.seed == 4 and estimate.obj == "red"
     assert isinstance(pick, Pick) and isinstance(guard, GraspGuard)
     with pytest.raises(PlanError, match="max_regrasps"):
-        transfer_with_depth_grasp(Target("red", 0.5, 0.1), max_regrasps=-1)
+        transfer(Target("red", 0.5, 0.1), max_regrasps=-1, locate=by_depth())
+
+
+def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # issue 9, item 8: no import circle
+    import subprocess
+    import sys
+
+    code = "import sys, bt_arrange.behaviours.grasp_estimation\nprint('bt_arrange.trees' in sys.modules)\n"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert result.stdout.strip() == "False"
+    source = (Path(__file__).resolve().parents[1] / "bt_arrange" / "behaviours" / "grasp_estimation.py").read_text()
+    assert "bt_arrange.trees import" not in source

@@ -246,7 +246,7 @@ def test_graphviz_failing_is_a_display_error(tmp_path: Path, monkeypatch: pytest
     fake_dot = tmp_path / "dot"
     fake_dot.write_text("#!/bin/sh\necho 'Error: <stdin>: syntax error in line 3' >&2\nexit 1\n")
     fake_dot.chmod(fake_dot.stat().st_mode | stat.S_IXUSR)
-    monkeypatch.setattr(display.shutil, "which", lambda name: str(fake_dot) if name == "dot" else None)
+    monkeypatch.setattr(display.rendering.shutil, "which", lambda name: str(fake_dot) if name == "dot" else None)
     with pytest.raises(DisplayError, match=r"\(exit status 1\): Error: <stdin>: syntax error in line 3$"):
         render_tree(two_cubes(), "png", out=tmp_path / "tree.png")
 

@@ -32,9 +32,15 @@ def kinematics() -> ArmKinematics:
     return ArmKinematics()
 
 
+#: The limits the figures of these tests were worked out for (slower than the defaults, so that
+#: a motion of a radian or two reaches its limits well before it ends).
+TEST_JOINT_LIMITS = JointLimits(velocity_rad_s=1.0, acceleration_rad_s2=2.0, jerk_rad_s3=10.0)
+TEST_CARTESIAN_LIMITS = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
+
+
 @pytest.fixture(scope="module")
 def planner(kinematics: ArmKinematics) -> MotionPlanner:
-    return MotionPlanner(kinematics, JointLimits(), CartesianLimits(), DT_S)
+    return MotionPlanner(kinematics, TEST_JOINT_LIMITS, TEST_CARTESIAN_LIMITS, DT_S)
 
 
 def run(motion: Motion, start_q: np.ndarray, stop_after_steps: int | None = None, max_steps: int = 5000) -> np.ndarray:
@@ -94,15 +100,15 @@ def line_deviation_m(kinematics: ArmKinematics, positions: np.ndarray, start_m: 
 
 def test_limit_defaults_and_per_joint_values() -> None:
     limits = JointLimits()
-    assert limits.velocity_rad_s == (1.0,) * 6
-    assert limits.acceleration_rad_s2 == (2.0,) * 6
-    assert limits.jerk_rad_s3 == (10.0,) * 6
+    assert limits.velocity_rad_s == (2.0,) * 6
+    assert limits.acceleration_rad_s2 == (8.0,) * 6
+    assert limits.jerk_rad_s3 == (100.0,) * 6
     per_joint = JointLimits(velocity_rad_s=[0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
     assert per_joint.velocity_rad_s == (0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
     cartesian = CartesianLimits()
-    assert (cartesian.velocity_m_s, cartesian.acceleration_m_s2, cartesian.jerk_m_s3) == (0.15, 0.5, 3.5)
+    assert (cartesian.velocity_m_s, cartesian.acceleration_m_s2, cartesian.jerk_m_s3) == (0.4, 2.0, 20.0)
     slower = cartesian.time_scaled(0.5)
-    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.075, 0.125, 0.4375))
+    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.2, 0.5, 2.5))
 
 
 @pytest.mark.parametrize(
@@ -293,7 +299,7 @@ def test_line_velocities_are_the_derivative_of_the_positions(
 
 def test_line_is_slowed_down_to_respect_slow_joints(kinematics: ArmKinematics, above_cube_q: np.ndarray) -> None:
     slow_joints = JointLimits(velocity_rad_s=0.1, acceleration_rad_s2=0.5, jerk_rad_s3=5.0)
-    planner = MotionPlanner(kinematics, slow_joints, CartesianLimits(), DT_S)
+    planner = MotionPlanner(kinematics, slow_joints, TEST_CARTESIAN_LIMITS, DT_S)
     start = kinematics.forward(above_cube_q)
     motion = planner.move_line(above_cube_q, Pose.from_rotation(start.position_m + [0.1, 0.0, -0.05], start.rotation))
     assert motion.time_scale < 0.7
@@ -373,7 +379,7 @@ def test_zero_length_line(planner: MotionPlanner, kinematics: ArmKinematics, abo
 
 def test_line_needing_a_huge_slowdown_is_a_motion_error(kinematics: ArmKinematics, above_cube_q: np.ndarray) -> None:
     crawling_joints = JointLimits(velocity_rad_s=0.005)
-    planner = MotionPlanner(kinematics, crawling_joints, CartesianLimits(), DT_S)
+    planner = MotionPlanner(kinematics, crawling_joints, TEST_CARTESIAN_LIMITS, DT_S)
     start = kinematics.forward(above_cube_q)
     with pytest.raises(MotionError, match=r"more than the 10x slowdown allowed"):
         LinearMotion(

@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_arrange.errors import PerceptionError
+from bt_arrange.errors import OutOfRangeError, PerceptionError
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception import (
     DEFAULT_COLOUR_TABLE,
@@ -29,16 +29,14 @@ from bt_arrange.perception.synthetic import (
     sim_intrinsics,
     top_down_camera_pose,
 )
-from bt_arrange.robot import CameraFrame
+from bt_arrange.robot import CameraFrame, PixelWindow
 
 INTRINSICS = sim_intrinsics()
 CAMERA = top_down_camera_pose()
 DETECTOR = CubeDetector()
 
 
-def assert_found_at(
-    detection: Detection, cube: SyntheticCube, xy_mm: float = 0.2, yaw_deg: float = 0.3
-) -> None:
+def assert_found_at(detection: Detection, cube: SyntheticCube, xy_mm: float = 0.2, yaw_deg: float = 0.3) -> None:
     assert detection.status is DetectionStatus.FOUND, detection.reason
     assert detection.pose_world is not None
     error_mm = 1000.0 * math.hypot(detection.pose_world.x_m - cube.x_m, detection.pose_world.y_m - cube.y_m)
@@ -283,11 +281,77 @@ def test_clutter_gives_outcomes_never_exceptions() -> None:
         for _ in range(12):
             centre = rng.uniform([0, 0], [960, 540])
             points = centre + rng.normal(0.0, rng.uniform(5, 60), (int(rng.integers(3, 8)), 2))
-            colour = (
-                np.array(rng.choice(list(SIM_CUBE_COLOURS_RGB.values()))) * 255 * rng.uniform(0.4, 1.0)
-            ).astype(int)
+            colour = (np.array(rng.choice(list(SIM_CUBE_COLOURS_RGB.values()))) * 255 * rng.uniform(0.4, 1.0)).astype(
+                int
+            )
             cv2.fillPoly(rgb, [points.astype(np.int32)], tuple(int(c) for c in colour))
         for colour, detection in DETECTOR.detect_all(replace(frame, rgb=rgb)).items():
             assert isinstance(detection.status, DetectionStatus)
             assert colour in detection.reason
             assert detection.found == (detection.pose_world is not None)
+
+
+def test_the_evaluation_shows_a_sign_of_life_before_each_row(monkeypatch, capsys) -> None:  # issue 8, item 9
+    from bt_arrange.perception import evaluate
+
+    monkeypatch.setattr(evaluate, "make_trials", lambda n, **_: [])
+    monkeypatch.setattr(evaluate, "evaluate", lambda trials, detector: type("S", (), {"row": lambda self, r: r})())
+    monkeypatch.setattr(evaluate, "runtime_ms", lambda: {})
+    evaluate.main(["--trials", "3"])
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "evaluate: row 1 of 24, 3 trials: 1920x1080 anti-aliased"
+    assert len(lines) == 25 and lines[-1].startswith("evaluate: timing")
+
+
+# -- windows and the search view -----------------------------------------------------------------
+
+
+def test_a_windows_intrinsics_move_the_principal_point_and_binning_scales_them() -> None:
+    window = PixelWindow(100, 40, 320, 160, binning=4)
+    windowed = INTRINSICS.windowed(window)
+    assert (windowed.width_px, windowed.height_px) == (80, 40)
+    assert windowed.fx_px == pytest.approx(INTRINSICS.fx_px / 4)
+    assert windowed.cx_px == pytest.approx((INTRINSICS.cx_px + 0.5 - 100) / 4 - 0.5)
+    unbinned = INTRINSICS.windowed(PixelWindow(100, 40, 320, 160))
+    assert (unbinned.cx_px, unbinned.cy_px) == pytest.approx((INTRINSICS.cx_px - 100, INTRINSICS.cy_px - 40))
+
+
+@pytest.mark.parametrize(
+    ("arguments", "why"),
+    [((-1, 0, 10, 10), "outside"), ((0, 0, 10, 10, 0), "binning"), ((0, 0, 10, 9, 2), "whole number")],
+)
+def test_a_bad_pixel_window_is_refused_saying_why(arguments, why: str) -> None:
+    with pytest.raises(OutOfRangeError, match=why):
+        PixelWindow(*arguments)
+
+
+def test_a_window_leaving_the_image_is_refused() -> None:
+    with pytest.raises(OutOfRangeError, match="leaves the"):
+        INTRINSICS.windowed(PixelWindow(1900, 0, 40, 40))
+
+
+def test_locate_finds_every_blob_of_a_colour_in_a_binned_view() -> None:
+    cubes = [
+        SyntheticCube("red", 0.45, -0.1, 0.2),
+        SyntheticCube("red", 0.6, 0.2, 0.9),
+        SyntheticCube("blue", 0.5, 0.0),
+    ]
+    binning = DETECTOR.search_binning(INTRINSICS, CAMERA)
+    assert binning == 8
+    frame = render_frame(cubes, INTRINSICS.windowed(PixelWindow.full(INTRINSICS, binning)), CAMERA, supersample=2)
+    located = sorted(DETECTOR.locate(frame, "red"))
+    assert len(located) == 2
+    for (x, y), expected in zip(located, [(0.45, -0.1), (0.6, 0.2)], strict=True):
+        assert 1000 * math.dist((x, y), expected) < 2.0
+    assert DETECTOR.locate(frame, "green") == ()
+
+
+def test_the_window_around_a_point_holds_its_square_and_stops_at_the_image() -> None:
+    window = DETECTOR.window_around(INTRINSICS, CAMERA, 0.5, 0.0, 0.05)
+    assert window is not None
+    corners = project_points(INTRINSICS, CAMERA, [[0.45, -0.05, 0.05], [0.55, 0.05, 0.05]])
+    assert window.x_px <= corners[:, 0].min() and corners[:, 0].max() <= window.x_px + window.width_px
+    assert window.y_px <= corners[:, 1].min() and corners[:, 1].max() <= window.y_px + window.height_px
+    edge = DETECTOR.window_around(INTRINSICS, CAMERA, 0.5, 0.44, 0.05)
+    assert edge is not None and edge.x_px == 0
+    assert DETECTOR.window_around(INTRINSICS, CAMERA, 0.5, 2.0, 0.05) is None

@@ -1,13 +1,16 @@
 """The py_trees behaviours of an arrangement: Detect, Pick, Place, Inspect, Push.
 
+Their blackboard keys are named in ``keys``, their stages (the feedback while they run) in ``stages``.
+
 Each reaches the world only through the ``Context`` handed to ``setup(context=...)``, declares
 its blackboard keys (see ``keys``), sets ``feedback_message`` on every branch, never blocks a
 tick, and turns errors of the framework into FAILURE with the reason as feedback.
 """
 
+from bt_arrange.behaviours import keys, stages
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import ArmBrake, Context
-from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth, transfer_with_depth_grasp
+from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.behaviours.handling import GraspGuard, Pick, Place, Push, holding
 from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, offset_in_target_frame_mm
 
@@ -29,5 +32,6 @@ __all__ = [
     "StagedBehaviour",
     "holding",
     "offset_in_target_frame_mm",
-    "transfer_with_depth_grasp",
+    "keys",
+    "stages",
 ]

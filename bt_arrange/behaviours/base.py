@@ -4,40 +4,47 @@
 stage (planning its motion); each ``update()`` advances the current stage by one control period
 and moves on to the next when it ends. Errors of the framework (``BtArrangeError``) become
 FAILURE with the error as the feedback message. An interrupted motion is handed to the
-context's ``ArmBrake``, which finishes its jerk-limited stop.
+context's ``ArmBrake``, which finishes its jerk-limited stop. An error raised while a stage
+runs (a ``MotionError`` mid-motion) is a FAILURE too, and its motion goes to the brake as well.
+
+The base class owns the behaviour's blackboard client: a subclass declares its keys with
+``reads(...)`` and ``writes(...)`` in ``__init__`` and reads them with ``read(key, written_by)``.
 """
 
 from __future__ import annotations
 
-from abc import abstractmethod
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
 import py_trees
-from py_trees.common import Status
+from py_trees.common import Access, Status
 
+from bt_arrange.behaviours import stages as stage_names
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import Motion
 
 
-class Stage:
-    """One step of a behaviour. ``start`` may raise ``BtArrangeError``; ``poll`` runs once per tick."""
+class Stage(ABC):
+    """One step of a behaviour. ``start`` and ``poll`` may raise ``BtArrangeError``; ``poll`` runs once per tick."""
 
     def __init__(self, name: str) -> None:
         self.name = name
         self.reason = ""
 
     def start(self, context: Context) -> None:
-        """Begin the step (plan a motion, command the gripper)."""
+        """Begin the step (plan a motion, command the gripper); a step that only polls needs nothing here."""
+        return None
 
     @abstractmethod
     def poll(self, context: Context) -> Status:
         """Advance by one control period; RUNNING, SUCCESS, or FAILURE with ``self.reason`` set."""
 
     def interrupt(self, context: Context) -> None:
-        """The behaviour was interrupted while this step ran."""
+        """The behaviour was interrupted while this step ran; a step without a motion has nothing to hand on."""
+        return None
 
 
 class MoveStage(Stage):
@@ -168,13 +175,15 @@ class OnlyIf(Stage):
 class StagedBehaviour(py_trees.behaviour.Behaviour):
     """A behaviour that runs ``stages()`` one after the other, never blocking a tick.
 
-    Subclasses declare their blackboard keys in ``__init__`` (configuration only: a tree can be
-    built and drawn without a robot), build their stages in ``stages()`` from the blackboard, and
-    may say what they achieved in ``success_message()``.
+    Subclasses declare their blackboard keys in ``__init__`` with ``reads()`` and ``writes()``
+    (configuration only: a tree can be built and drawn without a robot), build their stages in
+    ``stages()`` from the blackboard, and may say what they achieved in ``success_message()``.
     """
 
     def __init__(self, name: str) -> None:
         super().__init__(name=name)
+        #: The behaviour's blackboard client; its keys are declared with ``reads()`` and ``writes()``.
+        self.blackboard = self.attach_blackboard_client(name=name)
         self.context: Context | None = None
         self._stages: list[Stage] = []
         self._index = 0
@@ -198,12 +207,25 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         """Feedback once every stage succeeded."""
         return "done"
 
+    def reads(self, *keys: str) -> None:
+        """Declare blackboard keys this behaviour reads (absolute, e.g. ``keys.key("red", keys.POSE)``)."""
+        for key in keys:
+            self.blackboard.register_key(key, access=Access.READ)
+
+    def writes(self, *keys: str) -> None:
+        """Declare blackboard keys this behaviour writes."""
+        for key in keys:
+            self.blackboard.register_key(key, access=Access.WRITE)
+
     def read(self, key: str, written_by: str) -> Any:
         """A blackboard value this behaviour needs; a ``PlanError`` naming the key when it is missing."""
-        blackboard = getattr(self, "blackboard", None)
-        if blackboard is None or not blackboard.exists(key):
+        if not self.blackboard.exists(key):
             raise PlanError(f"{self.name} needs {key} on the blackboard, written by {written_by}: run that first")
-        return blackboard.get(key)
+        return self.blackboard.get(key)
+
+    def write(self, key: str, value: Any) -> None:
+        """Write a declared key (overwriting)."""
+        self.blackboard.set(key, value, overwrite=True)
 
     def initialise(self) -> None:
         """Build the stages and start the first one (plan its motion) unless the arm is still braking."""
@@ -227,14 +249,18 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
             self.feedback_message = self._failure
             return Status.FAILURE
         if context.brake.active:
-            self.feedback_message = "waiting for the arm to stop"
+            self.feedback_message = stage_names.WAITING_FOR_BRAKE
             return Status.RUNNING
         while self._index < len(self._stages):
             stage = self._stages[self._index]
             if not self._started and not self._start_current(context):
                 self.feedback_message = self._failure or ""
                 return Status.FAILURE
-            status = stage.poll(context)
+            try:
+                status = stage.poll(context)
+            except BtArrangeError as error:
+                self.feedback_message = self._abandon(stage, context, error)
+                return Status.FAILURE
             if status == Status.RUNNING:
                 self.feedback_message = stage.name
                 return Status.RUNNING
@@ -251,7 +277,17 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         if new_status == Status.INVALID and self.context is not None and self._index < len(self._stages):
             if self._started:
                 self._stages[self._index].interrupt(self.context)
-            self.feedback_message = "interrupted"
+            self.feedback_message = stage_names.INTERRUPTED
+
+    def _abandon(self, stage: Stage, context: Context, error: BtArrangeError) -> str:
+        """A stage raised mid-run: hand its motion to the brake and say why the behaviour fails."""
+        reason = f"{stage.name}: {error}"
+        self._started = False  # the stage is over: a later interruption has nothing to hand on
+        try:
+            stage.interrupt(context)
+        except BtArrangeError as stop_error:  # the motion cannot even be stopped: the arm holds its last setpoint
+            reason += f" (and its stop failed: {stop_error})"
+        return reason
 
     def _start_current(self, context: Context) -> bool:
         stage = self._stages[self._index]

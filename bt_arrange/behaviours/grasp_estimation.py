@@ -8,8 +8,8 @@ the depth image alone (colour-blind, with seeded sensor noise); see that module 
 and the size of its errors. Inspection after placing and the pushes still use the colour
 detector, as in the paper.
 
-``transfer_with_depth_grasp(target)`` is :func:`bt_arrange.trees.transfer` with this behaviour
-instead of Detect::
+``bt_arrange.trees.transfer(target, locate=by_depth(seed))`` builds the transfer with this
+behaviour instead of Detect (``arrange_one`` and ``arrangement`` take the same ``locate``)::
 
     Retry "pick and place red"
     └── Sequence "transfer red"
@@ -22,23 +22,18 @@ instead of Detect::
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-import py_trees
-from py_trees.common import Access
 
 from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
-from bt_arrange.behaviours.handling import GraspGuard, Pick, Place
 from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose
 from bt_arrange.perception.depth_grasp import SOURCE, DepthGraspEstimator
-
-if TYPE_CHECKING:  # the tree builders import the behaviours: no import at run time
-    from bt_arrange.trees import Target
 
 
 def _checked_hint(near_xy_m: object) -> tuple[float, float] | None:
@@ -84,8 +79,7 @@ class EstimateGraspFromDepth(StagedBehaviour):
         self.near_xy_m = _checked_hint(near_xy_m)
         self.seed = seed
         self.rng = np.random.default_rng(seed)
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.WRITE)
+        self.writes(keys.key(obj, keys.POSE))
         self.found: Pose | None = None
 
     def setup(self, **kwargs: Any) -> None:
@@ -95,7 +89,7 @@ class EstimateGraspFromDepth(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """Park if needed, then capture with depth and estimate."""
-        estimating = InstantStage(f"estimate the grasp of {self.obj} from depth", self._estimate)
+        estimating = InstantStage(stage.estimate_from_depth(self.obj), self._estimate)
         return [estimating] if is_parked(context) else [park_stage(), estimating]
 
     def _estimate(self, context: Context) -> str | None:
@@ -104,7 +98,7 @@ class EstimateGraspFromDepth(StagedBehaviour):
         if not estimate.found or estimate.pose_world is None:
             return f"{self.obj} {estimate.status.value}: {estimate.reason}"
         self.found = estimate.pose_world
-        self.blackboard.set(keys.key(self.obj, keys.POSE), estimate.pose_world, overwrite=True)
+        self.write(keys.key(self.obj, keys.POSE), estimate.pose_world)
         return None
 
     def success_message(self) -> str:
@@ -115,35 +109,3 @@ class EstimateGraspFromDepth(StagedBehaviour):
             f"{self.obj} grasp at x={planar.x_m:.4f} m, y={planar.y_m:.4f} m, "
             f"yaw={math.degrees(planar.yaw_rad):.2f} deg ({SOURCE})"
         )
-
-
-def transfer_with_depth_grasp(
-    target: Target,
-    max_regrasps: int = 3,
-    seed: int = 0,
-    *,
-    estimator: DepthGraspEstimator | None = None,
-    near_xy_m: tuple[float, float] | None = None,
-) -> py_trees.behaviour.Behaviour:
-    """:func:`bt_arrange.trees.transfer` with :class:`EstimateGraspFromDepth` instead of Detect.
-
-    Estimate the grasp from depth, pick and place one object; a cube lost on the way is looked
-    for and picked again (each attempt draws fresh depth noise). ``seed`` seeds the noise,
-    ``near_xy_m`` is the optional colour-blind hint (see :class:`EstimateGraspFromDepth`).
-    """
-    obj, colour = target.obj, target.colour
-    if isinstance(max_regrasps, bool) or not isinstance(max_regrasps, int) or max_regrasps < 0:
-        raise PlanError(f"max_regrasps={max_regrasps!r} must be a whole number, 0 or more")
-    carry = py_trees.composites.Sequence(
-        name=f"transfer {obj}",
-        memory=True,
-        children=[
-            EstimateGraspFromDepth(
-                f"estimate {obj} grasp from depth", obj, colour, estimator=estimator, near_xy_m=near_xy_m, seed=seed
-            ),
-            Pick(f"pick {obj}", obj),
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj)),
-        ],
-    )
-    # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
-    return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)

@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 import py_trees
-from py_trees.common import Access, Status
+from py_trees.common import Status
 
 from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
@@ -25,11 +26,15 @@ def _to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN20
     return plan
 
 
-def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
-    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push)."""
+def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False):  # noqa: ANN202
+    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
+
+    ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    """
 
     def plan(context: Context, q: FloatArray) -> Motion:
-        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+        limits = context.settings.push_limits if pushing else None
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
 
     return plan
 
@@ -56,8 +61,7 @@ class Pick(StagedBehaviour):
     def __init__(self, name: str, obj: str) -> None:
         super().__init__(name)
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
+        self.reads(keys.key(obj, keys.POSE))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
 
@@ -68,16 +72,16 @@ class Pick(StagedBehaviour):
         x, y = pose.x_m, pose.y_m
         yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
         return [
-            GripperStage("open the gripper", lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
-            MoveStage("move above the cube", _to_pose(x, y, s.approach_height_m, yaw)),
-            GripperStage("wait for the fingers to open", lambda c: None),
-            MoveStage("descend to the cube", _line_to(x, y, s.grasp_height_m, yaw)),
-            GripperStage("close on the cube", lambda c: c.robot.gripper.close(s.grip_force_n)),
-            InstantStage("check the grasp", self._check_grasp),
+            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
+            MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, s.approach_height_m, yaw)),
+            GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
+            MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, s.grasp_height_m, yaw)),
+            GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
+            InstantStage(stage.CHECK_GRASP, self._check_grasp),
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
-            OnlyIf(GripperStage("let go of a bad grasp", lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
-            MoveStage("lift the cube", _line_to(x, y, s.approach_height_m, yaw)),
-            InstantStage("confirm the grasp", lambda c: self.bad_grasp),
+            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
+            MoveStage(stage.LIFT_CUBE, _line_to(x, y, s.approach_height_m, yaw)),
+            InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
 
     def _bad(self, context: Context) -> bool:
@@ -113,8 +117,7 @@ class Place(StagedBehaviour):
     def __init__(self, name: str, obj: str) -> None:
         super().__init__(name)
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
+        self.reads(keys.key(obj, keys.TARGET))
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -124,15 +127,19 @@ class Place(StagedBehaviour):
         # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
         yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
         return [
-            MoveStage("carry above the target", _to_pose(x, y, s.approach_height_m, yaw)),
-            MoveStage("lower the cube to the table", _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
-            GripperStage("release the cube", lambda c: c.robot.gripper.open(s.open_width_m)),
-            MoveStage("retreat", _line_to(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.LOWER_CUBE, _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(s.open_width_m)),
+            MoveStage(stage.RETREAT, _line_to(x, y, s.approach_height_m, yaw)),
         ]
 
     def success_message(self) -> str:
         """Feedback once released."""
         return f"{self.obj} released at its target"
+
+
+#: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
+PUSH_STRATEGIES = ("paper", "learned")
 
 
 class Push(StagedBehaviour):
@@ -143,18 +150,29 @@ class Push(StagedBehaviour):
     below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
     opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
     also squares the cube up); the pads start on the side away from the target, push, back off.
+
+    ``strategy="paper"`` (the default, and what Table 1 uses) is the paper's: alternate x and y,
+    push by the axis' offset. ``strategy="learned"`` is ours: push the axis with the larger offset,
+    and learn from each push's response where pushes along that axis land beyond their aim (the arm's
+    local calibration error as the camera sees it, which an absolute push never corrects by itself):
+    after a push along an axis aimed at ``aim``, the cube's measured position minus ``aim`` is added to
+    that axis' bias, and the next push along it aims the bias short of the target.
     """
 
-    def __init__(self, name: str, obj: str) -> None:
+    def __init__(self, name: str, obj: str, strategy: str = "paper") -> None:
         super().__init__(name)
+        if strategy not in PUSH_STRATEGIES:
+            raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+        self.strategy = strategy
         self.obj = obj
-        self.blackboard = self.attach_blackboard_client(name=name)
-        self.blackboard.register_key(keys.key(obj, keys.POSE), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.TARGET), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.OFFSET_XY_MM), access=Access.READ)
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
         # Push reads the axis it alternates from and writes the next one.
-        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.READ)
-        self.blackboard.register_key(keys.key(obj, keys.PUSH_AXIS), access=Access.WRITE)
+        self.reads(keys.key(obj, keys.PUSH_AXIS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS))
+        if strategy == "learned":
+            for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
+                self.reads(keys.key(obj, field))
+                self.writes(keys.key(obj, field))
         self.pushed: tuple[str, float] | None = None
 
     def stages(self, context: Context) -> list[Stage]:
@@ -165,9 +183,12 @@ class Push(StagedBehaviour):
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
-        axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
-        self.blackboard.set(axis_key, "y" if axis == "x" else "x", overwrite=True)
-        distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
+        if self.strategy == "learned":
+            axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
+        else:
+            axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
+            distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
+        self.write(axis_key, "y" if axis == "x" else "x")
         self.pushed = (axis, distance_m)
         if abs(distance_m) < s.min_push_m:
             return []
@@ -182,16 +203,53 @@ class Push(StagedBehaviour):
         end = centre - direction * s.push_reach_m + direction * abs(distance_m)
         back = end - direction * s.push_clearance_m
         return [
-            GripperStage("set the push opening", lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
-            MoveStage("move behind the cube", _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
-            GripperStage("wait for the fingers", lambda c: None),
-            MoveStage("lower the fingers", _line_to(begin[0], begin[1], s.push_height_m, yaw)),
-            MoveStage(
-                f"push {abs(distance_m) * 1000:.2f} mm along {axis}", _line_to(end[0], end[1], s.push_height_m, yaw)
-            ),
-            MoveStage("back off", _line_to(back[0], back[1], s.push_height_m, yaw)),
-            MoveStage("lift the fingers", _line_to(back[0], back[1], s.approach_height_m, yaw)),
+            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
+            MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
+            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
+            MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], s.push_height_m, yaw)),
+            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True)),
+            MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], s.push_height_m, yaw)),
+            MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], s.approach_height_m, yaw)),
         ]
+
+    def _learned_push(self, offset_xy_mm: tuple[float, float], min_push_mm: float) -> tuple[str, float]:
+        """Strategy "learned": update the bias from the last push's response, then choose axis and distance."""
+        bias_key, last_key = keys.key(self.obj, keys.PUSH_BIAS_MM), keys.key(self.obj, keys.LAST_PUSH)
+        known = tuple(self.blackboard.get(bias_key)) if self.blackboard.exists(bias_key) else (0.0, 0.0)
+        last = self.blackboard.get(last_key) if self.blackboard.exists(last_key) else None
+        bias, axis, distance_mm = self.plan_learned(offset_xy_mm, (known[0], known[1]), last, min_push_mm)
+        self.write(bias_key, bias)
+        index = 0 if axis == "x" else 1
+        # Where this push aims the cube, relative to the target along its axis: the bias short of it.
+        aim_mm = -bias[index] if abs(distance_mm) >= min_push_mm else None
+        self.write(last_key, (axis, aim_mm))
+        return axis, distance_mm / 1000
+
+    @staticmethod
+    def plan_learned(
+        offset_xy_mm: tuple[float, float],
+        bias_mm: tuple[float, float],
+        last_push: tuple[str, float | None] | None,
+        min_push_mm: float,
+    ) -> tuple[tuple[float, float], str, float]:
+        """The learned strategy's arithmetic: (new bias, axis, signed push distance in mm).
+
+        The cube's position relative to the target is minus the offset. After a push along ``axis``
+        aimed at ``aim`` (relative to the target), the push landed ``position - aim`` beyond its aim:
+        that is the axis' new bias (a push that fell short of the cube underestimates it, and the
+        next push reaches further). The next push goes along the axis of the larger offset and
+        aims at ``-bias``: it pushes ``offset - bias``.
+        """
+        bias = [float(bias_mm[0]), float(bias_mm[1])]
+        if last_push is not None and last_push[1] is not None:
+            index = 0 if last_push[0] == "x" else 1
+            bias[index] = -offset_xy_mm[index] - last_push[1]
+        # The axis whose corrected push is longer; below a push, the other one.
+        wanted = [offset_xy_mm[0] - bias[0], offset_xy_mm[1] - bias[1]]
+        axis = "x" if abs(wanted[0]) >= abs(wanted[1]) else "y"
+        if abs(wanted[0 if axis == "x" else 1]) < min_push_mm:
+            axis = "x" if abs(offset_xy_mm[0]) >= abs(offset_xy_mm[1]) else "y"
+        return (bias[0], bias[1]), axis, wanted[0 if axis == "x" else 1]
 
     @staticmethod
     def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
@@ -219,8 +277,10 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     the cube again instead of placing air.
     """
 
-    def __init__(self, name: str, child: py_trees.behaviour.Behaviour) -> None:
+    def __init__(self, name: str, child: py_trees.behaviour.Behaviour, obj: str | None = None) -> None:
         super().__init__(name=name, child=child, condition=self._holding)
+        #: The object held: ``obj``, else the child's (a Place knows its object).
+        self.obj: str | None = obj if obj is not None else getattr(child, "obj", None)
         self.context: Context | None = None
 
     def setup(self, **kwargs: object) -> None:

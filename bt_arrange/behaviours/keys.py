@@ -9,6 +9,8 @@
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+| ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
+| ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
 """
 
 from __future__ import annotations
@@ -20,8 +22,18 @@ OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
+PUSH_BIAS_MM = "push_bias_mm"
+LAST_PUSH = "last_push"
 
 
 def key(obj: str, field: str) -> str:
     """The absolute blackboard key of ``field`` for object ``obj``."""
     return f"/{obj}/{field}"
+
+
+def object_of_key(absolute_key: str) -> str | None:
+    """The object of a key built by ``key`` (``/red/offset_mm`` -> ``red``), or None for another key."""
+    parts = absolute_key.split("/")
+    if len(parts) == 3 and parts[0] == "" and parts[1] and parts[2]:
+        return parts[1]
+    return None

@@ -20,7 +20,7 @@ import numpy as np
 import placo
 from numpy.typing import ArrayLike
 
-from bt_arrange.errors import MotionError, UnreachableError
+from bt_arrange.errors import GeometryError, MotionError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import FloatArray, Pose, wrap_angle
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 
@@ -98,7 +98,13 @@ def nearest_symmetric_yaw(yaw_rad: float, reference_yaw_rad: float, symmetry_rad
     so the wrist turns by the least amount.
     """
     if symmetry_rad <= 0.0:
-        raise ValueError(f"symmetry {symmetry_rad:g} rad must be positive")
+        raise GeometryError(
+            f"symmetry {symmetry_rad:g} rad must be positive",
+            field="symmetry_rad",
+            value=symmetry_rad,
+            limit=0.0,
+            unit="rad",
+        )
     offset = (yaw_rad - reference_yaw_rad + symmetry_rad / 2) % symmetry_rad - symmetry_rad / 2
     return reference_yaw_rad + offset
 
@@ -148,7 +154,13 @@ class ArmKinematics:
         self._world_to_base = self.base_pose_world.inverse()
         self.table_top_z_m = float(table_top_z_m)
         if table_clearance_m < 0.0:
-            raise ValueError(f"table clearance {table_clearance_m:g} m must not be negative")
+            raise OutOfRangeError(
+                f"table clearance {table_clearance_m:g} m must not be negative",
+                field="table_clearance_m",
+                value=table_clearance_m,
+                limit=0.0,
+                unit="m",
+            )
         self.table_clearance_m = float(table_clearance_m)
         self.max_iterations = int(max_iterations)
 
@@ -246,7 +258,8 @@ class ArmKinematics:
         raise UnreachableError(
             f"target {target!r} has no inverse kinematics solution within the joint limits: residual "
             f"{best[0] * 1e3:.3g} mm and {best[1]:.3g} rad, tolerance {POSITION_TOLERANCE_M * 1e3:g} mm "
-            f"and {ORIENTATION_TOLERANCE_RAD:g} rad"
+            f"and {ORIENTATION_TOLERANCE_RAD:g} rad",
+            pose=target,
         )
 
     # ----------------------------------------------------------------------------------------------
@@ -291,20 +304,23 @@ class ArmKinematics:
             raise UnreachableError(
                 f"target {target!r} is below the table: TCP z {z_m:.5f} m < minimum {self.min_tcp_z_m:.5f} m "
                 f"(pad bottoms {PAD_HALF_HEIGHT_M * 1e3:.2f} mm below the TCP, table top {self.table_top_z_m:.4f} m, "
-                f"clearance {self.table_clearance_m * 1e3:.1f} mm)"
+                f"clearance {self.table_clearance_m * 1e3:.1f} mm)",
+                pose=target,
             )
         wrist_centre = t_base[:3, :3] @ self._wrist_centre_in_tcp_m + t_base[:3, 3]
         distance_m = math.dist(wrist_centre, (0.0, 0.0, UR5_D1_M))
         if distance_m > _WRIST_CENTRE_REACH_M:
             raise UnreachableError(
                 f"target {target!r} is out of reach: its wrist centre lies {distance_m:.3f} m from the shoulder, "
-                f"the reach is {_WRIST_CENTRE_REACH_M:.3f} m"
+                f"the reach is {_WRIST_CENTRE_REACH_M:.3f} m",
+                pose=target,
             )
         radial_m = math.hypot(wrist_centre[0], wrist_centre[1])
         if radial_m < UR5_D4_M:
             raise UnreachableError(
                 f"target {target!r} is too close to the base axis: its wrist centre lies {radial_m:.3f} m from it, "
-                f"the minimum is {UR5_D4_M:.3f} m"
+                f"the minimum is {UR5_D4_M:.3f} m",
+                pose=target,
             )
 
     def _errors(self, t_target: FloatArray) -> tuple[float, float]:
@@ -356,5 +372,5 @@ def joint_vector(values: ArrayLike) -> FloatArray:
     """A copy of six joint values as a float array, checked for shape and finiteness."""
     q = np.array(values, dtype=float).reshape(-1)
     if q.shape != (6,) or not np.isfinite(q).all():
-        raise ValueError(f"a joint vector needs 6 finite values in radians, got {q}")
+        raise GeometryError(f"a joint vector needs 6 finite values in radians, got {q}", field="q", value=q, unit="rad")
     return q

@@ -41,9 +41,21 @@ def _check_positive_at_most(what: str, value: float, cap: float, unit: str) -> f
     """Return ``value`` as a float, or raise ``OutOfRangeError`` unless ``0 < value <= cap``."""
     value = float(value)
     if not math.isfinite(value) or value <= 0.0:
-        raise OutOfRangeError(f"{what} {value:g} {unit} must be positive (limit: 0 < value <= {cap:g} {unit})")
+        raise OutOfRangeError(
+            f"{what} {value:g} {unit} must be positive (limit: 0 < value <= {cap:g} {unit})",
+            field=what,
+            value=value,
+            limit=cap,
+            unit=unit,
+        )
     if value > cap:
-        raise OutOfRangeError(f"{what} {value:g} {unit} is above the hardware limit {cap:g} {unit}")
+        raise OutOfRangeError(
+            f"{what} {value:g} {unit} is above the hardware limit {cap:g} {unit}",
+            field=what,
+            value=value,
+            limit=cap,
+            unit=unit,
+        )
     return value
 
 
@@ -66,18 +78,24 @@ class JointLimits:
 
     Defaults, and why:
 
-    - ``velocity_rad_s = 1.0``: a third of the UR5's 3.14 rad/s, so a pick-and-place cycle stays
-      slow enough for the simulated contacts and a position-controlled arm to track it closely.
-    - ``acceleration_rad_s2 = 2.0``: reaches 1 rad/s in half a second, gentle on a held cube.
-    - ``jerk_rad_s3 = 10.0``: reaches 2 rad/s^2 in 0.2 s, which removes the torque steps that
-      make a simulated cube slip in the fingers.
+    - ``velocity_rad_s = 2.0``: about two thirds of the UR5's 3.14 rad/s. Measured in the
+      simulated cell (``benchmarks/throughput.py``): with 1 rad/s, 2 rad/s^2 and 10 rad/s^3 the
+      four-cube tree took 11.7 s of world time per cube, with these limits (and the faster lines,
+      settling and finger opening of the same change) 5.7 s, and the cubes landed as close to
+      their targets.
+    - ``acceleration_rad_s2 = 8.0``: reaches 2 rad/s in a quarter of a second; at the UR5's reach
+      of 0.85 m that is at most about 7 m/s^2 at the TCP, far below what slides a 5 cm cube held
+      with 40 N. A vertical 7.5 cm line at the Cartesian defaults needs up to about 6 rad/s^2.
+    - ``jerk_rad_s3 = 100.0``: reaches 8 rad/s^2 in 0.08 s. The same lines need up to about
+      65 rad/s^3: with these joint limits they plan once, without a slowdown (with 5 rad/s^2 and
+      40 rad/s^3 every line of the four-cube tree was replanned 10 to 20 % slower).
     - ``lower_rad``, ``upper_rad``, ``hardware_velocity_rad_s``: read from the bundled URDF
       (``JointLimits.from_urdf`` reads another one).
     """
 
-    velocity_rad_s: float | tuple[float, ...] = 1.0
-    acceleration_rad_s2: float | tuple[float, ...] = 2.0
-    jerk_rad_s3: float | tuple[float, ...] = 10.0
+    velocity_rad_s: float | tuple[float, ...] = 2.0
+    acceleration_rad_s2: float | tuple[float, ...] = 8.0
+    jerk_rad_s3: float | tuple[float, ...] = 100.0
     lower_rad: tuple[float, ...] = field(default=_BUNDLED.lower_rad)
     upper_rad: tuple[float, ...] = field(default=_BUNDLED.upper_rad)
     hardware_velocity_rad_s: tuple[float, ...] = field(default=_BUNDLED.velocity_rad_s)
@@ -110,9 +128,9 @@ class JointLimits:
     def from_urdf(
         cls,
         urdf_path: str | Path,
-        velocity_rad_s: float | Sequence[float] = 1.0,
-        acceleration_rad_s2: float | Sequence[float] = 2.0,
-        jerk_rad_s3: float | Sequence[float] = 10.0,
+        velocity_rad_s: float | Sequence[float] = 2.0,
+        acceleration_rad_s2: float | Sequence[float] = 8.0,
+        jerk_rad_s3: float | Sequence[float] = 100.0,
     ) -> JointLimits:
         """Limits with the position range and hardware speeds of another URDF."""
         urdf = read_joint_limits(urdf_path)
@@ -131,7 +149,11 @@ class JointLimits:
         for name, value, lower, upper in zip(ARM_JOINT_NAMES, values, self.lower_rad, self.upper_rad, strict=True):
             if not math.isfinite(value) or not lower <= value <= upper:
                 raise UnreachableError(
-                    f"{what}: {name} = {value:.4f} rad is outside the joint limits [{lower:.4f}, {upper:.4f}] rad"
+                    f"{what}: {name} = {value:.4f} rad is outside the joint limits [{lower:.4f}, {upper:.4f}] rad",
+                    joint=name,
+                    bound=(lower, upper),
+                    value=value,
+                    unit="rad",
                 )
 
 
@@ -141,17 +163,18 @@ class CartesianLimits:
 
     Defaults, and why:
 
-    - ``velocity_m_s = 0.15``: approach, descend, lift and push are short (5 to 30 cm); at
-      0.15 m/s they take one to two seconds, and a push at this speed does not make a 5 cm
-      cube tip or bounce.
-    - ``acceleration_m_s2 = 0.5``: full speed after 0.3 s and about 2 cm of travel.
-    - ``jerk_m_s3 = 3.5``: full acceleration after 0.14 s, which keeps the joint jerks of a
-      typical line under the joint default (10 rad/s^3), so a line plans once, without a slowdown.
+    - ``velocity_m_s = 0.4``: descend, lift, lower and retreat are short (7 to 8 cm); with the
+      acceleration below a 7.5 cm line takes 0.5 s (at the former 0.15 m/s a 9.5 cm one took 1.1 s). A push
+      uses slower limits of its own (``ManipulationSettings.push_limits``: 0.15 m/s, which does not
+      make a 5 cm cube tip, bounce or slide on).
+    - ``acceleration_m_s2 = 2.0``: full speed after 0.3 s and about 5 cm of travel.
+    - ``jerk_m_s3 = 20.0``: full acceleration after 0.1 s, which keeps the joint jerks of a
+      typical line under the joint default (100 rad/s^3), so a line plans once, without a slowdown.
     """
 
-    velocity_m_s: float = 0.15
-    acceleration_m_s2: float = 0.5
-    jerk_m_s3: float = 3.5
+    velocity_m_s: float = 0.4
+    acceleration_m_s2: float = 2.0
+    jerk_m_s3: float = 20.0
 
     def __post_init__(self) -> None:
         for name, value, cap, unit in (

@@ -63,13 +63,17 @@ class MotionPlanner:
         start_q: ArrayLike,
         target_pose: Pose,
         orientation_tolerance_rad: float = DEFAULT_LINE_ORIENTATION_TOLERANCE_RAD,
+        cartesian_limits: CartesianLimits | None = None,
     ) -> LinearMotion:
-        """Straight TCP line from the TCP at ``start_q`` to ``target_pose``'s position, orientation kept."""
+        """Straight TCP line from the TCP at ``start_q`` to ``target_pose``'s position, orientation kept.
+
+        ``cartesian_limits`` replaces the planner's path limits for this line (e.g. a slower push).
+        """
         return LinearMotion(
             self.kinematics,
             start_q,
             target_pose,
-            self.cartesian_limits,
+            cartesian_limits or self.cartesian_limits,
             self.joint_limits,
             self.control_period_s,
             orientation_tolerance_rad=orientation_tolerance_rad,

@@ -36,6 +36,7 @@ from bt_arrange.perception.pose import (
     expected_face_area_px,
     fit_square_on_plane,
     pixel_on_plane,
+    project_world,
     solve_face_pose,
     tilt_deg,
 )
@@ -50,7 +51,7 @@ from bt_arrange.perception.segmentation import (
     outline_deviation_px,
     to_hsv,
 )
-from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 
 
 class DetectionStatus(str, enum.Enum):
@@ -186,6 +187,15 @@ def _format_xy(points: Iterable[tuple[float, float]]) -> str:
     return ", ".join(f"({x:.3f}, {y:.3f})" for x, y in points)
 
 
+class _Rejected(Exception):
+    """A check of ``CubeDetector._measure`` the blob failed: the outcome's status and reason."""
+
+    def __init__(self, reason: str, status: DetectionStatus = DetectionStatus.PARTIAL) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.status = status
+
+
 class CubeDetector:
     """Finds coloured cubes' top faces in a camera frame and estimates their poses.
 
@@ -206,6 +216,50 @@ class CubeDetector:
         """Look for the cube of every colour in the table, in table order."""
         view = self._prepare(frame)
         return {name: self._detect(view, colour_range, roi) for name, colour_range in self.colours.items()}
+
+    def locate(
+        self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None
+    ) -> tuple[tuple[float, float], ...]:
+        """Where on the table (world x, y in metres) the blobs of ``colour`` large enough to be faces are.
+
+        The blob search of :meth:`detect` alone, without the full-resolution measurement: cheap on
+        a low-resolution frame (``PixelWindow.full(intrinsics, binning=8)``), to choose a window to
+        measure in. Centres are accurate to about a pixel of ``frame``.
+        """
+        candidates, _ = self._candidates(self._prepare(frame), self.colours[colour], roi)
+        return tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
+
+    def search_binning(self, intrinsics: CameraIntrinsics, T_W_C: Pose, face_edge_px: float = 12.0) -> int:
+        """Binning of a full view in which a face at the image centre is about ``face_edge_px`` wide.
+
+        Such a view is enough for :meth:`locate`, at a fraction of the pixels: 8 for the
+        simulated 1920 x 1080 camera 70 cm above the table (faces about 105 px wide).
+        """
+        centre = pixel_on_plane(intrinsics, T_W_C, np.array([intrinsics.cx_px, intrinsics.cy_px]), self.config.top_z_m)
+        if centre is None:
+            raise PerceptionError(f"the camera at {T_W_C} does not look down at the table plane")
+        edge_px = math.sqrt(expected_face_area_px(intrinsics, T_W_C, centre, self.config.cube_edge_m))
+        return max(1, int(edge_px // face_edge_px))
+
+    def window_around(
+        self, intrinsics: CameraIntrinsics, T_W_C: Pose, x_m: float, y_m: float, half_size_m: float
+    ) -> PixelWindow | None:
+        """The full-resolution window that sees the square of ``2 * half_size_m`` around ``(x, y)``.
+
+        The square lies on the plane of the top faces; the window is cut to the image, and None
+        when the square is outside it. Half a face's diagonal plus the uncertainty of ``(x, y)``
+        holds the whole face and the pixels beyond its edges that the sub-pixel fit reads.
+        """
+        h = half_size_m
+        z = self.config.top_z_m
+        square = np.array([[x_m - h, y_m - h, z], [x_m + h, y_m - h, z], [x_m + h, y_m + h, z], [x_m - h, y_m + h, z]])
+        in_camera = (square - T_W_C.position_m) @ T_W_C.rotation
+        if np.any(in_camera[:, 2] <= 0):
+            return None
+        pixels = project_world(intrinsics, T_W_C, square)
+        return PixelWindow.covering(
+            intrinsics, pixels[:, 0].min(), pixels[:, 1].min(), pixels[:, 0].max(), pixels[:, 1].max()
+        )
 
     # -- stages ----------------------------------------------------------------------------
 
@@ -252,7 +306,13 @@ class CubeDetector:
 
         return _View(rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort)
 
-    def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+    def _candidates(
+        self, view: _View, colour: ColourRange, roi: WorldRegion | None
+    ) -> tuple[list[tuple[Blob, FloatArray, float]], int]:
+        """Blobs of the colour that may be faces, and how many lay outside ``roi``.
+
+        Each candidate is (blob, its centre on the plane of the top faces, a face's expected area there).
+        """
         config = self.config
         # The paper's 7x7 kernel is meant for full resolution: scale it with the image.
         coarse_kernel_px = max(3, round(config.kernel_px / view.scale) | 1)
@@ -270,6 +330,11 @@ class CubeDetector:
                 outside_roi += 1
                 continue
             candidates.append((blob, on_plane, expected_px))
+        return candidates, outside_roi
+
+    def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+        config = self.config
+        candidates, outside_roi = self._candidates(view, colour, roi)
         xy = tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
         name = colour.name
 
@@ -308,37 +373,53 @@ class CubeDetector:
         expected_px: float,
         xy: tuple[tuple[float, float], ...],
     ) -> Detection:
-        """The paper's pipeline at full resolution on a crop around the one blob."""
-        config = self.config
+        """The paper's pipeline at full resolution on a crop around the one blob, as named checks.
+
+        Each check either passes on what it measured or rejects the blob with a status and a
+        reason (``_Rejected``): the face's contour, a whole single face, a square outline,
+        sub-pixel corners; then the pose from the corners and its reprojection check.
+        """
         name = colour.name
-        height, width = view.rgb.shape[:2]
         edge_px = math.sqrt(expected_px)
-
-        def partial(reason: str, area_px: float | None = None) -> Detection:
+        area_px: float | None = None
+        try:
+            contour, area_px = self._face_contour(view, colour, blob, edge_px)
+            self._check_whole_face(view, name, contour, area_px, expected_px)
+            polygon, outline = self._check_square_outline(contour, edge_px)
+            corners = self._refine(view, polygon, outline)
+            if corners is None:
+                raise _Rejected("edges could not be measured below a pixel")
+        except _Rejected as rejected:
+            reason = rejected.reason if rejected.status is DetectionStatus.AMBIGUOUS else f"{name} {rejected.reason}"
             return Detection(
-                name,
-                DetectionStatus.PARTIAL,
-                f"{name} {reason}",
-                area_px=area_px,
-                expected_area_px=expected_px,
-                candidates_xy_m=xy,
+                name, rejected.status, reason, area_px=area_px, expected_area_px=expected_px, candidates_xy_m=xy
             )
+        return self._pose_from_corners(view, name, corners, area_px, expected_px, xy)
 
+    def _face_contour(
+        self, view: _View, colour: ColourRange, blob: Blob, edge_px: float
+    ) -> tuple[NDArray[np.int32], float]:
+        """The blob's outline at full resolution (image pixels) and its area; rejected if it vanished."""
+        height, width = view.rgb.shape[:2]
         # The downscaled blob's box is accurate to a few pixels: add room for the sides.
         margin = int(max(12, 0.25 * edge_px)) + view.scale
         x, y, w, h = blob.bbox_px
         x0, y0 = max(0, x - margin), max(0, y - margin)
         x1, y1 = min(width, x + w + margin), min(height, y + h + margin)
-        mask = colour_mask(view.rgb[y0:y1, x0:x1], colour, config.kernel_px)
+        mask = colour_mask(view.rgb[y0:y1, x0:x1], colour, self.config.kernel_px)
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         if not contours:
-            return partial("blob vanished at full resolution after the closing and opening")
+            raise _Rejected("blob vanished at full resolution after the closing and opening")
         # The crop may also catch a piece of another blob: keep the one at this blob's centre.
         centre = (blob.centroid_px[0] - x0, blob.centroid_px[1] - y0)
         contour = max(contours, key=lambda c: (cv2.pointPolygonTest(c, centre, False) >= 0, cv2.contourArea(c)))
-        area_px = float(cv2.contourArea(contour))
-        contour = contour.reshape(-1, 2) + np.array([x0, y0])
+        return contour.reshape(-1, 2) + np.array([x0, y0]), float(cv2.contourArea(contour))
 
+    def _check_whole_face(
+        self, view: _View, name: str, contour: NDArray[np.int32], area_px: float, expected_px: float
+    ) -> None:
+        """One whole top face: not cut by the image border, not two faces, not a covered piece of one."""
+        height, width = view.rgb.shape[:2]
         touches_border = (
             contour[:, 0].min() <= 0
             or contour[:, 1].min() <= 0
@@ -346,25 +427,25 @@ class CubeDetector:
             or contour[:, 1].max() >= height - 1
         )
         if touches_border:
-            return partial("face is cut by the image border", area_px=area_px)
+            raise _Rejected("face is cut by the image border")
         ratio = area_px / expected_px
-        if ratio > config.ambiguous_area_fraction:
-            return Detection(
-                name,
-                DetectionStatus.AMBIGUOUS,
+        if ratio > self.config.ambiguous_area_fraction:
+            raise _Rejected(
                 f"one {name} blob as large as {ratio:.1f} faces: touching cubes of one colour?",
-                area_px=area_px,
-                expected_area_px=expected_px,
-                candidates_xy_m=xy,
+                DetectionStatus.AMBIGUOUS,
             )
-        low, high = config.face_area_fraction_range
+        low, high = self.config.face_area_fraction_range
         if not low <= ratio <= high:
-            return partial(f"blob is {ratio:.0%} of a face: covered, or not a whole top face", area_px=area_px)
+            raise _Rejected(f"blob is {ratio:.0%} of a face: covered, or not a whole top face")
+
+    def _check_square_outline(self, contour: NDArray[np.int32], edge_px: float) -> tuple[FloatArray, FloatArray]:
+        """Four convex corners, sides of a face's length, a contour that keeps to them: (polygon, outline)."""
+        config = self.config
         vertices = approximate_quadrilateral(contour)
         if len(vertices) != 4:
-            return partial(f"outline has {len(vertices)} corners, not 4: covered?", area_px=area_px)
+            raise _Rejected(f"outline has {len(vertices)} corners, not 4: covered?")
         if not cv2.isContourConvex(vertices.reshape(-1, 1, 2)):
-            return partial("outline is not convex: covered?", area_px=area_px)
+            raise _Rejected("outline is not convex: covered?")
         polygon = order_corners(vertices)
         # Lines through each side's contour pixels: corners within about half a pixel (the
         # polygon's vertices sit up to 3 px inside, on the mask's rounded corners).
@@ -372,20 +453,28 @@ class CubeDetector:
         sides_px = np.linalg.norm(outline - np.roll(outline, -1, axis=0), axis=1)
         low, high = config.side_length_fraction_range
         if not (low * edge_px <= sides_px.min() and sides_px.max() <= high * edge_px):
-            return partial(
+            raise _Rejected(
                 f"outline sides {sides_px.min():.0f}..{sides_px.max():.0f} px, "
-                f"expected {edge_px:.0f}: not a square face?",
-                area_px=area_px,
+                f"expected {edge_px:.0f}: not a square face?"
             )
         # Where the contour leaves the quadrilateral, something covers the face (or
         # Douglas-Peucker forced four corners on a shape that has more).
         deviation_px = outline_deviation_px(contour, outline)
         if deviation_px > config.max_outline_deviation_px:
-            return partial(f"outline strays {deviation_px:.1f} px from a quadrilateral: covered?", area_px=area_px)
+            raise _Rejected(f"outline strays {deviation_px:.1f} px from a quadrilateral: covered?")
+        return polygon, outline
 
-        corners = self._refine(view, polygon, outline)
-        if corners is None:
-            return partial("edges could not be measured below a pixel", area_px=area_px)
+    def _pose_from_corners(
+        self,
+        view: _View,
+        name: str,
+        corners: FloatArray,
+        area_px: float,
+        expected_px: float,
+        xy: tuple[tuple[float, float], ...],
+    ) -> Detection:
+        """The cube's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
+        config = self.config
         face = solve_face_pose(corners, view.intrinsics.matrix, config.cube_edge_m)
         pnp_pose = None if face is None else cube_centre_in_world(view.T_W_C, face.T_C_F, config.cube_edge_m)
         plane = fit_square_on_plane(corners, view.intrinsics, view.T_W_C, config.top_z_m, config.cube_edge_m)

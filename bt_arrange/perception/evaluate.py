@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from dataclasses import dataclass, replace
 
@@ -175,13 +176,14 @@ def runtime_ms(repeats: int = 20) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> None:
     """Print Markdown tables of the detector's errors on synthetic frames, and its runtime."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=100)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--trials", type=int, default=100, help="trials per row, 1 or more (default 100)")
+    parser.add_argument("--seed", type=int, default=0, help="seed, 0 or more (default 0)")
     args = parser.parse_args(argv)
     n, seed = args.trials, args.seed
-
-    print(f"Default detector (edge_lines, resting), {n} trials per row, seed {seed}\n")
-    print(HEADER)
+    if n < 1:
+        parser.error(f"--trials {n}: at least 1")
+    if seed < 0:
+        parser.error(f"--seed {seed}: 0 or more")
     renders: dict[str, dict[str, float | None]] = {
         "1920x1080 anti-aliased": {},
         "1920x1080 anti-aliased, yaw 0": {"yaw_rad": 0.0},
@@ -192,13 +194,25 @@ def main(argv: list[str] | None = None) -> None:
         "1280x720 anti-aliased": {"width_px": 1280, "height_px": 720},
         "1280x720 aliased": {"width_px": 1280, "height_px": 720, "supersample": 1},
     }
+    comparisons: dict[str, dict[str, float | None]] = {"anti-aliased": {}, "aliased": {"supersample": 1}}
+    rows_total = len(renders) + len(comparisons) * len(PoseModel) * len(CornerRefinement)
+    rows_done = 0
+
+    def progress(label: str) -> None:
+        # A sign of life on stderr before each row: a row takes several seconds at 100 trials.
+        nonlocal rows_done
+        rows_done += 1
+        print(f"evaluate: row {rows_done} of {rows_total}, {n} trials: {label}", file=sys.stderr, flush=True)
+
+    print(f"Default detector (edge_lines, resting), {n} trials per row, seed {seed}\n", flush=True)
+    print(HEADER, flush=True)
     for label, render in renders.items():
+        progress(label)
         trials = make_trials(n, seed=seed, **render)  # type: ignore[arg-type]
         print(evaluate(trials, CubeDetector()).row(label), flush=True)
 
     print(f"\nMethods compared, 1920x1080, {n} trials per row, seed {seed}\n")
     print(HEADER)
-    comparisons: dict[str, dict[str, float | None]] = {"anti-aliased": {}, "aliased": {"supersample": 1}}
     for label, render in comparisons.items():
         trials = make_trials(n, seed=seed, **render)  # type: ignore[arg-type]
         for pose_model in PoseModel:
@@ -210,9 +224,11 @@ def main(argv: list[str] | None = None) -> None:
                     # the accuracy of every detection rather than count rejections.
                     config = replace(config, max_reprojection_error_px=5.0, max_edge_error_fraction=0.1)
                     row += " (relaxed gates)"
+                progress(row)
                 print(evaluate(trials, CubeDetector(config=config)).row(row), flush=True)
 
-    print("\nRuntime, 1920x1080, median of 20 calls\n")
+    print("\nRuntime, 1920x1080, median of 20 calls\n", flush=True)
+    print("evaluate: timing detection and rendering, 20 calls each", file=sys.stderr, flush=True)
     for label, ms in runtime_ms().items():
         print(f"- {label}: {ms:.1f} ms")
 

@@ -3,8 +3,10 @@
 Two models, chosen with :class:`PoseModel`:
 
 * ``FREE``, the paper's: PnP on the top face's corners with the known edge length, from the
-  planar ``cv2.SOLVEPNP_IPPE_SQUARE`` solution and the DLT start of ``SOLVEPNP_ITERATIVE``,
-  refined by Levenberg-Marquardt (``cv2.solvePnPRefineLM``), then the paper's Eq. 1,
+  planar ``cv2.SOLVEPNP_IPPE_SQUARE`` solution and the homography start of
+  ``SOLVEPNP_ITERATIVE`` (the paper names a direct linear transformation; for four coplanar
+  points OpenCV starts from the plane's homography instead, as its DLT needs six points not all
+  in one plane), refined by Levenberg-Marquardt (``cv2.solvePnPRefineLM``), then the paper's Eq. 1,
   ``T_W_O = T_W_C * T_C_O``, with the cube's centre half an edge below the top face.
 * ``RESTING``, the default: a cube on the table has its top face at a known height, so each
   corner's ray meets that plane at the corner itself; a square of the known edge fitted to
@@ -70,8 +72,10 @@ def solve_face_pose(
 ) -> FacePose | None:
     """PnP of a square face of known edge from its four corners (ordered as ``order_corners``).
 
-    Starts from ``SOLVEPNP_IPPE_SQUARE`` (the planar solution) and from ``SOLVEPNP_ITERATIVE``
-    (the paper's DLT start), refines each with Levenberg-Marquardt and keeps the pose with the
+    Starts from ``SOLVEPNP_IPPE_SQUARE`` (the planar solution) and from ``SOLVEPNP_ITERATIVE``,
+    which for four coplanar points starts from the homography of the face's plane (the paper's
+    "direct linear transformation": OpenCV's DLT proper needs six points not all in one plane),
+    refines each with Levenberg-Marquardt and keeps the pose with the
     smaller RMS reprojection error, in pixels. OpenCV's IPPE returns a correct pose only when
     the object's z axis points away from the camera (a face seen from the front comes back
     wrong by up to hundreds of pixels, or NaN when exactly fronto-parallel): it is given the

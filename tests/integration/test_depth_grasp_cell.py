@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from bt_arrange.behaviours import Inspect, MoveHome
-from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth, transfer_with_depth_grasp
+from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
-from bt_arrange.trees import Arrangement, Target, correction, set_target
+from bt_arrange.trees import Arrangement, Target, by_depth, correction, set_target, transfer
 from bt_arrange_sim import WorkCell
 from bt_arrange_sim.runs import SimulatedRun
 from bt_arrange_sim.scenes import scatter
@@ -80,7 +80,7 @@ def row_four_tree(target: Target, seed: int) -> Arrangement:
         "row 4: depth grasp substitute",
         [
             set_target(target),
-            transfer_with_depth_grasp(target, seed=seed),
+            transfer(target, locate=by_depth(seed)),
             Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
             correction(target, threshold_mm=1.0),
             MoveHome("park the arm"),

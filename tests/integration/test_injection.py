@@ -19,6 +19,7 @@ import pytest
 from py_trees.common import Status
 
 from bt_arrange import treefile
+from bt_arrange.behaviours import stages
 from bt_arrange.errors import BtArrangeError, OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.settings import ManipulationSettings
@@ -38,8 +39,8 @@ SCENE_SEED = 0
 OBJ = "red"
 #: Stages whose first tick the probe notes (before any injector acts in that tick).
 STAGES = {
-    f"pick {OBJ}": ("close on the cube",),
-    f"place {OBJ}": ("carry above the target", "lower the cube to the table", "release the cube", "retreat"),
+    f"pick {OBJ}": (stages.CLOSE_ON_CUBE,),
+    f"place {OBJ}": (stages.CARRY_ABOVE_TARGET, stages.LOWER_CUBE, stages.RELEASE_CUBE, stages.RETREAT),
 }
 
 
@@ -78,10 +79,10 @@ class Probe:
         return Snapshot(self.run.cell.cube_pose_truth(OBJ), self.run.cell.arm.tcp_pose())
 
     def before_tick(self, root) -> None:
-        for behaviour, stages in STAGES.items():
+        for behaviour, watched in STAGES.items():
             node = self._nodes.get(behaviour) or next(n for n in root.iterate() if n.name == behaviour)
             self._nodes[behaviour] = node
-            if node.status == Status.RUNNING and node.feedback_message in stages:
+            if node.status == Status.RUNNING and node.feedback_message in watched:
                 self.stages.setdefault(node.feedback_message, self.snap())
         self._last = self.snap()
 
@@ -302,7 +303,7 @@ def test_perception_offset_makes_the_pick_miss_the_centre_and_inspection_stays_e
     assert trial.camera_offset_after == (0.0, 0.0, 0.0), "the camera is back for the inspections"
     assert record["also_seen_by"] == []
     # The pads come down at the wrong place; closing centres the cube along the closing axis only.
-    close = trial.probe.stages["close on the cube"]
+    close = trial.probe.stages[stages.CLOSE_ON_CUBE]
     held = trial.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     nominal = baseline.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     assert abs(held[0] - nominal[0]) < 0.3
@@ -322,7 +323,7 @@ def test_pick_translation_moves_the_detected_cube_and_the_grasp_centres_it_along
     shift = _xy_mm(before.cube, after.cube)
     np.testing.assert_allclose(shift, [record["dx_mm"], record["dy_mm"]], atol=1e-3)
     assert max(abs(record["dx_mm"]), abs(record["dy_mm"])) <= 25.0
-    close = trial.probe.stages["close on the cube"]
+    close = trial.probe.stages[stages.CLOSE_ON_CUBE]
     closing_axis = close.tcp.rotation[:2, 0] / np.linalg.norm(close.tcp.rotation[:2, 0])
     assert abs(shift @ closing_axis) <= 17.5, "the limit binds across the closing axis"
     assert abs(shift @ _pad_axis(close)) <= 25.0
@@ -390,8 +391,8 @@ def test_transport_slip_lets_the_cube_slide_along_the_pads_for_a_moment():
     slip = np.array(record["slip_mm"])
     assert 5.0 < slip[2] < 25.0, "fell down the pads, caught again"
     assert abs(slip[1]) > 1.0, "slid along the pads under the carry's acceleration"
-    carried = trial.probe.stages["carry above the target"].cube_in_tcp_mm
-    lowered = trial.probe.stages["lower the cube to the table"].cube_in_tcp_mm
+    carried = trial.probe.stages[stages.CARRY_ABOVE_TARGET].cube_in_tcp_mm
+    lowered = trial.probe.stages[stages.LOWER_CUBE].cube_in_tcp_mm
     np.testing.assert_allclose(lowered - carried, slip, atol=0.4)
     assert trial.red.placed_offset_mm > 1.0
     assert trial.detections() == 1
@@ -415,7 +416,7 @@ def test_release_stick_drags_the_cube_toward_one_finger_as_it_opens():
     record = trial.record("release_stick")
     assert record["fired"] and 1.0 < record["drag_mm"] <= 3.0
     assert record["dragged_mm"] == record["drag_mm"] and record["ticks"] > 3, "dragged over several ticks"
-    release = trial.probe.stages["release the cube"]
+    release = trial.probe.stages[stages.RELEASE_CUBE]
     placed = trial.probe.transitions[f"place {OBJ}"]
     moved = _xy_mm(release.cube, placed.cube)
     np.testing.assert_allclose(moved, [record["dx_mm"], record["dy_mm"]], atol=0.3)
@@ -429,9 +430,9 @@ def test_release_height_lets_the_cube_go_above_the_table_once():
     trial = _trial(("release_height:0.005",), seed=0)
     record, baseline = trial.record("release_height"), _trial(())
     assert record["fired"] and record["release_clearance_mm"] == 5.0 and record["nominal_clearance_mm"] == 0.5
-    released_z = trial.probe.stages["release the cube"].cube.z_m
+    released_z = trial.probe.stages[stages.RELEASE_CUBE].cube.z_m
     assert released_z == pytest.approx(0.025 + 0.005, abs=1e-3)
-    assert baseline.probe.stages["release the cube"].cube.z_m == pytest.approx(0.0255, abs=1e-3)
+    assert baseline.probe.stages[stages.RELEASE_CUBE].cube.z_m == pytest.approx(0.0255, abs=1e-3)
     assert trial.probe.transitions[f"place {OBJ}"].cube.z_m == pytest.approx(0.025, abs=5e-4), "it dropped"
     assert trial.settings_after.release_clearance_m == ManipulationSettings().release_clearance_m, "restored"
     _assert_recovered(trial)
@@ -463,7 +464,7 @@ def test_injectors_compose_and_the_same_seed_reproduces_the_records():
     assert trial.record("perception_offset")["camera_dyaw_deg"] != 0.0
     measured = trial.probe.measured[0]
     cube = trial.probe.fired["pick_rotation"][1].cube
-    closing = trial.probe.stages["close on the cube"].tcp.rotation
+    closing = trial.probe.stages[stages.CLOSE_ON_CUBE].tcp.rotation
     closing_yaw = math.atan2(closing[1, 0], closing[0, 0])
     assert grasp_fits(cube.x_m, cube.y_m, cube.yaw_rad, (measured.x_m, measured.y_m, closing_yaw), 0.05, 0.085)
     _assert_recovered(trial)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from bt_arrange import treefile
-from bt_arrange.behaviours import holding
+from bt_arrange.behaviours import holding, stages
 from bt_arrange_sim.runs import SimulatedRun
 
 TREES = sorted((Path(__file__).resolve().parents[2] / "trees").glob("*.py"))
@@ -63,7 +63,7 @@ def test_a_cube_that_slips_out_on_the_way_is_picked_again():
             if (
                 not state["slippery"]
                 and state["dropped_at"] is None
-                and place.feedback_message == "carry above the target"
+                and place.feedback_message == stages.CARRY_ABOVE_TARGET
             ):
                 state["slippery"] = True
                 for finger in cell.finger_joint_indices:

@@ -1,0 +1,184 @@
+"""Throughput benchmark: where the wall time and the world time of an arrangement go.
+
+    python benchmarks/throughput.py --json [--seed 0]
+
+Runs, in one process and one after the other: the bare robot (the URDF with nothing on the
+table, holding its home pose) stepped for a few seconds of world time, for reference; a
+single-cube trial (``trees/single_cube.py``); the four-cube tree (``trees/four_cubes.py``).
+For each trial the wall time of the run is split into exclusive sections: ``render`` (camera
+captures), ``physics`` (inside the world's stepping), ``perception`` (the detector),
+``planning`` (inverse kinematics and trajectories), ``tree`` (the rest of the ticks) and
+``rest`` (the runner's loop, logging, hooks). Timers wrap the objects' methods in this
+benchmark only (``bt_arrange.timing``): an ordinary run is not instrumented.
+
+World time is attributed per tick to what the running behaviour was doing: following a motion,
+letting the arm settle after one, waiting for the fingers, or braking.
+
+Key figures: ``render_share`` (rendering's fraction of the single-cube trial's wall time),
+``floor_ratio`` (that trial's wall time over the time spent stepping its physics: 1.0 would mean
+nothing but physics costs anything) and ``world_s_per_object`` (the four-cube tree). Wall-clock
+figures depend on the machine and on what else runs on it: compare ratios from one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import py_trees
+from py_trees.common import Status
+
+from bt_arrange import treefile
+from bt_arrange.behaviours import Context
+from bt_arrange.behaviours.base import GripperStage, MoveStage, OnlyIf, StagedBehaviour
+from bt_arrange.runner import Runner
+from bt_arrange.timing import SectionTimers
+from bt_arrange_sim import WorkCell
+from bt_arrange_sim.runs import SimulatedRun
+
+TREES = Path(__file__).resolve().parent.parent / "trees"
+SECTIONS = ("render", "physics", "perception", "planning", "tree", "rest")
+
+
+def bare_stepping(seconds: float = 4.0) -> dict:
+    """Stepping rate of the robot alone: nothing on the table, holding its home pose."""
+    with WorkCell() as cell:
+        cell.settle(0.2)
+        periods = max(1, round(seconds / cell.config.physics.control_period_s))
+        start = time.perf_counter()
+        cell.step(periods)
+        wall = time.perf_counter() - start
+        world = periods * cell.config.physics.control_period_s
+        steps = periods * cell.config.physics.substeps
+    return {
+        "world_s": round(world, 3),
+        "wall_s": round(wall, 3),
+        "physics_steps_per_s": round(steps / wall, 1),
+        "real_time_factor": round(world / wall, 1),
+    }
+
+
+def _stage_of(root: py_trees.behaviour.Behaviour, context: Context) -> tuple[str, str]:
+    """(category, stage name) of what the innermost running staged behaviour is doing."""
+    running = [n for n in root.iterate() if isinstance(n, StagedBehaviour) and n.status == Status.RUNNING]
+    if not running:
+        return "tree", "between behaviours"
+    node = running[-1]
+    if context.brake.active:
+        return "braking", f"{type(node).__name__}: waiting for the arm to stop"
+    stages = node._stages  # noqa: SLF001 - a benchmark looks inside
+    if node._index >= len(stages):  # noqa: SLF001
+        return "tree", type(node).__name__
+    stage = stages[node._index]  # noqa: SLF001
+    inner = stage._stage if isinstance(stage, OnlyIf) else stage  # noqa: SLF001
+    label = f"{type(node).__name__}: {stage.name}"
+    if isinstance(inner, MoveStage):
+        moving = inner.motion is not None and not inner.motion.done
+        return ("motion" if moving else "settle"), label
+    if isinstance(inner, GripperStage):
+        return "gripper", label
+    return "other", label
+
+
+def run_trial(tree_file: Path, seed: int) -> dict:
+    """One tree in a fresh cell, instrumented; returns its time split and its outcome."""
+    module = treefile.load(tree_file)
+    root = treefile.build_root(module)
+    timers = SectionTimers()
+    world_by_category: dict[str, float] = defaultdict(float)
+    world_by_stage: dict[str, float] = defaultdict(float)
+    with SimulatedRun(root, treefile.scene(module, seed)) as run:
+        cell, context = run.cell, run.context
+        period_s = cell.config.physics.control_period_s
+        timers.wrap_method(cell, "step", "physics")
+        timers.wrap_method(cell.camera, "capture", "render")
+        for method in ("detect", "detect_all", "locate"):
+            if hasattr(context.detector, method):
+                timers.wrap_method(context.detector, method, "perception")
+        for method in ("move_joints", "move_to_pose", "move_line"):
+            timers.wrap_method(context.planner, method, "planning")
+
+        def on_tick(tree_root: py_trees.behaviour.Behaviour) -> None:
+            category, stage = _stage_of(tree_root, context)
+            world_by_category[category] += period_s
+            world_by_stage[stage] += period_s
+
+        def time_ticks(runner: Runner) -> None:
+            timers.wrap_method(runner, "tick_tree", "tree")
+
+        # The benchmark's own bookkeeping is timed apart and left out of the trial's wall time.
+        run.tick_hooks.append(timers.wrap("benchmark", on_tick))
+        run.runner_hooks.append(time_ticks)
+        start = time.perf_counter()
+        report = run.run()
+        wall_s = time.perf_counter() - start - timers.seconds.get("benchmark", 0.0)
+        captures = timers.calls.get("render", 0)
+    seconds = {name: timers.seconds.get(name, 0.0) for name in SECTIONS[:-1]}
+    seconds["rest"] = max(0.0, wall_s - sum(seconds.values()))
+    physics_s = seconds["physics"]
+    objects = report.objects
+    return {
+        "tree": tree_file.name,
+        "seed": seed,
+        "status": report.tree_status,
+        "objects": len(objects),
+        "all_within": report.all_within_threshold,
+        "final_offset_mm": [o.final_offset_mm for o in objects],
+        "final_offset_truth_mm": [o.final_offset_truth_mm for o in objects],
+        "pushes": [o.pushes for o in objects],
+        "world_s": round(report.sim_seconds, 3),
+        "world_s_per_object": round(report.sim_seconds / max(1, len(objects)), 3),
+        "wall_s": round(wall_s, 3),
+        "wall_s_by_section": {name: round(value, 3) for name, value in seconds.items()},
+        "share_by_section": {name: round(value / wall_s, 4) for name, value in seconds.items()},
+        "floor_ratio": round(wall_s / physics_s, 3) if physics_s > 0 else math.inf,
+        "captures": captures,
+        "render_ms_per_capture": round(1000 * seconds["render"] / captures, 1) if captures else None,
+        "world_s_by_activity": {k: round(v, 3) for k, v in sorted(world_by_category.items())},
+        "world_s_by_stage": {k: round(v, 3) for k, v in sorted(world_by_stage.items(), key=lambda kv: -kv[1])},
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seed", type=int, default=0, help="scene seed of both trials (default 0)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    args = parser.parse_args(argv)
+
+    bare = bare_stepping()
+    single = run_trial(TREES / "single_cube.py", args.seed)
+    four = run_trial(TREES / "four_cubes.py", args.seed)
+    summary = {
+        "benchmark": "throughput",
+        "note": "wall times on this machine (shared with other jobs if so): compare the ratios",
+        "render_share": single["share_by_section"]["render"],
+        "floor_ratio": single["floor_ratio"],
+        "world_s_per_object": four["world_s_per_object"],
+        "bare_robot": bare,
+        "single_cube": single,
+        "four_cubes": four,
+    }
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for trial in (single, four):
+            split = ", ".join(f"{k} {v:.0%}" for k, v in trial["share_by_section"].items())
+            print(
+                f"{trial['tree']}: {trial['world_s']} s of world time ({trial['world_s_per_object']} s per object) "
+                f"in {trial['wall_s']} s of wall time: {split}; wall / physics {trial['floor_ratio']}"
+            )
+            print(f"  world time by activity: {trial['world_s_by_activity']}")
+        print(
+            f"bare robot: {bare['physics_steps_per_s']} physics steps per second "
+            f"({bare['real_time_factor']}x real time)"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

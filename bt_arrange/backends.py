@@ -1,0 +1,195 @@
+"""Backends: what the command line runs a tree on, found by name, never imported by the framework.
+
+``bt-arrange run``, ``experiment`` and ``info`` reach the world through a ``Backend``: the
+simulated work cell (``sim``, the default, from the ``bt_arrange_sim`` package) or, later, a real
+UR5. A backend is found through the ``bt_arrange.backends`` entry-point group, which a package
+declares in its ``pyproject.toml``::
+
+    [project.entry-points."bt_arrange.backends"]
+    sim = "bt_arrange_sim.backend:SimBackend"
+
+or registered at run time with ``register(name, factory)``. The framework names no backend
+module in its code: ``load("sim")`` imports whatever the entry point says, only when a command
+needs it. (When the installed metadata predates the entry point, e.g. an editable install not
+reinstalled since, the default is still found through ``FALLBACK``, a string, not an import.)
+
+The protocols below say what the CLI uses of a backend, its runs and their reports.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import py_trees
+
+from bt_arrange.errors import BackendError
+
+#: The entry-point group backends are declared in.
+ENTRY_POINT_GROUP = "bt_arrange.backends"
+#: The backend the command line uses unless told otherwise: the simulated work cell.
+DEFAULT_BACKEND = "sim"
+#: Where the default backend lives when no installed entry point declares it (stale metadata).
+FALLBACK = {DEFAULT_BACKEND: "bt_arrange_sim.backend:SimBackend"}
+
+
+class ObjectReport(Protocol):
+    """How one object ended: offsets in millimetres, camera and (where the backend knows it) truth."""
+
+    name: str
+    target: tuple[float, float, float]
+    placed_offset_mm: float | None
+    final_offset_mm: float | None
+    final_offset_truth_mm: float | None
+    pushes: int
+    status: str
+    reason: str
+
+
+class RunReport(Protocol):
+    """A run's outcome, per object and for the whole tree."""
+
+    @property
+    def objects(self) -> Sequence[ObjectReport]:
+        """One report per object of the plan."""
+        ...
+
+    tree_status: str
+    threshold_mm: float | None
+    sim_seconds: float
+    wall_seconds: float
+    timed_out: bool
+
+    @property
+    def all_within_threshold(self) -> bool:
+        """True when every object ended within the threshold, as the camera measured."""
+        ...
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``--json`` form."""
+        ...
+
+
+class RunSession(Protocol):
+    """One tree on one world, as a context manager: ``with backend.open_run(...) as run: run.run()``."""
+
+    tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], object]]
+
+    def elapsed_s(self) -> float:
+        """World time since the tree started."""
+        ...
+
+    def run(self) -> RunReport:
+        """Tick the tree to the end."""
+        ...
+
+    def __enter__(self) -> RunSession: ...
+
+    def __exit__(self, *exc: object) -> None: ...
+
+
+class Experiment(Protocol):
+    """The paper's evaluation on this backend (Table 1 rows as seeded trials)."""
+
+    ROWS: tuple[str, ...]
+    ROW_LABELS: Mapping[str, str]
+
+    def parse_rows(self, text: str) -> list[str]:
+        """Rows from a comma-separated list, or a ``PlanError``."""
+        ...
+
+    def run_experiment(
+        self, rows: Iterable[str], trials: int, seed: int, threshold_mm: float, out_dir: Path, **options: Any
+    ) -> list[dict[str, Any]]:
+        """Run the missing trials into ``out_dir``; the summary rows.
+
+        ``options`` are the backend's own, passed only when not their default: ``workers`` and
+        ``on_trial`` always; the sim backend also takes ``cell``, ``strategy``, ``thresholds``,
+        ``executor`` and ``scheduler`` and checks them first in ``check_options(**options)``.
+        """
+        ...
+
+    def markdown_table(self, summary: list[dict[str, Any]]) -> str:
+        """Table 1 as Markdown."""
+        ...
+
+
+@runtime_checkable
+class Backend(Protocol):
+    """What the command line runs trees on."""
+
+    name: str
+
+    def open_run(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        starts: Iterable[Any],
+        *,
+        gui: bool = False,
+        record_dir: Path | None = None,
+        time_limit_s: float = 1800.0,
+        title: str | None = None,
+    ) -> RunSession:
+        """Check the plan and the scene, build the world, and return the run (not started)."""
+        ...
+
+    def scatter(self, colours: Sequence[str], seed: int, avoid: Iterable[Any] = ()) -> list[Any]:
+        """Where cubes of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
+        ...
+
+    def check(self) -> Iterator[str]:
+        """Lines for ``bt-arrange info``: the backend starts (or a ``BtArrangeError`` saying why not)."""
+        ...
+
+    def prepare_out(self, path: Path) -> Path:
+        """Make an output folder, or a ``PlanError`` saying why it cannot be used."""
+        ...
+
+    @property
+    def experiment(self) -> Experiment | None:
+        """The paper's evaluation, or None when this backend cannot run it."""
+        ...
+
+
+_registered: dict[str, Callable[[], Backend]] = {}
+
+
+def register(name: str, factory: Callable[[], Backend]) -> None:
+    """Make a backend available under ``name`` (it takes precedence over an entry point of that name)."""
+    _registered[name] = factory
+
+
+def available() -> list[str]:
+    """The names of every backend found: registered, declared by entry points, and the fallback."""
+    names = set(_registered) | {ep.name for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)}
+    return sorted(names | set(FALLBACK))
+
+
+def _import(spec: str) -> Any:
+    module_name, _, attribute = spec.partition(":")
+    module = importlib.import_module(module_name)
+    return getattr(module, attribute) if attribute else module
+
+
+def load(name: str = DEFAULT_BACKEND) -> Backend:
+    """The backend called ``name``; a ``BackendError`` names the known ones when there is none."""
+    factory: Any = _registered.get(name)
+    if factory is None:
+        points = [ep for ep in metadata.entry_points(group=ENTRY_POINT_GROUP) if ep.name == name]
+        try:
+            if points:
+                factory = points[0].load()
+            elif name in FALLBACK:
+                factory = _import(FALLBACK[name])
+        except ImportError as error:
+            raise BackendError(f"backend {name!r} cannot be loaded: {error}") from error
+    if factory is None:
+        raise BackendError(f"no backend {name!r}; installed: {', '.join(available())}")
+    # A class or a factory function is called; an object that already is a backend is used as it is.
+    backend = factory() if isinstance(factory, type) or not isinstance(factory, Backend) else factory
+    if not isinstance(backend, Backend):
+        raise BackendError(f"backend {name!r} ({type(backend).__name__}) does not provide what bt-arrange needs")
+    return backend

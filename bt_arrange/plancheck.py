@@ -1,0 +1,236 @@
+"""The plan check that knows the cell: one function, run before anything moves.
+
+``check_plan`` takes what a run is about to do (the targets, the threshold, where the cubes start)
+and what the cell is (the top camera's view, the colours it can tell apart) and raises one
+``PlanError`` naming the first problem:
+
+- every target is well formed, reachable, and far enough from the others (``validate_targets``);
+- the threshold is one a push can correct (``check_threshold``: not below
+  ``ManipulationSettings.min_threshold_mm``);
+- every start is well formed, of a known colour, alone in its colour and name, clear of the other
+  cubes and of the other objects' targets, and reachable;
+- every target's object is in the scene, in the target's colour;
+- every target and every start lies inside the top camera's view with a margin
+  (``CameraView.margin_m``).
+
+The camera's view is data: a ``CameraView`` is the camera's intrinsics and pose, which the backend
+hands in (the simulated cell builds one from its camera configuration without starting a world; a
+real cell would from its calibration). Tree files, the Python API (``bt_arrange_sim.SimulatedRun``)
+and plan files all call this one function.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bt_arrange.checks import finite_number
+from bt_arrange.errors import PlanError, UnreachableError
+from bt_arrange.geometry import Pose, fold_yaw, rotation_z
+from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.perception.pose import pixel_on_plane, project_world
+from bt_arrange.robot import CameraIntrinsics
+from bt_arrange.settings import ManipulationSettings
+from bt_arrange.trees import MIN_TARGET_SPACING_M, Target, check_threshold, validate_targets
+
+#: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
+#: room for a placing error and for the detector's crop around the face.
+VIEW_MARGIN_M = 0.01
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """What the top camera sees: its intrinsics and its pose ``T_W_C`` (OpenCV optical frame).
+
+    ``margin_m`` (each side of a cube's top face, metres) is what ``check_plan`` demands beyond
+    the face.
+    """
+
+    intrinsics: CameraIntrinsics
+    camera_pose_world: Pose
+    margin_m: float = VIEW_MARGIN_M
+
+    def face_pixels(self, x_m: float, y_m: float, yaw_rad: float, half_side_m: float, z_m: float) -> np.ndarray:
+        """Pixels (4x2) of the corners of a level square of half-side ``half_side_m`` at (x, y, z, yaw)."""
+        square = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]) * half_side_m
+        corners = (rotation_z(yaw_rad) @ square.T).T + np.array([x_m, y_m, z_m])
+        return project_world(self.intrinsics, self.camera_pose_world, corners)
+
+    def sees_face(self, x_m: float, y_m: float, yaw_rad: float, cube_edge_m: float) -> bool:
+        """True when the top face of a cube at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
+        depth = (
+            np.array([x_m, y_m, cube_edge_m]) - self.camera_pose_world.position_m
+        ) @ self.camera_pose_world.rotation
+        if depth[2] <= 0:
+            return False
+        pixels = self.face_pixels(x_m, y_m, yaw_rad, cube_edge_m / 2 + self.margin_m, cube_edge_m)
+        width, height = self.intrinsics.width_px, self.intrinsics.height_px
+        return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
+
+    def sees_disc(self, x_m: float, y_m: float, radius_m: float, z_m: float, samples: int = 32) -> bool:
+        """True when a level disc (``samples`` points of its rim) at height ``z_m`` lies inside the image.
+
+        A cube whose top face fits this disc, grown by ``margin_m``, is seen at any yaw.
+        """
+        angles = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
+        rim = np.column_stack([x_m + radius_m * np.cos(angles), y_m + radius_m * np.sin(angles), np.full(samples, z_m)])
+        depth = (rim - self.camera_pose_world.position_m) @ self.camera_pose_world.rotation
+        if np.any(depth[:, 2] <= 0):
+            return False
+        pixels = project_world(self.intrinsics, self.camera_pose_world, rim)
+        width, height = self.intrinsics.width_px, self.intrinsics.height_px
+        return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
+
+    def sees_face_at_any_yaw(self, x_m: float, y_m: float, cube_edge_m: float) -> bool:
+        """True when a cube at (x, y) passes ``sees_face`` whatever its yaw (1 mm spare for the rim's sampling)."""
+        radius_m = (cube_edge_m / 2 + self.margin_m) * math.sqrt(2.0) + 0.001
+        return self.sees_disc(x_m, y_m, radius_m, cube_edge_m)
+
+    def table_extent_m(self, cube_edge_m: float) -> tuple[float, float, float, float]:
+        """Where a square cube's centre can be (x_min, x_max, y_min, y_max): the view at the top face's height.
+
+        An outer box of the image's corners on that plane, for messages; ``sees_face`` decides.
+        """
+        corners_px = np.array(
+            [
+                [0.0, 0.0],
+                [self.intrinsics.width_px - 1.0, 0.0],
+                [self.intrinsics.width_px - 1.0, self.intrinsics.height_px - 1.0],
+                [0.0, self.intrinsics.height_px - 1.0],
+            ]
+        )
+        points = [pixel_on_plane(self.intrinsics, self.camera_pose_world, p, cube_edge_m) for p in corners_px]
+        xy = np.array([p[:2] for p in points if p is not None])
+        if len(xy) == 0:
+            return (math.nan, math.nan, math.nan, math.nan)
+        return (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
+
+
+def _start_name(start: Any) -> str:
+    return getattr(start, "name", None) or start.colour
+
+
+def check_scene(
+    starts: Iterable[object],
+    *,
+    view: CameraView | None = None,
+    colours: Iterable[str] | None = None,
+    kinematics: ArmKinematics | None = None,
+    settings: ManipulationSettings | None = None,
+) -> list[Any]:
+    """Check where the cubes start (anything with ``colour``, ``x_m``, ``y_m``, ``yaw_rad`` and ``name``)."""
+    if isinstance(starts, (str, bytes)) or not isinstance(starts, Iterable):
+        raise PlanError(f"the scene must be a list of cube starts (colour, x_m, y_m, yaw_rad), got {starts!r}")
+    scene: list[Any] = list(starts)
+    known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
+    settings = settings or ManipulationSettings()
+    kinematics = kinematics or ArmKinematics()
+    names: dict[str, int] = {}
+    by_colour: dict[str, int] = {}
+    for index, start in enumerate(scene, start=1):
+        colour = getattr(start, "colour", None)
+        if not isinstance(colour, str):
+            raise PlanError(f"cube {index} of the scene is {start!r}, not a cube start (colour, x_m, y_m, yaw_rad)")
+        for field in ("x_m", "y_m", "yaw_rad"):
+            finite_number(field, getattr(start, field, None), where=f"cube {index} of the scene ({colour}): ")
+        name = getattr(start, "name", None)
+        if name is not None and (not isinstance(name, str) or not name):
+            raise PlanError(f"cube {index} of the scene ({colour}): name={name!r} is not a non-empty string")
+        if colour not in known:
+            raise PlanError(f"cube {index} of the scene: unknown colour {colour!r}; the cell knows {', '.join(known)}")
+        if _start_name(start) in names:
+            raise PlanError(
+                f"cubes {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}"
+            )
+        if colour in by_colour:
+            raise PlanError(
+                f"cubes {by_colour[colour]} and {index} of the scene are both {colour}: "
+                "the camera tells cubes apart by colour, so each colour is one cube"
+            )
+        names[_start_name(start)] = by_colour[colour] = index
+    edge = settings.cube_edge_m
+    for index, start in enumerate(scene, start=1):
+        where = f"cube {_start_name(start)} starts at ({start.x_m:.3f}, {start.y_m:.3f}) m"
+        if view is not None and not view.sees_face(start.x_m, start.y_m, start.yaw_rad, edge):
+            raise PlanError(f"{where}, outside the camera's view{_view_text(view, edge)}")
+        pick = gripper_down_pose(start.x_m, start.y_m, settings.grasp_height_m, fold_yaw(start.yaw_rad))
+        try:
+            kinematics.check_reachable(pick)
+        except UnreachableError as error:
+            raise PlanError(f"{where}, out of the arm's reach: {error}") from error
+        for other in scene[index:]:
+            distance_m = math.hypot(start.x_m - other.x_m, start.y_m - other.y_m)
+            if distance_m < edge * math.sqrt(2):
+                raise PlanError(
+                    f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
+                    f"closer than a cube's {edge * math.sqrt(2) * 1000:.0f} mm diagonal, they would overlap"
+                )
+    return scene
+
+
+def _view_text(view: CameraView, edge_m: float) -> str:
+    x0, x1, y0, y1 = view.table_extent_m(edge_m)
+    if not all(math.isfinite(v) for v in (x0, x1, y0, y1)):
+        return ""
+    return (
+        f" (it sees about x {x0:.2f} to {x1:.2f} m, y {y0:.2f} to {y1:.2f} m; the whole top face and "
+        f"{view.margin_m * 1000:.0f} mm around it must be in the image)"
+    )
+
+
+def check_plan(
+    targets: Iterable[object],
+    *,
+    threshold_mm: object = None,
+    starts: Iterable[object] | None = None,
+    view: CameraView | None = None,
+    colours: Iterable[str] | None = None,
+    kinematics: ArmKinematics | None = None,
+    settings: ManipulationSettings | None = None,
+) -> list[Target]:
+    """Check a whole run before anything moves; return the targets. A ``PlanError`` names the first problem.
+
+    ``threshold_mm``, ``starts`` and ``view`` are checked when given: a tree builder knows only the
+    targets and the threshold, a run in a cell knows the scene and the camera too.
+    """
+    settings = settings or ManipulationSettings()
+    kinematics = kinematics or ArmKinematics()
+    plan = validate_targets(targets, colours=colours, kinematics=kinematics, settings=settings)
+    if threshold_mm is not None:
+        check_threshold(threshold_mm, settings)
+    edge = settings.cube_edge_m
+    if view is not None:
+        for target in plan:
+            if not view.sees_face(target.x_m, target.y_m, target.yaw_rad, edge):
+                raise PlanError(
+                    f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is outside the camera's view"
+                    f"{_view_text(view, edge)}: the cube could be placed there but never inspected"
+                )
+    if starts is None:
+        return plan
+    scene = check_scene(starts, view=view, colours=colours, kinematics=kinematics, settings=settings)
+    by_name = {_start_name(start): start for start in scene}
+    for target in plan:
+        start = by_name.get(target.obj)
+        if start is None:
+            present = ", ".join(sorted(by_name)) or "none"
+            raise PlanError(f"target {target.obj}: no cube {target.obj!r} in the scene (the scene has {present})")
+        if start.colour != target.colour:
+            raise PlanError(
+                f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}"
+            )
+        for start in scene:
+            if _start_name(start) == target.obj:
+                continue
+            distance_m = math.hypot(start.x_m - target.x_m, start.y_m - target.y_m)
+            if distance_m < MIN_TARGET_SPACING_M:
+                raise PlanError(
+                    f"cube {_start_name(start)} starts {distance_m * 1000:.0f} mm from {target.obj}'s target: the "
+                    f"pads need at least {MIN_TARGET_SPACING_M * 1000:.0f} mm between cube centres"
+                )
+    return plan

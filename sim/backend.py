@@ -1,0 +1,79 @@
+"""The simulated work cell as a ``bt_arrange.backends.Backend`` (entry point ``sim``, the default).
+
+Imports nothing heavy at module level: the command line loads this to build its help, and the
+pybullet cell is built only when a command runs something.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import py_trees
+
+
+class SimBackend:
+    """Runs trees in a fresh headless pybullet cell (``bt_arrange_sim.runs.SimulatedRun``)."""
+
+    name = "sim"
+
+    def open_run(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        starts: Iterable[Any],
+        *,
+        gui: bool = False,
+        record_dir: Path | None = None,
+        time_limit_s: float = 1800.0,
+        title: str | None = None,
+        cell: str = "ideal",
+        run_seed: int = 0,
+    ) -> Any:
+        """A ``SimulatedRun``: the plan and scene checked, the cell built, not yet ticked.
+
+        ``cell`` is ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell``; a bad one is a
+        one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors.
+        """
+        from bt_arrange.errors import PlanError
+        from bt_arrange_sim.cell import CellConfig
+        from bt_arrange_sim.realcell import parse_cell
+        from bt_arrange_sim.runs import SimulatedRun
+
+        try:
+            errors = parse_cell(cell)
+        except PlanError as error:
+            raise PlanError(f"--cell {cell}: {error}") from error
+        config = CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
+        return SimulatedRun(
+            root, starts, cell_config=config, gui=gui, record_dir=record_dir, time_limit_s=time_limit_s, title=title
+        )
+
+    def scatter(self, colours: Sequence[str], seed: int, avoid: Iterable[Any] = ()) -> list[Any]:
+        """``bt_arrange_sim.scenes.scatter``: cubes inside the camera's view and the arm's reach."""
+        from bt_arrange_sim.scenes import scatter
+
+        return scatter(list(colours), seed, avoid=list(avoid))
+
+    def check(self) -> Iterator[str]:
+        """Start a headless cell and report the TCP pose."""
+        import bt_arrange_sim
+        from bt_arrange.motion import default_urdf_path
+
+        with bt_arrange_sim.WorkCell() as cell:
+            cell.settle(0.1)
+            yield f"robot description: {default_urdf_path()}"
+            yield f"headless work cell: ok (TCP at {cell.arm.tcp_pose()})"
+
+    def prepare_out(self, path: Path) -> Path:
+        """``bt_arrange_sim.runs.prepare_record_dir``."""
+        from bt_arrange_sim.runs import prepare_record_dir
+
+        return prepare_record_dir(path)
+
+    @property
+    def experiment(self) -> Any:
+        """The module ``bt_arrange_sim.experiment`` (Table 1 and Fig. 4 in simulation)."""
+        from bt_arrange_sim import experiment
+
+        return experiment

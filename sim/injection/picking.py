@@ -1,0 +1,140 @@
+"""2) Picking (the paper's Sec. 3, Fig. 2b-d): translation, orientation and surface errors of the grasp."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import py_trees
+
+from bt_arrange.behaviours import Pick
+from bt_arrange_sim.injection.framework import (
+    CLOSE_STAGE,
+    MAX_DRAWS,
+    Injector,
+    Parameter,
+    _deg,
+    _horizontal,
+    _mm,
+    _sample,
+)
+
+if TYPE_CHECKING:
+    from bt_arrange_sim.runs import SimulatedRun
+
+
+class PickTranslation(Injector):
+    """Translation error (Fig. 2b): the gripper is not centred above the cube.
+
+    Right after ``detect <obj>`` first succeeds (seen, not yet grasped) the cube is moved by dx, dy,
+    each uniform in +-``max_m`` along world x and y (the paper: up to +-2.5 cm, half a cube),
+    as the paper draws it; only a draw the pads could not close on is drawn again (``grasp_fits``:
+    at most 17.5 mm off across the closing axis; along the pads up to half an edge still grasps).
+    The closing pads drag it back to the centre along their closing axis; the offset along the
+    pads remains and shows up after placing.
+
+    Record: ``dx_mm``, ``dy_mm`` (world), ``draws`` (samples drawn), ``time_s``.
+    """
+
+    name = "pick_translation"
+    PARAMETERS = (Parameter("max_m", 0.025, 0.0, 0.05, "m"),)
+
+    def __init__(self, max_m: float = 0.025) -> None:
+        super().__init__(max_m=max_m)
+
+    def _attach(self, run: SimulatedRun, obj: str) -> None:
+        self._on_first_detection(self._inject)
+
+    def _inject(self) -> None:
+        cell, max_m = self.run.cell, self.params["max_m"]
+        x, y, yaw = cell.cube_planar_truth(self.cube)
+        reference = self._grasp_reference()
+
+        def draw() -> tuple[float, float]:
+            dx, dy = self.rng.uniform(-max_m, max_m, size=2)
+            return float(dx), float(dy)
+
+        drawn = _sample(draw, lambda d: self._fits(x + d[0], y + d[1], yaw, reference))
+        if drawn is None:
+            self.details.update(dx_mm=0.0, dy_mm=0.0, draws=MAX_DRAWS, skipped="no draw fits between the pads")
+            return
+        (dx, dy), draws = drawn
+        cell.displace_cube(self.cube, float(dx), float(dy))
+        self.details.update(dx_mm=_mm(dx), dy_mm=_mm(dy), draws=draws)
+
+
+class PickRotation(Injector):
+    """Orientation error (Fig. 2c): the pads are not aligned with the cube's faces.
+
+    Right after ``detect <obj>`` first succeeds the cube is turned about the vertical through its
+    centre by an angle uniform in +-``max_deg`` (the paper: up to +-40 deg), drawn again only when
+    the pads could not close on it (with another picking error already injected). The
+    closing pads turn it back towards square, which moves it.
+
+    Measured in this cell (trees/single_cube.py): turned by about 24 deg, the cube is held about
+    7 deg off square and placed 1 to 6 mm off; turned by 29 deg or more it can stay
+    wedged across two vertical edges (fingers about 68 mm apart, which Pick's width check accepts)
+    and is placed turned by the full angle but only about 0.2 mm off: the position threshold alone
+    does not see it.
+
+    Record: ``dyaw_deg``, ``draws``, ``time_s``.
+    """
+
+    name = "pick_rotation"
+    PARAMETERS = (Parameter("max_deg", 40.0, 0.0, 45.0, "deg"),)
+
+    def __init__(self, max_deg: float = 40.0) -> None:
+        super().__init__(max_deg=max_deg)
+
+    def _attach(self, run: SimulatedRun, obj: str) -> None:
+        self._on_first_detection(self._inject)
+
+    def _inject(self) -> None:
+        cell, max_rad = self.run.cell, math.radians(self.params["max_deg"])
+        x, y, yaw = cell.cube_planar_truth(self.cube)
+        reference = self._grasp_reference()
+        drawn = _sample(
+            lambda: float(self.rng.uniform(-max_rad, max_rad)), lambda d: self._fits(x, y, yaw + d, reference)
+        )
+        if drawn is None:
+            self.details.update(dyaw_deg=0.0, draws=MAX_DRAWS, skipped="no draw fits between the pads")
+            return
+        dyaw, draws = drawn
+        cell.displace_cube(self.cube, dyaw_rad=dyaw)
+        self.details.update(dyaw_deg=_deg(dyaw), draws=draws)
+
+
+class SurfaceShift(Injector):
+    """Surface error (Fig. 2d): an uneven face moves the cube as the fingers close.
+
+    When ``pick <obj>`` starts "close on the cube" (the pads around the cube, not yet touching it)
+    the cube is shifted by a distance uniform in +-``max_m`` along the pads, i.e. the horizontal
+    axis across the closing axis (the TCP's y axis), where the closing pads do not centre it.
+
+    Record: ``shift_mm`` (signed, along ``pad_axis``), ``dx_mm``, ``dy_mm`` (world), ``pad_axis``, ``time_s``.
+    """
+
+    name = "surface_shift"
+    PARAMETERS = (Parameter("max_m", 0.003, 0.0, 0.010, "m"),)
+
+    def __init__(self, max_m: float = 0.003) -> None:
+        super().__init__(max_m=max_m)
+
+    def _attach(self, run: SimulatedRun, obj: str) -> None:
+        self._on_stage(Pick, CLOSE_STAGE, self._inject)
+
+    def _inject(self, node: py_trees.behaviour.Behaviour) -> bool:
+        cell = self.run.cell
+        pad_axis = _horizontal(cell.arm.tcp_pose().rotation[:, 1])
+        shift = float(self.rng.uniform(-self.params["max_m"], self.params["max_m"]))
+        dx, dy = shift * pad_axis
+        cell.displace_cube(self.cube, float(dx), float(dy))
+        self.fired = True
+        self.details.update(
+            time_s=self._now(),
+            shift_mm=_mm(shift),
+            dx_mm=_mm(dx),
+            dy_mm=_mm(dy),
+            pad_axis=[round(float(v), 6) for v in pad_axis],
+        )
+        return True

@@ -1,0 +1,316 @@
+"""The CLI's contract for user mistakes: exit 2, exactly one line on stderr, no traceback, nothing simulated.
+
+Every subcommand meets every kind of bad input. A spy stands in for the work cell and for the
+experiment's trials: a mistake must be refused before either is reached. Generated argument lists
+(hypothesis) either reach the spy (accepted, so they would run) or are refused by that contract.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import bt_arrange_sim.cell
+import bt_arrange_sim.executors
+import bt_arrange_sim.experiment
+import bt_arrange_sim.runs
+from bt_arrange import cli
+
+TREES = Path(__file__).resolve().parents[1] / "trees"
+SINGLE = str(TREES / "single_cube.py")
+
+
+class Simulated(Exception):
+    """Raised by the spies: the command got as far as building a world or running a trial."""
+
+
+def spy(*_: object, **__: object) -> None:
+    raise Simulated
+
+
+@pytest.fixture(autouse=True)
+def no_world(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(bt_arrange_sim.runs, "WorkCell", spy)
+    monkeypatch.setattr(bt_arrange_sim.cell, "WorkCell", spy)
+    monkeypatch.setattr(bt_arrange_sim, "WorkCell", spy)
+    monkeypatch.setattr(bt_arrange_sim.experiment, "run_trial", spy)
+    monkeypatch.setattr(bt_arrange_sim.experiment, "ProcessPoolExecutor", spy)
+    monkeypatch.setattr(bt_arrange_sim.executors, "open_executor", spy)
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+
+
+def call(argv: list[str]) -> tuple[int | str, str, str]:
+    """Run the CLI in-process; the exit code, or "simulated" when a spy was reached."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code: int | str = cli.main(argv)
+        except SystemExit as exit_:
+            code = exit_.code if isinstance(exit_.code, int) else 2
+        except Simulated:
+            code = "simulated"
+    return code, out.getvalue(), err.getvalue()
+
+
+def assert_refused(code: int | str, err: str) -> str:
+    assert code == 2, (code, err)
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("bt-arrange: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def tree(tmp_path: Path, name: str, body: str) -> str:
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(body))
+    return str(path)
+
+
+GOOD_TREE = """
+    from bt_arrange.trees import Target, arrangement
+    from bt_arrange_sim.scenes import CubeStart, scatter
+    TARGETS = [Target("red", {x}, {y})]
+    def create_root(threshold_mm=1.0):
+        return arrangement(TARGETS, threshold_mm=threshold_mm)
+    def create_scene(seed):
+        return {scene}
+"""
+
+
+def bad_tree_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
+    """Tree files with one mistake each, and a fragment the error line must contain."""
+    scene = 'scatter(["red"], seed, avoid=TARGETS)'
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    return {
+        "missing": (str(tmp_path / "nope.py"), "nope.py not found"),
+        "not python": (tree(tmp_path, "tree.txt", "x"), "is neither a Python file (.py) nor a BehaviorTree"),
+        "syntax error": (tree(tmp_path, "syntax.py", "def create_root(:\n"), "syntax error at line 1"),
+        "raises on import": (tree(tmp_path, "boom.py", "1 / 0\n"), "ZeroDivisionError"),
+        "no create_root": (tree(tmp_path, "empty.py", "X = 1\n"), "defines no create_root()"),
+        "create_root fails": (tree(tmp_path, "fails.py", "def create_root():\n    return {}['x']\n"), "KeyError"),
+        "not a behaviour": (tree(tmp_path, "notbt.py", "def create_root():\n    return 3\n"), "returned int"),
+        "unknown colour": (
+            tree(
+                tmp_path, "purple.py", GOOD_TREE.replace('"red", {x}', '"purple", {x}').format(x=0.5, y=0, scene=scene)
+            ),
+            "unknown colour 'purple'",
+        ),
+        "out of reach": (tree(tmp_path, "far.py", GOOD_TREE.format(x=1.2, y=0, scene=scene)), "out of reach"),
+    }
+
+
+def bad_run_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
+    """Tree files that only ``run`` refuses: their scene or their place in the cell is wrong."""
+    scene = 'scatter(["red"], seed, avoid=TARGETS)'
+    return {
+        "no create_scene": (
+            tree(tmp_path, "noscene.py", GOOD_TREE.format(x=0.5, y=0, scene=scene).replace("create_scene", "other")),
+            "create_scene(seed)",
+        ),
+        "no cube for the target": (
+            tree(tmp_path, "nocube.py", GOOD_TREE.format(x=0.5, y=0, scene='scatter(["blue"], seed)')),
+            "no cube 'red' in the scene",
+        ),
+        "target out of view": (
+            tree(tmp_path, "view.py", GOOD_TREE.format(x=0.3, y=0.45, scene=scene)),
+            "camera's view",
+        ),
+        "target behind the base": (tree(tmp_path, "behind.py", GOOD_TREE.format(x=-0.4, y=0, scene=scene)), "view"),
+        "unknown cube colour": (
+            tree(
+                tmp_path, "paint.py", GOOD_TREE.format(x=0.5, y=0, scene=f'{scene} + [CubeStart("pink", 0.4, 0.3, 0)]')
+            ),
+            "unknown colour 'pink'",
+        ),
+        "scene raises": (tree(tmp_path, "scene.py", GOOD_TREE.format(x=0.5, y=0, scene="1 / 0")), "create_scene()"),
+    }
+
+
+def test_every_bad_tree_file_is_one_line_for_run_and_show(tmp_path: Path) -> None:
+    for command in ("run", "show"):
+        for kind, (path, fragment) in bad_tree_files(tmp_path).items():
+            code, _, err = call([command, path])
+            assert fragment in assert_refused(code, err), (command, kind)
+
+
+def test_every_tree_file_that_cannot_run_in_the_cell_is_one_line(tmp_path: Path) -> None:
+    for kind, (path, fragment) in bad_run_files(tmp_path).items():
+        code, _, err = call(["run", path])
+        assert fragment in assert_refused(code, err), kind
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["run", SINGLE, "--seed", "-5"], "argument --seed: -5 must be 0 or more"),
+        (["run", SINGLE, "--seed", "x"], "argument --seed: 'x' is not a whole number"),
+        (["run", SINGLE, "--threshold-mm", "0"], "--threshold-mm"),
+        (["run", SINGLE, "--threshold-mm", "nan"], "--threshold-mm"),
+        (["run", SINGLE, "--threshold-mm", "abc"], "'abc' is not a number of millimetres"),
+        (["run", SINGLE, "--threshold-mm", "0.1"], "below 0.28 mm, the smallest offset a push can correct"),
+        (["run", SINGLE, "--time-limit-s", "0"], "argument --time-limit-s: 0 must be a positive number of seconds"),
+        (["run", SINGLE, "--time-limit-s", "-1"], "--time-limit-s"),
+        (["run", SINGLE, "--time-limit-s", "inf"], "--time-limit-s"),
+        (["run", SINGLE, "--gui"], "needs a display"),
+        (["run", SINGLE, "--record", "{file}"], "it is a file, not a folder"),
+        (["run", SINGLE, "--record", "{file}/below"], "cannot record into"),
+        (["run", SINGLE, "--bogus"], "unrecognized arguments: --bogus"),
+        (["run"], "the following arguments are required: TREE_FILE"),
+        (["show", SINGLE, "--format", "gif"], "argument --format: invalid choice: 'gif'"),
+        (["show", SINGLE, "--out", "{file}/below.txt"], "below.txt"),
+        (["experiment", "--seed", "-5"], "argument --seed: -5 must be 0 or more"),
+        (["experiment", "--trials", "0"], "argument --trials: 0 must be 1 or more"),
+        (["experiment", "--workers", "0"], "argument --workers: 0 must be 1 or more"),
+        (["experiment", "--rows", "bogus"], "unknown row 'bogus'"),
+        (["experiment", "--rows", ","], "--rows is empty"),
+        (["experiment", "--threshold-mm", "-1", "--out", "{dir}"], "--threshold-mm"),
+        (["experiment", "--threshold-mm", "0.2", "--out", "{dir}"], "below 0.28 mm"),
+        (["experiment", "--out", "{file}"], "it is a file, not a folder"),
+        (["experiment", "--thresholds", "0.2,1", "--out", "{dir}"], "--thresholds 0.2: threshold 0.2 mm is below 0.28"),
+        (["experiment", "--thresholds", "1,x", "--out", "{dir}"], "--thresholds: 'x' is not a number"),
+        (["experiment", "--thresholds", ",", "--out", "{dir}"], "--thresholds is empty"),
+        (["experiment", "--threshold-mm", "1", "--thresholds", "1,2"], "give --threshold-mm or --thresholds, not both"),
+        (["experiment", "--executor", "slurm"], "argument --executor: invalid choice: 'slurm'"),
+        (["experiment", "--executor", "dask", "--workers", "0"], "argument --workers: 0 must be 1 or more"),
+        (["experiment", "--scheduler", "tcp://10.0.0.5:8786", "--out", "{dir}"], "--scheduler needs --executor dask"),
+        (["experiment", "--executor", "dask", "--scheduler", "", "--out", "{dir}"], "--scheduler is empty"),
+        (["experiment", "--cell", "ideal,lab", "--out", "{dir}"], "--cell lab: unknown cell 'lab'"),
+        (["info", "--bogus"], "unrecognized arguments: --bogus"),
+        (["bogus"], "invalid choice: 'bogus'"),
+        ([], "the following arguments are required: COMMAND"),
+    ],
+)
+def test_every_subcommand_refuses_bad_options_in_one_line(tmp_path: Path, argv: list[str], fragment: str) -> None:
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    argv = [a.format(file=a_file, dir=tmp_path / "out") for a in argv]
+    code, _, err = call(argv)
+    assert fragment in assert_refused(code, err)
+
+
+CELL_FILES = {
+    "unknown_key.toml": ('preset = "real"\n[gripper]\nfinger_wobble = 1\n', "unknown key gripper.finger_wobble"),
+    "unknown_table.toml": ("[lens]\nk1 = 0.1\n", "unknown key 'lens'"),
+    "bad_value.toml": ("[camera]\nfocal_sigma_percent = -1\n", "camera.focal_sigma_percent = -1 must not be negative"),
+    "bad_type.toml": ('[joints]\nenabled = "yes"\n', "joints.enabled = 'yes' must be true or false"),
+    "bad_preset.toml": ('preset = "lab"\n', "preset 'lab' is not one of ideal, real"),
+    "broken.toml": ("[camera\n", "is not valid TOML"),
+}
+
+
+@pytest.mark.parametrize("command", ["run", "experiment"])
+@pytest.mark.parametrize(
+    ("cell", "fragment"),
+    [
+        ("lab", "--cell lab: unknown cell 'lab': choose ideal or real, or give a .toml file"),
+        (",", "--cell"),
+        ("{dir}/missing.toml", "cannot read cell file"),
+        *[(f"{{dir}}/{name}", fragment) for name, (_, fragment) in CELL_FILES.items()],
+    ],
+)
+def test_a_bad_cell_is_refused_in_one_line_naming_the_key(
+    tmp_path: Path, command: str, cell: str, fragment: str
+) -> None:
+    for name, (text, _) in CELL_FILES.items():
+        (tmp_path / name).write_text(text)
+    argv = ["run", SINGLE] if command == "run" else ["experiment", "--trials", "1", "--out", str(tmp_path / "out")]
+    code, _, err = call([*argv, "--cell", cell.format(dir=tmp_path)])
+    assert fragment in assert_refused(code, err)
+
+
+def test_a_good_cell_reaches_the_world(tmp_path: Path) -> None:
+    mine = tmp_path / "mine.toml"
+    mine.write_text('preset = "real"\ncell_seed = 3\n[friction]\nenabled = false\n[gripper]\ncoupling_erp = 0.5\n')
+    for cell in ("real", "ideal", str(mine)):
+        assert call(["run", SINGLE, "--cell", cell])[0] == "simulated"
+        out = tmp_path / cell.replace("/", "_")
+        assert call(["experiment", "--trials", "1", "--rows", "system", "--cell", cell, "--out", str(out)])[0] == (
+            "simulated"
+        )
+
+
+def test_a_good_run_reaches_the_world_and_a_good_experiment_its_trials(tmp_path: Path) -> None:
+    # The spies themselves work: what is accepted does get as far as simulating.
+    assert call(["run", SINGLE])[0] == "simulated"
+    assert call(["experiment", "--trials", "1", "--rows", "system", "--out", str(tmp_path / "x")])[0] == "simulated"
+    campaigns = [
+        ["--thresholds", "0.5,1", "--cell", "ideal,real", "--strategy", "learned"],
+        ["--executor", "dask", "--workers", "2"],
+        ["--executor", "dask", "--scheduler", "tcp://10.0.0.5:8786"],
+        ["--workers", "2", "--rows", "all,tilt"],
+    ]
+    for i, options in enumerate(campaigns):
+        argv = ["experiment", "--trials", "1", "--rows", "system", "--out", str(tmp_path / f"c{i}"), *options]
+        assert call(argv)[0] == "simulated", options
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", SINGLE, "--seed", "-5"],
+        ["experiment", "--trials", "0"],
+        ["experiment", "--rows", "bogus"],
+        ["show", SINGLE, "--format", "gif"],
+    ],
+)
+def test_the_installed_command_prints_one_line_and_nothing_from_the_simulator(argv: list[str]) -> None:
+    # A real process: C-level output (pybullet's banner) and the progress bar would show here.
+    result = subprocess.run(
+        [sys.executable, "-m", "bt_arrange.cli", *argv], capture_output=True, text=True, timeout=120, check=False
+    )
+    assert_refused(result.returncode, result.stderr)
+    assert result.stdout == ""
+
+
+# -- property-based: generated argument lists --------------------------------------------------
+
+values = st.sampled_from(["0", "-1", "1", "2.5", "0.1", "nan", "inf", "-inf", "x", "", "1e400", "7", "0.3"])
+run_options = st.lists(
+    st.one_of(
+        st.tuples(st.sampled_from(["--seed", "--threshold-mm", "--time-limit-s"]), values),
+        st.tuples(st.sampled_from(["--json", "--live", "--gui", "--bogus"])),
+    ),
+    max_size=3,
+)
+experiment_options = st.lists(
+    st.one_of(
+        st.tuples(st.sampled_from(["--seed", "--threshold-mm", "--trials", "--workers"]), values),
+        st.tuples(st.just("--rows"), st.sampled_from(["system", "bogus", ",", "system,translation", "", "all"])),
+        st.tuples(st.just("--thresholds"), st.sampled_from(["0.5,1", "1", "0.1,1", "x", ",", "", "nan,1"])),
+        st.tuples(st.just("--executor"), st.sampled_from(["local", "dask", "slurm", ""])),
+        st.tuples(st.just("--scheduler"), st.sampled_from(["tcp://127.0.0.1:8786", "", " "])),
+        st.tuples(st.just("--cell"), st.sampled_from(["ideal", "real", "ideal,real", ",", "lab"])),
+    ),
+    max_size=3,
+)
+CLI_EXAMPLES = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@CLI_EXAMPLES
+@given(options=run_options)
+def test_generated_run_options_simulate_or_are_refused_in_one_line(options) -> None:
+    argv = ["run", SINGLE, *[part for option in options for part in option]]
+    code, _, err = call(argv)
+    if code != "simulated":
+        assert_refused(code, err)
+
+
+@CLI_EXAMPLES
+@given(options=experiment_options)
+def test_generated_experiment_options_run_trials_or_are_refused_in_one_line(options, tmp_path_factory) -> None:
+    out = tmp_path_factory.mktemp("experiment")
+    argv = ["experiment", "--out", str(out), *[part for option in options for part in option]]
+    code, _, err = call(argv)
+    if code != "simulated":
+        assert_refused(code, err)

@@ -1,0 +1,82 @@
+"""The runner's TransitionLog is a py_trees visitor: it logs what a walk over every node would, with node ids."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from fakes import FakeClock, cube, make_context
+from py_trees.common import Status
+
+from bt_arrange.behaviours import Detect, Inspect, Pick
+from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.trees import Target, arrangement
+
+RED, GREEN = Target("red", 0.50, 0.0), Target("green", 0.50, -0.15)
+
+
+def run_beside_a_full_walk(root, context) -> tuple[list[list[tuple]], list[list[tuple]], Runner]:
+    """Run ``root``; after every tick compare the visitor's changes with a full walk's (an ``observe``)."""
+    full = TransitionLog()
+    by_visitor: list[list[tuple]] = []
+    by_walk: list[list[tuple]] = []
+    this_tick: list[Transition] = []
+    clock = context.robot.clock
+
+    def after_tick(tree_root) -> None:
+        by_visitor.append(sorted((t.node_id, t.old, t.new) for t in this_tick))
+        by_walk.append(sorted((t.node_id, t.old, t.new) for t in full.observe(tree_root, clock.now())))
+        this_tick.clear()
+
+    runner = Runner(
+        root,
+        context,
+        lambda: clock.advance(context.robot.arm.control_period_s),
+        time_limit_s=600.0,
+        on_transition=this_tick.append,
+        on_tick=after_tick,
+    )
+    result = runner.run()
+    assert result.status in (Status.SUCCESS, Status.FAILURE)
+    return by_visitor, by_walk, runner
+
+
+@pytest.mark.parametrize("correct", ["each", "after_all"])
+@pytest.mark.parametrize("held_width_m", [None, 0.05])
+def test_the_visitor_logs_every_change_a_full_walk_sees(correct: str, held_width_m: float | None) -> None:
+    # None: every pick closes on nothing (retries, resets, FailureIsSuccess). 0.05: red is held, placed,
+    # inspected and pushed (the fake camera still sees it where it lay). Green is not there.
+    context = make_context(FakeClock(), cubes=[cube("red", 0.60, -0.12)], object_width_m=held_width_m)
+    root = arrangement([RED, GREEN], correct=correct, max_regrasps=1, max_pushes=2)
+    by_visitor, by_walk, runner = run_beside_a_full_walk(root, context)
+    assert sum(len(tick) for tick in by_walk) > 30, "the run changed many statuses"
+    assert any(new == Status.INVALID.value for tick in by_walk for _, _, new in tick), "nodes were reset"
+    assert by_visitor == by_walk
+
+
+def test_a_transition_names_its_node_by_id_and_its_object() -> None:
+    context = make_context(FakeClock(), cubes=[cube("red", 0.60, -0.12)], object_width_m=None)
+    root = arrangement([RED], max_regrasps=0)
+    _, _, runner = run_beside_a_full_walk(root, context)
+    transitions = runner.log.transitions
+    picks = [t for t in transitions if isinstance(runner.node(t), Pick)]
+    assert picks and all(t.obj == "red" and runner.node(t).obj == "red" for t in picks)
+    assert {t.kind for t in picks} == {"Pick"}
+    detects = [t for t in transitions if isinstance(runner.node(t), Detect) and not isinstance(runner.node(t), Inspect)]
+    assert detects and detects[0].new == Status.SUCCESS.value, "parked: the first look succeeds at once"
+    root_changes = [t for t in transitions if runner.node(t) is root]
+    assert root_changes and root_changes[0].obj is None
+
+
+def test_the_json_lines_keep_the_old_fields_and_add_the_node(tmp_path) -> None:
+    context = make_context(FakeClock(), cubes=[], object_width_m=None)
+    log = TransitionLog(tmp_path / "log.jsonl")
+    clock = context.robot.clock
+    Runner(arrangement([RED], max_regrasps=0), context, lambda: clock.advance(0.008), log=log).run()
+    lines = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
+    assert lines and len(lines) == len(log.transitions)
+    for line in lines:
+        assert {"time_s", "behaviour", "kind", "old", "new", "feedback"} <= set(line)
+        assert log.nodes[line["node_id"]].name == line["behaviour"]
+    detect = next(line for line in lines if line["behaviour"] == "detect red")
+    assert (detect["kind"], detect["obj"]) == ("Detect", "red")

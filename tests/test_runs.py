@@ -1,0 +1,163 @@
+"""SimulatedRun checks everything before it builds a world, and reports by the behaviours' own flags.
+
+A ``FakeCell`` (fake devices, synthetic camera) stands in for the pybullet cell, so these run in
+milliseconds and can tell whether a world was ever built.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import py_trees
+import pytest
+from fakes import FakeClock, cube, make_context
+
+from bt_arrange.behaviours import Inspect
+from bt_arrange.errors import PlanError
+from bt_arrange.runner import Transition
+from bt_arrange.trees import Arrangement, Target, arrangement, set_target, transfer
+from bt_arrange_sim import runs
+from bt_arrange_sim.scenes import CubeStart
+
+RED = Target("red", 0.50, 0.0)
+RED_START = CubeStart("red", 0.40, -0.20, 0.0)
+
+
+class FakeCell:
+    """What SimulatedRun uses of a WorkCell, over the fake devices of tests/fakes.py."""
+
+    built: list[FakeCell] = []
+
+    def __init__(self, config: object = None, gui: bool = False) -> None:
+        self.clock = FakeClock()
+        self.context = make_context(self.clock)
+        self.robot = self.context.robot
+        self.camera = self.robot.camera
+        self.starts: dict[str, CubeStart] = {}
+        FakeCell.built.append(self)
+
+    def add_cubes(self, starts) -> None:
+        for start in starts:
+            self.starts[start.name or start.colour] = start
+        self.camera.cubes = [cube(s.colour, s.x_m, s.y_m, s.yaw_rad) for s in self.starts.values()]
+
+    def settle(self, seconds: float) -> None:
+        self.clock.advance(seconds)
+
+    def step(self) -> None:
+        self.clock.advance(0.008)
+
+    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+        start = self.starts[name]
+        return start.x_m, start.y_m, start.yaw_rad
+
+    def close(self) -> None:
+        pass
+
+
+@pytest.fixture
+def fake_cell(monkeypatch: pytest.MonkeyPatch) -> type[FakeCell]:
+    FakeCell.built = []
+    monkeypatch.setattr(runs, "WorkCell", FakeCell)
+    return FakeCell
+
+
+def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(fake_cell, tmp_path) -> None:  # item 7
+    inspect = Inspect("look at red once it is down", "red", after_placing=True)
+    root = Arrangement("mine", [set_target(RED), transfer(RED), inspect], [RED], 1.0)
+    run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
+    run._on_transition(
+        Transition(
+            1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red"
+        )
+    )
+    assert run._placed_truth_mm["red"] == pytest.approx(223.607, abs=1e-3)  # the fake cube still at its start
+    assert (tmp_path / "after_placing_red.png").is_file()
+
+
+def test_an_inspect_that_does_not_record_placing_is_not_taken_for_one(fake_cell, tmp_path) -> None:
+    inspect = Inspect("inspect red after placing", "red")  # the name says so, the flag does not
+    root = Arrangement("mine", [set_target(RED), inspect], [RED], 1.0)
+    run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
+    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "", str(inspect.id), "red"))
+    assert run._placed_truth_mm == {}
+
+
+def test_an_object_stopped_by_the_time_limit_says_so(fake_cell) -> None:  # item 5
+    with runs.SimulatedRun(arrangement([RED]), [RED_START], time_limit_s=0.02) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert report.timed_out
+    assert red.status == "failed"
+    assert red.reason == "stopped after 0.02 s of world time"
+    assert not report.all_within_threshold
+
+
+def test_the_run_counts_world_time_from_the_start_of_the_tree(fake_cell) -> None:  # item 9: live view vs report
+    run = runs.SimulatedRun(arrangement([RED]), [RED_START])
+    assert run.cell.clock.now() == pytest.approx(runs.SETTLE_S)
+    assert run.elapsed_s() == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"starts": []}, r"^target red: no cube 'red' in the scene \(the scene has none\)$"),
+        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^cube red starts at \(0\.300, 0\.450\) m, outside"),
+        ({"time_limit_s": 0}, r"^time limit 0 s must be a positive number of seconds$"),
+        ({"time_limit_s": -1.0}, r"^time limit -1\.0 s must be a positive number of seconds$"),
+        ({"root": "tree"}, r"^the root must be a py_trees behaviour, got str$"),
+    ],
+)
+def test_a_bad_run_is_refused_before_a_world_is_built(fake_cell, kwargs, message) -> None:
+    arguments = {"root": arrangement([RED]), "starts": [RED_START], **kwargs}
+    with pytest.raises(PlanError, match=message):
+        runs.SimulatedRun(arguments.pop("root"), arguments.pop("starts"), **arguments)
+    assert fake_cell.built == []
+
+
+def test_a_custom_root_still_has_its_scene_checked(fake_cell) -> None:
+    with pytest.raises(PlanError, match="unknown colour 'purple'"):
+        runs.SimulatedRun(py_trees.behaviours.Success("done"), [CubeStart("purple", 0.5, 0.0, 0.0)])
+    assert fake_cell.built == []
+
+
+def test_recording_into_a_file_or_an_impossible_folder_is_refused_first(fake_cell, tmp_path) -> None:  # item 4
+    a_file = tmp_path / "report.txt"
+    a_file.write_text("x")
+    with pytest.raises(PlanError, match=r"^cannot record into .*report\.txt: it is a file, not a folder$"):
+        runs.SimulatedRun(arrangement([RED]), [RED_START], record_dir=a_file)
+    with pytest.raises(PlanError, match=r"^cannot record into .*report\.txt/inside: "):
+        runs.SimulatedRun(arrangement([RED]), [RED_START], record_dir=a_file / "inside")
+    assert fake_cell.built == []
+
+
+def test_the_window_without_a_display_is_refused_first(fake_cell, monkeypatch) -> None:  # item 5
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(PlanError, match=r"^the pybullet window \(--gui\) needs a display, and DISPLAY is not set"):
+        runs.SimulatedRun(arrangement([RED]), [RED_START], gui=True)
+    assert fake_cell.built == []
+
+
+def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  # issue 9, item 1
+    target = Target("red", 0.50, 0.0, name="red cube")
+    start = CubeStart("red", 0.40, -0.20, 0.0, name="red cube")
+    with runs.SimulatedRun(arrangement([target], max_regrasps=0), [start]) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert red.name == "red cube" and red.status == "failed"
+    # The fake gripper closes on nothing: Pick's reason, found by the node's type and object.
+    assert red.reason.startswith("no cube between the pads"), red.reason
+
+
+def test_the_injectors_find_a_node_by_type_and_object_not_by_name() -> None:  # issue 9, item 1
+    from bt_arrange import treefile
+    from bt_arrange.behaviours import Place
+    from bt_arrange_sim.injection import _NodeFinder
+
+    root = treefile.build_root(treefile.load(Path(__file__).resolve().parents[1] / "trees" / "row_of_three.py"))
+    named = [node for node in root.iterate() if node.name == "place red"]
+    assert len(named) == 2 and {type(node) for node in named} == {Place, py_trees.composites.Sequence}
+    found = _NodeFinder(Place, "red")(root)
+    assert isinstance(found, Place) and found.obj == "red"

@@ -1,0 +1,197 @@
+"""BehaviorTree.CPP XML trees: the files in trees/ are up to date and round-trip; bad or hostile files are refused."""
+
+import sys
+import textwrap
+from pathlib import Path
+
+import py_trees
+import pytest
+
+from bt_arrange import cli, treefile, xmltree
+from bt_arrange.display import blackboard_access
+from bt_arrange.xmltree import XmlTreeError
+
+TREES = Path(__file__).resolve().parents[1] / "trees"
+PYTHON_TREES = sorted(TREES.glob("*.py"))
+
+
+def build(path):
+    return treefile.build_root(treefile.load(path))
+
+
+def export(path) -> str:
+    return xmltree.to_xml(
+        build(path), tree_id=path.stem, comment=f"generated from {path.name} by bt-arrange show (format xml)"
+    )
+
+
+def keys_of(root):
+    return [(a.key, a.writers, a.readers) for a in blackboard_access(root)]
+
+
+@pytest.mark.parametrize("path", PYTHON_TREES, ids=[p.stem for p in PYTHON_TREES])
+def test_every_tree_file_has_an_up_to_date_xml_twin(path):
+    twin = path.with_suffix(".xml")
+    assert twin.is_file(), f"run: bt-arrange show trees/{path.name} --format xml --out trees/{twin.name}"
+    assert twin.read_text() == export(path), (
+        f"stale: bt-arrange show trees/{path.name} --format xml --out trees/{twin.name}"
+    )
+
+
+@pytest.mark.parametrize("path", PYTHON_TREES, ids=[p.stem for p in PYTHON_TREES])
+def test_python_to_xml_to_tree_keeps_structure_parameters_and_blackboard_keys(path):
+    original = build(path)
+    reloaded = xmltree.from_xml(export(path))
+    assert list(xmltree.iter_structure(reloaded)) == list(xmltree.iter_structure(original))
+    assert [type(n) for n in reloaded.iterate()] == [type(n) for n in original.iterate()]
+    assert keys_of(reloaded) == keys_of(original)
+    assert reloaded.targets == original.targets and reloaded.threshold_mm == original.threshold_mm
+
+
+def test_an_xml_tree_file_gives_the_scene_of_its_python_file():
+    python, xml = treefile.load(TREES / "four_cubes.py"), treefile.load(TREES / "four_cubes.xml")
+    for seed in (0, 3):
+        assert treefile.scene(xml, seed) == treefile.scene(python, seed)
+
+
+def test_builtin_composites_and_decorators_round_trip():
+    leaf = py_trees.behaviours.Success
+    root = py_trees.composites.Selector(
+        "choose",
+        memory=False,
+        children=[
+            py_trees.composites.Parallel(
+                "both",
+                py_trees.common.ParallelPolicy.SuccessOnOne(),
+                children=[leaf("a"), py_trees.behaviours.Failure("b")],
+            ),
+            py_trees.decorators.Repeat("twice", py_trees.decorators.Inverter("not", leaf("c")), num_success=2),
+            py_trees.composites.Sequence("reactive", memory=False, children=[leaf("d")]),
+            py_trees.decorators.SuccessIsFailure("force failure", leaf("e")),
+        ],
+    )
+    text = xmltree.to_xml(root)
+    assert "<ReactiveFallback" in text and 'success_count="1"' in text and 'num_cycles="2"' in text
+    assert "<TreeNodesModel>\n  </TreeNodesModel>" in text, "builtin nodes stay out of the model"
+    reloaded = xmltree.from_xml(text)
+    assert list(xmltree.iter_structure(reloaded)) == list(xmltree.iter_structure(root))
+    assert isinstance(reloaded.children[0].policy, py_trees.common.ParallelPolicy.SuccessOnOne)
+
+
+def test_a_subtree_is_inlined_and_ports_default_when_absent():
+    text = """<root BTCPP_format="4" main_tree_to_execute="Main">
+      <BehaviorTree ID="Main"><Sequence name="all"><SubTree ID="Look"/><MoveHome name="home"/></Sequence></BehaviorTree>
+      <BehaviorTree ID="Look"><Detect name="look" obj="red"/></BehaviorTree>
+    </root>"""
+    root = xmltree.from_xml(text)
+    detect = root.children[0]
+    assert (detect.name, detect.obj, detect.colour) == ("look", "red", "red")
+
+
+def test_writing_an_unregistered_behaviour_names_it():
+    class Mine(py_trees.behaviours.Success):
+        pass
+
+    with pytest.raises(XmlTreeError, match="Mine is not a registered node"):
+        xmltree.to_xml(py_trees.composites.Sequence("s", True, children=[Mine("mine")]))
+
+
+def xml_file(tmp_path, body: str) -> Path:
+    path = tmp_path / "tree.xml"
+    path.write_text(textwrap.dedent(body).lstrip())
+    return path
+
+
+def show_error(capsys, path) -> str:
+    code = cli.main(["show", str(path), "--format", "xml"])
+    out, err = capsys.readouterr()
+    assert code == 2, out
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("bt-arrange: error: "), err
+    return lines[0]
+
+
+def tree(node: str) -> str:
+    return f"""
+    <root BTCPP_format="4">
+      <BehaviorTree ID="T">
+        <Sequence name="s">
+          {node}
+        </Sequence>
+      </BehaviorTree>
+    </root>
+    """
+
+
+@pytest.mark.parametrize(
+    ("node", "fragments"),
+    [
+        ('<Shell name="x" cmd="rm -rf /"/>', ["line 4", "<Shell> is not a registered node"]),
+        ('<os.system name="x"/>', ["line 4", "<os.system> is not a registered node"]),
+        ('<Detect name="d" obj="red" _skipIf="import os"/>', ["line 4", "_skipIf", "scripts are code"]),
+        ('<Detect name="d"/>', ["line 4", "needs port 'obj'"]),
+        ('<Detect name="d" obj="red" module="os"/>', ["line 4", "no port 'module'"]),
+        ('<Detect name="d" obj="{the_object}"/>', ["line 4", "not blackboard references"]),
+        (
+            '<RetryUntilThreshold name="r" offset_key="/a" threshold_mm="abc"><Push obj="red"/></RetryUntilThreshold>',
+            ["line 4", "threshold_mm='abc' is not a double"],
+        ),
+        (
+            '<RetryUntilThreshold name="r" offset_key="/a" threshold_mm="-1"><Push obj="a"/></RetryUntilThreshold>',
+            ["line 4", "positive"],
+        ),
+        ('<Pick name="p" obj="red"><Place obj="red"/></Pick>', ["line 4", "leaf"]),
+        ('<GraspGuard name="g"/>', ["line 4", "exactly one child"]),
+        ('<SubTree ID="T"/>', ["line 4", "includes itself"]),
+    ],
+)
+def test_a_bad_node_is_refused_with_its_tag_and_line(capsys, tmp_path, node, fragments):
+    message = show_error(capsys, xml_file(tmp_path, tree(node)))
+    for fragment in fragments:
+        assert fragment in message
+
+
+@pytest.mark.parametrize(
+    ("text", "fragments"),
+    [
+        ('<root BTCPP_format="4">\n<Include path="other.xml"/>\n</root>', ["line 2", "<Include> is not supported"]),
+        ('<!DOCTYPE root [<!ENTITY a "aaaa">]>\n<root BTCPP_format="4"/>', ["line 1", "DOCTYPE"]),
+        (
+            '<root BTCPP_format="3"><BehaviorTree ID="T"><MoveHome/></BehaviorTree></root>',
+            ["line 1", 'BTCPP_format="4"'],
+        ),
+        ('<root BTCPP_format="4">\n<BehaviorTree ID="T">\n<MoveHome>\n</root>', ["line 4", "not well-formed"]),
+        ("<tree/>", ["line 1", "not <root"]),
+    ],
+)
+def test_a_bad_document_is_refused_with_its_line(capsys, tmp_path, text, fragments):
+    message = show_error(capsys, xml_file(tmp_path, text))
+    for fragment in fragments:
+        assert fragment in message
+
+
+def test_loading_runs_no_code_the_file_names(capsys, tmp_path, monkeypatch):
+    """A module on sys.path that the file names is never imported (py_trees' parser would import a type by name)."""
+    marker = tmp_path / "imported"
+    (tmp_path / "booby_trap.py").write_text(f"open({str(marker)!r}, 'w').close()\nclass Trap: pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for node in ('<booby_trap.Trap name="x"/>', '<Detect name="d" obj="red" colour="booby_trap.Trap"/>'):
+        path = xml_file(tmp_path, tree(node))
+        cli.main(["show", str(path), "--format", "xml"])
+        capsys.readouterr()
+    assert not marker.exists() and "booby_trap" not in sys.modules
+
+
+def test_an_xml_tree_does_not_take_a_threshold_from_the_command_line(capsys):
+    code = cli.main(["run", str(TREES / "single_cube.xml"), "--threshold-mm", "0.5"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "edit them instead of passing --threshold-mm" in err and len(err.strip().splitlines()) == 1
+
+
+def test_show_writes_xml_to_a_file_and_reads_it_back(capsys, tmp_path):
+    out = tmp_path / "four.xml"
+    assert cli.main(["show", str(TREES / "four_cubes.py"), "--format", "xml", "--out", str(out)]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    assert out.read_text() == (TREES / "four_cubes.xml").read_text()
+    assert cli.main(["show", str(out)]) == 0
+    assert "correct yellow to 1 mm" in capsys.readouterr().out
