@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import py_trees
@@ -14,6 +15,7 @@ from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, On
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
+from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
 
 
@@ -56,12 +58,19 @@ class Pick(StagedBehaviour):
     check from the finger width that the pads hold the cube across two faces, lift. A bad grasp
     (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
     lifting and fails with the width, so a retry can look and pick again.
+
+    ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
+    come down in the free room beside two faces and nowhere else.
     """
 
-    def __init__(self, name: str, obj: str) -> None:
+    def __init__(self, name: str, obj: str, grasp: Release | None = None) -> None:
         super().__init__(name)
         self.obj = obj
+        self.grasp = grasp
         self.reads(keys.key(obj, keys.POSE))
+        if grasp is not None:
+            self.reads(keys.key(obj, keys.TARGET))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
 
@@ -70,16 +79,24 @@ class Pick(StagedBehaviour):
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
         s = context.settings
         x, y = pose.x_m, pose.y_m
-        yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
+        opening_m = s.open_width_m
+        if self.grasp is None:
+            yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
+        else:
+            target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+            # The quarter turn of the part's measured yaw whose closing axis is the chosen one.
+            across = target.yaw_rad + (math.pi / 2 if self.grasp.axis == "y" else 0.0)
+            yaw = nearest_symmetric_yaw(nearest_symmetric_yaw(pose.yaw_rad, across), _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
+            opening_m = self.grasp.opening_m
         return [
-            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
+            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, s.approach_height_m, yaw)),
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
             MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, s.grasp_height_m, yaw)),
             GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
-            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
+            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
             MoveStage(stage.LIFT_CUBE, _line_to(x, y, s.approach_height_m, yaw)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
@@ -112,11 +129,18 @@ class Pick(StagedBehaviour):
 
 
 class Place(StagedBehaviour):
-    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat."""
+    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat.
 
-    def __init__(self, name: str, obj: str) -> None:
+    ``release`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    stand across that axis of the target's frame and open only to ``release.opening_m``, and a
+    staged release lets go ``release.offset_m`` (target frame) away from the target, where the
+    pads fit, for pushes to bring it home.
+    """
+
+    def __init__(self, name: str, obj: str, release: Release | None = None) -> None:
         super().__init__(name)
         self.obj = obj
+        self.release = release
         self.reads(keys.key(obj, keys.TARGET))
 
     def stages(self, context: Context) -> list[Stage]:
@@ -124,17 +148,28 @@ class Place(StagedBehaviour):
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         s = context.settings
         x, y = target.x_m, target.y_m
-        # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
-        yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
+        opening_m = s.open_width_m
+        if self.release is None:
+            # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
+            yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
+        else:
+            offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
+            x, y = x + float(offset[0]), y + float(offset[1])
+            across = target.yaw_rad + (math.pi / 2 if self.release.axis == "y" else 0.0)
+            yaw = nearest_symmetric_yaw(across, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
+            opening_m = self.release.opening_m
         return [
             MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, s.approach_height_m, yaw)),
             MoveStage(stage.LOWER_CUBE, _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
-            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(s.open_width_m)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m)),
             MoveStage(stage.RETREAT, _line_to(x, y, s.approach_height_m, yaw)),
         ]
 
     def success_message(self) -> str:
         """Feedback once released."""
+        if self.release is not None and self.release.staged:
+            dx, dy = self.release.offset_m
+            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target (target frame), to push home"
         return f"{self.obj} released at its target"
 
 
@@ -146,15 +181,29 @@ class Push(StagedBehaviour):
     below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
     opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
     also squares the cube up); the pads start on the side away from the target, push, back off.
+
+    ``towards`` (directions of the target's frame, ``"+x"``, ``"-y"`` ...; default all four) are
+    the directions it may push: a side a neighbour blocks is never pushed from. When the offset
+    can only be corrected from a blocked side, Push fails saying so and writes the direction it
+    needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
+    pushed from.
     """
 
-    def __init__(self, name: str, obj: str) -> None:
+    def __init__(
+        self, name: str, obj: str, towards: tuple[str, ...] | None = None, opening_m: float | None = None
+    ) -> None:
         super().__init__(name)
         self.obj = obj
+        #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
+        #: width); default the paper's width minus a pad's thickness.
+        self.opening_m = opening_m
+        if towards is not None and any(d not in DIRECTIONS for d in towards):
+            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
+        self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
-        self.writes(keys.key(obj, keys.PUSH_AXIS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
         self.pushed: tuple[str, float] | None = None
 
     def stages(self, context: Context) -> list[Stage]:
@@ -165,7 +214,12 @@ class Push(StagedBehaviour):
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
-        axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
+        choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
+        if isinstance(choice, Blocked):
+            self.pushed = None
+            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
+            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: choice.reason(self.obj))]
+        axis = choice
         self.write(axis_key, "y" if axis == "x" else "x")
         distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
         self.pushed = (axis, distance_m)
@@ -181,8 +235,9 @@ class Push(StagedBehaviour):
         begin = centre - direction * (s.push_reach_m + s.push_clearance_m)
         end = centre - direction * s.push_reach_m + direction * abs(distance_m)
         back = end - direction * s.push_clearance_m
+        opening_m = s.push_opening_m if self.opening_m is None else self.opening_m
         return [
-            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(s.push_opening_m), wait=False),
+            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
             MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], s.push_height_m, yaw)),
@@ -190,6 +245,28 @@ class Push(StagedBehaviour):
             MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], s.push_height_m, yaw)),
             MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], s.approach_height_m, yaw)),
         ]
+
+    @staticmethod
+    def choose_side(
+        preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float, towards: tuple[str, ...]
+    ) -> str | Blocked:
+        """The axis to push along (as ``choose_axis``) among the free directions, or what blocks it.
+
+        An axis whose offset needs a push towards a direction not in ``towards`` is skipped; when
+        every axis with an offset of a push or more is so, the answer is ``Blocked``.
+        """
+        along = {"x": offset_xy_mm[0], "y": offset_xy_mm[1]}
+
+        def needs(axis: str) -> str:
+            return ("+" if along[axis] >= 0 else "-") + axis
+
+        axis = Push.choose_axis(preferred, offset_xy_mm, min_push_mm)
+        other = "y" if axis == "x" else "x"
+        if abs(along[axis]) < min_push_mm or needs(axis) in towards:
+            return axis
+        if abs(along[other]) >= min_push_mm and needs(other) in towards:
+            return other
+        return Blocked(needs(axis), along[axis])
 
     @staticmethod
     def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
@@ -207,6 +284,22 @@ class Push(StagedBehaviour):
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
             return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
         return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
+
+
+@dataclass(frozen=True)
+class Blocked:
+    """A correction Push cannot make: the part must move ``towards`` (target frame) by ``offset_mm``."""
+
+    towards: str
+    offset_mm: float
+
+    def reason(self, obj: str) -> str:
+        """The feedback: which side, and what happens next."""
+        side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
+        return (
+            f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
+            "where a neighbour leaves the pads no room: pick it up and release it again on the side it can be pushed from"
+        )
 
 
 class GraspGuard(py_trees.decorators.EternalGuard):
