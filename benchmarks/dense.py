@@ -16,9 +16,9 @@ import sys
 import time
 from pathlib import Path
 
+from bt_arrange import treefile
 from bt_arrange.layout import Rect, gap_m
 from bt_arrange.settings import CUBE_EDGE_M
-from bt_arrange import treefile
 from bt_arrange_sim.runs import SimulatedRun
 
 

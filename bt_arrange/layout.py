@@ -238,8 +238,10 @@ def free_push_directions(part: Part, placed: Sequence[tuple[str, Rect]], pads: P
 
 @dataclass(frozen=True)
 class Release:
-    """Where and how a part is let go: pads across ``axis`` of its target's frame, opened to ``opening_m``,
-    at ``offset_m`` (target frame) from the target; a staged release is pushed home from ``push_from``.
+    """Where and how a part is let go.
+
+    The pads close across ``axis`` of its target's frame and open to ``opening_m``, at ``offset_m``
+    (target frame) from the target; a staged release (an offset) is pushed home from free sides.
     """
 
     axis: str
@@ -254,8 +256,10 @@ class Release:
 
 @dataclass(frozen=True)
 class Step:
-    """One part's step: how it is released, which directions it may be pushed towards afterwards,
-    its neighbours on the table then, and how to release it again when a correction needs a blocked side.
+    """One part's step.
+
+    How it is released, which directions it may be pushed towards afterwards, its neighbours on
+    the table then, and how to release it again when a correction needs a blocked side.
     """
 
     part: Part
@@ -288,7 +292,7 @@ def _staged_release(
     directions: Sequence[tuple[int, int]] | None = None,
     axes: Sequence[str] = ("x", "y"),
 ) -> Release | None:
-    """The smallest offset away from the neighbours where the pads fit and the part can be pushed home from its free sides."""
+    """The smallest offset away from the neighbours where the pads fit and pushes home go from free sides."""
     free = free_push_directions(part, placed, pads)
     candidates = directions or [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1) if (sx, sy) != (0, 0)]
     best: tuple[float, Release] | None = None
@@ -325,7 +329,7 @@ def _staged_release(
 
 
 def choose_release(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[Release | None, list[str]]:
-    """Release at the target across free faces, else at a staging pose; None and the parts in the way when neither fits."""
+    """Release at the target across free faces, else at a staging pose; None and who is in the way if neither fits."""
     axis, in_way = _release_at(part, part.footprint, placed, pads)
     if axis is not None:
         return Release(axis, pads.release_opening_m(part, axis)), []
@@ -355,7 +359,7 @@ def restage_releases(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads)
 
 
 def neighbours_of(part: Part, placed: Sequence[tuple[str, Rect]], within_m: float = 0.03) -> tuple[str, ...]:
-    """Placed parts whose footprint lies within ``within_m`` of ``part``'s: a push or a release there could move them."""
+    """Placed parts within ``within_m`` of ``part``'s footprint: a push or a release there could move them."""
     return tuple(name for name, rect in placed if name != part.name and gap_m(part.footprint, rect) <= within_m)
 
 
@@ -369,7 +373,8 @@ def check_gaps(parts: Sequence[Part], pads: Pads) -> None:
             if gap < pads.min_gap_m - 1e-9:
                 raise PlanError(
                     f"targets {first.name} and {second.name} are {gap * 1000:.1f} mm apart, under the "
-                    f"{pads.min_gap_m * 1000:.0f} mm two parts need so that each can lie within the threshold without touching"
+                    f"{pads.min_gap_m * 1000:.0f} mm two parts need so that each can lie within the threshold "
+                    "without touching"
                 )
 
 
@@ -433,7 +438,8 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
 
 
 def _no_room(part: Part, in_way: Sequence[str], pads: Pads, after: bool) -> str:
-    who = " and ".join(in_way) if in_way else "its neighbours"
+    names = sorted(in_way)
+    who = (", ".join(names[:-1]) + " and " + names[-1]) if len(names) > 1 else (names[0] if names else "its neighbours")
     when = "in this order" if after else "in any order"
     return (
         f"no order and approach builds this plan ({when}): {part.name} has no room for the pads, {who} "

@@ -33,12 +33,12 @@ import numpy as np
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
+from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.trees import Target, check_threshold, footprint_m, parts_of, validate_targets
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
@@ -233,12 +233,17 @@ def check_plan(
         for start in scene:
             if _start_name(start) == part.name:
                 continue
-            size_x, size_y = footprint_m(by_target[_start_name(start)], settings) if _start_name(start) in by_target else (edge, edge)
+            size_x, size_y = (
+                footprint_m(by_target[_start_name(start)], settings)
+                if _start_name(start) in by_target
+                else (edge, edge)
+            )
             need_m = start_clearance_m(math.hypot(size_x, size_y) / 2, pads)
             gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
             if gap < need_m:
                 raise PlanError(
                     f"cube {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
-                    f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's footprint"
+                    f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's "
+                    "footprint"
                 )
     return plan

@@ -225,12 +225,24 @@ def transfer(
     ``release`` says where the pads go among neighbours (``bt_arrange.layout``; default: anywhere).
     """
     obj = target.obj
+    find = locate or by_camera()
+    look_again: list[py_trees.behaviour.Behaviour] = []
+    if release is not None:
+        # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
+        # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
+        # at it again, and pick it centred.
+        look_again = [
+            GraspGuard(f"while setting {obj} down", Place(f"set {obj} down to look again", obj, where="pick")),
+            find(target),
+            Pick(f"pick {obj} centred", obj),
+        ]
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            (locate or by_camera())(target),
+            find(target),
             Pick(f"pick {obj}", obj),
+            *look_again,
             GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, release=release)),
         ],
     )
@@ -283,7 +295,7 @@ def correction(
 
 
 def _restage(target: Target, towards: str, release: Release, label: str) -> py_trees.behaviour.Behaviour:
-    """When Push needed ``towards`` from a blocked side: pick the part up and release it past the target on that side."""
+    """When Push needed ``towards`` from a blocked side: pick the part up, release it past the target on that side."""
     obj = target.obj
     dx, dy = release.offset_m
     return py_trees.composites.Sequence(
@@ -326,7 +338,9 @@ def arrange_one(
         set_target(target),
         transfer(target, max_regrasps, locate=locate, release=release),
         Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-        correction(target, threshold_mm, max_pushes, towards=towards, restage=restage, push_opening_m=_opening(step, dense)),
+        correction(
+            target, threshold_mm, max_pushes, towards=towards, restage=restage, push_opening_m=_opening(step, dense)
+        ),
     ]
     for neighbour, sides, again in neighbours:
         label = f" after {obj}"

@@ -260,7 +260,7 @@ def _named(cls: Callable[[str], py_trees.behaviour.Behaviour]) -> Builder:
 
 
 def _obj_only(node: Pick | Place | Push) -> dict[str, Any]:
-    """The port of a Pick, Place or Push; one placed among neighbours has no XML form yet: refused, never written without it."""
+    """The port of a Pick, Place or Push; one among neighbours has no XML form yet: refused, never written without."""
     among_neighbours = (
         getattr(node, "grasp", None) is not None
         or getattr(node, "release", None) is not None

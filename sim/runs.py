@@ -156,7 +156,7 @@ class SimulatedRun:
         #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
         self.runner_hooks: list[Callable[[Runner], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
-        #: Ground truth (evaluation only) of each object when it was last looked at, and the most it moved between looks.
+        #: Ground truth (evaluation only) of each object when last looked at, and the most it moved between looks.
         self._looked_truth_xy: dict[str, tuple[float, float]] = {}
         self._moved_truth_mm: dict[str, float] = {}
         #: A tree that looks at placed parts again (a dense one): only then is the truth tracked per look.

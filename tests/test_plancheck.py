@@ -13,9 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.layout import Part, gap_m
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import CUBE_COLOURS_RGB, ManipulationSettings
-from bt_arrange.layout import Part, gap_m
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
 from bt_arrange_sim.cell import CameraConfig
 from bt_arrange_sim.scenes import CubeStart, scatter
@@ -110,7 +110,10 @@ def test_a_bad_scene_is_one_plan_error(starts: object, message: str) -> None:
 
 
 def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:
-    with pytest.raises(PlanError, match=r"^cube blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm"):
+    with pytest.raises(
+        PlanError,
+        match=r"^cube blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm",
+    ):
         check_plan([RED], starts=[RED_START, CubeStart("blue", 0.55, 0.0, 0.0)], view=VIEW)
 
 

@@ -61,7 +61,10 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
         ),
         ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
         ([RED, Target("green", 0.45, 0.08)], r"^targets red and green overlap: two parts cannot stand there$"),
-        ([RED, Target("green", 0.45, 0.049)], r"^targets red and green are 1.0 mm apart, under the 2 mm two parts need"),
+        (
+            [RED, Target("green", 0.45, 0.049)],
+            r"^targets red and green are 1.0 mm apart, under the 2 mm two parts need",
+        ),
     ],
     ids=[
         "empty",

@@ -17,7 +17,9 @@ XML_TWIN = False
 GAP_M = 0.002
 PITCH_M = 0.05 + GAP_M
 
-TARGETS = [Target(colour, x_m=0.42 + i * PITCH_M, y_m=0.0) for i, colour in enumerate(("red", "green", "blue", "yellow"))]
+TARGETS = [
+    Target(colour, x_m=0.42 + i * PITCH_M, y_m=0.0) for i, colour in enumerate(("red", "green", "blue", "yellow"))
+]
 
 
 def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:

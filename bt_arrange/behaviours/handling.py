@@ -86,7 +86,9 @@ class Pick(StagedBehaviour):
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
             # The quarter turn of the part's measured yaw whose closing axis is the chosen one.
             across = target.yaw_rad + (math.pi / 2 if self.grasp.axis == "y" else 0.0)
-            yaw = nearest_symmetric_yaw(nearest_symmetric_yaw(pose.yaw_rad, across), _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
+            yaw = nearest_symmetric_yaw(
+                nearest_symmetric_yaw(pose.yaw_rad, across), _wrist_yaw(context), GRIPPER_SYMMETRY_RAD
+            )
             opening_m = self.grasp.opening_m
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
@@ -135,13 +137,22 @@ class Place(StagedBehaviour):
     stand across that axis of the target's frame and open only to ``release.opening_m``, and a
     staged release lets go ``release.offset_m`` (target frame) away from the target, where the
     pads fit, for pushes to bring it home.
+
+    ``where="pick"`` sets the part down where it was picked (``/<obj>/pose``) instead: a part
+    about to go among neighbours is set down and looked at once more, so the next grasp is
+    centred on it and its offset in the pads (unknown while held) does not carry into a neighbour.
     """
 
-    def __init__(self, name: str, obj: str, release: Release | None = None) -> None:
+    def __init__(self, name: str, obj: str, release: Release | None = None, where: str = "target") -> None:
         super().__init__(name)
+        if where not in ("target", "pick"):
+            raise BtArrangeError(f"place {name!r}: where={where!r}, choose target or pick")
         self.obj = obj
         self.release = release
+        self.where = where
         self.reads(keys.key(obj, keys.TARGET))
+        if where == "pick":
+            self.reads(keys.key(obj, keys.POSE))
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -149,7 +160,11 @@ class Place(StagedBehaviour):
         s = context.settings
         x, y = target.x_m, target.y_m
         opening_m = s.open_width_m
-        if self.release is None:
+        if self.where == "pick":
+            picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
+            x, y = picked.x_m, picked.y_m
+            yaw = nearest_symmetric_yaw(picked.yaw_rad, _wrist_yaw(context))
+        elif self.release is None:
             # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
             yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
         else:
@@ -167,9 +182,11 @@ class Place(StagedBehaviour):
 
     def success_message(self) -> str:
         """Feedback once released."""
+        if self.where == "pick":
+            return f"{self.obj} set down where it was picked, to be looked at and picked again"
         if self.release is not None and self.release.staged:
             dx, dy = self.release.offset_m
-            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target (target frame), to push home"
+            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target, to push home"
         return f"{self.obj} released at its target"
 
 
@@ -298,7 +315,8 @@ class Blocked:
         side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
         return (
             f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
-            "where a neighbour leaves the pads no room: pick it up and release it again on the side it can be pushed from"
+            "where a neighbour leaves the pads no room: pick it up and release it again "
+            "on the side it can be pushed from"
         )
 
 

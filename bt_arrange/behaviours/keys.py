@@ -9,7 +9,7 @@
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
-| ``/<obj>/blocked_towards`` | ``"+x"`` ..., the direction a correction needed from a blocked side | Push | the tree's restage choice |
+| ``/<obj>/blocked_towards`` | ``"+x"`` ..., a push a neighbour blocks | Push | the tree's restaging |
 | ``/<obj>/moved_mm`` | ``float``, how far it moved since it was last looked at | Recheck | reports |
 | ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
 """

@@ -187,7 +187,7 @@ class Inspect(Detect):
 
 
 class Recheck(Inspect):
-    """Look again at a part placed earlier, after a neighbour's release and pushes: did they move it?
+    """Look again at a part placed earlier, after a neighbour's release and pushes: did they move it.
 
     An Inspect (the offset to its target is written afresh, so a correction loop after it pushes
     the part back when it moved beyond the threshold) that also writes how far the part moved

@@ -344,7 +344,10 @@ class CubeDetector:
         height, width = view.rgb.shape[:2]
         split: list[Blob] = []
         for blob in blobs:
-            if blob.area_px <= self.config.face_area_fraction_range[1] * view.min_blob_area_px / self.config.min_area_fraction:
+            if (
+                blob.area_px
+                <= self.config.face_area_fraction_range[1] * view.min_blob_area_px / self.config.min_area_fraction
+            ):
                 split.append(blob)
                 continue
             x, y, w, h = blob.bbox_px
