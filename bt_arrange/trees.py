@@ -46,6 +46,7 @@ from bt_arrange.behaviours import (
     Recheck,
     keys,
 )
+from bt_arrange.behaviours.handling import PUSH_STRATEGIES
 from bt_arrange.checks import finite_number, positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError
@@ -251,10 +252,18 @@ def transfer(
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
 
 
+def check_strategy(strategy: object) -> str:
+    """The push strategy's name, or a ``PlanError`` listing the strategies."""
+    if strategy not in PUSH_STRATEGIES:
+        raise PlanError(f"strategy={strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+    return str(strategy)
+
+
 def correction(
     target: Target,
     threshold_mm: float = 1.0,
     max_pushes: int = 10,
+    strategy: str = "paper",
     *,
     towards: tuple[str, ...] | None = None,
     restage: dict[str, Release] | None = None,
@@ -268,10 +277,14 @@ def correction(
     out (default all four). ``restage``: per blocked direction, a release on the other side; when
     a correction needs a blocked side, Push fails and the part is picked up and released there,
     from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
     """
     check_threshold(threshold_mm)
+    check_strategy(strategy)
     obj, colour = target.obj, target.colour
-    push: py_trees.behaviour.Behaviour = Push(f"push {obj}{label}", obj, towards=towards, opening_m=push_opening_m)
+    push: py_trees.behaviour.Behaviour = Push(
+        f"push {obj}{label}", obj, strategy, towards=towards, opening_m=push_opening_m
+    )
     if restage:
         push = py_trees.composites.Selector(
             name=f"push {obj} from a free side{label}",
@@ -321,6 +334,7 @@ def arrange_one(
     locate: Locate | None = None,
     step: Step | None = None,
     neighbours: Sequence[tuple[Target, tuple[str, ...], dict[str, Release]]] = (),
+    strategy: str = "paper",
 ) -> py_trees.behaviour.Behaviour:
     """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the threshold.
 
@@ -339,7 +353,13 @@ def arrange_one(
         transfer(target, max_regrasps, locate=locate, release=release),
         Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
         correction(
-            target, threshold_mm, max_pushes, towards=towards, restage=restage, push_opening_m=_opening(step, dense)
+            target,
+            threshold_mm,
+            max_pushes,
+            strategy,
+            towards=towards,
+            restage=restage,
+            push_opening_m=_opening(step, dense),
         ),
     ]
     for neighbour, sides, again in neighbours:
@@ -354,6 +374,7 @@ def arrange_one(
                         neighbour,
                         threshold_mm,
                         max_pushes,
+                        strategy,
                         towards=sides,
                         restage=again,
                         push_opening_m=_DENSE_PADS.push_opening_m(parts_of([neighbour])[0], "x"),
@@ -415,6 +436,7 @@ def arrangement(
     keep_going: bool = True,
     locate: Locate | None = None,
     order: Sequence[str] | None = None,
+    strategy: str = "paper",
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -427,7 +449,10 @@ def arrangement(
     (``bt_arrange.layout.plan_layout``: the plan's own order where it can be built). Among
     neighbours each part is released where the pads fit, pushed only from free sides, and the
     parts near it are looked at again once it is down.
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned).
     """
+    check_strategy(strategy)
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm)
@@ -458,7 +483,14 @@ def arrangement(
             ]
             target = by_obj[step.part.name]
             subtree = arrange_one(
-                target, threshold_mm, max_pushes, max_regrasps, locate=locate, step=step, neighbours=neighbours
+                target,
+                threshold_mm,
+                max_pushes,
+                max_regrasps,
+                locate=locate,
+                strategy=strategy,
+                step=step,
+                neighbours=neighbours,
             )
             children.append(carry_on(subtree, target.obj))
     else:
@@ -500,6 +532,7 @@ def arrangement(
                                 t,
                                 threshold_mm,
                                 max_pushes,
+                                strategy,
                                 towards=free_push_directions(steps_by_obj[t.obj].part, everything, pads),
                                 restage=restage_releases(steps_by_obj[t.obj].part, everything, pads),
                             ),

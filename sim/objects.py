@@ -41,7 +41,9 @@ class Contact:
         )
 
 
-def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Contact) -> int:  # noqa: ANN001
+def create_cube(  # noqa: ANN001 - a BulletClient, positions of any sequence type
+    client, colour: str, position_m, orientation_xyzw, contact: Contact, edge_m: float = CUBE_EDGE_M
+) -> int:
     """Add a cube with a coloured top face; returns its body id.
 
     The collision shape is one primitive box (no mesh margin); the visual is a near-white
@@ -51,7 +53,7 @@ def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Cont
 
     if colour not in CUBE_COLOURS_RGB:
         raise PlanError(f"unknown cube colour {colour!r}; known: {', '.join(sorted(CUBE_COLOURS_RGB))}")
-    half = CUBE_EDGE_M / 2
+    half = edge_m / 2
     collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[half, half, half])
     visual = client.createVisualShapeArray(
         shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_BOX],
