@@ -4,11 +4,13 @@
 and what the cell is (the top camera's view, the colours it can tell apart) and raises one
 ``PlanError`` naming the first problem:
 
-- every target is well formed, reachable, and far enough from the others (``validate_targets``);
+- every target is well formed and reachable, and the plan can be built among neighbours: an order
+  and, per part, where the pads go (``validate_targets``, by the geometry of ``bt_arrange.layout``);
 - the threshold is one a push can correct (``check_threshold``: not below
   ``ManipulationSettings.min_threshold_mm``);
 - every start is well formed, of a known colour, alone in its colour and name, clear of the other
-  cubes and of the other objects' targets, and reachable;
+  cubes, and far enough from the other objects' targets for the pads picking it and working there
+  (``layout.start_clearance_m``), and reachable;
 - every target's object is in the scene, in the target's colour;
 - every target and every start lies inside the top camera's view with a margin
   (``CameraView.margin_m``).
@@ -31,12 +33,13 @@ import numpy as np
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
+from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.trees import MIN_TARGET_SPACING_M, Target, check_threshold, validate_targets
+from bt_arrange.trees import Target, check_threshold, footprint_m, parts_of, validate_targets
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
 #: room for a placing error and for the detector's crop around the face.
@@ -215,6 +218,7 @@ def check_plan(
         return plan
     scene = check_scene(starts, view=view, colours=colours, kinematics=kinematics, settings=settings)
     by_name = {_start_name(start): start for start in scene}
+    by_target = {target.obj: target for target in plan}
     for target in plan:
         start = by_name.get(target.obj)
         if start is None:
@@ -224,13 +228,22 @@ def check_plan(
             raise PlanError(
                 f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}"
             )
+    pads = Pads.from_settings(settings)
+    for part in parts_of(plan, settings):
         for start in scene:
-            if _start_name(start) == target.obj:
+            if _start_name(start) == part.name:
                 continue
-            distance_m = math.hypot(start.x_m - target.x_m, start.y_m - target.y_m)
-            if distance_m < MIN_TARGET_SPACING_M:
+            size_x, size_y = (
+                footprint_m(by_target[_start_name(start)], settings)
+                if _start_name(start) in by_target
+                else (edge, edge)
+            )
+            need_m = start_clearance_m(math.hypot(size_x, size_y) / 2, pads)
+            gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
+            if gap < need_m:
                 raise PlanError(
-                    f"cube {_start_name(start)} starts {distance_m * 1000:.0f} mm from {target.obj}'s target: the "
-                    f"pads need at least {MIN_TARGET_SPACING_M * 1000:.0f} mm between cube centres"
+                    f"cube {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
+                    f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's "
+                    "footprint"
                 )
     return plan

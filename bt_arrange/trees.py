@@ -28,27 +28,35 @@ that writes ``/<obj>/pose`` will do.
 
 from __future__ import annotations
 
-import math
+import operator
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import py_trees
 
-from bt_arrange.behaviours import Detect, EstimateGraspFromDepth, GraspGuard, Inspect, MoveHome, Pick, Place, Push, keys
+from bt_arrange.behaviours import (
+    Detect,
+    EstimateGraspFromDepth,
+    GraspGuard,
+    Inspect,
+    MoveHome,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    keys,
+)
 from bt_arrange.behaviours.handling import PUSH_STRATEGIES
 from bt_arrange.checks import finite_number, positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import DIRECTIONS, Pads, Part, Release, Step, free_push_directions, plan_layout, restage_releases
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
 
-#: Cube centres closer than this leave the pads no room beside a face: a push starts with the
-#: pads 10 mm behind the face and 22 mm deep, so they reach 57 mm from the cube's centre, where a
-#: neighbour's face must not be (57 mm + half an edge, rounded up).
-MIN_TARGET_SPACING_M = 0.09
 CORRECT_MODES = ("each", "after_all")
 
 
@@ -86,7 +94,8 @@ def validate_targets(
     """Check a plan before anything moves; a ``PlanError`` names the first problem.
 
     Malformed entries, unknown colours, two targets for one object, a target out of the arm's
-    reach and two targets closer than ``MIN_TARGET_SPACING_M`` are each a clear error.
+    reach, and a plan no order and approach can build (``plan_steps``: targets that overlap or lie
+    closer than 2 mm, a part the pads find no room beside) are each a clear error.
     """
     if isinstance(targets, (str, bytes)) or not isinstance(targets, Iterable):
         raise PlanError(f"targets must be a list of Target(colour, x_m, y_m, yaw_rad), got {targets!r}")
@@ -120,15 +129,30 @@ def validate_targets(
                 raise PlanError(
                     f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is out of reach: {error}"
                 ) from error
-    for i, first in enumerate(checked):
-        for second in checked[i + 1 :]:
-            distance_m = math.hypot(first.x_m - second.x_m, first.y_m - second.y_m)
-            if distance_m < MIN_TARGET_SPACING_M:
-                raise PlanError(
-                    f"targets {first.obj} and {second.obj} are {distance_m * 1000:.0f} mm apart: the pads need "
-                    f"at least {MIN_TARGET_SPACING_M * 1000:.0f} mm between cube centres to grasp and push"
-                )
+    plan_steps(checked, settings)
     return checked
+
+
+def footprint_m(target: Target, settings: ManipulationSettings | None = None) -> tuple[float, float]:
+    """The part's size on the table (x, y in its own frame, metres): its type's, else the cube's edge."""
+    size = getattr(target, "size_xy_m", None)
+    if size is not None:
+        return float(size[0]), float(size[1])
+    edge = (settings or ManipulationSettings()).cube_edge_m
+    return edge, edge
+
+
+def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
+    """The plan's targets as footprints for ``bt_arrange.layout``."""
+    return [Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t, settings)) for t in targets]
+
+
+def plan_steps(
+    targets: Sequence[Target], settings: ManipulationSettings | None = None, order: Sequence[str] | None = None
+) -> list[Step]:
+    """The layout's steps (``bt_arrange.layout.plan_layout``): the placing order and each part's approach."""
+    settings = settings or ManipulationSettings()
+    return plan_layout(parts_of(targets, settings), Pads.from_settings(settings), order)
 
 
 def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
@@ -193,19 +217,34 @@ def by_depth(
     return locate
 
 
-def transfer(target: Target, max_regrasps: int = 3, *, locate: Locate | None = None) -> py_trees.behaviour.Behaviour:
+def transfer(
+    target: Target, max_regrasps: int = 3, *, locate: Locate | None = None, release: Release | None = None
+) -> py_trees.behaviour.Behaviour:
     """Locate, pick and place one object; a cube lost on the way is located and picked again.
 
-    ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
+    ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect);
+    ``release`` says where the pads go among neighbours (``bt_arrange.layout``; default: anywhere).
     """
     obj = target.obj
+    find = locate or by_camera()
+    look_again: list[py_trees.behaviour.Behaviour] = []
+    if release is not None:
+        # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
+        # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
+        # at it again, and pick it centred.
+        look_again = [
+            GraspGuard(f"while setting {obj} down", Place(f"set {obj} down to look again", obj, where="pick")),
+            find(target),
+            Pick(f"pick {obj} centred", obj),
+        ]
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            (locate or by_camera())(target),
+            find(target),
             Pick(f"pick {obj}", obj),
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj)),
+            *look_again,
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, release=release)),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
@@ -221,28 +260,68 @@ def check_strategy(strategy: object) -> str:
 
 
 def correction(
-    target: Target, threshold_mm: float = 1.0, max_pushes: int = 10, strategy: str = "paper"
+    target: Target,
+    threshold_mm: float = 1.0,
+    max_pushes: int = 10,
+    strategy: str = "paper",
+    *,
+    towards: tuple[str, ...] | None = None,
+    restage: dict[str, Release] | None = None,
+    push_opening_m: float | None = None,
+    count: bool = True,
+    label: str = "",
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` of its target.
 
+    ``towards``: the directions (target frame) it may be pushed, the sides a neighbour blocks left
+    out (default all four). ``restage``: per blocked direction, a release on the other side; when
+    a correction needs a blocked side, Push fails and the part is picked up and released there,
+    from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
     ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
     """
     check_threshold(threshold_mm)
     check_strategy(strategy)
     obj, colour = target.obj, target.colour
+    push: py_trees.behaviour.Behaviour = Push(
+        f"push {obj}{label}", obj, strategy, towards=towards, opening_m=push_opening_m
+    )
+    if restage:
+        push = py_trees.composites.Selector(
+            name=f"push {obj} from a free side{label}",
+            memory=True,
+            children=[push, *(_restage(target, d, release, label) for d, release in restage.items())],
+        )
     push_and_look = py_trees.composites.Sequence(
-        name=f"push and inspect {obj}",
+        name=f"push and inspect {obj}{label}",
         memory=True,
-        children=[Push(f"push {obj}", obj, strategy), Inspect(f"inspect {obj}", obj, colour)],
+        children=[push, Inspect(f"inspect {obj}{label}", obj, colour)],
     )
     return RepeatUntilWithin(
-        name=f"correct {obj} to {threshold_mm:g} mm",
+        name=f"correct {obj} to {threshold_mm:g} mm{label}",
         child=push_and_look,
         offset_key=keys.key(obj, keys.OFFSET_MM),
         threshold_mm=threshold_mm,
         max_attempts=max_pushes,
-        corrections_key=keys.key(obj, keys.CORRECTIONS),
+        corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
         obj=obj,
+    )
+
+
+def _restage(target: Target, towards: str, release: Release, label: str) -> py_trees.behaviour.Behaviour:
+    """When Push needed ``towards`` from a blocked side: pick the part up, release it past the target on that side."""
+    obj = target.obj
+    dx, dy = release.offset_m
+    return py_trees.composites.Sequence(
+        name=f"release {obj} again {dx * 1000:+.0f}, {dy * 1000:+.0f} mm to push it {towards}{label}",
+        memory=True,
+        children=[
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj} needs a push {towards}{label}",
+                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
+            ),
+            Pick(f"pick {obj} again{label}", obj, grasp=release),
+            GraspGuard(f"while holding {obj} again{label}", Place(f"place {obj} again{label}", obj, release=release)),
+        ],
     )
 
 
@@ -253,20 +332,76 @@ def arrange_one(
     max_regrasps: int = 3,
     *,
     locate: Locate | None = None,
+    step: Step | None = None,
+    neighbours: Sequence[tuple[Target, tuple[str, ...], dict[str, Release]]] = (),
     strategy: str = "paper",
 ) -> py_trees.behaviour.Behaviour:
-    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the threshold."""
+    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the threshold.
+
+    ``step`` (from ``plan_steps``) places it among neighbours: its release, the sides it may be
+    pushed from and how to release it again. ``neighbours`` are the parts placed before it nearby,
+    each with the directions it may be pushed and its restaging once this one is down: each is
+    looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
+    """
     obj = target.obj
-    return py_trees.composites.Sequence(
-        name=f"arrange {obj}",
-        memory=True,
-        children=[
-            set_target(target),
-            transfer(target, max_regrasps, locate=locate),
-            Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes, strategy),
-        ],
-    )
+    dense = step is not None and _is_dense(step)
+    release = step.release if dense and step is not None else None
+    towards = step.push_towards if dense and step is not None else None
+    restage = step.restage if dense and step is not None else None
+    children: list[py_trees.behaviour.Behaviour] = [
+        set_target(target),
+        transfer(target, max_regrasps, locate=locate, release=release),
+        Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
+        correction(
+            target,
+            threshold_mm,
+            max_pushes,
+            strategy,
+            towards=towards,
+            restage=restage,
+            push_opening_m=_opening(step, dense),
+        ),
+    ]
+    for neighbour, sides, again in neighbours:
+        label = f" after {obj}"
+        children.append(
+            py_trees.composites.Sequence(
+                name=f"look again at {neighbour.obj}{label}",
+                memory=True,
+                children=[
+                    Recheck(f"look at {neighbour.obj}{label}", neighbour.obj, neighbour.colour, after=obj),
+                    correction(
+                        neighbour,
+                        threshold_mm,
+                        max_pushes,
+                        strategy,
+                        towards=sides,
+                        restage=again,
+                        push_opening_m=_DENSE_PADS.push_opening_m(parts_of([neighbour])[0], "x"),
+                        count=False,
+                        label=label,
+                    ),
+                ],
+            )
+        )
+    return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
+
+
+_DENSE_PADS = Pads.from_settings(ManipulationSettings())
+
+
+def _opening(step: Step | None, dense: bool) -> float | None:
+    """The push opening among neighbours (square parts: the same along x and y), None for a free part."""
+    return _DENSE_PADS.push_opening_m(step.part, "x") if dense and step is not None else None
+
+
+def _dense_release(step: Step) -> Release | None:
+    return step.release if _is_dense(step) else None
+
+
+def _is_dense(step: Step) -> bool:
+    """A step among neighbours: released away from its target, near placed parts, or with a blocked side."""
+    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
 
 
 class Arrangement(py_trees.composites.Sequence):
@@ -300,6 +435,7 @@ def arrangement(
     max_regrasps: int = 3,
     keep_going: bool = True,
     locate: Locate | None = None,
+    order: Sequence[str] | None = None,
     strategy: str = "paper",
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
@@ -309,6 +445,10 @@ def arrangement(
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
     ``locate`` says how each object is found before it is picked (default ``by_camera()``).
+    ``order`` (object names) is the placing order; by default the layout chooses one
+    (``bt_arrange.layout.plan_layout``: the plan's own order where it can be built). Among
+    neighbours each part is released where the pads fit, pushed only from free sides, and the
+    parts near it are looked at again once it is down.
     ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
     (``Push``: the larger axis first, each push's landing error learned).
     """
@@ -318,6 +458,11 @@ def arrangement(
     check_threshold(threshold_mm)
     whole_number("max_pushes", max_pushes)
     plan = validate_targets(targets)
+    steps = plan_steps(plan, order=order)
+    steps_by_obj = {st.part.name: st for st in steps}
+    by_obj = {t.obj: t for t in plan}
+    ordered = [by_obj[st.part.name] for st in steps]
+    pads = Pads.from_settings(ManipulationSettings())
 
     def carry_on(subtree: py_trees.behaviour.Behaviour, obj: str) -> py_trees.behaviour.Behaviour:
         if not keep_going:
@@ -325,11 +470,31 @@ def arrangement(
         return py_trees.decorators.FailureIsSuccess(name=f"then the next ({obj})", child=subtree)
 
     if correct == "each":
-        children = [
-            carry_on(arrange_one(t, threshold_mm, max_pushes, max_regrasps, locate=locate, strategy=strategy), t.obj)
-            for t in plan
-        ]
+        children = []
+        for index, step in enumerate(steps):
+            placed = [(st.part.name, st.part.footprint) for st in steps[: index + 1]]
+            neighbours = [
+                (
+                    by_obj[name],
+                    free_push_directions(steps_by_obj[name].part, placed, pads),
+                    restage_releases(steps_by_obj[name].part, placed, pads),
+                )
+                for name in step.neighbours
+            ]
+            target = by_obj[step.part.name]
+            subtree = arrange_one(
+                target,
+                threshold_mm,
+                max_pushes,
+                max_regrasps,
+                locate=locate,
+                strategy=strategy,
+                step=step,
+                neighbours=neighbours,
+            )
+            children.append(carry_on(subtree, target.obj))
     else:
+        everything = [(st.part.name, st.part.footprint) for st in steps]
         place_all = py_trees.composites.Sequence(
             name="place all",
             memory=True,
@@ -340,13 +505,13 @@ def arrangement(
                         memory=True,
                         children=[
                             set_target(t),
-                            transfer(t, max_regrasps, locate=locate),
+                            transfer(t, max_regrasps, locate=locate, release=_dense_release(steps_by_obj[t.obj])),
                             Inspect(f"inspect {t.obj} after placing", t.obj, t.colour, after_placing=True),
                         ],
                     ),
                     t.obj,
                 )
-                for t in plan
+                for t in ordered
             ],
         )
         correct_all = py_trees.composites.Sequence(
@@ -363,12 +528,19 @@ def arrangement(
                                 name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
                             ),
                             Inspect(f"inspect {t.obj} before correcting", t.obj, t.colour),
-                            correction(t, threshold_mm, max_pushes, strategy),
+                            correction(
+                                t,
+                                threshold_mm,
+                                max_pushes,
+                                strategy,
+                                towards=free_push_directions(steps_by_obj[t.obj].part, everything, pads),
+                                restage=restage_releases(steps_by_obj[t.obj].part, everything, pads),
+                            ),
                         ],
                     ),
                     t.obj,
                 )
-                for t in plan
+                for t in ordered
             ],
         )
         children = [place_all, correct_all]

@@ -13,7 +13,7 @@ from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, P
 from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.trees import MIN_TARGET_SPACING_M, Arrangement, Target, arrange_one, arrangement, validate_targets
+from bt_arrange.trees import Arrangement, Target, arrange_one, arrangement, validate_targets
 
 RED = Target("red", 0.45, 0.10)
 GREEN = Target("green", 0.45, -0.10, 0.3)
@@ -60,7 +60,11 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
             r"^targets 1 and 2 are both named 'red': the camera tells cubes apart by colour, so each colour is one",
         ),
         ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
-        ([RED, Target("green", 0.45, 0.02)], r"^targets red and green are 80 mm apart: the pads need at least 90 mm"),
+        ([RED, Target("green", 0.45, 0.08)], r"^targets red and green overlap: two parts cannot stand there$"),
+        (
+            [RED, Target("green", 0.45, 0.049)],
+            r"^targets red and green are 1.0 mm apart, under the 2 mm two parts need",
+        ),
     ],
     ids=[
         "empty",
@@ -74,6 +78,7 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
         "unknown colour",
         "two for one colour",
         "out of reach",
+        "overlapping",
         "too close",
     ],
 )
@@ -84,8 +89,8 @@ def test_a_bad_plan_is_one_clear_plan_error(targets, message: str) -> None:
         arrangement(targets)
 
 
-def test_targets_just_far_enough_apart_are_accepted() -> None:
-    other = Target("green", RED.x_m, RED.y_m - MIN_TARGET_SPACING_M - 1e-6)
+def test_targets_2_mm_apart_are_accepted() -> None:
+    other = Target("green", RED.x_m, RED.y_m - 0.052)
     assert validate_targets([RED, other]) == [RED, other]
 
 

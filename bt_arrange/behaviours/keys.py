@@ -9,6 +9,9 @@
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+| ``/<obj>/blocked_towards`` | ``"+x"`` ..., a push a neighbour blocks | Push | the tree's restaging |
+| ``/<obj>/moved_mm`` | ``float``, how far it moved since it was last looked at | Recheck | reports |
+| ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
 | ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
 | ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
 """
@@ -22,6 +25,9 @@ OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
+BLOCKED_TOWARDS = "blocked_towards"
+MOVED_MM = "moved_mm"
+MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
 LAST_PUSH = "last_push"
 
