@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from bt_arrange import MotionError, OutOfRangeError, PlanError, Pose, UnreachableError
-from bt_arrange.motion import trajectory
 from bt_arrange.motion import (
     DEFAULT_HOME_Q,
     ArmKinematics,
@@ -20,6 +19,7 @@ from bt_arrange.motion import (
     MotionPlanner,
     gripper_down_pose,
     rotation_angle_rad,
+    trajectory,
 )
 
 DT_S = 0.008  # the UR CB3's 125 Hz, as in the simulated cell
@@ -331,9 +331,7 @@ def test_line_stop_comes_to_rest_on_the_line(
         assert rotation_angle_rad(kinematics.forward(q).rotation, start.rotation) < 1e-5
 
 
-def line_pose_errors(
-    kinematics: ArmKinematics, motion: LinearMotion, q: np.ndarray, s_m: float
-) -> tuple[float, float]:
+def line_pose_errors(kinematics: ArmKinematics, motion: LinearMotion, q: np.ndarray, s_m: float) -> tuple[float, float]:
     """Distance (m) and turn (rad) of the TCP at ``q`` from the line's pose at path length ``s_m``."""
     start, end = motion.start_pose, motion.end_pose
     direction = (end.position_m - start.position_m) / motion.length_m
