@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import json
 import time
-import uuid
-from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -74,7 +72,9 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         self.pending: list[Transition] = []
         #: Every node that changed status, by its id (as text): ``node(transition)`` looks them up.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {}
-        self._last: dict[uuid.UUID, Status] = {}
+        # Keyed by the node itself (identity hash, in C), not by its UUID (hashed in Python):
+        # the log looks at a few nodes every tick.
+        self._last: dict[py_trees.behaviour.Behaviour, Status] = {}
         self._visited: list[py_trees.behaviour.Behaviour] = []
         self._file: IO[str] | None = None
 
@@ -99,20 +99,26 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         """Compare ``nodes``, and the children of any of them that changed unseen, with the last look."""
         changes: list[Transition] = []
         last = self._last
-        seen: set[uuid.UUID] = set()
-        queue = deque(nodes)
-        while queue:
-            node = queue.popleft()
-            if node.id in seen:
+        seen: set[py_trees.behaviour.Behaviour] = set()
+        # Breadth first (a list read from the front): the changes come in the order of the tick.
+        queue = list(nodes)
+        invalid = Status.INVALID
+        index = 0
+        while index < len(queue):
+            node = queue[index]
+            index += 1
+            if node in seen:
                 continue
-            seen.add(node.id)
-            before = last.get(node.id, Status.INVALID)
-            if node.status != before:
+            seen.add(node)
+            before = last.get(node, invalid)
+            if node.status is not before:
                 changes.append(self._transition(node, before, time_s))
-                last[node.id] = node.status
+                last[node] = node.status
             # A child changes without a tick only when a parent stops it (to INVALID): so only below a node
             # ticked or stopped now, and only a child whose status differs from the last look.
-            queue.extend(c for c in node.children if last.get(c.id, Status.INVALID) != c.status)
+            for child in node.children:
+                if last.get(child, invalid) is not child.status:
+                    queue.append(child)
         if changes:
             self.pending.extend(changes)
             self.transitions.extend(changes)
@@ -230,12 +236,15 @@ class Runner:
         if tree.pre_tick_handlers or tree.post_tick_handlers or any(v.full for v in tree.visitors):
             tree.tick()
             return
-        for visitor in tree.visitors:
+        visitors = tree.visitors
+        for visitor in visitors:
             visitor.initialise()
+        # ``node.visit(visitor)`` is ``visitor.run(node)``: the bound methods, looked up once per tick.
+        runs = [visitor.run for visitor in visitors]
         for node in self.root.tick():
-            for visitor in tree.visitors:
-                node.visit(visitor)
-        for visitor in tree.visitors:
+            for run in runs:
+                run(node)
+        for visitor in visitors:
             visitor.finalise()
         tree.count += 1
 

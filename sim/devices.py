@@ -55,6 +55,13 @@ class SimArm:
         self._joint_rng = cell.config.errors.rng("joints", per_run=True)
         self._joint_error = np.zeros(6)
         self._rest_q: FloatArray | None = None
+        # The client's bound call and the fixed arguments, looked up once: the arm is commanded
+        # every control period.
+        self._set_motors = cell.client.setJointMotorControlArray
+        physics = cell.config.physics
+        self._position_gains = [physics.arm_position_gain] * 6
+        self._velocity_gains = [physics.arm_velocity_gain] * 6
+        self._zero_velocities = [0.0] * 6
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -79,24 +86,27 @@ class SimArm:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
         import pybullet
 
-        velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
-        physics = self._cell.config.physics
         positions = np.asarray(positions_rad, dtype=float)
         if self._joint_sigma_rad:
+            velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
             resting = not np.any(velocities)
             if resting and (self._rest_q is None or not np.array_equal(positions, self._rest_q)):
                 self._rest_q = positions.copy()
                 self._joint_error = self._joint_rng.normal(0.0, self._joint_sigma_rad, 6)
             positions = positions + self._joint_error
-        self._client.setJointMotorControlArray(
+        self._set_motors(
             self._body,
             self._indices,
             pybullet.POSITION_CONTROL,
-            targetPositions=list(positions),
-            targetVelocities=list(velocities),
+            targetPositions=positions.tolist(),
+            targetVelocities=(
+                self._zero_velocities
+                if velocities_rad_s is None
+                else np.asarray(velocities_rad_s, dtype=float).tolist()
+            ),
             forces=self._efforts_n_m,
-            positionGains=[physics.arm_position_gain] * 6,
-            velocityGains=[physics.arm_velocity_gain] * 6,
+            positionGains=self._position_gains,
+            velocityGains=self._velocity_gains,
         )
 
     def tcp_pose(self) -> Pose:

@@ -19,6 +19,7 @@ from bt_arrange.motion import (
     MotionPlanner,
     gripper_down_pose,
     rotation_angle_rad,
+    trajectory,
 )
 
 DT_S = 0.008  # the UR CB3's 125 Hz, as in the simulated cell
@@ -328,6 +329,63 @@ def test_line_stop_comes_to_rest_on_the_line(
     assert np.linalg.norm(acceleration, axis=1).max() <= motion.cartesian_limits.acceleration_m_s2 * (1 + 1e-2)
     for q in positions:
         assert rotation_angle_rad(kinematics.forward(q).rotation, start.rotation) < 1e-5
+
+
+def line_pose_errors(kinematics: ArmKinematics, motion: LinearMotion, q: np.ndarray, s_m: float) -> tuple[float, float]:
+    """Distance (m) and turn (rad) of the TCP at ``q`` from the line's pose at path length ``s_m``."""
+    start, end = motion.start_pose, motion.end_pose
+    direction = (end.position_m - start.position_m) / motion.length_m
+    tcp = kinematics.forward(q)
+    return (
+        float(np.linalg.norm(tcp.position_m - (start.position_m + s_m * direction))),
+        rotation_angle_rad(tcp.rotation, start.rotation),
+    )
+
+
+@pytest.mark.parametrize(
+    "end_m",
+    [
+        (0.5, 0.1, 0.025),  # descend to a grasp
+        (0.62, 0.1, 0.15),  # push along x
+        (0.4, -0.25, 0.06),  # a long diagonal
+    ],
+)
+def test_line_joints_between_ik_knots_stay_within_the_deviation_bound(
+    planner: MotionPlanner, kinematics: ArmKinematics, above_cube_q: np.ndarray, end_m: tuple[float, float, float]
+) -> None:
+    start = kinematics.forward(above_cube_q)
+    motion = planner.move_line(above_cube_q, Pose.from_rotation(np.array(end_m), start.rotation))
+    # IK at knots only: far fewer solves than setpoints.
+    assert len(motion.knots_m) < len(motion.planned_positions_rad) / 4
+    assert motion.knots_m[0] == 0.0 and motion.knots_m[-1] == motion.length_m
+    # Densely along the path, not only at the knots' midpoints the planner checked: the TCP of
+    # the interpolated joints is where the line's pose is, within the bound (the Hermite error
+    # peaks at the midpoints, so the bound holds everywhere up to round-off).
+    for s_m in np.linspace(0.0, motion.length_m, 301):
+        position_m, turn_rad = line_pose_errors(kinematics, motion, motion.path_positions_rad([s_m])[0], s_m)
+        assert position_m <= trajectory.LINE_DEVIATION_TOLERANCE_M * 1.05
+        assert turn_rad <= trajectory.LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD * 1.05
+    # ...and at the knots themselves the joints are the IK's exact solutions.
+    for s_m, q in zip(motion.knots_m, motion.path_positions_rad(motion.knots_m), strict=True):
+        position_m, turn_rad = line_pose_errors(kinematics, motion, q, s_m)
+        assert position_m < 1e-6 and turn_rad < 1e-5
+
+
+def test_line_knots_are_refined_where_interpolation_strays(
+    kinematics: ArmKinematics, above_cube_q: np.ndarray, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # One knot at each end only: interpolating a 25 cm diagonal between them strays millimetres
+    # from the line, so the planner splits the intervals until the bound holds again.
+    monkeypatch.setattr(trajectory, "LINE_KNOT_SPACING_M", 1.0)
+    planner = MotionPlanner(kinematics, TEST_JOINT_LIMITS, TEST_CARTESIAN_LIMITS, DT_S)
+    start = kinematics.forward(above_cube_q)
+    end = Pose.from_rotation([0.4, -0.25, 0.06], start.rotation)
+    motion = planner.move_line(above_cube_q, end)
+    assert len(motion.knots_m) > 2
+    for s_m in np.linspace(0.0, motion.length_m, 201):
+        position_m, turn_rad = line_pose_errors(kinematics, motion, motion.path_positions_rad([s_m])[0], s_m)
+        assert position_m <= trajectory.LINE_DEVIATION_TOLERANCE_M * 1.05
+        assert turn_rad <= trajectory.LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD * 1.05
 
 
 def test_line_below_the_table_is_refused_before_any_setpoint(

@@ -137,3 +137,19 @@ def test_edge_lines_unmix_a_touching_cube_of_another_colour() -> None:
         refined = refine_edge_lines(frame.rgb, start)
         assert refined is not None
         assert corner_error_px(refined, cube) < 0.1, cube.colour
+
+
+def test_the_corner_fit_median_and_cross_product_are_numpys_exactly() -> None:
+    # corners.py avoids np.median (its first call imports numpy.ma) and np.cross (slow on
+    # 3-vectors): the results must be numpy's, bit for bit, or the benchmark figures would move.
+    from bt_arrange.perception.corners import _cross, _median
+
+    rng = np.random.default_rng(0)
+    for count in range(1, 40):
+        for shape, axis in (((count,), None), ((count, 2), 0)):
+            values = rng.normal(size=shape) * 10 ** rng.uniform(-3, 3)
+            assert np.array_equal(_median(values, axis=axis), np.median(values, axis=axis))
+    assert np.isnan(_median(np.array([1.0, np.nan, 2.0])))
+    for _ in range(200):
+        a, b = rng.normal(size=3) * 100, rng.normal(size=3)
+        assert np.array_equal(_cross(a, b), np.cross(a, b))

@@ -49,6 +49,16 @@ _SLOWDOWN_MARGIN = 1.02
 _LINE_REPLANS = 4
 # Lines shorter than this are treated as "already there".
 _MIN_LINE_LENGTH_M = 1e-9
+#: Longest stretch of a line between two IK solutions (m), before any refinement.
+LINE_KNOT_SPACING_M = 0.04
+#: Largest TCP distance from the line (m) that interpolating the joints between IK knots may add,
+#: checked at each interval's midpoint: the IK's own position tolerance.
+LINE_DEVIATION_TOLERANCE_M = 1e-6
+#: Largest turn away from the line's orientation (rad) that the interpolation may add.
+LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD = 2e-6
+# Knots closer than this are not split again (the joints curve so sharply there, near a
+# singularity, that interpolation cannot follow; the slowdown check refuses such a line anyway).
+_MIN_KNOT_SPACING_M = 1e-4
 
 _RUCKIG_OK = (Result.Working, Result.Finished)
 
@@ -257,9 +267,17 @@ class LinearMotion(Motion):
     ``PlanError`` otherwise): a line never turns the gripper, so a target that asks for a turn is
     a mistake, while the start (a measured joint state) always differs a little from the intent.
 
-    Timing: ruckig plans the path length ``s`` (1 DoF, from rest to rest) under ``cartesian_limits``.
-    Planning then solves IK for the TCP pose at every control period, each warm-started from the
-    previous one, so an unreachable line raises ``UnreachableError`` before any motion starts.
+    Path: IK is solved at knots along the line (at most ``LINE_KNOT_SPACING_M`` apart, each
+    warm-started from the previous one on its branch), and the joints between two knots follow the
+    cubic Hermite curve through both knots' joints and joint rates (``dq/ds``, from the Jacobian).
+    Where the TCP of that curve, at an interval's midpoint, strays more than
+    ``LINE_DEVIATION_TOLERANCE_M`` from the line or ``LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD``
+    from the orientation, the midpoint becomes a knot too, until every interval is within both.
+    An unreachable line raises ``UnreachableError`` before any motion starts. The path depends on
+    the line alone, so a slowed-down replan reuses it.
+
+    Timing: ruckig plans the path length ``s`` (1 DoF, from rest to rest) under ``cartesian_limits``,
+    sampled every control period and mapped through the path to joints.
     The joint velocities, accelerations and jerks of those samples (finite differences) must stay
     within ``joint_limits``; if they do not (near a singularity, or a fast wrist turn), the whole
     line is slowed down in time (velocity, acceleration and jerk limits scaled by ``f``, ``f**2``,
@@ -302,10 +320,11 @@ class LinearMotion(Motion):
         self.start_pose = start_pose
         self.end_pose = end_pose
 
+        self._knots_m, self._knot_q, self._knot_dq_ds = self._solve_path(start)
         limits = cartesian_limits
         scale = 1.0
         for _ in range(_LINE_REPLANS):
-            self._plan(start, limits)
+            self._plan(limits)
             ratio = self._joint_limit_ratio()
             if ratio <= 1.0:
                 break
@@ -329,8 +348,76 @@ class LinearMotion(Motion):
     # ----------------------------------------------------------------------------------------------
     # Planning
 
-    def _plan(self, start: FloatArray, limits: CartesianLimits) -> None:
-        """Sample ``s(t)`` every control period and solve IK at every sample."""
+    def _solve_path(self, start: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Knots along the line: path lengths (m), joints (rad) and joint rates ``dq/ds`` (rad/m).
+
+        Uniform knots first, each IK warm-started from the previous knot's first-order prediction;
+        then every interval whose Hermite midpoint strays from the line (position or orientation)
+        beyond the deviation tolerances is split at its midpoint, which is solved from that
+        midpoint's interpolated joints, until none does.
+        """
+        if self._length_m <= _MIN_LINE_LENGTH_M:
+            return np.zeros(1), start[None, :].copy(), np.zeros((1, len(ARM_JOINT_NAMES)))
+        count = max(1, math.ceil(self._length_m / LINE_KNOT_SPACING_M - 1e-9))
+        knots = [float(v) for v in np.linspace(0.0, self._length_m, count + 1)]
+        knots[-1] = self._length_m
+        knot_q = [start]
+        knot_dq_ds = [self._joints_per_metre_at(start, 0.0)]
+        for k in range(1, len(knots)):
+            seed = knot_q[-1] + knot_dq_ds[-1] * (knots[k] - knots[k - 1])
+            q = self._solve_at(knots[k], seed)
+            knot_q.append(q)
+            knot_dq_ds.append(self._joints_per_metre_at(q, knots[k]))
+        i = 0
+        while i < len(knots) - 1:
+            span_m = knots[i + 1] - knots[i]
+            mid_m = 0.5 * (knots[i] + knots[i + 1])
+            # The Hermite curve at the interval's midpoint.
+            guess = 0.5 * (knot_q[i] + knot_q[i + 1]) + 0.125 * span_m * (knot_dq_ds[i] - knot_dq_ds[i + 1])
+            if span_m < 2 * _MIN_KNOT_SPACING_M or self._deviation_ok(guess, mid_m):
+                i += 1
+                continue
+            q = self._solve_at(mid_m, guess)
+            knots.insert(i + 1, mid_m)
+            knot_q.insert(i + 1, q)
+            knot_dq_ds.insert(i + 1, self._joints_per_metre_at(q, mid_m))
+        return np.array(knots), np.array(knot_q), np.array(knot_dq_ds)
+
+    def _joints_per_metre_at(self, q: FloatArray, s_m: float) -> FloatArray:
+        """``dq/ds``: the joint rates that move the TCP along the line at 1 m/s without turning it."""
+        twist = np.concatenate([self._direction, np.zeros(3)])
+        try:
+            return np.linalg.solve(self._kinematics.jacobian(q), twist)
+        except np.linalg.LinAlgError as error:
+            raise MotionError(f"line passes through a singularity at s = {s_m:.4f} m") from error
+
+    def _deviation_ok(self, q: FloatArray, s_m: float) -> bool:
+        """True when the TCP at ``q`` lies within the deviation tolerances of the line's pose at ``s_m``."""
+        pose = self._kinematics.forward(q)
+        position_error_m = float(np.linalg.norm(pose.position_m - (self._start_m + s_m * self._direction)))
+        return (
+            position_error_m <= LINE_DEVIATION_TOLERANCE_M
+            and rotation_angle_rad(pose.rotation, self._rotation) <= LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD
+        )
+
+    def _path_at(self, s_m: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Joints (rad) and ``dq/ds`` (rad/m) at path lengths ``s_m``: the cubic Hermite curve between knots."""
+        s = np.atleast_1d(np.asarray(s_m, dtype=float))
+        knots = self._knots_m
+        if len(knots) == 1:
+            return np.repeat(self._knot_q, len(s), axis=0), np.repeat(self._knot_dq_ds, len(s), axis=0)
+        i = np.clip(np.searchsorted(knots, s, side="right") - 1, 0, len(knots) - 2)
+        h = (knots[i + 1] - knots[i])[:, None]
+        t = np.clip((s[:, None] - knots[i][:, None]) / h, 0.0, 1.0)
+        q0, q1 = self._knot_q[i], self._knot_q[i + 1]
+        m0, m1 = self._knot_dq_ds[i] * h, self._knot_dq_ds[i + 1] * h
+        t2, t3 = t * t, t * t * t
+        positions = (2 * t3 - 3 * t2 + 1) * q0 + (t3 - 2 * t2 + t) * m0 + (3 * t2 - 2 * t3) * q1 + (t3 - t2) * m1
+        rates = ((6 * t2 - 6 * t) * q0 + (3 * t2 - 4 * t + 1) * m0 + (6 * t - 6 * t2) * q1 + (3 * t2 - 2 * t) * m1) / h
+        return positions, rates
+
+    def _plan(self, limits: CartesianLimits) -> None:
+        """Sample ``s(t)`` every control period and map the samples through the path to joints."""
         dt = self._control_period_s
         if self._length_m <= _MIN_LINE_LENGTH_M:
             s, s_dot, s_ddot = np.zeros(1), np.zeros(1), np.zeros(1)
@@ -358,19 +445,9 @@ class LinearMotion(Motion):
             samples = np.array([[v[0] for v in trajectory.at_time(k * dt)] for k in range(count + 1)])
             s, s_dot, s_ddot = samples[:, 0], samples[:, 1], samples[:, 2]
             s[-1] = self._length_m  # exactly on the target, not a rounding away from it
-        positions = np.empty((len(s), len(ARM_JOINT_NAMES)))
-        joints_per_metre = np.zeros_like(positions)
-        positions[0] = start
-        twist = np.concatenate([self._direction, np.zeros(3)])
-        q = start
-        for k in range(len(s)):
-            if k > 0:
-                q = self._solve_at(float(s[k]), q)
-                positions[k] = q
-            try:
-                joints_per_metre[k] = np.linalg.solve(self._kinematics.jacobian(q), twist)
-            except np.linalg.LinAlgError as error:
-                raise MotionError(f"line passes through a singularity at s = {s[k]:.4f} m") from error
+        positions, joints_per_metre = self._path_at(s)
+        # Exactly the measured start and the last knot's IK solution, not a rounding away from them.
+        positions[0], positions[-1] = self._knot_q[0], self._knot_q[-1]
         self._s, self._s_dot, self._s_ddot = s, s_dot, s_ddot
         self._positions = positions
         self._joints_per_metre = joints_per_metre
@@ -437,6 +514,15 @@ class LinearMotion(Motion):
         """All planned setpoints, one row per control period, starting with the start state."""
         return self._positions.copy()
 
+    @property
+    def knots_m(self) -> FloatArray:
+        """Path lengths (m) where IK was solved; the joints between them are interpolated."""
+        return self._knots_m.copy()
+
+    def path_positions_rad(self, s_m: ArrayLike) -> FloatArray:
+        """Joints (one row per value) at path lengths ``s_m`` in metres from the start, on the planned path."""
+        return self._path_at(np.clip(np.asarray(s_m, dtype=float), 0.0, self._length_m))[0]
+
     # ----------------------------------------------------------------------------------------------
     # Stepping and stopping
 
@@ -462,23 +548,9 @@ class LinearMotion(Motion):
         return JointSetpoint(positions, joints_per_metre * s_dot), result == Result.Finished
 
     def _interpolate(self, s_m: float) -> tuple[FloatArray, FloatArray]:
-        """Joints at path length ``s_m``: between the two nearest samples, refined by IK onto the line."""
-        i = int(np.clip(np.searchsorted(self._s, s_m, side="right") - 1, 0, max(len(self._s) - 2, 0)))
-        if len(self._s) == 1:
-            return self._positions[0].copy(), self._joints_per_metre[0].copy()
-        span = self._s[i + 1] - self._s[i]
-        fraction = float(np.clip((s_m - self._s[i]) / span, 0.0, 1.0)) if span > 0.0 else 0.0
-        guess = self._positions[i] + fraction * (self._positions[i + 1] - self._positions[i])
-        joints_per_metre = self._joints_per_metre[i] + fraction * (
-            self._joints_per_metre[i + 1] - self._joints_per_metre[i]
-        )
-        try:
-            positions = self._solve_at(s_m, guess)
-        except UnreachableError:
-            # Both neighbours solved, and the samples lie a fraction of a millimetre apart: the
-            # interpolation stays within micrometres of the line, good enough to finish a stop.
-            positions = guess
-        return positions, joints_per_metre
+        """Joints and ``dq/ds`` at path length ``s_m``, on the path (within its deviation tolerances)."""
+        positions, joints_per_metre = self._path_at(s_m)
+        return positions[0], joints_per_metre[0]
 
     def _begin_stop(self) -> None:
         """Brake ``s`` from its current state with ruckig's velocity interface, zero target velocity."""

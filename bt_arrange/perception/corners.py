@@ -31,7 +31,7 @@ docs/perception.md for the measured accuracy of each.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
@@ -76,16 +76,38 @@ def face_chroma(rgb: NDArray[np.uint8], corners_px: FloatArray) -> FloatArray:
     height, width = rgb.shape[:2]
     u = np.clip(np.round(points[:, 0]).astype(int), 0, width - 1)
     v = np.clip(np.round(points[:, 1]).astype(int), 0, height - 1)
-    return np.median(chroma(rgb[v, u]), axis=0)
+    return _median(chroma(rgb[v, u]), axis=0)
+
+
+def _median(values: FloatArray, axis: int | None = None) -> FloatArray:
+    """``np.median``, the same values, without numpy's lazy import of ``numpy.ma`` on its first call.
+
+    That import is most of the first detection's time in a process (about 8 ms of CPU).
+    """
+    ordered = np.sort(np.asarray(values, dtype=np.float64), axis=axis)
+    if axis is None:
+        ordered = ordered.reshape(-1)
+        axis = 0
+    count = ordered.shape[axis]
+    middle = np.take(ordered, [(count - 1) // 2, count // 2], axis=axis)
+    median = np.mean(middle, axis=axis)  # np.median averages the two middle values the same way
+    last = np.take(ordered, count - 1, axis=axis)
+    # A NaN sorts last and makes np.median NaN.
+    return np.asarray(np.where(np.isnan(last), np.nan, median), dtype=np.float64)
+
+
+def _cross(a: Sequence[float] | FloatArray, b: Sequence[float] | FloatArray) -> FloatArray:
+    """``np.cross`` of two 3-vectors, the same arithmetic without its axis handling (a tenth of the time)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _line_through(p: FloatArray, q: FloatArray) -> FloatArray:
     """Homogeneous line ``(a, b, c)``, ``a u + b v + c = 0``, through two points."""
-    return np.cross([p[0], p[1], 1.0], [q[0], q[1], 1.0])
+    return _cross([p[0], p[1], 1.0], [q[0], q[1], 1.0])
 
 
 def _intersect(line_a: FloatArray, line_b: FloatArray) -> FloatArray:
-    point = np.cross(line_a, line_b)
+    point = _cross(line_a, line_b)
     return point[:2] / point[2]
 
 
@@ -190,7 +212,7 @@ def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
         slope, offset = np.polyfit(x[keep], y[keep], 1)
         residual = np.abs(y - (offset + slope * x))
         # Trim beyond 3.5 robust sigmas (noise, a touching cube's edge); never below 0.05 px.
-        limit = max(3.5 * 1.4826 * float(np.median(residual[keep])), 0.05)
+        limit = max(3.5 * 1.4826 * float(_median(residual[keep])), 0.05)
         new_keep = residual <= limit
         if new_keep.sum() < 5 or np.array_equal(new_keep, keep):
             break
@@ -234,7 +256,7 @@ def refine_edge_lines(
         # spread (1 px for a sharp edge, about 2.8 px for a blur of sigma 0.8 px): near enough
         # to miss what lies beyond a thin neighbour, far enough to be clear of the blur. The
         # spread is a property of the lens, so the face's median serves all four sides.
-        excess = max(0.0, float(np.median(np.concatenate(spreads))) - SHARP_EDGE_SPREAD)
+        excess = max(0.0, float(_median(np.concatenate(spreads))) - SHARP_EDGE_SPREAD)
         near_outside_px = 1.0 + 4.0 * excess
     return corners
 
