@@ -225,7 +225,7 @@ def correction(
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` of its target.
 
-    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, ``"learned"`` or ``"diagonal"``.
     """
     check_threshold(threshold_mm)
     check_strategy(strategy)
@@ -309,8 +309,9 @@ def arrangement(
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
     ``locate`` says how each object is found before it is picked (default ``by_camera()``).
-    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
-    (``Push``: the larger axis first, each push's landing error learned).
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's), ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned) or ``"diagonal"`` (learned,
+    and the same push corrects the other axis too).
     """
     check_strategy(strategy)
     if correct not in CORRECT_MODES:

@@ -284,7 +284,7 @@ class RealCellErrors:
 # -- presets -----------------------------------------------------------------------------------
 
 #: The fitted grasp offset of the real cell (GripperError.grasp_offset_sigma_mm; docs/experiments.md).
-GRASP_OFFSET_SIGMA_MM = 4.0
+GRASP_OFFSET_SIGMA_MM = 3.5
 
 
 def ideal() -> RealCellErrors:
