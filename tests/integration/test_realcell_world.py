@@ -75,3 +75,15 @@ def test_a_real_grasp_holds_the_cube_off_the_tcp_by_its_draw_and_the_fingers_rec
     ideal, ideal_offset_m = _grip_red_cube(CellConfig.ideal())
     with ideal:
         assert ideal.grasp_offset_m == 0.0 and abs(ideal_offset_m) < 0.0005
+
+
+def test_in_the_real_cell_one_diagonal_push_does_what_takes_the_learned_strategy_two() -> None:
+    from bt_arrange_sim.experiment import TrialSpec, run_trial
+
+    # Row 1, trial 0: placed 3.8 mm off, along one axis mostly, with the arm's error along the other.
+    learned = run_trial(TrialSpec("system", 0, 0, 0.5, cell="real", strategy="learned"))
+    diagonal = run_trial(TrialSpec("system", 0, 0, 0.5, cell="real", strategy="diagonal"))
+    assert learned["placed_mm"] == diagonal["placed_mm"] > 1.0, "the same placement before the pushes"
+    assert learned["status"] == diagonal["status"] == "within", (learned["reason"], diagonal["reason"])
+    assert diagonal["pushes"] < learned["pushes"], (diagonal["pushes"], learned["pushes"])
+    assert diagonal["pushed_truth_mm"] < 0.8
