@@ -4,7 +4,7 @@
                    [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
-                          [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned]
+                          [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange info
 
@@ -442,9 +442,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--strategy",
-        choices=("paper", "learned"),
+        choices=("paper", "learned", "diagonal"),
         default="paper",
-        help="push strategy: paper (alternating x/y, Table 1's; default) or learned (docs/experiments.md)",
+        help="push strategy: paper (alternating x/y, Table 1's; default), learned or diagonal (docs/experiments.md)",
     )
     experiment.set_defaults(handler=_experiment)
 

@@ -277,7 +277,8 @@ def correction(
     out (default all four). ``restage``: per blocked direction, a release on the other side; when
     a correction needs a blocked side, Push fails and the part is picked up and released there,
     from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
-    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, ``"learned"``
+    or ``"diagonal"``.
     """
     check_threshold(threshold_mm)
     check_strategy(strategy)
@@ -449,8 +450,9 @@ def arrangement(
     (``bt_arrange.layout.plan_layout``: the plan's own order where it can be built). Among
     neighbours each part is released where the pads fit, pushed only from free sides, and the
     parts near it are looked at again once it is down.
-    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
-    (``Push``: the larger axis first, each push's landing error learned).
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's), ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned) or ``"diagonal"`` (learned,
+    and the same push corrects the other axis too).
     """
     check_strategy(strategy)
     if correct not in CORRECT_MODES:

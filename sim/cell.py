@@ -271,6 +271,10 @@ class WorkCell:
             flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
         )
         self._edge_rng = errors.rng("objects", per_run=True)
+        self._grasp_offset_rng = errors.grasp_offset_rng()
+        #: The last grasp's offset of the pads' centre from the TCP along the closing axis (m).
+        self.grasp_offset_m = 0.0
+        self._recentre_at_width_m: float | None = None
         self._joint_index = {
             self.client.getJointInfo(self.robot_id, i)[1].decode(): i
             for i in range(self.client.getNumJoints(self.robot_id))
@@ -323,6 +327,9 @@ class WorkCell:
                 self._apply_friction_field()
             for _ in range(self._substeps):
                 self.client.stepSimulation()
+            if self._recentre_at_width_m is not None and self.gripper.width() >= self._recentre_at_width_m:
+                self._set_grasp_offset(0.0)
+                self._recentre_at_width_m = None
         self._steps += control_periods * self._substeps
 
     def _apply_friction_field(self) -> None:
@@ -451,6 +458,40 @@ class WorkCell:
         table = self.client.createMultiBody(0.0, collision, visual, basePosition=[cx, cy, -thickness / 2])
         self.config.physics.table_contact.apply(self.client, table)
         return int(table)
+
+    def begin_grasp(self) -> None:
+        """A real cell's grasp: the pads' centre settles a fresh draw off the TCP (``GripperError``).
+
+        The gear constraint keeps the two fingers that far apart from symmetric until the next grasp
+        (``relativePositionTarget`` is the left joint's value minus the right's: twice the offset).
+        Nothing happens in the ideal cell.
+        """
+        if self._grasp_offset_rng is None:
+            return
+        sigma_m = self.config.errors.gripper.grasp_offset_sigma_mm / 1000
+        self._recentre_at_width_m = None
+        self._set_grasp_offset(float(self._grasp_offset_rng.normal(0.0, sigma_m)))
+
+    def end_grasp(self, opening_m: float) -> None:
+        """The gripper opens to ``opening_m``: the fingers re-centre once they are clear of the cube.
+
+        Not at once: re-centring while the pads still touch would push the released cube. The
+        offset is dropped when the opening is within 2 mm (and the offset, which a joint limit may
+        hold back) of ``opening_m`` (``step``), so pushes
+        are made with centred fingers.
+        """
+        if self.grasp_offset_m != 0.0:
+            self._recentre_at_width_m = opening_m - 0.002 - 2 * abs(self.grasp_offset_m)
+
+    def _set_grasp_offset(self, offset_m: float) -> None:
+        self.grasp_offset_m = offset_m
+        self.client.changeConstraint(
+            self.gear_constraint_id,
+            gearRatio=-1,
+            maxForce=self.config.physics.gear_max_force_n,
+            erp=self.config.errors.gripper.coupling_erp,
+            relativePositionTarget=2 * offset_m,
+        )
 
     def _configure_gripper(self) -> None:
         import pybullet

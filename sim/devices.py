@@ -148,6 +148,7 @@ class SimGripper:
             )
         physics = self._cell.config.physics
         speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
+        self._cell.end_grasp(width_m)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
@@ -167,6 +168,7 @@ class SimGripper:
         if not low <= force_n <= high:
             raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
         speed = self._checked_speed(speed_m_s)
+        self._cell.begin_grasp()
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed / 2, force=force_n

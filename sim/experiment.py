@@ -114,7 +114,7 @@ class TrialSpec:
     threshold_mm: float
     #: The cell: ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell.parse_cell``).
     cell: str = "ideal"
-    #: The push strategy: ``paper`` (Table 1's) or ``learned`` (``bt_arrange.behaviours.Push``).
+    #: The push strategy: ``paper`` (Table 1's), ``learned`` or ``diagonal`` (``bt_arrange.behaviours.Push``).
     strategy: str = "paper"
 
 

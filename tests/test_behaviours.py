@@ -831,3 +831,47 @@ def test_learned_push_keeps_its_bias_on_the_blackboard_between_pushes(context: C
 def test_an_unknown_push_strategy_is_a_clear_error() -> None:
     with pytest.raises(BtArrangeError, match="push strategy 'magic': choose one of paper, learned"):
         Push("push red", "red", strategy="magic")
+
+
+def test_a_diagonal_push_moves_the_cube_across_its_axis_by_the_other_offset_within_the_friction_limit() -> None:
+    assert Push.across_push_mm((3.0, 1.0), "x", 3.0, 0.2) == pytest.approx(1.0)
+    assert Push.across_push_mm((-0.5, 2.0), "y", 2.0, 0.2) == pytest.approx(-0.5)
+    # At most 0.6 mm across per mm along: the rest is left to a later push.
+    assert Push.across_push_mm((1.0, -2.0), "x", 1.0, 0.2) == pytest.approx(-0.6)
+    # Nothing across below the shortest push, nor when there is no push.
+    assert Push.across_push_mm((3.0, 0.1), "x", 3.0, 0.2) == 0.0
+    assert Push.across_push_mm((0.1, 3.0), "x", 0.1, 0.2) == 0.0
+
+
+def test_a_diagonal_push_goes_sideways_while_the_pads_touch_and_says_so(clock) -> None:
+    context = make_context(clock)
+    centre = np.array([0.5, 0.05])
+    write({"/red/pose": cube_pose(*centre), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)})
+    push = set_up(Push("push red", "red", strategy="diagonal"), context)
+    arm, s = fake_arm(context), SETTINGS
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed +3.00 mm along x, +1.00 mm along y"
+    assert read("/red/last_push") == ("x", -0.0), "the push along x is learned as the learned strategy's"
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands]) - [*centre, 0.0]
+    low = tcp[np.abs(tcp[:, 2] - s.push_height_m) < 1e-6]
+    deepest = low[int(np.argmax(low[:, 0]))]
+    assert deepest[0] == pytest.approx(-s.push_reach_m + 0.003, abs=1e-6)
+    assert deepest[1] == pytest.approx(0.001, abs=1e-6), "1 mm along y by the end of the push"
+    # Where the pads meet the face (reach from the centre), the line has not gone sideways yet.
+    meet = low[int(np.argmin(np.abs(low[:, 0] + s.push_reach_m)))]
+    assert meet[1] == pytest.approx(0.0, abs=5e-5)
+    assert low[0][1] == pytest.approx(-0.001 * s.push_clearance_m / 0.003, abs=1e-6), "started that far the other way"
+
+
+def test_a_diagonal_push_does_not_go_sideways_towards_a_blocked_side(clock) -> None:
+    context = make_context(clock)
+    write(
+        {"/red/pose": cube_pose(0.5, 0.05), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)}
+    )
+    # +y is blocked by a neighbour: the push along +x stays straight.
+    push = set_up(Push("push red", "red", strategy="diagonal", towards=("+x", "-x", "-y")), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed +3.00 mm along x"
+    assert push.across_m == 0.0

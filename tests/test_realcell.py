@@ -104,3 +104,14 @@ def test_the_friction_field_is_smooth_and_within_its_spread() -> None:
     assert min(values) >= 1 - spread - 1e-9 and max(values) <= 1 + spread + 1e-9
     assert max(values) - min(values) > 0.05
     assert realcell.ideal().friction_scale(0.5, 0.0) == 1.0
+
+
+def test_grasp_offsets_are_drawn_per_run_and_only_when_the_term_is_on() -> None:
+    real = realcell.real()
+    assert real.gripper.grasp_offset_sigma_mm > 0 and real.gripper.coupling_erp == 0.8, "stiff: no cube is lost"
+    first, again, other = (realcell.real().with_run_seed(s).grasp_offset_rng() for s in (4, 4, 5))
+    assert first is not None and again is not None and other is not None
+    assert first.normal() == again.normal() != other.normal()
+    assert realcell.ideal().grasp_offset_rng() is None
+    off = dataclasses.replace(real, gripper=dataclasses.replace(real.gripper, grasp_offset_sigma_mm=0.0))
+    assert off.grasp_offset_rng() is None

@@ -191,7 +191,12 @@ class Place(StagedBehaviour):
 
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
-PUSH_STRATEGIES = ("paper", "learned")
+PUSH_STRATEGIES = ("paper", "learned", "diagonal")
+
+#: Strategy "diagonal": the most a push may move the cube across its axis, per millimetre along it.
+#: The pads drag the cube sideways by friction (pads 1.2 on the cube: slipping only beyond about
+#: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the cube.
+DIAGONAL_ACROSS_RATIO = 0.6
 
 
 class Push(StagedBehaviour):
@@ -215,6 +220,13 @@ class Push(StagedBehaviour):
     can only be corrected from a blocked side, Push fails saying so and writes the direction it
     needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
     pushed from.
+
+    ``strategy="diagonal"`` is "learned" whose push also corrects the other axis: the pads move
+    across the push by that axis' offset (at most ``DIAGONAL_ACROSS_RATIO`` of the push's length)
+    while they press on the face, and the cube follows them by friction, so one push can correct x
+    and y together. The sideways part is a relative motion of the pads, so the arm's absolute
+    error does not enter it and it is not learned. It moves sideways only towards a free side
+    (``towards``): a neighbour across the push is never shoved.
     """
 
     def __init__(
@@ -241,11 +253,13 @@ class Push(StagedBehaviour):
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
         self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
-        if strategy == "learned":
+        if strategy in ("learned", "diagonal"):
             for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
                 self.reads(keys.key(obj, field))
                 self.writes(keys.key(obj, field))
         self.pushed: tuple[str, float] | None = None
+        #: Strategy "diagonal": the last push's sideways part (m, signed along the other axis).
+        self.across_m = 0.0
 
     def stages(self, context: Context) -> list[Stage]:
         """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
@@ -255,12 +269,18 @@ class Push(StagedBehaviour):
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
-        if self.strategy == "learned":
+        self.across_m = 0.0
+        if self.strategy in ("learned", "diagonal"):
             axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
             needed = ("+" if distance_m >= 0 else "-") + axis
             choice: str | Blocked = axis
             if abs(distance_m) >= s.min_push_m and needed not in self.towards:
                 choice = Blocked(needed, distance_m * 1000)
+            if self.strategy == "diagonal" and not isinstance(choice, Blocked):
+                across_mm = self.across_push_mm(offset_xy_mm, axis, distance_m * 1000, s.min_push_m * 1000)
+                # Sideways only towards a free side: a neighbour there is never shoved.
+                across_towards = ("+" if across_mm >= 0 else "-") + ("y" if axis == "x" else "x")
+                self.across_m = across_mm / 1000 if across_towards in self.towards else 0.0
         else:
             choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
             if not isinstance(choice, Blocked):
@@ -284,6 +304,13 @@ class Push(StagedBehaviour):
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (s.push_reach_m + s.push_clearance_m)
         end = centre - direction * s.push_reach_m + direction * abs(distance_m)
+        if self.across_m:
+            other = np.array([0.0, 1.0, 0.0]) if axis == "x" else np.array([1.0, 0.0, 0.0])
+            across = (rotation_z(target.yaw_rad) @ other)[:2] * self.across_m
+            # One straight line that meets the face where a straight push would and moves sideways
+            # by ``across`` over the part in contact: it starts that far the other way, scaled.
+            begin = begin - across * (s.push_clearance_m / abs(distance_m))
+            end = end + across
         back = end - direction * s.push_clearance_m
         opening_m = s.push_opening_m if self.opening_m is None else self.opening_m
         return [
@@ -358,6 +385,21 @@ class Push(StagedBehaviour):
         return Blocked(needs(axis), along[axis])
 
     @staticmethod
+    def across_push_mm(offset_xy_mm: tuple[float, float], axis: str, distance_mm: float, min_push_mm: float) -> float:
+        """Strategy "diagonal": how far (mm, signed) the push along ``axis`` also moves the cube across it.
+
+        The other axis' offset, at most ``DIAGONAL_ACROSS_RATIO`` times the push's length (the rest
+        is left to a later push); none below the shortest push, or when there is no push.
+        """
+        if abs(distance_mm) < min_push_mm:
+            return 0.0
+        wanted = offset_xy_mm[1] if axis == "x" else offset_xy_mm[0]
+        if abs(wanted) < min_push_mm:
+            return 0.0
+        limit = DIAGONAL_ACROSS_RATIO * abs(distance_mm)
+        return max(-limit, min(limit, float(wanted)))
+
+    @staticmethod
     def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
         """The preferred (alternated) axis, unless its offset is below a push and the other's is not."""
         other = "y" if preferred == "x" else "x"
@@ -372,6 +414,9 @@ class Push(StagedBehaviour):
         axis, distance_m = self.pushed
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
             return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
+        if self.across_m:
+            other = "y" if axis == "x" else "x"
+            return f"pushed {distance_m * 1000:+.2f} mm along {axis}, {self.across_m * 1000:+.2f} mm along {other}"
         return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
 
 
