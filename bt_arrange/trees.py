@@ -29,8 +29,8 @@ that writes ``/<obj>/pose`` will do.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import py_trees
 
@@ -40,22 +40,25 @@ from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.objects import CUBE, MIN_TARGET_SPACING_M, ObjectType, kind_of, min_target_spacing_m
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
 
-#: Cube centres closer than this leave the pads no room beside a face: a push starts with the
-#: pads 10 mm behind the face and 22 mm deep, so they reach 57 mm from the cube's centre, where a
-#: neighbour's face must not be (57 mm + half an edge, rounded up).
-MIN_TARGET_SPACING_M = 0.09
+#: Re-exported: the cubes' target spacing (``bt_arrange.objects.min_target_spacing_m`` for any two types).
+MIN_TARGET_SPACING_M = MIN_TARGET_SPACING_M
 CORRECT_MODES = ("each", "after_all")
+#: The yaw error (degrees) the correction loop leaves by default.
+DEFAULT_YAW_THRESHOLD_DEG = 1.0
 
 
 @dataclass(frozen=True)
 class Target:
-    """Where one cube should end up: ``colour``, ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
+    """Where one part should end up: ``colour`` (of its top face), ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
 
     ``name`` is the object's blackboard namespace (``/<name>/pose``); it defaults to the colour.
+    ``object_type`` is its size (default the paper's cube, ``bt_arrange.objects.CUBE``). Several
+    targets may share a type and a colour (identical parts): each needs its own name.
     """
 
     colour: str
@@ -63,6 +66,7 @@ class Target:
     y_m: float
     yaw_rad: float = 0.0
     name: str | None = None
+    object_type: ObjectType = field(default=CUBE)
 
     @property
     def obj(self) -> str:
@@ -84,8 +88,9 @@ def validate_targets(
 ) -> list[Target]:
     """Check a plan before anything moves; a ``PlanError`` names the first problem.
 
-    Malformed entries, unknown colours, two targets for one object, a target out of the arm's
-    reach and two targets closer than ``MIN_TARGET_SPACING_M`` are each a clear error.
+    Malformed entries, unknown colours, two targets for one object, one colour on two types, a
+    target out of the arm's reach and two targets closer than ``min_target_spacing_m`` are each a
+    clear error. Targets of one type and colour are identical parts (each with its own name).
     """
     if isinstance(targets, (str, bytes)) or not isinstance(targets, Iterable):
         raise PlanError(f"targets must be a list of Target(colour, x_m, y_m, yaw_rad), got {targets!r}")
@@ -94,25 +99,39 @@ def validate_targets(
         raise PlanError("no targets: an arrangement needs at least one Target(colour, x_m, y_m, yaw_rad)")
     known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
     settings = settings or ManipulationSettings()
-    seen: dict[str, int] = {}
+    names: dict[str, int] = {}
+    type_of_colour: dict[str, tuple[ObjectType, int]] = {}
     for index, target in enumerate(plan, start=1):
         if not isinstance(target, Target):
             raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
-        for field in ("x_m", "y_m", "yaw_rad"):
-            finite_number(field, getattr(target, field), where=f"target {index} ({target.colour}): ")
+        for field_name in ("x_m", "y_m", "yaw_rad"):
+            finite_number(field_name, getattr(target, field_name), where=f"target {index} ({target.colour}): ")
+        if not isinstance(target.object_type, ObjectType):
+            raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
         if target.colour not in known:
             raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
-        for taken, what in ((target.obj, "named"), (target.colour, "coloured")):
-            if taken in seen:
-                raise PlanError(
-                    f"targets {seen[taken]} and {index} are both {what} {taken!r}: "
-                    "the camera tells cubes apart by colour, so each colour is one object"
-                )
-        seen[target.obj] = seen[target.colour] = index
+        if target.obj in names:
+            first_index = names[target.obj]
+            hint = (
+                f" (identical parts need a name each, e.g. name='{target.colour} 1' and name='{target.colour} 2')"
+                if target.name is None
+                else ""
+            )
+            raise PlanError(f"targets {first_index} and {index} are both named {target.obj!r}{hint}")
+        names[target.obj] = index
+        seen = type_of_colour.get(target.colour)
+        if seen is not None and seen[0] != target.object_type:
+            raise PlanError(
+                f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
+                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type"
+            )
+        type_of_colour.setdefault(target.colour, (target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]
     kinematics = kinematics or ArmKinematics()
     for target in checked:
-        for height_m in (settings.grasp_height_m, settings.approach_height_m):
+        grasp_m = settings.grasp_height_m + (target.object_type.grasp_height_m - CUBE.grasp_height_m)
+        approach_m = target.object_type.approach_height_m(settings.approach_height_m)
+        for height_m in (grasp_m, approach_m):
             try:
                 kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
             except UnreachableError as error:
@@ -122,12 +141,29 @@ def validate_targets(
     for i, first in enumerate(checked):
         for second in checked[i + 1 :]:
             distance_m = math.hypot(first.x_m - second.x_m, first.y_m - second.y_m)
-            if distance_m < MIN_TARGET_SPACING_M:
+            spacing_m = min_target_spacing_m(first.object_type, second.object_type)
+            if distance_m < spacing_m:
                 raise PlanError(
                     f"targets {first.obj} and {second.obj} are {distance_m * 1000:.0f} mm apart: the pads need "
-                    f"at least {MIN_TARGET_SPACING_M * 1000:.0f} mm between cube centres to grasp and push"
+                    f"at least {spacing_m * 1000:.0f} mm between their centres to grasp and push"
                 )
     return checked
+
+
+def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
+    """For each target's object, the targets of every part of its kind (type and colour), its own among them.
+
+    Only kinds of several parts (identical parts) are listed; an object alone in its kind is left out.
+    """
+    plan = list(targets)
+    by_kind: dict[tuple[ObjectType, str], list[Target]] = {}
+    for target in plan:
+        by_kind.setdefault(kind_of(target), []).append(target)
+    return {
+        target.obj: tuple(t.planar for t in by_kind[kind_of(target)])
+        for target in plan
+        if len(by_kind[kind_of(target)]) > 1
+    }
 
 
 def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
@@ -165,7 +201,7 @@ def by_camera() -> Locate:
     """Find the object with the top camera's colour detection: ``Detect "detect <obj>"`` (the default)."""
 
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
-        return Detect(f"detect {target.obj}", target.obj, target.colour)
+        return Detect(f"detect {target.obj}", target.obj, target.colour, target.object_type)
 
     return locate
 
@@ -180,6 +216,11 @@ def by_depth(
     """
 
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
+        if target.object_type != CUBE:
+            raise PlanError(
+                f"target {target.obj}: the depth-only grasp estimator knows the paper's 5 cm cube only, "
+                f"not a {target.object_type.name} ({target.object_type.size_text})"
+            )
         return EstimateGraspFromDepth(
             f"estimate {target.obj} grasp from depth",
             target.obj,
@@ -192,19 +233,30 @@ def by_depth(
     return locate
 
 
-def transfer(target: Target, max_regrasps: int = 3, *, locate: Locate | None = None) -> py_trees.behaviour.Behaviour:
-    """Locate, pick and place one object; a cube lost on the way is located and picked again.
+def transfer(
+    target: Target,
+    max_regrasps: int = 3,
+    *,
+    locate: Locate | None = None,
+    kind_targets: Sequence[PlanarPose] = (),
+) -> py_trees.behaviour.Behaviour:
+    """Locate, pick and place one object; a part lost on the way is located and picked again.
 
     ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
+    ``kind_targets`` (identical parts: the targets of the kind) let a Detect choose a part that
+    is not at one of them.
     """
     obj = target.obj
+    finder = (locate or by_camera())(target)
+    if kind_targets and isinstance(finder, Detect):
+        finder.among(kind_targets)
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            (locate or by_camera())(target),
-            Pick(f"pick {obj}", obj),
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj)),
+            finder,
+            Pick(f"pick {obj}", obj, target.object_type),
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, target.object_type)),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
@@ -212,14 +264,38 @@ def transfer(target: Target, max_regrasps: int = 3, *, locate: Locate | None = N
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
 
 
-def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) -> py_trees.behaviour.Behaviour:
-    """Push and inspect one object until it lies within ``threshold_mm`` of its target."""
+def inspect(
+    target: Target, name: str, *, after_placing: bool = False, kind_targets: Sequence[PlanarPose] = ()
+) -> Inspect:
+    """The Inspect of one object (its type, colour and, for identical parts, the targets of its kind)."""
+    return Inspect(
+        name, target.obj, target.colour, after_placing, object_type=target.object_type, kind_targets=kind_targets
+    )
+
+
+def correction(
+    target: Target,
+    threshold_mm: float = 1.0,
+    max_pushes: int = 10,
+    *,
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
+) -> py_trees.behaviour.Behaviour:
+    """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
+
+    ``yaw_threshold_deg=None`` corrects the position only.
+    """
     check_threshold(threshold_mm)
-    obj, colour = target.obj, target.colour
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    obj = target.obj
     push_and_look = py_trees.composites.Sequence(
         name=f"push and inspect {obj}",
         memory=True,
-        children=[Push(f"push {obj}", obj), Inspect(f"inspect {obj}", obj, colour)],
+        children=[
+            Push(f"push {obj}", obj, target.object_type, yaw_threshold_deg),
+            inspect(target, f"inspect {obj}", kind_targets=kind_targets),
+        ],
     )
     return RepeatUntilWithin(
         name=f"correct {obj} to {threshold_mm:g} mm",
@@ -229,6 +305,8 @@ def correction(target: Target, threshold_mm: float = 1.0, max_pushes: int = 10) 
         max_attempts=max_pushes,
         corrections_key=keys.key(obj, keys.CORRECTIONS),
         obj=obj,
+        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+        yaw_threshold_deg=yaw_threshold_deg,
     )
 
 
@@ -239,17 +317,21 @@ def arrange_one(
     max_regrasps: int = 3,
     *,
     locate: Locate | None = None,
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
-    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the threshold."""
+    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds."""
     obj = target.obj
     return py_trees.composites.Sequence(
         name=f"arrange {obj}",
         memory=True,
         children=[
             set_target(target),
-            transfer(target, max_regrasps, locate=locate),
-            Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-            correction(target, threshold_mm, max_pushes),
+            transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets),
+            inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
+            correction(
+                target, threshold_mm, max_pushes, yaw_threshold_deg=yaw_threshold_deg, kind_targets=kind_targets
+            ),
         ],
     )
 
@@ -269,11 +351,17 @@ class Arrangement(py_trees.composites.Sequence):
         threshold_mm: float,
         *,
         place_all: py_trees.behaviour.Behaviour | None = None,
+        yaw_threshold_deg: float | None = None,
+        colours: ColourTable | None = None,
     ) -> None:
         super().__init__(name=name, memory=True, children=list(children))
         self.targets = targets
         self.threshold_mm = threshold_mm
         self.place_all = place_all
+        #: The yaw error (degrees) the correction loop leaves; None: position only.
+        self.yaw_threshold_deg = yaw_threshold_deg
+        #: The colour table the plan's colours come from: the cell paints with it, the camera reads it.
+        self.colours = colours if colours is not None else DEFAULT_COLOUR_TABLE
 
 
 def arrangement(
@@ -285,6 +373,8 @@ def arrangement(
     max_regrasps: int = 3,
     keep_going: bool = True,
     locate: Locate | None = None,
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    colours: ColourTable | Mapping[str, object] | None = None,
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -293,12 +383,21 @@ def arrangement(
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
     ``locate`` says how each object is found before it is picked (default ``by_camera()``).
+    ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
+    position only). ``colours`` is the colour table of the plan (default the cell's four; a
+    user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
     """
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm)
     whole_number("max_pushes", max_pushes)
-    plan = validate_targets(targets)
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    if colours is not None and not isinstance(colours, ColourTable):
+        raise PlanError(f"colours must be a ColourTable (bt_arrange.perception), got {type(colours).__name__}")
+    table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
+    plan = validate_targets(targets, colours=table.names)
+    siblings = kinds(plan)
 
     def carry_on(subtree: py_trees.behaviour.Behaviour, obj: str) -> py_trees.behaviour.Behaviour:
         if not keep_going:
@@ -307,7 +406,19 @@ def arrangement(
 
     if correct == "each":
         children = [
-            carry_on(arrange_one(t, threshold_mm, max_pushes, max_regrasps, locate=locate), t.obj) for t in plan
+            carry_on(
+                arrange_one(
+                    t,
+                    threshold_mm,
+                    max_pushes,
+                    max_regrasps,
+                    locate=locate,
+                    yaw_threshold_deg=yaw_threshold_deg,
+                    kind_targets=siblings.get(t.obj, ()),
+                ),
+                t.obj,
+            )
+            for t in plan
         ]
     else:
         place_all = py_trees.composites.Sequence(
@@ -320,8 +431,13 @@ def arrangement(
                         memory=True,
                         children=[
                             set_target(t),
-                            transfer(t, max_regrasps, locate=locate),
-                            Inspect(f"inspect {t.obj} after placing", t.obj, t.colour, after_placing=True),
+                            transfer(t, max_regrasps, locate=locate, kind_targets=siblings.get(t.obj, ())),
+                            inspect(
+                                t,
+                                f"inspect {t.obj} after placing",
+                                after_placing=True,
+                                kind_targets=siblings.get(t.obj, ()),
+                            ),
                         ],
                     ),
                     t.obj,
@@ -342,8 +458,14 @@ def arrangement(
                             py_trees.behaviours.CheckBlackboardVariableExists(
                                 name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
                             ),
-                            Inspect(f"inspect {t.obj} before correcting", t.obj, t.colour),
-                            correction(t, threshold_mm, max_pushes),
+                            inspect(t, f"inspect {t.obj} before correcting", kind_targets=siblings.get(t.obj, ())),
+                            correction(
+                                t,
+                                threshold_mm,
+                                max_pushes,
+                                yaw_threshold_deg=yaw_threshold_deg,
+                                kind_targets=siblings.get(t.obj, ()),
+                            ),
                         ],
                     ),
                     t.obj,
@@ -358,4 +480,6 @@ def arrangement(
         targets=plan,
         threshold_mm=float(threshold_mm),
         place_all=children[0] if correct == "after_all" else None,
+        yaw_threshold_deg=None if yaw_threshold_deg is None else float(yaw_threshold_deg),
+        colours=table,
     )

@@ -92,7 +92,10 @@ def bad_tree_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
     a_file.write_text("x")
     return {
         "missing": (str(tmp_path / "nope.py"), "nope.py not found"),
-        "not python": (tree(tmp_path, "tree.txt", "x"), "is neither a Python file (.py) nor a BehaviorTree"),
+        "not python": (
+            tree(tmp_path, "tree.txt", "x"),
+            "is neither a Python file (.py), a BehaviorTree.CPP XML tree (.xml) nor a plan (.toml)",
+        ),
         "syntax error": (tree(tmp_path, "syntax.py", "def create_root(:\n"), "syntax error at line 1"),
         "raises on import": (tree(tmp_path, "boom.py", "1 / 0\n"), "ZeroDivisionError"),
         "no create_root": (tree(tmp_path, "empty.py", "X = 1\n"), "defines no create_root()"),

@@ -13,7 +13,16 @@ from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, P
 from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.trees import MIN_TARGET_SPACING_M, Arrangement, Target, arrange_one, arrangement, validate_targets
+from bt_arrange.objects import ObjectType
+from bt_arrange.trees import (
+    MIN_TARGET_SPACING_M,
+    Arrangement,
+    Target,
+    arrange_one,
+    arrangement,
+    kinds,
+    validate_targets,
+)
 
 RED = Target("red", 0.45, 0.10)
 GREEN = Target("green", 0.45, -0.10, 0.3)
@@ -57,7 +66,7 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
         ),
         (
             [RED, Target("red", 0.55, -0.1)],
-            r"^targets 1 and 2 are both named 'red': the camera tells cubes apart by colour, so each colour is one",
+            r"^targets 1 and 2 are both named 'red' \(identical parts need a name each, e\.g\. name='red 1'",
         ),
         ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
         ([RED, Target("green", 0.45, 0.02)], r"^targets red and green are 80 mm apart: the pads need at least 90 mm"),
@@ -94,9 +103,16 @@ def test_the_known_colours_can_be_given() -> None:
         validate_targets([RED, GREEN], colours=["red", "blue"])
 
 
-def test_two_names_for_one_colour_is_a_plan_error_the_camera_cannot_tell_them_apart() -> None:
+def test_two_names_for_one_colour_and_type_are_identical_parts() -> None:
     first, second = Target("red", 0.45, 0.1, name="first"), Target("red", 0.45, -0.1, name="second")
-    with pytest.raises(PlanError, match=r"^targets 1 and 2 are both .*'red'"):
+    assert validate_targets([first, second]) == [first, second]
+    assert kinds([first, second]) == {"first": (first.planar, second.planar), "second": (first.planar, second.planar)}
+
+
+def test_one_colour_on_two_types_is_a_plan_error_the_camera_cannot_tell_them_apart() -> None:
+    bar = ObjectType("bar", (0.08, 0.04, 0.04))
+    first, second = Target("red", 0.45, 0.1, name="first"), Target("red", 0.45, -0.1, name="bar", object_type=bar)
+    with pytest.raises(PlanError, match=r"^targets 1 and 2 are both red but of types 'cube' and 'bar'"):
         validate_targets([first, second])
 
 

@@ -8,6 +8,8 @@
 | ``/<obj>/offset_xy_mm`` | ``(float, float)``, target minus pose in the target's frame | Inspect | Push |
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
+| ``/<obj>/yaw_error_deg`` | ``float``, measured minus target yaw (folded) | Inspect | RepeatUntilWithin, Push |
+| ``/<obj>/placed_yaw_error_deg`` | ``float``, the yaw error after placing | Inspect(after placing) | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
 """
 
@@ -20,6 +22,8 @@ OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
+YAW_ERROR_DEG = "yaw_error_deg"
+PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
 
 
 def key(obj: str, field: str) -> str:
