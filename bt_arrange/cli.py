@@ -1,8 +1,10 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--gui] [--live] [--record DIR] [--json]
+    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
+                   [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
+                          [--cell ideal|real|FILE.toml] [--strategy paper|learned]
     bt-arrange examples
     bt-arrange info
 
@@ -93,6 +95,12 @@ def _check_threshold_option(threshold_mm: float | None) -> None:
         raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
 
 
+CELL_HELP = (
+    "the work cell: ideal (default; today's simulated cell), real (the paper's real cell's errors, "
+    "docs/simulation.md) or FILE.toml with your own values (the sim backend)"
+)
+
+
 def _info(args: argparse.Namespace) -> int:
     print(f"bt-arrange {metadata.version('bt-arrange')}")
     for package in STACK:
@@ -121,6 +129,8 @@ def _run(args: argparse.Namespace) -> int:
         record_dir=args.record,
         time_limit_s=args.time_limit_s,
         title=Path(args.tree_file).name,
+        # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+        **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
     ) as run:
         if args.live:
             from bt_arrange.display import LiveView
@@ -197,6 +207,21 @@ def _experiment_of(backend: Backend) -> Experiment:
     return experiment
 
 
+def _cell_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
+    """``--cell`` and ``--strategy`` checked by the backend's experiment; only non-defaults are passed on."""
+    options = {
+        key: value
+        for key, value, default in (("cell", args.cell, "ideal"), ("strategy", args.strategy, "paper"))
+        if value != default
+    }
+    check = getattr(experiment, "check_options", None)
+    if options and check is None:
+        raise BackendError(f"backend {backend.name!r} has no {', '.join('--' + key for key in options)}")
+    if check is not None:
+        check(cell=args.cell, strategy=args.strategy)
+    return options
+
+
 def _experiment(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -205,6 +230,7 @@ def _experiment(args: argparse.Namespace) -> int:
     # Every option is checked before the progress bar is drawn or a worker starts.
     rows = experiment.parse_rows(args.rows)
     _check_threshold_option(args.threshold_mm)
+    cell_options = _cell_options(backend, experiment, args)
     try:
         backend.prepare_out(args.out)
     except BtArrangeError as error:
@@ -218,7 +244,14 @@ def _experiment(args: argparse.Namespace) -> int:
 
     try:
         summary = experiment.run_experiment(
-            rows, args.trials, args.seed, args.threshold_mm, args.out, workers=args.workers, on_trial=progress
+            rows,
+            args.trials,
+            args.seed,
+            args.threshold_mm,
+            args.out,
+            workers=args.workers,
+            on_trial=progress,
+            **cell_options,
         )
     finally:
         bar.close()
@@ -340,6 +373,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop after this much world time (default 1800 s)",
     )
     add_backend(run)
+    run.add_argument("--cell", default="ideal", help=CELL_HELP)
     run.set_defaults(handler=_run)
 
     show = add_command(
@@ -380,6 +414,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
     add_backend(experiment)
+    experiment.add_argument("--cell", default="ideal", help=CELL_HELP)
+    experiment.add_argument(
+        "--strategy",
+        choices=("paper", "learned"),
+        default="paper",
+        help="push strategy: paper (alternating x/y, Table 1's; default) or learned (docs/experiments.md)",
+    )
     experiment.set_defaults(handler=_experiment)
 
     examples = add_command(

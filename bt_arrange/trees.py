@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import py_trees
 
 from bt_arrange.behaviours import Detect, EstimateGraspFromDepth, GraspGuard, Inspect, MoveHome, Pick, Place, Push, keys
+from bt_arrange.behaviours.handling import PUSH_STRATEGIES
 from bt_arrange.checks import finite_number, positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError
@@ -273,19 +274,29 @@ def inspect(
     )
 
 
+def check_strategy(strategy: object) -> str:
+    """The push strategy's name, or a ``PlanError`` listing the strategies."""
+    if strategy not in PUSH_STRATEGIES:
+        raise PlanError(f"strategy={strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+    return str(strategy)
+
+
 def correction(
     target: Target,
     threshold_mm: float = 1.0,
     max_pushes: int = 10,
+    strategy: str = "paper",
     *,
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
     ``yaw_threshold_deg=None`` corrects the position only.
     """
     check_threshold(threshold_mm)
+    check_strategy(strategy)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
     obj = target.obj
@@ -293,7 +304,7 @@ def correction(
         name=f"push and inspect {obj}",
         memory=True,
         children=[
-            Push(f"push {obj}", obj, target.object_type, yaw_threshold_deg),
+            Push(f"push {obj}", obj, strategy, target.object_type, yaw_threshold_deg),
             inspect(target, f"inspect {obj}", kind_targets=kind_targets),
         ],
     )
@@ -317,6 +328,7 @@ def arrange_one(
     max_regrasps: int = 3,
     *,
     locate: Locate | None = None,
+    strategy: str = "paper",
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
@@ -330,7 +342,12 @@ def arrange_one(
             transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets),
             inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
             correction(
-                target, threshold_mm, max_pushes, yaw_threshold_deg=yaw_threshold_deg, kind_targets=kind_targets
+                target,
+                threshold_mm,
+                max_pushes,
+                strategy,
+                yaw_threshold_deg=yaw_threshold_deg,
+                kind_targets=kind_targets,
             ),
         ],
     )
@@ -373,6 +390,7 @@ def arrangement(
     max_regrasps: int = 3,
     keep_going: bool = True,
     locate: Locate | None = None,
+    strategy: str = "paper",
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     colours: ColourTable | Mapping[str, object] | None = None,
 ) -> Arrangement:
@@ -383,10 +401,13 @@ def arrangement(
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
     ``locate`` says how each object is found before it is picked (default ``by_camera()``).
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned).
     ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
     position only). ``colours`` is the colour table of the plan (default the cell's four; a
     user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
     """
+    check_strategy(strategy)
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm)
@@ -413,6 +434,7 @@ def arrangement(
                     max_pushes,
                     max_regrasps,
                     locate=locate,
+                    strategy=strategy,
                     yaw_threshold_deg=yaw_threshold_deg,
                     kind_targets=siblings.get(t.obj, ()),
                 ),
@@ -463,6 +485,7 @@ def arrangement(
                                 t,
                                 threshold_mm,
                                 max_pushes,
+                                strategy,
                                 yaw_threshold_deg=yaw_threshold_deg,
                                 kind_targets=siblings.get(t.obj, ()),
                             ),

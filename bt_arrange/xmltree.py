@@ -373,7 +373,9 @@ register(
         "Action",
         Push,
         (_OBJ, _TYPE, Port("yaw_threshold_deg", DOUBLE, 0.0, "square the part at this yaw error [deg] (0: never)")),
-        lambda name, v, _: Push(name, v["obj"], v["object_type"], _off_if_zero(v["yaw_threshold_deg"])),
+        lambda name, v, _: Push(
+            name, v["obj"], object_type=v["object_type"], yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"])
+        ),
         lambda n: {"obj": n.obj, "object_type": n.object_type, "yaw_threshold_deg": n.yaw_threshold_deg or 0.0},
         description="one push",
     )

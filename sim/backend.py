@@ -27,11 +27,27 @@ class SimBackend:
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
         title: str | None = None,
+        cell: str = "ideal",
+        run_seed: int = 0,
     ) -> Any:
-        """A ``SimulatedRun``: the plan and scene checked, the cell built, not yet ticked."""
+        """A ``SimulatedRun``: the plan and scene checked, the cell built, not yet ticked.
+
+        ``cell`` is ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell``; a bad one is a
+        one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors.
+        """
+        from bt_arrange.errors import PlanError
+        from bt_arrange_sim.cell import CellConfig
+        from bt_arrange_sim.realcell import parse_cell
         from bt_arrange_sim.runs import SimulatedRun
 
-        return SimulatedRun(root, starts, gui=gui, record_dir=record_dir, time_limit_s=time_limit_s, title=title)
+        try:
+            errors = parse_cell(cell)
+        except PlanError as error:
+            raise PlanError(f"--cell {cell}: {error}") from error
+        config = CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
+        return SimulatedRun(
+            root, starts, cell_config=config, gui=gui, record_dir=record_dir, time_limit_s=time_limit_s, title=title
+        )
 
     def scatter(
         self,

@@ -30,6 +30,7 @@ from bt_arrange.robot import CameraIntrinsics, Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
+from bt_arrange_sim.realcell import RealCellErrors, hand_eye_base_pose, write_perturbed_urdf
 from bt_arrange_sim.scenes import CubeStart
 
 #: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
@@ -131,6 +132,34 @@ class CellConfig:
     camera_noise: CameraNoiseConfig = field(default_factory=CameraNoiseConfig)
     table_size_m: tuple[float, float] = (1.3, 1.4)
     table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
+    #: A real cell's errors (``bt_arrange_sim.realcell``); all off by default: the ideal cell.
+    errors: RealCellErrors = field(default_factory=RealCellErrors)
+
+    @classmethod
+    def ideal(cls) -> CellConfig:
+        """Today's simulated cell, exactly (no real-cell error term on)."""
+        return cls()
+
+    @classmethod
+    def real(cls, cell_seed: int = 0) -> CellConfig:
+        """The paper's real cell: ``realcell.real()``'s error terms (docs/simulation.md)."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.real(cell_seed))
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike[str]) -> CellConfig:
+        """A cell with the user's own error values (``realcell.load_toml``; a ``PlanError`` names a bad key)."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.load_toml(path))
+
+    @classmethod
+    def named(cls, name: str) -> CellConfig:
+        """``ideal``, ``real`` or a ``.toml`` file, as ``--cell`` takes it."""
+        from bt_arrange_sim import realcell
+
+        return cls(errors=realcell.parse_cell(name))
 
 
 @contextlib.contextmanager
@@ -188,6 +217,19 @@ def require_display() -> None:
         )
 
 
+_HAND_EYE: dict[str, tuple[np.ndarray, float]] = {}
+
+
+def _cached_hand_eye(urdf_path: os.PathLike[str] | str) -> tuple[np.ndarray, float]:
+    """``realcell.hand_eye_base_pose`` once per process and URDF (it solves 40 IK problems)."""
+    key = str(urdf_path)
+    if key not in _HAND_EYE:
+        from pathlib import Path
+
+        _HAND_EYE[key] = hand_eye_base_pose(Path(key))
+    return _HAND_EYE[key]
+
+
 class WorkCell:
     """One simulated work cell with its own physics world.
 
@@ -219,9 +261,22 @@ class WorkCell:
         #: The colour table the cell paints from: the one the camera's detector reads.
         self.colours: ColourTable = DEFAULT_COLOUR_TABLE
         self.table_id = self._create_table()
+        errors = self.config.errors
+        # A real cell's arm: the perturbed URDF (the planner keeps the nominal one), mounted where
+        # the hand-eye calibration puts it (absorbing the arm's mean error over the workspace).
+        self.urdf_path = write_perturbed_urdf(errors) if errors.enabled else None
+        base_position, base_yaw = (0.0, 0.0, 0.0), 0.0
+        if self.urdf_path is not None and errors.kinematics.enabled and errors.kinematics.hand_eye_absorbs_mean:
+            translation, base_yaw = _cached_hand_eye(self.urdf_path)
+            base_position = (float(translation[0]), float(translation[1]), float(translation[2]))
         self.robot_id = self.client.loadURDF(
-            str(default_urdf_path()), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE
+            str(self.urdf_path or default_urdf_path()),
+            basePosition=list(base_position),
+            baseOrientation=list(self.client.getQuaternionFromEuler((0.0, 0.0, base_yaw))),
+            useFixedBase=True,
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
         )
+        self._edge_rng = errors.rng("objects", per_run=True)
         self._joint_index = {
             self.client.getJointInfo(self.robot_id, i)[1].decode(): i
             for i in range(self.client.getNumJoints(self.robot_id))
@@ -237,7 +292,16 @@ class WorkCell:
         self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
         self.tcp_link_index = self._link_index[TCP_FRAME]
         self._configure_gripper()
-        self.camera_noise = CameraNoise(self.config.camera_noise)
+        noise = self.config.camera_noise
+        if errors.imaging.enabled:
+            imaging = errors.imaging
+            noise = CameraNoiseConfig(
+                sensor_sigma=imaging.sensor_sigma,
+                blur_sigma_px=imaging.blur_sigma_px,
+                brightness_jitter=imaging.exposure_jitter,
+                seed=int(errors.rng("imaging", per_run=True).integers(2**31)),
+            )
+        self.camera_noise = CameraNoise(noise)
         self.clock = SimClock(self)
         self.arm = SimArm(self)
         self.gripper = SimGripper(self)
@@ -259,9 +323,20 @@ class WorkCell:
 
     def step(self, control_periods: int = 1) -> None:
         """Advance the world by whole control periods (each several physics steps)."""
-        for _ in range(control_periods * self._substeps):
-            self.client.stepSimulation()
+        friction = self.config.errors.friction.enabled
+        for _ in range(control_periods):
+            if friction:
+                self._apply_friction_field()
+            for _ in range(self._substeps):
+                self.client.stepSimulation()
         self._steps += control_periods * self._substeps
+
+    def _apply_friction_field(self) -> None:
+        """A real cell's table: each cube's friction is the field's where it lies (new contacts take it)."""
+        nominal = self.config.physics.cube_contact.lateral_friction
+        for body in self.cubes.values():
+            (x, y, _), _ = self.client.getBasePositionAndOrientation(body)
+            self.client.changeDynamics(body, -1, lateralFriction=nominal * self.config.errors.friction_scale(x, y))
 
     def settle(self, seconds: float = 0.5) -> None:
         """Let the world run with the current commands, e.g. after adding cubes."""
@@ -307,10 +382,18 @@ class WorkCell:
         name = name or colour_name
         if name in self.cubes:
             raise ValueError(f"a cube named {name!r} is already in the cell")
-        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=object_type.height_m / 2)
+        objects = self.config.errors.objects
+        # A real cell's parts: each edge off by its tolerance (the perception assumes the nominal size).
+        edge_error_m = float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
+        built = (
+            dataclasses.replace(object_type, size_m=tuple(v + edge_error_m for v in object_type.size_m))
+            if edge_error_m
+            else object_type
+        )
+        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=built.height_m / 2)
         self.cubes[name] = create_object(
             self.client,
-            object_type,
+            built,
             colour,
             pose.position_m,
             pose.quaternion_xyzw,
@@ -421,8 +504,17 @@ class WorkCell:
             parentFramePosition=[0, 0, 0],
             childFramePosition=[0, 0, 0],
         )
-        self.client.changeConstraint(
-            self.gear_constraint_id, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=physics.gear_erp
-        )
+        gripper = self.config.errors.gripper
+        # A real cell's linkage has play: a softer coupling (the fitted figure of realcell.GripperError).
+        erp = gripper.coupling_erp if gripper.enabled else physics.gear_erp
+        self.client.changeConstraint(self.gear_constraint_id, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=erp)
         for finger in self.finger_joint_indices:
             physics.pad_contact.apply(self.client, self.robot_id, finger)
+            if gripper.enabled and gripper.pad_stiffness_n_m > 0:
+                # Silicone pads: a compliant contact instead of pybullet's rigid one.
+                self.client.changeDynamics(
+                    self.robot_id,
+                    finger,
+                    contactStiffness=gripper.pad_stiffness_n_m,
+                    contactDamping=gripper.pad_damping_n_s_m,
+                )

@@ -48,6 +48,13 @@ class SimArm:
         self._indices = list(cell.arm_joint_indices)
         self._efforts_n_m = list(cell.arm_joint_efforts_n_m)
         self._names = tuple(cell.joint_name(i) for i in self._indices)
+        # A real cell's joint repeatability: the arm rests a little off each new setpoint, the
+        # encoders read the setpoint (realcell.JointRepeatability). Zeros in the ideal cell.
+        repeatability = cell.config.errors.joints
+        self._joint_sigma_rad = repeatability.joint_sigma_mrad / 1000 if repeatability.enabled else 0.0
+        self._joint_rng = cell.config.errors.rng("joints", per_run=True)
+        self._joint_error = np.zeros(6)
+        self._rest_q: FloatArray | None = None
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -61,7 +68,8 @@ class SimArm:
 
     def joint_positions(self) -> FloatArray:
         """Measured joint positions in radians."""
-        return np.array([s[0] for s in self._client.getJointStates(self._body, self._indices)])
+        measured = np.array([s[0] for s in self._client.getJointStates(self._body, self._indices)])
+        return measured - self._joint_error if self._joint_sigma_rad else measured
 
     def joint_velocities(self) -> FloatArray:
         """Measured joint velocities in radians per second."""
@@ -73,11 +81,18 @@ class SimArm:
 
         velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
         physics = self._cell.config.physics
+        positions = np.asarray(positions_rad, dtype=float)
+        if self._joint_sigma_rad:
+            resting = not np.any(velocities)
+            if resting and (self._rest_q is None or not np.array_equal(positions, self._rest_q)):
+                self._rest_q = positions.copy()
+                self._joint_error = self._joint_rng.normal(0.0, self._joint_sigma_rad, 6)
+            positions = positions + self._joint_error
         self._client.setJointMotorControlArray(
             self._body,
             self._indices,
             pybullet.POSITION_CONTROL,
-            targetPositions=list(np.asarray(positions_rad, dtype=float)),
+            targetPositions=list(positions),
             targetVelocities=list(velocities),
             forces=self._efforts_n_m,
             positionGains=[physics.arm_position_gain] * 6,
@@ -179,9 +194,23 @@ class SimCamera:
         config = cell.config.camera
         self._intrinsics = config.calibrated_intrinsics()
         self._pose_world = config.pose_world()
+        # A real cell's camera (realcell.CameraCalibrationError): images come from the true camera,
+        # frames report the calibrated one. In the ideal cell the two are the same.
+        errors = cell.config.errors
+        self._true = errors.camera_draw() if errors.camera.enabled else None
+        self._imaging = errors.imaging if errors.imaging.enabled else None
+        self._light_rng = errors.rng("imaging", per_run=True)
+        self._distortion_maps: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._true_pose_world = self._pose_world
+        if self._true is not None:
+            t = self._true
+            turn = _small_rotation(t["rx"], t["ry"], t["rz"])
+            self._true_pose_world = Pose.from_rotation(
+                self._pose_world.position_m + np.array([t["dx"], t["dy"], t["dz"]]), self._pose_world.rotation @ turn
+            )
         # OpenGL looks down its -z with y up; the OpenCV optical frame looks down +z with y down.
         flip = np.diag([1.0, -1.0, -1.0, 1.0])
-        self._view_matrix = list(np.linalg.inv(self._pose_world.matrix @ flip).flatten(order="F"))
+        self._view_matrix = list(np.linalg.inv(self._true_pose_world.matrix @ flip).flatten(order="F"))
         # Error injection only (``set_render_offset``): the view actually rendered, normally the calibrated one.
         self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self._render_view_matrix = self._view_matrix
@@ -217,7 +246,8 @@ class SimCamera:
         c, s = math.cos(offset[2]), math.sin(offset[2])
         turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
         moved = Pose.from_rotation(
-            self._pose_world.position_m + np.array([offset[0], offset[1], 0.0]), turn @ self._pose_world.rotation
+            self._true_pose_world.position_m + np.array([offset[0], offset[1], 0.0]),
+            turn @ self._true_pose_world.rotation,
         )
         flip = np.diag([1.0, -1.0, -1.0, 1.0])  # as in __init__: OpenGL view from the OpenCV optical frame
         self._render_view_matrix = list(np.linalg.inv(moved.matrix @ flip).flatten(order="F"))
@@ -243,6 +273,8 @@ class SimCamera:
         config = self._cell.config.camera
         near, far = config.near_m, config.far_m
         width, height = config.width_px, config.height_px
+        if self._true is not None:
+            return self._true_projection_matrix(window)
         # Half extents of the full frustum on the near plane (the nominal pinhole is centred).
         half_w = near * (width / 2.0) / self._nominal.fx_px
         half_h = near * (height / 2.0) / self._nominal.fy_px
@@ -261,6 +293,61 @@ class SimCamera:
         )
         return [float(v) for v in matrix.flatten(order="F")]
 
+    def _true_projection_matrix(self, window: PixelWindow) -> list[float]:
+        """The frustum through ``window`` of the true pinhole (a real cell's intrinsics error)."""
+        assert self._true is not None
+        config = self._cell.config.camera
+        near, far = config.near_m, config.far_m
+        fx = self._nominal.fx_px * (1.0 + self._true["dfx"])
+        fy = self._nominal.fy_px * (1.0 + self._true["dfy"])
+        cx = self._nominal.cx_px + self._true["dcx"]
+        cy = self._nominal.cy_px + self._true["dcy"]
+        left = near * (window.x_px - cx) / fx
+        right = near * (window.x_px + window.width_px - cx) / fx
+        top = near * (cy - window.y_px) / fy
+        bottom = near * (cy - (window.y_px + window.height_px)) / fy
+        matrix = np.array(
+            [
+                [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
+                [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
+                [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
+                [0.0, 0.0, -1.0, 0.0],
+            ]
+        )
+        return [float(v) for v in matrix.flatten(order="F")]
+
+    def _distort(self, rgb: np.ndarray, intrinsics: CameraIntrinsics) -> np.ndarray:
+        """Resample a pinhole render as the true lens (radial ``k1`` left by the calibration) sees it."""
+        assert self._true is not None
+        k1 = self._true["k1"]
+        if k1 == 0.0:
+            return rgb
+        import cv2
+
+        height, width = rgb.shape[:2]
+        # Normalised coordinates relative to the full image's optical axis, in this frame's pixels.
+        key = (width, height, intrinsics.fx_px, intrinsics.fy_px, intrinsics.cx_px, intrinsics.cy_px)
+        if key not in self._distortion_maps:
+            u, v = np.meshgrid(np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64))
+            xd = (u - intrinsics.cx_px) / intrinsics.fx_px
+            yd = (v - intrinsics.cy_px) / intrinsics.fy_px
+            # Each distorted pixel shows the pinhole ray at x_u = x_d / (1 + k1 r^2) (first order).
+            scale = 1.0 / (1.0 + k1 * (xd * xd + yd * yd))
+            map_u = (xd * scale * intrinsics.fx_px + intrinsics.cx_px).astype(np.float32)
+            map_v = (yd * scale * intrinsics.fy_px + intrinsics.cy_px).astype(np.float32)
+            self._distortion_maps[key] = (map_u, map_v)
+        map_u, map_v = self._distortion_maps[key]
+        return cv2.remap(rgb, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+    def _light_direction(self) -> list[float]:
+        """The light's direction, turned by up to ``light_jitter_deg`` per frame in a real cell."""
+        direction = np.asarray(self._cell.config.camera.light_direction, dtype=float)
+        if self._imaging is None or self._imaging.light_jitter_deg <= 0:
+            return list(direction)
+        limit = math.radians(self._imaging.light_jitter_deg)
+        turn = _small_rotation(*self._light_rng.uniform(-limit, limit, 3))
+        return [float(v) for v in turn @ direction]
+
     def window_intrinsics(self, window: PixelWindow) -> CameraIntrinsics:
         """Intrinsics of the frame rendered through ``window``.
 
@@ -277,8 +364,11 @@ class SimCamera:
 
         config = self._cell.config.camera
         client = self._cell.client
-        if window is None or window == self._full_window:
+        if (window is None or window == self._full_window) and self._true is None:
             projection, intrinsics = self._projection_matrix, self._intrinsics
+            width, height = config.width_px, config.height_px
+        elif window is None or window == self._full_window:
+            projection, intrinsics = self.projection_matrix(self._full_window), self._intrinsics
             width, height = config.width_px, config.height_px
         else:
             intrinsics = self.window_intrinsics(window)
@@ -291,7 +381,7 @@ class SimCamera:
             projectionMatrix=projection,
             renderer=pybullet.ER_TINY_RENDERER,
             shadow=0,
-            lightDirection=list(config.light_direction),
+            lightDirection=self._light_direction(),
             flags=pybullet.ER_NO_SEGMENTATION_MASK,
         )
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
@@ -300,5 +390,17 @@ class SimCamera:
             z = np.asarray(zbuffer, dtype=np.float64).reshape(height, width)
             near, far = config.near_m, config.far_m
             depth = (far * near / (far - (far - near) * z)).astype(np.float32)
+        if self._true is not None:
+            rgb = self._distort(rgb, intrinsics)
         rgb = self._cell.camera_noise.apply(rgb)
         return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
+
+
+def _small_rotation(rx_rad: float, ry_rad: float, rz_rad: float) -> np.ndarray:
+    """The rotation of a small turn about x, then y, then z (a calibration residual, a light's wobble)."""
+    cx, sx, cy, sy, cz, sz = (math.cos(rx_rad), math.sin(rx_rad), math.cos(ry_rad), math.sin(ry_rad),
+                              math.cos(rz_rad), math.sin(rz_rad))  # fmt: skip
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ ry @ rx

@@ -52,6 +52,10 @@ class TrialSpec:
     index: int
     seed: int
     threshold_mm: float
+    #: The cell: ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell.parse_cell``).
+    cell: str = "ideal"
+    #: The push strategy: ``paper`` (Table 1's) or ``learned`` (``bt_arrange.behaviours.Push``).
+    strategy: str = "paper"
 
 
 def parse_rows(text: str) -> list[str]:
@@ -81,12 +85,12 @@ def run_trial(spec: TrialSpec) -> dict:
     )
     starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target])
     if spec.row == "grasp-estimator":
-        root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)))
+        root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)), spec.strategy)
     else:
-        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10)
+        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
     injectors = row_injectors(spec.row)
     injection_seed = int(rng.integers(2**31))
-    with SimulatedRun(root, starts) as run:
+    with SimulatedRun(root, starts, cell_config=_cell_config(spec)) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
@@ -98,6 +102,8 @@ def run_trial(spec: TrialSpec) -> dict:
         "trial": spec.index,
         "seed": spec.seed,
         "threshold_mm": spec.threshold_mm,
+        "cell": spec.cell,
+        "strategy": spec.strategy,
         "target": [round(v, 6) for v in outcome.target],
         "placed_mm": outcome.placed_offset_mm,
         "pushed_mm": outcome.final_offset_mm,
@@ -110,6 +116,33 @@ def run_trial(spec: TrialSpec) -> dict:
         "sim_seconds": round(report.sim_seconds, 3),
         "wall_seconds": round(time.perf_counter() - wall_start, 3),
     }
+
+
+def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazily: pybullet)
+    """The trial's cell; a real cell's per-run errors are seeded from the trial, apart from its draws."""
+    from bt_arrange_sim.cell import CellConfig
+    from bt_arrange_sim.realcell import parse_cell
+
+    errors = parse_cell(spec.cell)
+    if not errors.enabled:
+        return CellConfig()
+    run_seed = int(np.random.default_rng([spec.seed, ROWS.index(spec.row), spec.index, 12]).integers(2**31))
+    return CellConfig(errors=errors.with_run_seed(run_seed))
+
+
+def check_options(cell: str = "ideal", strategy: str = "paper") -> None:
+    """``--cell`` and ``--strategy``, checked before anything runs; a one-line ``PlanError`` otherwise."""
+    from bt_arrange.trees import check_strategy
+    from bt_arrange_sim.realcell import parse_cell
+
+    try:
+        check_strategy(strategy)
+    except PlanError as error:
+        raise PlanError(f"--strategy {strategy!r}: {error}") from error
+    try:
+        parse_cell(cell)
+    except PlanError as error:
+        raise PlanError(f"--cell {cell}: {error}") from error
 
 
 def row_injectors(row: str) -> list:
@@ -125,12 +158,12 @@ def row_injectors(row: str) -> list:
     return []
 
 
-def _depth_grasp_tree(target, threshold_mm: float, seed: int):  # noqa: ANN001, ANN202 - py_trees types
+def _depth_grasp_tree(target, threshold_mm: float, seed: int, strategy: str = "paper"):  # noqa: ANN001, ANN202
     """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
     from bt_arrange.behaviours import MoveHome
     from bt_arrange.trees import Arrangement, arrange_one, by_depth
 
-    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed))
+    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed), strategy=strategy)
     return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)
 
 
@@ -157,6 +190,8 @@ def run_experiment(
     workers: int = 1,
     executor: Executor | None = None,
     on_trial: Callable[[dict, int, int], None] | None = None,
+    cell: str = "ideal",
+    strategy: str = "paper",
 ) -> list[dict]:
     """Run every missing trial, appending each to ``out_dir/trials.jsonl`` as it ends; return the summary.
 
@@ -174,18 +209,29 @@ def run_experiment(
         raise PlanError(f"--trials must be at least 1, got {trials}")
     if workers < 1:
         raise PlanError(f"--workers must be at least 1, got {workers}")
+    check_options(cell, strategy)
     out_dir.mkdir(parents=True, exist_ok=True)
     trials_path = out_dir / "trials.jsonl"
     existing = read_trials(trials_path)
     for record in existing:
-        if record.get("seed") != seed or record.get("threshold_mm") != threshold_mm:
+        if (
+            record.get("seed") != seed
+            or record.get("threshold_mm") != threshold_mm
+            or record.get("cell", "ideal") != cell
+            or record.get("strategy", "paper") != strategy
+        ):
             raise PlanError(
                 f"{trials_path} holds trials of another experiment (seed {record.get('seed')}, threshold "
-                f"{record.get('threshold_mm')} mm); choose another --out for seed {seed}, threshold {threshold_mm} mm"
+                f"{record.get('threshold_mm')} mm, cell {record.get('cell', 'ideal')}, strategy "
+                f"{record.get('strategy', 'paper')}); choose another --out for seed {seed}, "
+                f"threshold {threshold_mm} mm, cell {cell}, strategy {strategy}"
             )
     done = {(record["row"], record["trial"]) for record in existing}
     specs = [
-        TrialSpec(row, index, seed, threshold_mm) for row in rows for index in range(trials) if (row, index) not in done
+        TrialSpec(row, index, seed, threshold_mm, cell, strategy)
+        for row in rows
+        for index in range(trials)
+        if (row, index) not in done
     ]
     total = len(rows) * trials
     finished = total - len(specs)

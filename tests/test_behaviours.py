@@ -742,3 +742,49 @@ def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
         "/red/yaw_error_deg",
         "/red/placed_yaw_error_deg",
     }
+
+
+# -- the learned push strategy (ours; the paper's stays the default) ----------------------------
+
+
+def test_learned_push_goes_along_the_larger_offset_first() -> None:
+    assert Push.plan_learned((0.5, -3.0), (0.0, 0.0), None, 0.2) == ((0.0, 0.0), "y", -3.0)
+    assert Push.plan_learned((2.0, 1.0), (0.0, 0.0), None, 0.2) == ((0.0, 0.0), "x", 2.0)
+
+
+def test_learned_push_learns_where_the_last_push_landed_and_aims_short_by_it() -> None:
+    # The last push along x aimed at the target (aim 0) and the cube stopped 0.6 mm past it
+    # (offset -0.6 mm): pushes along x land 0.6 mm beyond their aim.
+    bias, axis, distance = Push.plan_learned((-0.6, 0.1), (0.0, 0.0), ("x", 0.0), 0.2)
+    assert bias == pytest.approx((0.6, 0.0))
+    assert axis == "x"
+    assert distance == pytest.approx(-1.2), "aim 0.6 mm short of the target, from 0.6 mm past it"
+    # Aimed 0.6 mm short and landed on the target: the bias stays 0.6 mm.
+    bias, _, _ = Push.plan_learned((0.0, 0.1), bias, ("x", -0.6), 0.2)
+    assert bias == pytest.approx((0.6, 0.0))
+
+
+def test_learned_push_that_fell_short_of_the_cube_reaches_further_next_time() -> None:
+    # Aimed at the target, but the cube did not move from 0.3 mm short: push further.
+    bias, axis, distance = Push.plan_learned((0.3, 0.0), (0.0, 0.0), ("x", 0.0), 0.2)
+    assert bias == pytest.approx((-0.3, 0.0))
+    assert (axis, distance) == ("x", pytest.approx(0.6))
+
+
+def test_learned_push_keeps_its_bias_on_the_blackboard_between_pushes(context: Context) -> None:
+    write({"/red/pose": cube_pose(0.5, 0.0), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)})
+    run = tick_until_done(set_up(Push("push red", "red", strategy="learned"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed +3.00 mm along x"
+    assert read("/red/last_push") == ("x", -0.0)
+    # The camera then sees the cube 0.4 mm past the target along x, 1 mm short along y.
+    write({"/red/offset_xy_mm": (-0.4, 1.0)})
+    run = tick_until_done(set_up(Push("push red", "red", strategy="learned"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert read("/red/push_bias_mm") == pytest.approx((0.4, 0.0))
+    assert run.feedback == "pushed +1.00 mm along y"
+
+
+def test_an_unknown_push_strategy_is_a_clear_error() -> None:
+    with pytest.raises(BtArrangeError, match="push strategy 'magic': choose one of paper, learned"):
+        Push("push red", "red", strategy="magic")

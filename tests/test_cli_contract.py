@@ -191,6 +191,47 @@ def test_every_subcommand_refuses_bad_options_in_one_line(tmp_path: Path, argv: 
     assert fragment in assert_refused(code, err)
 
 
+CELL_FILES = {
+    "unknown_key.toml": ('preset = "real"\n[gripper]\nfinger_wobble = 1\n', "unknown key gripper.finger_wobble"),
+    "unknown_table.toml": ("[lens]\nk1 = 0.1\n", "unknown key 'lens'"),
+    "bad_value.toml": ("[camera]\nfocal_sigma_percent = -1\n", "camera.focal_sigma_percent = -1 must not be negative"),
+    "bad_type.toml": ('[joints]\nenabled = "yes"\n', "joints.enabled = 'yes' must be true or false"),
+    "bad_preset.toml": ('preset = "lab"\n', "preset 'lab' is not one of ideal, real"),
+    "broken.toml": ("[camera\n", "is not valid TOML"),
+}
+
+
+@pytest.mark.parametrize("command", ["run", "experiment"])
+@pytest.mark.parametrize(
+    ("cell", "fragment"),
+    [
+        ("lab", "--cell lab: unknown cell 'lab': choose ideal or real, or give a .toml file"),
+        (",", "--cell"),
+        ("{dir}/missing.toml", "cannot read cell file"),
+        *[(f"{{dir}}/{name}", fragment) for name, (_, fragment) in CELL_FILES.items()],
+    ],
+)
+def test_a_bad_cell_is_refused_in_one_line_naming_the_key(
+    tmp_path: Path, command: str, cell: str, fragment: str
+) -> None:
+    for name, (text, _) in CELL_FILES.items():
+        (tmp_path / name).write_text(text)
+    argv = ["run", SINGLE] if command == "run" else ["experiment", "--trials", "1", "--out", str(tmp_path / "out")]
+    code, _, err = call([*argv, "--cell", cell.format(dir=tmp_path)])
+    assert fragment in assert_refused(code, err)
+
+
+def test_a_good_cell_reaches_the_world(tmp_path: Path) -> None:
+    mine = tmp_path / "mine.toml"
+    mine.write_text('preset = "real"\ncell_seed = 3\n[friction]\nenabled = false\n[gripper]\ncoupling_erp = 0.5\n')
+    for cell in ("real", "ideal", str(mine)):
+        assert call(["run", SINGLE, "--cell", cell])[0] == "simulated"
+        out = tmp_path / cell.replace("/", "_")
+        assert call(["experiment", "--trials", "1", "--rows", "system", "--cell", cell, "--out", str(out)])[0] == (
+            "simulated"
+        )
+
+
 def test_a_good_run_reaches_the_world_and_a_good_experiment_its_trials(tmp_path: Path) -> None:
     # The spies themselves work: what is accepted does get as far as simulating.
     assert call(["run", SINGLE])[0] == "simulated"

@@ -178,6 +178,10 @@ class Place(StagedBehaviour):
         return f"{self.obj} released at its target"
 
 
+#: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
+PUSH_STRATEGIES = ("paper", "learned")
+
+
 class Push(StagedBehaviour):
     """One corrective push along the target's x or y axis, alternating between pushes.
 
@@ -186,12 +190,27 @@ class Push(StagedBehaviour):
     below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
     opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
     also squares the cube up); the pads start on the side away from the target, push, back off.
+
+    ``strategy="paper"`` (the default, and what Table 1 uses) is the paper's: alternate x and y,
+    push by the axis' offset. ``strategy="learned"`` is ours: push the axis with the larger offset,
+    and learn from each push's response where pushes along that axis land beyond their aim (the arm's
+    local calibration error as the camera sees it, which an absolute push never corrects by itself):
+    after a push along an axis aimed at ``aim``, the cube's measured position minus ``aim`` is added to
+    that axis' bias, and the next push along it aims the bias short of the target.
     """
 
     def __init__(
-        self, name: str, obj: str, object_type: ObjectType | None = None, yaw_threshold_deg: float | None = None
+        self,
+        name: str,
+        obj: str,
+        strategy: str = "paper",
+        object_type: ObjectType | None = None,
+        yaw_threshold_deg: float | None = None,
     ) -> None:
         super().__init__(name)
+        if strategy not in PUSH_STRATEGIES:
+            raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+        self.strategy = strategy
         self.obj = obj
         self.object_type = object_type or CUBE
         #: With a yaw error (``/<obj>/yaw_error_deg``) at or above this, a push is made even when the
@@ -203,6 +222,10 @@ class Push(StagedBehaviour):
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
         self.writes(keys.key(obj, keys.PUSH_AXIS))
+        if strategy == "learned":
+            for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
+                self.reads(keys.key(obj, field))
+                self.writes(keys.key(obj, field))
         self.pushed: tuple[str, float] | None = None
         self.squaring = False
 
@@ -214,9 +237,12 @@ class Push(StagedBehaviour):
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
-        axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
+        if self.strategy == "learned":
+            axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
+        else:
+            axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
+            distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
         self.write(axis_key, "y" if axis == "x" else "x")
-        distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
         self.pushed = (axis, distance_m)
         self.squaring = False
         if abs(distance_m) < s.min_push_m:
@@ -265,6 +291,45 @@ class Push(StagedBehaviour):
         if not self.blackboard.exists(yaw_key):
             return False
         return abs(float(self.blackboard.get(yaw_key))) >= self.yaw_threshold_deg
+
+    def _learned_push(self, offset_xy_mm: tuple[float, float], min_push_mm: float) -> tuple[str, float]:
+        """Strategy "learned": update the bias from the last push's response, then choose axis and distance."""
+        bias_key, last_key = keys.key(self.obj, keys.PUSH_BIAS_MM), keys.key(self.obj, keys.LAST_PUSH)
+        known = tuple(self.blackboard.get(bias_key)) if self.blackboard.exists(bias_key) else (0.0, 0.0)
+        last = self.blackboard.get(last_key) if self.blackboard.exists(last_key) else None
+        bias, axis, distance_mm = self.plan_learned(offset_xy_mm, (known[0], known[1]), last, min_push_mm)
+        self.write(bias_key, bias)
+        index = 0 if axis == "x" else 1
+        # Where this push aims the cube, relative to the target along its axis: the bias short of it.
+        aim_mm = -bias[index] if abs(distance_mm) >= min_push_mm else None
+        self.write(last_key, (axis, aim_mm))
+        return axis, distance_mm / 1000
+
+    @staticmethod
+    def plan_learned(
+        offset_xy_mm: tuple[float, float],
+        bias_mm: tuple[float, float],
+        last_push: tuple[str, float | None] | None,
+        min_push_mm: float,
+    ) -> tuple[tuple[float, float], str, float]:
+        """The learned strategy's arithmetic: (new bias, axis, signed push distance in mm).
+
+        The cube's position relative to the target is minus the offset. After a push along ``axis``
+        aimed at ``aim`` (relative to the target), the push landed ``position - aim`` beyond its aim:
+        that is the axis' new bias (a push that fell short of the cube underestimates it, and the
+        next push reaches further). The next push goes along the axis of the larger offset and
+        aims at ``-bias``: it pushes ``offset - bias``.
+        """
+        bias = [float(bias_mm[0]), float(bias_mm[1])]
+        if last_push is not None and last_push[1] is not None:
+            index = 0 if last_push[0] == "x" else 1
+            bias[index] = -offset_xy_mm[index] - last_push[1]
+        # The axis whose corrected push is longer; below a push, the other one.
+        wanted = [offset_xy_mm[0] - bias[0], offset_xy_mm[1] - bias[1]]
+        axis = "x" if abs(wanted[0]) >= abs(wanted[1]) else "y"
+        if abs(wanted[0 if axis == "x" else 1]) < min_push_mm:
+            axis = "x" if abs(offset_xy_mm[0]) >= abs(offset_xy_mm[1]) else "y"
+        return (bias[0], bias[1]), axis, wanted[0 if axis == "x" else 1]
 
     @staticmethod
     def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:

@@ -11,6 +11,8 @@
 | ``/<obj>/yaw_error_deg`` | ``float``, measured minus target yaw (folded) | Inspect | RepeatUntilWithin, Push |
 | ``/<obj>/placed_yaw_error_deg`` | ``float``, the yaw error after placing | Inspect(after placing) | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+| ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
+| ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
 YAW_ERROR_DEG = "yaw_error_deg"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
+PUSH_BIAS_MM = "push_bias_mm"
+LAST_PUSH = "last_push"
 
 
 def key(obj: str, field: str) -> str:

@@ -1,0 +1,545 @@
+"""An error model of a real work cell: what a real UR5 + 2F-85 + L515 cell gets wrong.
+
+Every term is a frozen dataclass, off unless ``enabled``; each field says the figure it stands for
+and where that figure comes from (a datasheet, the calibration literature, ``FACTS.md``), and calls
+an estimate an estimate. Where a figure was *fitted* to the paper's real "after placing" column
+(Table 1 b, rows 1 to 3) it says so: docs/experiments.md lists those fits.
+
+Two seeds: ``cell_seed`` is which robot, camera and table this is (the arm's link lengths, the
+camera's calibration error, the table's friction: fixed for the cell, the same in every trial);
+``run_seed`` is what changes from run to run (joint noise, image noise, the cube's tolerance).
+
+The simulated world is built from the *true* values (a perturbed URDF, the true camera), while the
+robot's software keeps the *nominal* ones: the planner loads the nominal URDF, and each camera
+frame reports the calibrated intrinsics and pose, so the perception pipeline uses the nominal
+calibration, as on a real cell.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_arrange.errors import PlanError
+
+#: Where the hand-eye fit samples the arm's error: the trials' target area and the scatter area.
+WORKSPACE_X_M = (0.30, 0.66)
+WORKSPACE_Y_M = (-0.28, 0.28)
+
+
+@dataclass(frozen=True)
+class KinematicError:
+    """Arm kinematic calibration error: the simulated arm's link lengths and joint zeros are off.
+
+    The simulated arm loads a perturbed URDF (each of the six joint origins' translations longer or
+    shorter by a draw of ``link_length_sigma_mm``, each joint's zero turned by a draw of
+    ``joint_offset_sigma_mrad``); the planner keeps the nominal URDF, so the TCP lands millimetres
+    off in a way that varies over the workspace. Figures: Universal Robots writes that two
+    uncalibrated cobots can differ in length by "multiple millimeters" (universal-robots.com,
+    "Kinematic Robot Calibration"); uncalibrated 6-DoF arms are reported at 1 to 15 mm mean
+    position error (robot-calibration literature, e.g. the SCALAR paper). 1 mm and 1 mrad are an
+    estimate in that range.
+
+    ``hand_eye_absorbs_mean``: the camera-to-robot (hand-eye) calibration of a real cell is made
+    with this arm, so it absorbs the arm's *mean* error over the workspace (a rigid fit in x, y, z
+    and yaw); what remains is the error's *variation* over the workspace. The cell mounts the
+    simulated arm where that fit puts it.
+    """
+
+    enabled: bool = False
+    link_length_sigma_mm: float = 0.0
+    joint_offset_sigma_mrad: float = 0.0
+    hand_eye_absorbs_mean: bool = True
+
+
+@dataclass(frozen=True)
+class JointRepeatability:
+    """Joint tracking and repeatability: each motion ends a little off where it was sent.
+
+    A fresh joint error of ``joint_sigma_mrad`` per joint is drawn whenever the arm comes to rest
+    at a new setpoint (the encoders read the setpoint; the arm stands off it). 0.04 mrad per joint
+    gives a TCP standard deviation of about 0.03 mm, so ±0.1 mm is three sigma: the UR5's
+    datasheet repeatability of ±0.1 mm.
+    """
+
+    enabled: bool = False
+    joint_sigma_mrad: float = 0.0
+
+
+@dataclass(frozen=True)
+class CameraCalibrationError:
+    """Camera intrinsics error, lens-distortion residual and camera-to-world error.
+
+    The image is rendered from the *true* camera; frames report the calibrated (nominal) one.
+
+    - ``focal_sigma_percent``: true fx, fy off by this (0.1 %, about 1.4 px of 1371: what a good
+      checkerboard calibration leaves; estimate);
+    - ``principal_point_sigma_px``: true cx, cy off by this (0.5 px; an intrinsic calibration is
+      considered good below 0.5 px reprojection error, FACTS.md);
+    - ``distortion_k1``: radial distortion the calibration did not remove (0.0005 in normalised
+      coordinates: about 0.3 px in the image corners, under 0.05 px where the cubes are; estimate);
+    - ``position_sigma_mm``, ``rotation_sigma_mrad``: camera-to-world (hand-eye) residual of 0.5 mm
+      and 0.5 mrad (sub-millimetre for a small arm, Zivid's hand-eye documentation; 1 mrad moves a
+      point 0.7 m below by about 0.7 mm).
+    """
+
+    enabled: bool = False
+    focal_sigma_percent: float = 0.0
+    principal_point_sigma_px: float = 0.0
+    distortion_k1: float = 0.0
+    position_sigma_mm: float = 0.0
+    rotation_sigma_mrad: float = 0.0
+
+
+@dataclass(frozen=True)
+class ImagingError:
+    """Exposure, sensor noise and lighting that change from frame to frame.
+
+    ``sensor_sigma`` grey levels of Gaussian noise (2 of 255: an L515 RGB frame under a ring light;
+    estimate), ``exposure_jitter`` a uniform gain change of ±5 % per frame (auto exposure;
+    estimate), ``blur_sigma_px`` a slight defocus (0.5 px; estimate), ``light_jitter_deg`` the
+    light's direction turned by up to this per frame (people and daylight around the ring light;
+    estimate).
+    """
+
+    enabled: bool = False
+    sensor_sigma: float = 0.0
+    exposure_jitter: float = 0.0
+    blur_sigma_px: float = 0.0
+    light_jitter_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class GripperError:
+    """Gripper finger asymmetry and pad compliance.
+
+    - ``finger_offset_sigma_mm``: the two pads' centre stands off the TCP along the closing axis
+      (one finger mounted or worn thicker: "a fraction of a millimetre is plausible", FACTS.md,
+      estimate); the planner's TCP stays in the middle.
+    - ``coupling_erp``: how stiffly the two fingers are kept symmetric (the gear constraint's error
+      reduction; the ideal cell's 0.8 is stiff). The real 2F-85's linkage has play and its pads are
+      silicone, so one finger that meets the cube first can push it off the centre before the
+      other arrives. FITTED to the paper's real after-placing column (docs/experiments.md).
+    - ``pad_stiffness_n_m``, ``pad_damping_n_s_m``: the silicone pads' contact stiffness and damping
+      (0: pybullet's rigid contact). 1e5 N/m lets a 40 N grip sink 0.4 mm into a pad (estimate;
+      3000 N/m, 13 mm, lost every cube); chosen together with ``coupling_erp`` in the fit.
+    """
+
+    enabled: bool = False
+    finger_offset_sigma_mm: float = 0.0
+    coupling_erp: float = 0.8
+    pad_stiffness_n_m: float = 0.0
+    pad_damping_n_s_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class ObjectTolerance:
+    """Cube size tolerance: each cube's edge is off by a draw of ``edge_sigma_mm``.
+
+    Wooden or 3D-printed cubes hold ±0.1 to 0.3 mm on the edge (FACTS.md, estimate); the perception
+    assumes 50 mm. Rounded edges (0.5 to 1 mm, estimate) are not modelled: a primitive box has sharp
+    edges, and a rounding that is the same on all four sides shrinks the coloured face about its
+    centre without moving the centre.
+    """
+
+    enabled: bool = False
+    edge_sigma_mm: float = 0.0
+
+
+@dataclass(frozen=True)
+class FrictionField:
+    """Friction that varies over the table: ``1 + spread * f(x, y)`` times the nominal cube-table friction.
+
+    ``f`` is a smooth field in -1..1 (two sines of ``wavelength_m`` with phases from the cell seed);
+    ±20 % over a worn table top is an estimate. Applied to a cube wherever it lies, each control
+    period (pybullet keeps a contact's friction while it lasts, so it takes effect where a cube is
+    set down).
+    """
+
+    enabled: bool = False
+    spread: float = 0.0
+    wavelength_m: float = 0.3
+
+
+_TERMS: dict[str, type] = {
+    "kinematics": KinematicError,
+    "joints": JointRepeatability,
+    "camera": CameraCalibrationError,
+    "imaging": ImagingError,
+    "gripper": GripperError,
+    "objects": ObjectTolerance,
+    "friction": FrictionField,
+}
+
+
+@dataclass(frozen=True)
+class RealCellErrors:
+    """All the error terms of a real cell, each switchable, with the cell's two seeds."""
+
+    cell_seed: int = 0
+    run_seed: int = 0
+    kinematics: KinematicError = field(default_factory=KinematicError)
+    joints: JointRepeatability = field(default_factory=JointRepeatability)
+    camera: CameraCalibrationError = field(default_factory=CameraCalibrationError)
+    imaging: ImagingError = field(default_factory=ImagingError)
+    gripper: GripperError = field(default_factory=GripperError)
+    objects: ObjectTolerance = field(default_factory=ObjectTolerance)
+    friction: FrictionField = field(default_factory=FrictionField)
+
+    @property
+    def enabled(self) -> bool:
+        """True when any term is on."""
+        return any(getattr(self, name).enabled for name in _TERMS)
+
+    def with_run_seed(self, run_seed: int) -> RealCellErrors:
+        """The same cell, another run."""
+        return dataclasses.replace(self, run_seed=int(run_seed))
+
+    def rng(self, term: str, per_run: bool) -> np.random.Generator:
+        """The random stream of one term: from the cell seed (fixed draws) or the run seed."""
+        index = list(_TERMS).index(term)
+        return np.random.default_rng([self.cell_seed, index, self.run_seed if per_run else 2**31 - 1, int(per_run)])
+
+    # -- draws -------------------------------------------------------------------------------
+
+    def arm_draw(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(link length errors in m, joint zero errors in rad), one per arm joint; fixed for the cell."""
+        k = self.kinematics
+        if not k.enabled:
+            return np.zeros(6), np.zeros(6)
+        rng = self.rng("kinematics", per_run=False)
+        return rng.normal(0.0, k.link_length_sigma_mm / 1000, 6), rng.normal(0.0, k.joint_offset_sigma_mrad / 1000, 6)
+
+    def finger_offset_m(self) -> float:
+        """Where the pads' centre stands off the TCP along the closing axis; fixed for the cell."""
+        g = self.gripper
+        if not g.enabled:
+            return 0.0
+        return float(self.rng("gripper", per_run=False).normal(0.0, g.finger_offset_sigma_mm / 1000))
+
+    def cube_edge_error_m(self) -> float:
+        """The edge error of the first cube a run puts on the table (the cell draws the next ones on)."""
+        o = self.objects
+        if not o.enabled:
+            return 0.0
+        return float(self.rng("objects", per_run=True).normal(0.0, o.edge_sigma_mm / 1000))
+
+    def camera_draw(self) -> dict[str, float]:
+        """The true camera's deviation from its calibration; fixed for the cell."""
+        c = self.camera
+        if not c.enabled:
+            return {"dfx": 0.0, "dfy": 0.0, "dcx": 0.0, "dcy": 0.0, "k1": 0.0, "dx": 0.0, "dy": 0.0, "dz": 0.0,
+                    "rx": 0.0, "ry": 0.0, "rz": 0.0}  # fmt: skip
+        rng = self.rng("camera", per_run=False)
+        f = rng.normal(0.0, c.focal_sigma_percent / 100, 2)
+        pp = rng.normal(0.0, c.principal_point_sigma_px, 2)
+        pos = rng.normal(0.0, c.position_sigma_mm / 1000, 3)
+        rot = rng.normal(0.0, c.rotation_sigma_mrad / 1000, 3)
+        return {"dfx": float(f[0]), "dfy": float(f[1]), "dcx": float(pp[0]), "dcy": float(pp[1]),
+                "k1": float(c.distortion_k1), "dx": float(pos[0]), "dy": float(pos[1]), "dz": float(pos[2]),
+                "rx": float(rot[0]), "ry": float(rot[1]), "rz": float(rot[2])}  # fmt: skip
+
+    def friction_phases(self) -> tuple[float, float]:
+        """The friction field's two phases; fixed for the cell (it is the table)."""
+        rng = self.rng("friction", per_run=False)
+        return float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi))
+
+    def friction_scale(self, x_m: float, y_m: float) -> float:
+        """Factor on the nominal cube-table friction at (x, y)."""
+        f = self.friction
+        if not f.enabled:
+            return 1.0
+        px, py = self.friction_phases()
+        k = 2 * math.pi / f.wavelength_m
+        return 1.0 + f.spread * 0.5 * (math.sin(k * x_m + px) + math.sin(k * y_m + py))
+
+
+# -- presets -----------------------------------------------------------------------------------
+
+
+def ideal() -> RealCellErrors:
+    """Today's simulated cell: no error term on."""
+    return RealCellErrors()
+
+
+def real(cell_seed: int = 0) -> RealCellErrors:
+    """The paper's real cell, as far as public figures and the fit to its Table 1 b go (see each term)."""
+    return RealCellErrors(
+        cell_seed=cell_seed,
+        kinematics=KinematicError(True, link_length_sigma_mm=1.0, joint_offset_sigma_mrad=1.0),
+        joints=JointRepeatability(True, joint_sigma_mrad=0.04),
+        camera=CameraCalibrationError(
+            True,
+            focal_sigma_percent=0.1,
+            principal_point_sigma_px=0.5,
+            distortion_k1=0.0005,
+            position_sigma_mm=0.5,
+            rotation_sigma_mrad=0.5,
+        ),
+        imaging=ImagingError(True, sensor_sigma=2.0, exposure_jitter=0.05, blur_sigma_px=0.5, light_jitter_deg=10.0),
+        gripper=REAL_GRIPPER,
+        objects=ObjectTolerance(True, edge_sigma_mm=0.1),
+        friction=FrictionField(True, spread=0.2, wavelength_m=0.3),
+    )
+
+
+#: The real cell's gripper; ``coupling_erp`` is the fitted figure (docs/experiments.md).
+REAL_GRIPPER = GripperError(
+    True, finger_offset_sigma_mm=0.3, coupling_erp=0.03, pad_stiffness_n_m=1.0e5, pad_damping_n_s_m=500.0
+)
+
+PRESETS = {"ideal": ideal, "real": real}
+
+
+# -- the user's own values: TOML ---------------------------------------------------------------
+
+
+def _toml_module() -> Any:
+    if sys.version_info >= (3, 11):
+        import tomllib
+
+        return tomllib
+    import tomli  # the tomli backport on 3.10 (a dependency there)
+
+    return tomli
+
+
+def from_mapping(data: Mapping[str, Any], where: str = "cell file") -> RealCellErrors:
+    """Errors from a mapping like the TOML file's: ``preset`` to start from, seeds, one table per term.
+
+    A ``PlanError`` names an unknown key or a bad value.
+    """
+    known_top = {"preset", "cell_seed", "run_seed", *_TERMS}
+    for key in data:
+        if key not in known_top:
+            raise PlanError(f"{where}: unknown key {key!r}; the keys are {', '.join(sorted(known_top))}")
+    preset = data.get("preset", "ideal")
+    if preset not in PRESETS:
+        raise PlanError(f"{where}: preset {preset!r} is not one of {', '.join(PRESETS)}")
+    errors = PRESETS[preset]()
+    changes: dict[str, Any] = {}
+    for key in ("cell_seed", "run_seed"):
+        if key in data:
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise PlanError(f"{where}: {key} = {value!r} must be a whole number, 0 or more")
+            changes[key] = value
+    for term, cls in _TERMS.items():
+        if term not in data:
+            continue
+        table = data[term]
+        if not isinstance(table, Mapping):
+            raise PlanError(f"{where}: [{term}] must be a table of values, got {table!r}")
+        current = getattr(errors, term)
+        names = {f.name: f for f in fields(cls)}
+        values: dict[str, Any] = {}
+        for key, value in table.items():
+            if key not in names:
+                raise PlanError(f"{where}: unknown key {term}.{key}; [{term}] takes {', '.join(names)}")
+            default = getattr(current, key)
+            if isinstance(default, bool):
+                if not isinstance(value, bool):
+                    raise PlanError(f"{where}: {term}.{key} = {value!r} must be true or false")
+            else:
+                if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                    raise PlanError(f"{where}: {term}.{key} = {value!r} must be a finite number")
+                if value < 0 and key != "distortion_k1":
+                    raise PlanError(f"{where}: {term}.{key} = {value!r} must not be negative")
+                value = float(value)
+            values[key] = value
+        if term == "gripper" and not 0.0 < values.get("coupling_erp", current.coupling_erp) <= 1.0:
+            raise PlanError(f"{where}: gripper.coupling_erp must lie in (0, 1]")
+        changes[term] = dataclasses.replace(current, **values)
+    return dataclasses.replace(errors, **changes)
+
+
+def load_toml(path: Path | str) -> RealCellErrors:
+    """Errors from a TOML file; a ``PlanError`` for a missing, unreadable or malformed one."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise PlanError(f"cannot read cell file {path}: {error.strerror or error}") from error
+    try:
+        data = _toml_module().loads(text)
+    except Exception as error:  # tomllib.TOMLDecodeError; one line, whatever the parser says
+        raise PlanError(f"cell file {path} is not valid TOML: {error}") from error
+    return from_mapping(data, where=f"cell file {path}")
+
+
+def parse_cell(text: str) -> RealCellErrors:
+    """``ideal``, ``real`` or a path to a ``.toml`` file; a ``PlanError`` otherwise."""
+    name = text.strip()
+    if name in PRESETS:
+        return PRESETS[name]()
+    if name.endswith(".toml"):
+        return load_toml(name)
+    raise PlanError(f"unknown cell {name!r}: choose {' or '.join(PRESETS)}, or give a .toml file")
+
+
+def parse_cells(text: str) -> list[tuple[str, RealCellErrors]]:
+    """A comma-separated list of cells (``ideal,real``): (name, errors) each, checked."""
+    names = [part.strip() for part in text.split(",") if part.strip()]
+    if not names:
+        raise PlanError(f"--cell is empty; choose from {', '.join(PRESETS)}, or give a .toml file")
+    return [(name, parse_cell(name)) for name in names]
+
+
+# -- the perturbed robot ------------------------------------------------------------------------
+
+
+def _rpy_to_matrix(rpy: NDArray[np.float64]) -> NDArray[np.float64]:
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _matrix_to_rpy(m: NDArray[np.float64]) -> NDArray[np.float64]:
+    pitch = math.asin(max(-1.0, min(1.0, -m[2, 0])))
+    if abs(math.cos(pitch)) > 1e-9:
+        roll = math.atan2(m[2, 1], m[2, 2])
+        yaw = math.atan2(m[1, 0], m[0, 0])
+    else:  # gimbal lock: put everything in yaw
+        roll, yaw = 0.0, math.atan2(-m[0, 1], m[1, 1])
+    return np.array([roll, pitch, yaw])
+
+
+def _axis_rotation(axis: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
+    axis = axis / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+
+
+def perturbed_urdf_text(
+    nominal_text: str,
+    arm_joints: tuple[str, ...],
+    finger_joints: tuple[str, ...],
+    link_errors_m: NDArray[np.float64],
+    joint_zero_errors_rad: NDArray[np.float64],
+    finger_offset_m: float,
+) -> str:
+    """The URDF with each arm joint's origin lengthened and its zero turned, fingers moved.
+
+    Each arm joint's origin translation is lengthened and its zero turned, and the
+    fingers moved together along the closing axis (both joint origins by ``finger_offset_m``).
+    """
+    root = ET.fromstring(nominal_text)
+    joints = {j.get("name"): j for j in root.iter("joint")}
+    for name, length_error, zero_error in zip(arm_joints, link_errors_m, joint_zero_errors_rad, strict=True):
+        joint = joints[name]
+        origin = joint.find("origin")
+        assert origin is not None
+        xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
+        rpy = np.array([float(v) for v in origin.get("rpy", "0 0 0").split()])
+        norm = float(np.linalg.norm(xyz))
+        if norm > 0:
+            xyz = xyz + xyz / norm * length_error
+        axis_element = joint.find("axis")
+        axis = np.array([float(v) for v in (axis_element.get("xyz") if axis_element is not None else "1 0 0").split()])
+        # A joint whose zero is off: the child frame is turned about the joint axis at q = 0.
+        rotation = _rpy_to_matrix(rpy) @ _axis_rotation(axis, float(zero_error))
+        origin.set("xyz", " ".join(f"{v:.9g}" for v in xyz))
+        origin.set("rpy", " ".join(f"{v:.12g}" for v in _matrix_to_rpy(rotation)))
+    for name in finger_joints:
+        origin = joints[name].find("origin")
+        assert origin is not None
+        xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
+        xyz[0] += finger_offset_m  # both fingers' origins: the pads' centre moves along the closing axis (x)
+        origin.set("xyz", " ".join(f"{v:.9g}" for v in xyz))
+    return ET.tostring(root, encoding="unicode")
+
+
+def write_perturbed_urdf(errors: RealCellErrors) -> Path | None:
+    """A temporary file with the real cell's URDF, or None when the arm and fingers are nominal.
+
+    The file lives in the system's temporary folder, named by the cell seed and the draws, and is
+    written once per process and cell.
+    """
+    from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, default_urdf_path
+
+    link_errors, zero_errors = errors.arm_draw()
+    finger_offset = errors.finger_offset_m()
+    if not (errors.kinematics.enabled or errors.gripper.enabled) or (
+        not link_errors.any() and not zero_errors.any() and finger_offset == 0.0
+    ):
+        return None
+    text = perturbed_urdf_text(
+        default_urdf_path().read_text(), ARM_JOINT_NAMES, FINGER_JOINT_NAMES, link_errors, zero_errors, finger_offset
+    )
+    # Meshes are none (primitive shapes), so the file may live anywhere.
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    path = Path(tempfile.gettempdir()) / f"bt_arrange_realcell_{errors.cell_seed}_{digest}.urdf"
+    if not path.exists():
+        tmp = path.with_suffix(f".{digest}.{os.getpid()}.tmp")
+        tmp.write_text(text)
+        tmp.replace(path)
+    return path
+
+
+def hand_eye_base_pose(urdf_path: Path) -> tuple[NDArray[np.float64], float]:
+    """The base placement (translation m, yaw rad) that absorbs the perturbed arm's mean TCP error.
+
+    Samples gripper-down poses over the workspace, solves them with the nominal model, runs the
+    joint vectors through the perturbed model, and fits the rigid motion (x, y, z, yaw) that takes
+    the true TCPs back onto the nominal ones: a real hand-eye calibration finds that transform.
+    """
+    from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, gripper_down_pose
+
+    nominal, true = ArmKinematics(), ArmKinematics(urdf_path)
+    wanted, reached = [], []
+    q = np.asarray(DEFAULT_HOME_Q, dtype=float)
+    for x in np.linspace(*WORKSPACE_X_M, 4):
+        for y in np.linspace(*WORKSPACE_Y_M, 5):
+            for z in (0.025, 0.10):
+                target = gripper_down_pose(float(x), float(y), z)
+                q = nominal.inverse(target, q)
+                wanted.append(target.position_m)
+                reached.append(true.forward(q).position_m)
+    a, b = np.array(reached), np.array(wanted)
+    ca, cb = a.mean(axis=0), b.mean(axis=0)
+    h = (a[:, :2] - ca[:2]).T @ (b[:, :2] - cb[:2])
+    yaw = math.atan2(h[0, 1] - h[1, 0], h[0, 0] + h[1, 1])
+    c, s = math.cos(yaw), math.sin(yaw)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    translation = cb - rot @ ca
+    return translation, yaw
+
+
+def tcp_error_over_workspace_mm(errors: RealCellErrors, points: int = 5) -> NDArray[np.float64]:
+    """The true TCP's planar error (mm) at gripper-down poses over the workspace, after the hand-eye fit.
+
+    Runs in pure kinematics (no world): what the arm's calibration error does to a grasp or a push.
+    """
+    from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, gripper_down_pose
+
+    path = write_perturbed_urdf(errors)
+    if path is None:
+        return np.zeros((points * points, 2))
+    translation, yaw = hand_eye_base_pose(path) if errors.kinematics.hand_eye_absorbs_mean else (np.zeros(3), 0.0)
+    c, s = math.cos(yaw), math.sin(yaw)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    nominal, true = ArmKinematics(), ArmKinematics(path)
+    q = np.asarray(DEFAULT_HOME_Q, dtype=float)
+    out = []
+    for x in np.linspace(0.38, 0.62, points):
+        for y in np.linspace(-0.25, 0.25, points):
+            target = gripper_down_pose(float(x), float(y), 0.025)
+            q = nominal.inverse(target, q)
+            reached = rot @ true.forward(q).position_m + translation
+            out.append((reached[:2] - target.position_m[:2]) * 1000)
+    return np.array(out)
