@@ -107,7 +107,12 @@ class Experiment(Protocol):
     def run_experiment(
         self, rows: Iterable[str], trials: int, seed: int, threshold_mm: float, out_dir: Path, **options: Any
     ) -> list[dict[str, Any]]:
-        """Run the missing trials into ``out_dir``; the summary rows."""
+        """Run the missing trials into ``out_dir``; the summary rows.
+
+        ``options`` are the backend's own, passed only when not their default: ``workers`` and
+        ``on_trial`` always; the sim backend also takes ``cell``, ``strategy``, ``thresholds``,
+        ``executor`` and ``scheduler`` and checks them first in ``check_options(**options)``.
+        """
         ...
 
     def markdown_table(self, summary: list[dict[str, Any]]) -> str:

@@ -3,8 +3,9 @@
     bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--gui] [--live] [--record DIR] [--json]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
-    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0] [--workers N] [--out DIR]
-                          [--cell ideal|real|FILE.toml] [--strategy paper|learned]
+    bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
+                          [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned]
+                          [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange examples
     bt-arrange info
 
@@ -207,19 +208,45 @@ def _experiment_of(backend: Backend) -> Experiment:
     return experiment
 
 
-def _cell_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
-    """``--cell`` and ``--strategy`` checked by the backend's experiment; only non-defaults are passed on."""
-    options = {
-        key: value
-        for key, value, default in (("cell", args.cell, "ideal"), ("strategy", args.strategy, "paper"))
-        if value != default
-    }
+#: The experiment's options beyond the Protocol's arguments, with their defaults: only a value other
+#: than its default is passed on, so a backend that has not these options need not know them.
+EXPERIMENT_OPTIONS = (
+    ("cell", "ideal"),
+    ("strategy", "paper"),
+    ("thresholds", None),
+    ("executor", "local"),
+    ("scheduler", None),
+)
+
+
+def _experiment_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
+    """The experiment's options (``EXPERIMENT_OPTIONS``), checked by the backend's ``check_options``.
+
+    Only non-defaults are passed on; ``--workers`` is one of the Protocol's own arguments.
+    """
+    options = {key: getattr(args, key) for key, default in EXPERIMENT_OPTIONS if getattr(args, key) != default}
     check = getattr(experiment, "check_options", None)
     if options and check is None:
         raise BackendError(f"backend {backend.name!r} has no {', '.join('--' + key for key in options)}")
     if check is not None:
-        check(cell=args.cell, strategy=args.strategy)
+        check(
+            cell=args.cell,
+            strategy=args.strategy,
+            workers=args.workers,
+            **{key: value for key, value in options.items() if key not in ("cell", "strategy")},
+        )
     return options
+
+
+def _print_experiment(experiment: Experiment, summary: list[dict[str, Any]], out: Path) -> None:
+    print(experiment.markdown_table(summary), end="")
+    if any("folder" in row for row in summary):
+        print(
+            f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
+            f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
+        )
+    else:
+        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {out}")
 
 
 def _experiment(args: argparse.Namespace) -> int:
@@ -229,17 +256,24 @@ def _experiment(args: argparse.Namespace) -> int:
     experiment = _experiment_of(backend)
     # Every option is checked before the progress bar is drawn or a worker starts.
     rows = experiment.parse_rows(args.rows)
+    if args.thresholds is not None and args.threshold_mm is not None:
+        raise BtArrangeError("give --threshold-mm or --thresholds, not both")
     _check_threshold_option(args.threshold_mm)
-    cell_options = _cell_options(backend, experiment, args)
+    options = _experiment_options(backend, experiment, args)
     try:
         backend.prepare_out(args.out)
     except BtArrangeError as error:
         raise BtArrangeError(f"--out {args.out}: {error}") from error
+    # The total grows to the campaign's size (thresholds x cells) with the first finished trial.
     bar = tqdm(total=len(rows) * args.trials, unit="trial", desc="trials", file=sys.stderr, dynamic_ncols=True)
 
     def progress(record: dict, done: int, total: int) -> None:
+        bar.total = total
         bar.n = done
-        bar.set_postfix_str(f"{record['row']} #{record['trial']}: {record['status']}", refresh=False)
+        where = f"{record['threshold_mm']:g} mm" + (
+            f", {record['cell']} cell" if record.get("cell", "ideal") != "ideal" else ""
+        )
+        bar.set_postfix_str(f"{record['row']} #{record['trial']} at {where}: {record['status']}", refresh=False)
         bar.refresh()
 
     try:
@@ -247,16 +281,22 @@ def _experiment(args: argparse.Namespace) -> int:
             rows,
             args.trials,
             args.seed,
-            args.threshold_mm,
+            1.0 if args.threshold_mm is None else args.threshold_mm,
             args.out,
             workers=args.workers,
             on_trial=progress,
-            **cell_options,
+            **options,
         )
+    except BtArrangeError as error:
+        # Trials lost (a worker died): what did finish is written and printed, then the one-line error.
+        finished = getattr(error, "summary", None)
+        if finished:
+            bar.close()
+            _print_experiment(experiment, finished, args.out)
+        raise
     finally:
         bar.close()
-    print(experiment.markdown_table(summary), end="")
-    print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {args.out}")
+    _print_experiment(experiment, summary, args.out)
     return EXIT_OK
 
 
@@ -316,6 +356,7 @@ def build_parser() -> argparse.ArgumentParser:
     except BtArrangeError:
         default_experiment = None
     rows = tuple(default_experiment.ROWS) if default_experiment is not None else ()
+    default_rows = tuple(getattr(default_experiment, "DEFAULT_ROWS", rows))
     row_labels = dict(default_experiment.ROW_LABELS) if default_experiment is not None else {}
 
     parser = _Parser(
@@ -395,26 +436,40 @@ def build_parser() -> argparse.ArgumentParser:
     rows_help = "\n".join(f"  {row:<16} {row_labels.get(row, '')}" for row in rows)
     experiment = add_command(
         "experiment",
-        "reproduce the paper's Table 1 and Fig. 4 in simulation",
+        "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
         f"rows (--rows):\n{rows_help}\n\n"
         "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
     )
     experiment.add_argument(
-        "--rows", default=",".join(rows), help=f"comma-separated rows, listed below (default: all {len(rows)})"
+        "--rows",
+        default=",".join(default_rows),
+        help=f"comma-separated rows, listed below (default: {','.join(default_rows)})",
     )
     experiment.add_argument("--trials", type=_whole(1), default=100, help="trials per row (default 100)")
     experiment.add_argument("--seed", type=_whole(0), default=0, help="experiment seed, 0 or more (default 0)")
+    experiment.add_argument("--threshold-mm", type=_millimetres, help="accuracy threshold in mm (default 1)")
     experiment.add_argument(
-        "--threshold-mm", type=_millimetres, default=1.0, help="accuracy threshold in mm (default 1)"
+        "--thresholds", metavar="MM,MM,...", help="sweep: comma-separated thresholds in mm, one folder each"
     )
     experiment.add_argument(
-        "--workers", type=_whole(1), default=1, help="worker processes, each with its own world (default 1)"
+        "--executor", default="local", choices=("local", "dask"), help="local process pool (default) or Dask"
+    )
+    experiment.add_argument(
+        "--workers",
+        type=_whole(1),
+        default=1,
+        help="worker processes (local pool or Dask LocalCluster), each with its own world (default 1)",
+    )
+    experiment.add_argument(
+        "--scheduler", metavar="tcp://HOST:PORT", help="with --executor dask: an existing cluster's scheduler"
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
     )
     add_backend(experiment)
-    experiment.add_argument("--cell", default="ideal", help=CELL_HELP)
+    experiment.add_argument(
+        "--cell", default="ideal", help=CELL_HELP + "; several, comma-separated (ideal,real), one folder each"
+    )
     experiment.add_argument(
         "--strategy",
         choices=("paper", "learned"),

@@ -135,6 +135,25 @@ def test_show_prints_the_tree_as_text(capsys):
         assert name in out
 
 
+@pytest.mark.parametrize(
+    ("argv", "fragments"),
+    [
+        (("--threshold-mm", "1", "--thresholds", "0.5,1"), ("--threshold-mm or --thresholds",)),
+        (("--thresholds", "0.5,abc"), ("--thresholds", "'abc' is not a number")),
+        (("--scheduler", "tcp://127.0.0.1:8786"), ("--scheduler needs --executor dask",)),
+        (("--rows", "system,wobble"), ("unknown row 'wobble'", "tilt, all")),
+        (("--executor", "dask", "--scheduler", " "), ("--scheduler is empty",)),
+        (("--thresholds", "0.5,0.1"), ("--thresholds 0.1", "below 0.28 mm")),
+        (("--cell", "ideal,lab"), ("--cell lab", "unknown cell 'lab'")),
+        (("--cell", "real", "--strategy", "learned", "--thresholds", ","), ("--thresholds is empty",)),
+    ],
+)
+def test_experiment_options_are_checked_before_any_trial_runs(capsys, tmp_path, argv, fragments):
+    code, _, err = run_cli(capsys, "experiment", "--out", tmp_path / "out", *argv)
+    assert_one_line_error(code, err, *fragments)
+    assert not (tmp_path / "out").exists(), "nothing started"
+
+
 def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(capsys) -> None:  # item 2
     from bt_arrange_sim.runs import ObjectOutcome, SimulationReport
 

@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import bt_arrange_sim.cell
+import bt_arrange_sim.executors
 import bt_arrange_sim.experiment
 import bt_arrange_sim.runs
 from bt_arrange import cli
@@ -42,6 +43,7 @@ def no_world(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(bt_arrange_sim, "WorkCell", spy)
     monkeypatch.setattr(bt_arrange_sim.experiment, "run_trial", spy)
     monkeypatch.setattr(bt_arrange_sim.experiment, "ProcessPoolExecutor", spy)
+    monkeypatch.setattr(bt_arrange_sim.executors, "open_executor", spy)
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
 
@@ -178,6 +180,15 @@ def test_every_tree_file_that_cannot_run_in_the_cell_is_one_line(tmp_path: Path)
         (["experiment", "--threshold-mm", "-1", "--out", "{dir}"], "--threshold-mm"),
         (["experiment", "--threshold-mm", "0.2", "--out", "{dir}"], "below 0.28 mm"),
         (["experiment", "--out", "{file}"], "it is a file, not a folder"),
+        (["experiment", "--thresholds", "0.2,1", "--out", "{dir}"], "--thresholds 0.2: threshold 0.2 mm is below 0.28"),
+        (["experiment", "--thresholds", "1,x", "--out", "{dir}"], "--thresholds: 'x' is not a number"),
+        (["experiment", "--thresholds", ",", "--out", "{dir}"], "--thresholds is empty"),
+        (["experiment", "--threshold-mm", "1", "--thresholds", "1,2"], "give --threshold-mm or --thresholds, not both"),
+        (["experiment", "--executor", "slurm"], "argument --executor: invalid choice: 'slurm'"),
+        (["experiment", "--executor", "dask", "--workers", "0"], "argument --workers: 0 must be 1 or more"),
+        (["experiment", "--scheduler", "tcp://10.0.0.5:8786", "--out", "{dir}"], "--scheduler needs --executor dask"),
+        (["experiment", "--executor", "dask", "--scheduler", "", "--out", "{dir}"], "--scheduler is empty"),
+        (["experiment", "--cell", "ideal,lab", "--out", "{dir}"], "--cell lab: unknown cell 'lab'"),
         (["info", "--bogus"], "unrecognized arguments: --bogus"),
         (["bogus"], "invalid choice: 'bogus'"),
         ([], "the following arguments are required: COMMAND"),
@@ -236,6 +247,15 @@ def test_a_good_run_reaches_the_world_and_a_good_experiment_its_trials(tmp_path:
     # The spies themselves work: what is accepted does get as far as simulating.
     assert call(["run", SINGLE])[0] == "simulated"
     assert call(["experiment", "--trials", "1", "--rows", "system", "--out", str(tmp_path / "x")])[0] == "simulated"
+    campaigns = [
+        ["--thresholds", "0.5,1", "--cell", "ideal,real", "--strategy", "learned"],
+        ["--executor", "dask", "--workers", "2"],
+        ["--executor", "dask", "--scheduler", "tcp://10.0.0.5:8786"],
+        ["--workers", "2", "--rows", "all,tilt"],
+    ]
+    for i, options in enumerate(campaigns):
+        argv = ["experiment", "--trials", "1", "--rows", "system", "--out", str(tmp_path / f"c{i}"), *options]
+        assert call(argv)[0] == "simulated", options
 
 
 @pytest.mark.parametrize(
@@ -269,7 +289,11 @@ run_options = st.lists(
 experiment_options = st.lists(
     st.one_of(
         st.tuples(st.sampled_from(["--seed", "--threshold-mm", "--trials", "--workers"]), values),
-        st.tuples(st.just("--rows"), st.sampled_from(["system", "bogus", ",", "system,translation", ""])),
+        st.tuples(st.just("--rows"), st.sampled_from(["system", "bogus", ",", "system,translation", "", "all"])),
+        st.tuples(st.just("--thresholds"), st.sampled_from(["0.5,1", "1", "0.1,1", "x", ",", "", "nan,1"])),
+        st.tuples(st.just("--executor"), st.sampled_from(["local", "dask", "slurm", ""])),
+        st.tuples(st.just("--scheduler"), st.sampled_from(["tcp://127.0.0.1:8786", "", " "])),
+        st.tuples(st.just("--cell"), st.sampled_from(["ideal", "real", "ideal,real", ",", "lab"])),
     ),
     max_size=3,
 )

@@ -30,9 +30,10 @@ whether it fired (``"fired"``) and what it did, in millimetres and degrees.
 
 **Seeds.** Each injector draws from its own ``numpy.random.Generator``; ``attach_all`` derives
 one per injector from the seed and the injector's name (not its position), so an injector draws
-the same values whatever else is attached. The draws of the picking injectors are resampled until
-the cube fits between the open pads, which depends on where the camera saw the cube, so the same
-seed reproduces a record for the same scene.
+the same values whatever else is attached. The draws of the picking injectors are resampled only
+when the pads could not close on the cube (``grasp_fits``: the limit binds across the closing axis),
+which depends on where the camera saw the cube, so the same seed reproduces a record for the same
+scene.
 
 An injector finds the behaviours it waits for by their type and object (the ``Detect``, ``Pick``
 and ``Place`` of ``obj`` that ``bt_arrange.trees.transfer`` builds), never by their names, and a

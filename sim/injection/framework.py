@@ -22,6 +22,7 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose
+from bt_arrange.motion import nearest_symmetric_yaw
 from bt_arrange.runner import Transition
 
 if TYPE_CHECKING:
@@ -172,18 +173,28 @@ class Injector(ABC):
         self.run.tick_hooks.append(hook)
 
     def _grasp_reference(self) -> tuple[float, float, float]:
-        """Where the pads will come down: the pose the robot measured (``/<obj>/pose``), else the true pose.
+        """Where the pads will come down (x, y) and the yaw of their closing axis.
 
-        Read only to keep a picking error graspable, as the paper's bounds do; never written.
+        The position is the pose the robot measured (``/<obj>/pose``), else the true pose; the yaw is
+        Pick's choice among the cube's quarter turns. Read only to keep a picking error graspable, as the
+        paper's bounds do; never written.
         """
         measured = read_blackboard(keys.key(self.cube, keys.POSE))
         if isinstance(measured, Pose):
-            return measured.x_m, measured.y_m, measured.yaw_rad
-        truth = self.run.cell.cube_pose_truth(self.cube)
-        return truth.x_m, truth.y_m, truth.yaw_rad
+            x, y, yaw = measured.x_m, measured.y_m, measured.yaw_rad
+        else:
+            truth = self.run.cell.cube_pose_truth(self.cube)
+            x, y, yaw = truth.x_m, truth.y_m, truth.yaw_rad
+        return x, y, self._closing_yaw(yaw)
+
+    def _closing_yaw(self, cube_yaw_rad: float) -> float:
+        """The yaw Pick will close at for a cube seen at ``cube_yaw_rad``: the quarter turn nearest the wrist."""
+        context = self.run.context
+        wrist = context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
+        return nearest_symmetric_yaw(cube_yaw_rad, wrist)
 
     def _fits(self, x_m: float, y_m: float, yaw_rad: float, reference: tuple[float, float, float]) -> bool:
-        """True when a cube at (x, y, yaw) lies between pads opened around ``reference`` along either of its axes."""
+        """True when a cube at (x, y, yaw) can still be grasped by pads closing around ``reference``."""
         settings = self.run.context.settings
         return grasp_fits(x_m, y_m, yaw_rad, reference, settings.cube_edge_m, settings.open_width_m)
 
@@ -231,22 +242,28 @@ def grasp_fits(
     edge_m: float,
     open_width_m: float,
 ) -> bool:
-    """The paper's grasp feasibility: the cube still lies between the open pads.
+    """The paper's grasp feasibility: the pads still close on the cube.
 
-    The pads come down around ``reference`` (x_m, y_m, yaw_rad: where the robot saw the cube),
-    closing along one of its axes. Along both of them, the cube's centre offset plus its half
-    extent (half an edge when square to the pads, up to edge / sqrt(2) turned by 45 degrees) must
-    stay within half the opening: for an 85 mm opening and a 50 mm cube square to the pads, the
-    centre may be at most 17.5 mm off along either axis.
+    The pads come down around ``reference`` (x_m, y_m, and yaw_rad: the direction of the closing
+    axis) and close along that axis. The limit binds across the closing axis only: the cube's centre
+    offset along it plus its half extent there (half an edge when square to the pads, up to
+    edge / sqrt(2) turned by 45 degrees) must stay within half the opening; for an 85 mm opening
+    and a 50 mm cube square to the pads, 17.5 mm. Along the pads the cube is still grasped while
+    the pads' centre stays on the part of it they close on: up to half an edge (25 mm) off for a
+    cube square to them; for a cube turned by ``a`` the pads first meet two vertical edges,
+    ``edge / 2 * (cos a - sin a)`` either side of its centre along the pads, and the pads' centre
+    must stay between them (measured: with the centre beyond, a cube turned by 37 deg and 15 mm
+    off along the pads was squeezed out sideways and thrown off the table's view).
     """
-    rx, ry, ryaw = reference
-    relative_yaw = yaw_rad - ryaw
-    half_extent_m = edge_m / 2 * (abs(math.cos(relative_yaw)) + abs(math.sin(relative_yaw)))
+    rx, ry, closing_yaw = reference
+    # Turned by more than 45 degrees is turned the other way: fold into [0, 45] degrees.
+    turn = abs((yaw_rad - closing_yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4)
+    half_extent_m = edge_m / 2 * (math.cos(turn) + math.sin(turn))
+    along_pads_limit_m = edge_m / 2 * (math.cos(turn) - math.sin(turn))
     offset = np.array([x_m - rx, y_m - ry])
-    for axis in (np.array([math.cos(ryaw), math.sin(ryaw)]), np.array([-math.sin(ryaw), math.cos(ryaw)])):
-        if abs(float(offset @ axis)) + half_extent_m > open_width_m / 2:
-            return False
-    return True
+    across = abs(float(offset @ np.array([math.cos(closing_yaw), math.sin(closing_yaw)])))
+    along_pads = abs(float(offset @ np.array([-math.sin(closing_yaw), math.cos(closing_yaw)])))
+    return across + half_extent_m <= open_width_m / 2 + 1e-12 and along_pads <= along_pads_limit_m + 1e-12
 
 
 def _sample(draw: Callable[[], T], fits: Callable[[T], bool]) -> tuple[T, int] | None:

@@ -61,7 +61,9 @@ class PerceptionOffset(Injector):
             dx, dy, dyaw = offset
             # What the calibrated camera will report for the cube (see SimCamera.set_render_offset).
             seen = rotation_z(-dyaw)[:2, :2] @ np.array([truth.x_m - cx - dx, truth.y_m - cy - dy]) + (cx, cy)
-            return self._fits(truth.x_m, truth.y_m, truth.yaw_rad, (seen[0], seen[1], truth.yaw_rad - dyaw))
+            return self._fits(
+                truth.x_m, truth.y_m, truth.yaw_rad, (seen[0], seen[1], self._closing_yaw(truth.yaw_rad - dyaw))
+            )
 
         drawn = _sample(draw, fits)
         (dx, dy, dyaw), draws = drawn or ((0.0, 0.0, 0.0), MAX_DRAWS)

@@ -28,9 +28,10 @@ class PickTranslation(Injector):
 
     Right after ``detect <obj>`` first succeeds (seen, not yet grasped) the cube is moved by dx, dy,
     each uniform in +-``max_m`` along world x and y (the paper: up to +-2.5 cm, half a cube),
-    resampled while the cube would not fit between the open pads (``grasp_fits``: at most 17.5 mm
-    off along either of its axes). The closing pads drag it back to the centre along their
-    closing axis; the offset along the pads remains and shows up after placing.
+    as the paper draws it; only a draw the pads could not close on is drawn again (``grasp_fits``:
+    at most 17.5 mm off across the closing axis; along the pads up to half an edge still grasps).
+    The closing pads drag it back to the centre along their closing axis; the offset along the
+    pads remains and shows up after placing.
 
     Record: ``dx_mm``, ``dy_mm`` (world), ``draws`` (samples drawn), ``time_s``.
     """
@@ -66,8 +67,8 @@ class PickRotation(Injector):
     """Orientation error (Fig. 2c): the pads are not aligned with the cube's faces.
 
     Right after ``detect <obj>`` first succeeds the cube is turned about the vertical through its
-    centre by an angle uniform in +-``max_deg`` (the paper: up to +-40 deg), resampled while it
-    would not fit between the open pads (with another picking error already injected). The
+    centre by an angle uniform in +-``max_deg`` (the paper: up to +-40 deg), drawn again only when
+    the pads could not close on it (with another picking error already injected). The
     closing pads turn it back towards square, which moves it.
 
     Measured in this cell (trees/single_cube.py): turned by about 24 deg, the cube is held about

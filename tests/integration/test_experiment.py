@@ -1,11 +1,25 @@
-"""The experiment command on a few trials: files, resuming, refusing another experiment's folder."""
+"""The experiment command on a few trials: files, resuming, refusing another experiment's folder, rows, sweeps."""
 
 import json
+from concurrent.futures import Executor, Future
 
 import pytest
 
 from bt_arrange.errors import PlanError
-from bt_arrange_sim.experiment import ROW_LABELS, parse_rows, read_trials, run_experiment
+from bt_arrange_sim.experiment import (
+    ROW_INJECTORS,
+    ROW_LABELS,
+    ROWS,
+    CampaignIncompleteError,
+    combinations,
+    parse_rows,
+    parse_thresholds,
+    read_trials,
+    row_injectors,
+    run_campaign,
+    run_experiment,
+)
+from bt_arrange_sim.injection import INJECTORS
 
 
 def test_an_experiment_writes_its_trials_summaries_and_figure_and_resumes(tmp_path):
@@ -64,3 +78,152 @@ def test_rows_are_checked_and_row_4_is_labelled_as_the_substitute():
     with pytest.raises(PlanError, match="unknown row 'learned'; the rows are system, translation"):
         parse_rows("system,learned")
     assert "substitute for Berscheid et al." in ROW_LABELS["grasp-estimator"]
+
+
+def test_every_error_of_section_3_is_a_row_with_its_injectors():
+    assert ROWS[:4] == ("system", "translation", "orientation", "grasp-estimator"), "Table 1's seeds stay put"
+    assert set(ROWS) == {
+        *("system", "translation", "orientation", "grasp-estimator", "perception", "surface", "slip"),
+        *("sticking", "release", "tilt", "all"),
+    }
+    assert set(ROW_INJECTORS["all"]) == set(INJECTORS), "the all row injects every error"
+    for row in ROWS:
+        assert [i.name for i in row_injectors(row)] == list(ROW_INJECTORS[row])
+    assert all(len(ROW_INJECTORS[row]) == 1 for row in ROWS[4:-1])
+
+
+def test_thresholds_and_the_campaign_product_are_checked():
+    assert parse_thresholds("0.29, 0.5,1,2") == [0.29, 0.5, 1.0, 2.0]
+    with pytest.raises(PlanError, match=r"--thresholds 0.25: .*below 0.28 mm"):
+        parse_thresholds("0.25,1")
+    with pytest.raises(PlanError, match="'x' is not a number"):
+        parse_thresholds("1,x")
+    with pytest.raises(PlanError, match="-1 must be a positive"):
+        parse_thresholds("-1")
+    with pytest.raises(PlanError, match="empty"):
+        parse_thresholds(" , ")
+    combos = combinations([0.5, 1, 0.5])
+    assert [c.threshold_mm for c in combos] == [0.5, 1.0]
+    assert [c.folder for c in combos] == ["threshold-0.5mm", "threshold-1mm"]
+
+
+def test_a_threshold_sweep_writes_a_folder_per_combination_and_the_threshold_figure(tmp_path):
+    result = run_campaign(["system"], trials=1, seed=3, combos=combinations([0.5, 2.0]), out_dir=tmp_path)
+    assert not result.lost
+    for folder in ("threshold-0.5mm", "threshold-2mm"):
+        assert {"trials.jsonl", "summary.json", "summary.md", "fig4.png"} <= {
+            p.name for p in (tmp_path / folder).iterdir()
+        }
+    assert (tmp_path / "thresholds.png").stat().st_size > 0
+    campaign = json.loads((tmp_path / "campaign.json").read_text())
+    assert sorted(r["threshold_mm"] for r in campaign) == [0.5, 2.0]
+    # The same trial (same start, same target) under both thresholds: only the threshold differs.
+    (a,), (b,) = (read_trials(tmp_path / f / "trials.jsonl") for f in ("threshold-0.5mm", "threshold-2mm"))
+    assert a["target"] == b["target"] and a["placed_mm"] == b["placed_mm"]
+
+
+def test_a_trial_that_does_not_come_back_is_reported_and_a_rerun_completes_it(tmp_path):
+    class DyingWorker(Executor):
+        """Runs trials in this process, but the worker dies on the second one."""
+
+        def __init__(self):
+            self.calls = 0
+
+        def submit(self, fn, /, *args, **kwargs):
+            future = Future()
+            self.calls += 1
+            if self.calls == 2:
+                future.set_exception(RuntimeError("worker died"))
+            else:
+                future.set_result(fn(*args, **kwargs))
+            return future
+
+    with pytest.raises(CampaignIncompleteError, match=r"1 trial\(s\) did not finish .*worker died.*rerun"):
+        run_experiment(["system"], trials=2, seed=4, threshold_mm=1.0, out_dir=tmp_path, executor=DyingWorker())
+    assert [r["trial"] for r in read_trials(tmp_path / "trials.jsonl")] == [0], "what finished is kept"
+    run_experiment(["system"], trials=2, seed=4, threshold_mm=1.0, out_dir=tmp_path)
+    assert sorted(r["trial"] for r in read_trials(tmp_path / "trials.jsonl")) == [0, 1]
+
+
+def _quick_trial(spec):
+    """A trial record without a world: enough for the campaign's files and summaries."""
+    return {
+        "row": spec.row,
+        "trial": spec.index,
+        "seed": spec.seed,
+        "threshold_mm": spec.threshold_mm,
+        "cell": spec.cell,
+        "strategy": spec.strategy,
+        "target": [0.5, 0.0, 0.0],
+        "placed_mm": 2.0,
+        "pushed_mm": 0.5,
+        "placed_truth_mm": 2.0,
+        "pushed_truth_mm": 0.5,
+        "pushes": 1,
+        "regrasps": 0,
+        "status": "within",
+    }
+
+
+def test_cells_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
+    import bt_arrange_sim.experiment as experiment
+
+    combos = combinations([0.5, 1.0], ["ideal", "real"], strategy="learned")
+    assert [(c.threshold_mm, c.cell, c.strategy) for c in combos] == [
+        (0.5, "ideal", "learned"),
+        (0.5, "real", "learned"),
+        (1.0, "ideal", "learned"),
+        (1.0, "real", "learned"),
+    ]
+    assert [c.folder for c in combos[:2]] == ["threshold-0.5mm", "threshold-0.5mm-cell-real"]
+    assert combos[1].spec("system", 3, 7).cell == "real"
+    assert not combos[1].owns({"threshold_mm": 0.5, "strategy": "learned"}), "a record without a cell is ideal"
+    assert experiment.parse_cells(" ideal, real ,ideal") == ["ideal", "real"]
+    with pytest.raises(PlanError, match="--cell lab: unknown cell 'lab'"):
+        experiment.parse_cells("ideal,lab")
+
+    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    summary = run_experiment(["system"], trials=2, seed=1, threshold_mm=1.0, out_dir=tmp_path, cell="ideal,real")
+    assert [(r["cell"], r["folder"], r["trials"]) for r in summary] == [
+        ("ideal", "threshold-1mm", 2),
+        ("real", "threshold-1mm-cell-real", 2),
+    ]
+    assert {r["cell"] for r in read_trials(tmp_path / "threshold-1mm-cell-real" / "trials.jsonl")} == {"real"}
+    assert len(json.loads((tmp_path / "campaign.json").read_text())) == 2
+    table = experiment.markdown_table(summary)
+    assert "## threshold 1 mm, cell real, strategy paper (threshold-1mm-cell-real)" in table
+    # One threshold and one cell: straight into the folder, as before campaigns.
+    flat = run_experiment(["system"], trials=1, seed=1, threshold_mm=1.0, out_dir=tmp_path / "flat", cell="real")
+    assert "folder" not in flat[0] and (tmp_path / "flat" / "trials.jsonl").exists()
+    with pytest.raises(PlanError, match="strategy learned"):
+        run_experiment(["system"], 1, 1, 1.0, tmp_path / "flat", cell="real", strategy="learned")
+
+
+def test_the_executor_option_opens_dask_through_the_executors_module(tmp_path, monkeypatch):
+    import contextlib
+
+    import bt_arrange_sim.executors as executors
+    import bt_arrange_sim.experiment as experiment
+
+    class InProcess(Executor):
+        def submit(self, fn, /, *args, **kwargs):
+            future = Future()
+            future.set_result(fn(*args, **kwargs))
+            return future
+
+    opened = []
+
+    @contextlib.contextmanager
+    def fake_open(kind, workers, scheduler):
+        opened.append((kind, workers, scheduler))
+        yield InProcess()
+
+    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    monkeypatch.setattr(executors, "open_executor", fake_open)
+    run_experiment(
+        ["system"], 1, 2, 1.0, tmp_path, executor="dask", workers=3, scheduler="tcp://10.0.0.5:8786", thresholds="1,2"
+    )
+    assert opened == [("dask", 3, "tcp://10.0.0.5:8786")]
+    assert (tmp_path / "threshold-2mm" / "trials.jsonl").exists()
+    with pytest.raises(PlanError, match="--scheduler needs --executor dask"):
+        experiment.check_options(scheduler="tcp://10.0.0.5:8786")

@@ -245,14 +245,24 @@ def test_generators_come_from_the_seed_and_the_injectors_name():
     assert draws(3, "pick_translation") != draws(3, "pick_translation", 1)
 
 
-def test_grasp_feasibility_is_the_papers_17_5_mm_along_either_axis():
+def test_grasp_feasibility_binds_across_the_closing_axis_only():
     edge, opening = 0.05, 0.085
-    assert grasp_fits(0.0175, -0.0175, 0.0, (0.0, 0.0, 0.0), edge, opening)
+    # Across the closing axis (the reference yaw): 17.5 mm for a square cube; along the pads half an edge.
+    assert grasp_fits(0.0175, -0.025, 0.0, (0.0, 0.0, 0.0), edge, opening)
     assert not grasp_fits(0.0176, 0.0, 0.0, (0.0, 0.0, 0.0), edge, opening)
-    # In the cube's own axes: 17 mm along each axis of a cube turned by 30 degrees is 24 mm along world x.
+    assert not grasp_fits(0.0, 0.0251, 0.0, (0.0, 0.0, 0.0), edge, opening)
+    # The paper's +-2.5 cm in world x and y, with the pads closing along world y: 24 mm along x still grasps.
+    assert grasp_fits(0.024, 0.017, 0.0, (0.0, 0.0, math.pi / 2), edge, opening)
+    assert not grasp_fits(0.017, 0.018, 0.0, (0.0, 0.0, math.pi / 2), edge, opening)
+    # Pads closing along a cube square to them, turned by 30 degrees in the world: 17 mm across, 20 mm along.
     yaw = math.radians(30)
-    dx, dy = 0.017 * (math.cos(yaw) - math.sin(yaw)), 0.017 * (math.sin(yaw) + math.cos(yaw))
+    dx, dy = 0.017 * math.cos(yaw) - 0.020 * math.sin(yaw), 0.017 * math.sin(yaw) + 0.020 * math.cos(yaw)
     assert grasp_fits(dx, dy, yaw, (0.0, 0.0, yaw), edge, opening)
+    # A cube turned by 30 degrees against the pads is first met by two edges 9.15 mm either side of
+    # its centre along the pads: the pads' centre must stay between them.
+    assert grasp_fits(0.0, 0.009, math.radians(30), (0.0, 0.0, 0.0), edge, opening)
+    assert not grasp_fits(0.0, 0.0095, math.radians(30), (0.0, 0.0, 0.0), edge, opening)
+    assert grasp_fits(0.0, 0.009, math.radians(-60), (0.0, 0.0, 0.0), edge, opening), "a quarter turn is no turn"
     # A cube turned by 40 degrees against the pads reaches 35.2 mm from its centre: 7.3 mm of room.
     assert grasp_fits(0.007, 0.0, math.radians(40), (0.0, 0.0, 0.0), edge, opening)
     assert not grasp_fits(0.008, 0.0, math.radians(40), (0.0, 0.0, 0.0), edge, opening)
@@ -313,10 +323,10 @@ def test_pick_translation_moves_the_detected_cube_and_the_grasp_centres_it_along
     shift = _xy_mm(before.cube, after.cube)
     np.testing.assert_allclose(shift, [record["dx_mm"], record["dy_mm"]], atol=1e-3)
     assert max(abs(record["dx_mm"]), abs(record["dy_mm"])) <= 25.0
-    yaw = before.cube.yaw_rad  # the shift fits the pads along both of the cube's own axes
-    for axis in ((math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))):
-        assert abs(shift @ np.array(axis)) <= 17.5
     close = trial.probe.stages[stages.CLOSE_ON_CUBE]
+    closing_axis = close.tcp.rotation[:2, 0] / np.linalg.norm(close.tcp.rotation[:2, 0])
+    assert abs(shift @ closing_axis) <= 17.5, "the limit binds across the closing axis"
+    assert abs(shift @ _pad_axis(close)) <= 25.0
     held = trial.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     nominal = baseline.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     assert abs(held[0] - nominal[0]) < 0.3, "centred along the closing axis"
@@ -454,6 +464,8 @@ def test_injectors_compose_and_the_same_seed_reproduces_the_records():
     assert trial.record("perception_offset")["camera_dyaw_deg"] != 0.0
     measured = trial.probe.measured[0]
     cube = trial.probe.fired["pick_rotation"][1].cube
-    assert grasp_fits(cube.x_m, cube.y_m, cube.yaw_rad, (measured.x_m, measured.y_m, measured.yaw_rad), 0.05, 0.085)
+    closing = trial.probe.stages[stages.CLOSE_ON_CUBE].tcp.rotation
+    closing_yaw = math.atan2(closing[1, 0], closing[0, 0])
+    assert grasp_fits(cube.x_m, cube.y_m, cube.yaw_rad, (measured.x_m, measured.y_m, closing_yaw), 0.05, 0.085)
     _assert_recovered(trial)
     _assert_recovered(again)
