@@ -214,22 +214,6 @@ def min_centre_distance_m(first: ObjectType, second: ObjectType) -> float:
     return first.half_diagonal_m + second.half_diagonal_m
 
 
-#: The least distance between the centres of two cubes' targets: a push starts with the pads
-#: 10 mm behind the face and 22 mm deep, so they reach 57 mm from the cube's centre, where a
-#: neighbour's face must not be (57 mm + half an edge, rounded up).
-MIN_TARGET_SPACING_M = 0.09
-#: Beyond the two parts' half extents, what the pads need between two targets (90 mm for cubes).
-TARGET_GAP_M = MIN_TARGET_SPACING_M - CUBE.size_m[0]
-
-
-def min_target_spacing_m(first: ObjectType, second: ObjectType) -> float:
-    """The least distance between two targets' centres: room for the pads to grasp and push between them.
-
-    Half of each part's longer top edge plus ``TARGET_GAP_M`` (90 mm for two cubes, as before).
-    """
-    return max(first.top_size_m) / 2 + max(second.top_size_m) / 2 + TARGET_GAP_M
-
-
 def kind_of(thing: object) -> tuple[ObjectType, str]:
     """A target's or start's kind: its type and colour (parts of one kind are identical)."""
     return object_type_of(thing), str(getattr(thing, "colour", ""))

@@ -4,11 +4,13 @@
 and what the cell is (the top camera's view, the colours it can tell apart) and raises one
 ``PlanError`` naming the first problem:
 
-- every target is well formed, reachable, and far enough from the others (``validate_targets``);
+- every target is well formed and reachable, and the plan can be built among neighbours: an order
+  and, per part, where the pads go (``validate_targets``, by the geometry of ``bt_arrange.layout``);
 - the threshold is one a push can correct (``check_threshold``: not below
   ``ManipulationSettings.min_threshold_mm``);
 - every start is well formed, of a known colour, alone in its colour and name, clear of the other
-  cubes and of the other objects' targets, and reachable;
+  cubes, and far enough from the other objects' targets for the pads picking it and working there
+  (``layout.start_clearance_m``), and reachable;
 - every target's object is in the scene, in the target's colour;
 - every target and every start lies inside the top camera's view with a margin
   (``CameraView.margin_m``).
@@ -31,13 +33,14 @@ import numpy as np
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose, rotation_z
+from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.objects import CUBE, ObjectType, min_centre_distance_m, min_target_spacing_m, object_type_of
+from bt_arrange.objects import CUBE, ObjectType, min_centre_distance_m, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.trees import Target, check_threshold, validate_targets
+from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
 #: room for a placing error and for the detector's crop around the face.
@@ -258,14 +261,22 @@ def check_plan(
                 f"target {target.obj} is a {target.object_type.name} ({target.object_type.size_text}) but the "
                 f"scene's {target.obj} is a {object_type_of(start).name} ({object_type_of(start).size_text})"
             )
+    pads = Pads.from_settings(settings)
+    for part in parts_of(plan, settings):
         for start in scene:
-            if _start_name(start) == target.obj:
+            if _start_name(start) == part.name:
                 continue
-            distance_m = math.hypot(start.x_m - target.x_m, start.y_m - target.y_m)
-            spacing_m = min_target_spacing_m(object_type_of(start), target.object_type)
-            if distance_m < spacing_m:
+            start_kind = object_type_of(start)
+            # The start's own size (a cube's from the settings' edge): the circle it sweeps as it turns.
+            half_diagonal_m = (
+                settings.cube_edge_m * math.sqrt(2) / 2 if start_kind == CUBE else start_kind.half_diagonal_m
+            )
+            need_m = start_clearance_m(half_diagonal_m, pads)
+            gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
+            if gap < need_m:
                 raise PlanError(
-                    f"cube {_start_name(start)} starts {distance_m * 1000:.0f} mm from {target.obj}'s target: the "
-                    f"pads need at least {spacing_m * 1000:.0f} mm between their centres"
+                    f"cube {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
+                    f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's "
+                    "footprint"
                 )
     return plan

@@ -137,7 +137,7 @@ def load(path: str | Path) -> Plan:
     except tomllib.TOMLDecodeError as error:
         raise PlanError(f"{path}: not TOML: {error}") from None
     plan = _Reader(path).read(data)
-    plan.create_root()  # every check of the tree builder (reach, spacing, thresholds) now, before anything moves
+    plan.create_root()  # every check of the tree builder (reach, layout, thresholds) now, before anything moves
     return plan
 
 

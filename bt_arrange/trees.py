@@ -28,26 +28,36 @@ that writes ``/<obj>/pose`` will do.
 
 from __future__ import annotations
 
-import math
+import operator
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import py_trees
 
-from bt_arrange.behaviours import Detect, EstimateGraspFromDepth, GraspGuard, Inspect, MoveHome, Pick, Place, Push, keys
+from bt_arrange.behaviours import (
+    Detect,
+    EstimateGraspFromDepth,
+    GraspGuard,
+    Inspect,
+    MoveHome,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    keys,
+)
 from bt_arrange.behaviours.handling import PUSH_STRATEGIES
 from bt_arrange.checks import finite_number, positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import DIRECTIONS, Pads, Part, Release, Step, free_push_directions, plan_layout, restage_releases
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.objects import CUBE, MIN_TARGET_SPACING_M, ObjectType, kind_of, min_target_spacing_m
+from bt_arrange.objects import CUBE, ObjectType, kind_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
 
-#: Re-exported: the cubes' target spacing (``bt_arrange.objects.min_target_spacing_m`` for any two types).
-MIN_TARGET_SPACING_M = MIN_TARGET_SPACING_M
 CORRECT_MODES = ("each", "after_all")
 #: The yaw error (degrees) the correction loop leaves by default.
 DEFAULT_YAW_THRESHOLD_DEG = 1.0
@@ -90,8 +100,10 @@ def validate_targets(
     """Check a plan before anything moves; a ``PlanError`` names the first problem.
 
     Malformed entries, unknown colours, two targets for one object, one colour on two types, a
-    target out of the arm's reach and two targets closer than ``min_target_spacing_m`` are each a
-    clear error. Targets of one type and colour are identical parts (each with its own name).
+    target out of the arm's reach, and a plan no order and approach can build (``plan_steps``:
+    targets that overlap or lie closer than 2 mm, a part the pads find no room beside, each part's
+    footprint its type's size) are each a clear error. Targets of one type and colour are
+    identical parts (each with its own name).
     """
     if isinstance(targets, (str, bytes)) or not isinstance(targets, Iterable):
         raise PlanError(f"targets must be a list of Target(colour, x_m, y_m, yaw_rad), got {targets!r}")
@@ -139,15 +151,7 @@ def validate_targets(
                 raise PlanError(
                     f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is out of reach: {error}"
                 ) from error
-    for i, first in enumerate(checked):
-        for second in checked[i + 1 :]:
-            distance_m = math.hypot(first.x_m - second.x_m, first.y_m - second.y_m)
-            spacing_m = min_target_spacing_m(first.object_type, second.object_type)
-            if distance_m < spacing_m:
-                raise PlanError(
-                    f"targets {first.obj} and {second.obj} are {distance_m * 1000:.0f} mm apart: the pads need "
-                    f"at least {spacing_m * 1000:.0f} mm between their centres to grasp and push"
-                )
+    plan_steps(checked, settings)
     return checked
 
 
@@ -165,6 +169,39 @@ def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
         for target in plan
         if len(by_kind[kind_of(target)]) > 1
     }
+
+
+def footprint_m(target: Target, settings: ManipulationSettings | None = None) -> tuple[float, float]:
+    """The part's size on the table (x, y in its own frame, metres): its type's top face.
+
+    The cube's is the settings' edge (``cube_edge_m``, 50 mm unless a test changes it).
+    """
+    kind = getattr(target, "object_type", CUBE)
+    if kind == CUBE:
+        edge = (settings or ManipulationSettings()).cube_edge_m
+        return edge, edge
+    return float(kind.top_size_m[0]), float(kind.top_size_m[1])
+
+
+def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
+    """The plan's targets as footprints for ``bt_arrange.layout``, each held only across a side the stroke spans."""
+    return [
+        Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t, settings), grasp_axes=_grasp_axes(t.object_type))
+        for t in targets
+    ]
+
+
+def _grasp_axes(kind: ObjectType) -> tuple[str, ...]:
+    """The axes of the part's frame the pads may close across: its grasp axis, and the other too on a square top."""
+    return ("x", "y") if kind.square_top else (kind.grasp_axis,)
+
+
+def plan_steps(
+    targets: Sequence[Target], settings: ManipulationSettings | None = None, order: Sequence[str] | None = None
+) -> list[Step]:
+    """The layout's steps (``bt_arrange.layout.plan_layout``): the placing order and each part's approach."""
+    settings = settings or ManipulationSettings()
+    return plan_layout(parts_of(targets, settings), Pads.from_settings(settings), order)
 
 
 def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
@@ -240,24 +277,45 @@ def transfer(
     *,
     locate: Locate | None = None,
     kind_targets: Sequence[PlanarPose] = (),
+    release: Release | None = None,
 ) -> py_trees.behaviour.Behaviour:
     """Locate, pick and place one object; a part lost on the way is located and picked again.
 
     ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
     ``kind_targets`` (identical parts: the targets of the kind) let a Detect choose a part that
-    is not at one of them.
+    is not at one of them. ``release`` says where the pads go among neighbours
+    (``bt_arrange.layout``; default: anywhere).
     """
     obj = target.obj
-    finder = (locate or by_camera())(target)
-    if kind_targets and isinstance(finder, Detect):
-        finder.among(kind_targets)
+    kind = target.object_type
+
+    def find() -> py_trees.behaviour.Behaviour:
+        finder = (locate or by_camera())(target)
+        if kind_targets and isinstance(finder, Detect):
+            finder.among(kind_targets)
+        return finder
+
+    look_again: list[py_trees.behaviour.Behaviour] = []
+    if release is not None:
+        # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
+        # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
+        # at it again, and pick it centred.
+        look_again = [
+            GraspGuard(
+                f"while setting {obj} down",
+                Place(f"set {obj} down to look again", obj, kind, where="pick"),
+            ),
+            find(),
+            Pick(f"pick {obj} centred", obj, kind),
+        ]
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            finder,
-            Pick(f"pick {obj}", obj, target.object_type),
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, target.object_type)),
+            find(),
+            Pick(f"pick {obj}", obj, kind),
+            *look_again,
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, kind, release=release)),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
@@ -289,9 +347,18 @@ def correction(
     *,
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
+    towards: tuple[str, ...] | None = None,
+    restage: dict[str, Release] | None = None,
+    push_opening_m: float | None = None,
+    count: bool = True,
+    label: str = "",
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
+    ``towards``: the directions (target frame) it may be pushed, the sides a neighbour blocks left
+    out (default all four). ``restage``: per blocked direction, a release on the other side; when
+    a correction needs a blocked side, Push fails and the part is picked up and released there,
+    from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
     ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, or ``"learned"``.
     ``yaw_threshold_deg=None`` corrects the position only.
     """
@@ -300,24 +367,57 @@ def correction(
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
     obj = target.obj
+    push: py_trees.behaviour.Behaviour = Push(
+        f"push {obj}{label}",
+        obj,
+        strategy,
+        target.object_type,
+        yaw_threshold_deg,
+        towards=towards,
+        opening_m=push_opening_m,
+    )
+    if restage:
+        push = py_trees.composites.Selector(
+            name=f"push {obj} from a free side{label}",
+            memory=True,
+            children=[push, *(_restage(target, d, release, label) for d, release in restage.items())],
+        )
     push_and_look = py_trees.composites.Sequence(
-        name=f"push and inspect {obj}",
+        name=f"push and inspect {obj}{label}",
         memory=True,
-        children=[
-            Push(f"push {obj}", obj, strategy, target.object_type, yaw_threshold_deg),
-            inspect(target, f"inspect {obj}", kind_targets=kind_targets),
-        ],
+        children=[push, inspect(target, f"inspect {obj}{label}", kind_targets=kind_targets)],
     )
     return RepeatUntilWithin(
-        name=f"correct {obj} to {threshold_mm:g} mm",
+        name=f"correct {obj} to {threshold_mm:g} mm{label}",
         child=push_and_look,
         offset_key=keys.key(obj, keys.OFFSET_MM),
         threshold_mm=threshold_mm,
         max_attempts=max_pushes,
-        corrections_key=keys.key(obj, keys.CORRECTIONS),
+        corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
         obj=obj,
         yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
         yaw_threshold_deg=yaw_threshold_deg,
+    )
+
+
+def _restage(target: Target, towards: str, release: Release, label: str) -> py_trees.behaviour.Behaviour:
+    """When Push needed ``towards`` from a blocked side: pick the part up, release it past the target on that side."""
+    obj = target.obj
+    dx, dy = release.offset_m
+    return py_trees.composites.Sequence(
+        name=f"release {obj} again {dx * 1000:+.0f}, {dy * 1000:+.0f} mm to push it {towards}{label}",
+        memory=True,
+        children=[
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj} needs a push {towards}{label}",
+                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
+            ),
+            Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release),
+            GraspGuard(
+                f"while holding {obj} again{label}",
+                Place(f"place {obj} again{label}", obj, target.object_type, release=release),
+            ),
+        ],
     )
 
 
@@ -328,29 +428,93 @@ def arrange_one(
     max_regrasps: int = 3,
     *,
     locate: Locate | None = None,
+    step: Step | None = None,
+    neighbours: Sequence[tuple[Target, tuple[str, ...], dict[str, Release]]] = (),
     strategy: str = "paper",
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
+    kind_of_neighbour: Mapping[str, Sequence[PlanarPose]] | None = None,
 ) -> py_trees.behaviour.Behaviour:
-    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds."""
+    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds.
+
+    ``step`` (from ``plan_steps``) places it among neighbours: its release, the sides it may be
+    pushed from and how to release it again. ``neighbours`` are the parts placed before it nearby,
+    each with the directions it may be pushed and its restaging once this one is down: each is
+    looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
+    ``kind_targets`` (identical parts) are the targets of its kind; ``kind_of_neighbour`` gives
+    a neighbour's.
+    """
     obj = target.obj
-    return py_trees.composites.Sequence(
-        name=f"arrange {obj}",
-        memory=True,
-        children=[
-            set_target(target),
-            transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets),
-            inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
-            correction(
-                target,
-                threshold_mm,
-                max_pushes,
-                strategy,
-                yaw_threshold_deg=yaw_threshold_deg,
-                kind_targets=kind_targets,
-            ),
-        ],
-    )
+    dense = step is not None and _is_dense(step)
+    release = step.release if dense and step is not None else None
+    towards = step.push_towards if dense and step is not None else None
+    restage = step.restage if dense and step is not None else None
+    children: list[py_trees.behaviour.Behaviour] = [
+        set_target(target),
+        transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
+        inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
+        correction(
+            target,
+            threshold_mm,
+            max_pushes,
+            strategy,
+            yaw_threshold_deg=yaw_threshold_deg,
+            kind_targets=kind_targets,
+            towards=towards,
+            restage=restage,
+            push_opening_m=_opening(step, dense),
+        ),
+    ]
+    for neighbour, sides, again in neighbours:
+        label = f" after {obj}"
+        neighbour_kind = (kind_of_neighbour or {}).get(neighbour.obj, ())
+        children.append(
+            py_trees.composites.Sequence(
+                name=f"look again at {neighbour.obj}{label}",
+                memory=True,
+                children=[
+                    Recheck(
+                        f"look at {neighbour.obj}{label}",
+                        neighbour.obj,
+                        neighbour.colour,
+                        after=obj,
+                        object_type=neighbour.object_type,
+                        kind_targets=neighbour_kind,
+                    ),
+                    correction(
+                        neighbour,
+                        threshold_mm,
+                        max_pushes,
+                        strategy,
+                        yaw_threshold_deg=yaw_threshold_deg,
+                        kind_targets=neighbour_kind,
+                        towards=sides,
+                        restage=again,
+                        push_opening_m=_DENSE_PADS.push_opening_m(parts_of([neighbour])[0], "x"),
+                        count=False,
+                        label=label,
+                    ),
+                ],
+            )
+        )
+    return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
+
+
+_DENSE_PADS = Pads.from_settings(ManipulationSettings())
+
+
+def _opening(step: Step | None, dense: bool) -> float | None:
+    """The push opening among neighbours (along x; Push keeps it within the pushed face's own width), None when free."""
+    return _DENSE_PADS.push_opening_m(step.part, "x") if dense and step is not None else None
+
+
+def _dense_release(step: Step) -> Release | None:
+    return step.release if _is_dense(step) else None
+
+
+def _is_dense(step: Step) -> bool:
+    """A step among neighbours: released away from its target, near placed parts, or with a blocked side."""
+    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
 
 
 class Arrangement(py_trees.composites.Sequence):
@@ -390,6 +554,7 @@ def arrangement(
     max_regrasps: int = 3,
     keep_going: bool = True,
     locate: Locate | None = None,
+    order: Sequence[str] | None = None,
     strategy: str = "paper",
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     colours: ColourTable | Mapping[str, object] | None = None,
@@ -401,6 +566,10 @@ def arrangement(
     With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
     its subtree's failure is kept in the log and in the report, and the next object is handled.
     ``locate`` says how each object is found before it is picked (default ``by_camera()``).
+    ``order`` (object names) is the placing order; by default the layout chooses one
+    (``bt_arrange.layout.plan_layout``: the plan's own order where it can be built). Among
+    neighbours each part is released where the pads fit, pushed only from free sides, and the
+    parts near it are looked at again once it is down.
     ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's) or ``"learned"``
     (``Push``: the larger axis first, each push's landing error learned).
     ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
@@ -419,6 +588,11 @@ def arrangement(
     table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
     plan = validate_targets(targets, colours=table.names)
     siblings = kinds(plan)
+    steps = plan_steps(plan, order=order)
+    steps_by_obj = {st.part.name: st for st in steps}
+    by_obj = {t.obj: t for t in plan}
+    ordered = [by_obj[st.part.name] for st in steps]
+    pads = Pads.from_settings(ManipulationSettings())
 
     def carry_on(subtree: py_trees.behaviour.Behaviour, obj: str) -> py_trees.behaviour.Behaviour:
         if not keep_going:
@@ -426,23 +600,34 @@ def arrangement(
         return py_trees.decorators.FailureIsSuccess(name=f"then the next ({obj})", child=subtree)
 
     if correct == "each":
-        children = [
-            carry_on(
-                arrange_one(
-                    t,
-                    threshold_mm,
-                    max_pushes,
-                    max_regrasps,
-                    locate=locate,
-                    strategy=strategy,
-                    yaw_threshold_deg=yaw_threshold_deg,
-                    kind_targets=siblings.get(t.obj, ()),
-                ),
-                t.obj,
+        children = []
+        for index, step in enumerate(steps):
+            placed = [(st.part.name, st.part.footprint) for st in steps[: index + 1]]
+            neighbours = [
+                (
+                    by_obj[name],
+                    free_push_directions(steps_by_obj[name].part, placed, pads),
+                    restage_releases(steps_by_obj[name].part, placed, pads),
+                )
+                for name in step.neighbours
+            ]
+            target = by_obj[step.part.name]
+            subtree = arrange_one(
+                target,
+                threshold_mm,
+                max_pushes,
+                max_regrasps,
+                locate=locate,
+                strategy=strategy,
+                step=step,
+                neighbours=neighbours,
+                yaw_threshold_deg=yaw_threshold_deg,
+                kind_targets=siblings.get(target.obj, ()),
+                kind_of_neighbour=siblings,
             )
-            for t in plan
-        ]
+            children.append(carry_on(subtree, target.obj))
     else:
+        everything = [(st.part.name, st.part.footprint) for st in steps]
         place_all = py_trees.composites.Sequence(
             name="place all",
             memory=True,
@@ -453,7 +638,13 @@ def arrangement(
                         memory=True,
                         children=[
                             set_target(t),
-                            transfer(t, max_regrasps, locate=locate, kind_targets=siblings.get(t.obj, ())),
+                            transfer(
+                                t,
+                                max_regrasps,
+                                locate=locate,
+                                kind_targets=siblings.get(t.obj, ()),
+                                release=_dense_release(steps_by_obj[t.obj]),
+                            ),
                             inspect(
                                 t,
                                 f"inspect {t.obj} after placing",
@@ -464,7 +655,7 @@ def arrangement(
                     ),
                     t.obj,
                 )
-                for t in plan
+                for t in ordered
             ],
         )
         correct_all = py_trees.composites.Sequence(
@@ -488,12 +679,14 @@ def arrangement(
                                 strategy,
                                 yaw_threshold_deg=yaw_threshold_deg,
                                 kind_targets=siblings.get(t.obj, ()),
+                                towards=free_push_directions(steps_by_obj[t.obj].part, everything, pads),
+                                restage=restage_releases(steps_by_obj[t.obj].part, everything, pads),
                             ),
                         ],
                     ),
                     t.obj,
                 )
-                for t in plan
+                for t in ordered
             ],
         )
         children = [place_all, correct_all]

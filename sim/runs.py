@@ -18,7 +18,18 @@ from typing import Any
 import py_trees
 from py_trees.common import Access, Status
 
-from bt_arrange.behaviours import Context, Detect, EstimateGraspFromDepth, GraspGuard, Inspect, Pick, Place, Push, keys
+from bt_arrange.behaviours import (
+    Context,
+    Detect,
+    EstimateGraspFromDepth,
+    GraspGuard,
+    Inspect,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    keys,
+)
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
@@ -66,6 +77,10 @@ class ObjectOutcome:
     #: The part's type and its size (mm), for the report.
     object_type: str = "cube"
     size_mm: tuple[float, float, float] = (50.0, 50.0, 50.0)
+    #: The most later steps (a neighbour's release and pushes) moved it between two looks at it:
+    #: by the camera (``Recheck``), and by ground truth at the same moments; None when never looked at again.
+    moved_by_later_mm: float | None = None
+    moved_by_later_truth_mm: float | None = None
 
 
 @dataclass
@@ -154,6 +169,11 @@ class SimulatedRun:
         #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
         self.runner_hooks: list[Callable[[Runner], None]] = []
         self._placed_truth_mm: dict[str, float] = {}
+        #: Ground truth (evaluation only) of each object when last looked at, and the most it moved between looks.
+        self._looked_truth_xy: dict[str, tuple[float, float]] = {}
+        self._moved_truth_mm: dict[str, float] = {}
+        #: A tree that looks at placed parts again (a dense one): only then is the truth tracked per look.
+        self._rechecks = any(isinstance(node, Recheck) for node in root.iterate())
         #: What the replay page shows (recorded runs only), and its heading.
         self.replay: ReplayRecorder | None = None
         self.title = title or root.name
@@ -217,6 +237,8 @@ class SimulatedRun:
         if transition.new != Status.SUCCESS.value:
             return
         node = self.node(transition)
+        if self._rechecks and isinstance(node, Inspect):
+            self._track_truth(node)
         # The Inspects that record the after-placing figures, by their own flag rather than their names.
         obj = node.obj if isinstance(node, Inspect) and node.after_placing else None
         if obj is not None and isinstance(self.root, Arrangement):
@@ -229,6 +251,20 @@ class SimulatedRun:
             self._save_image(f"after_placing_{obj}")
         elif isinstance(self.root, Arrangement) and node is not None and node is self.root.place_all:
             self._save_image("after_placing")
+
+    def _track_truth(self, node: Inspect) -> None:
+        """Ground truth at each look at an object; at a ``Recheck``, how far it moved since the last look.
+
+        With identical parts the part looked at is the one of its kind nearest its target (``part_of``).
+        """
+        targets = self.root.targets if isinstance(self.root, Arrangement) else []
+        target = next((t for t in targets if t.obj == node.obj), None)
+        x, y, _ = self.cell.cube_planar_truth(self.part_of(target) if target is not None else node.obj)
+        before = self._looked_truth_xy.get(node.obj)
+        if isinstance(node, Recheck) and before is not None:
+            moved = math.hypot(x - before[0], y - before[1]) * 1000
+            self._moved_truth_mm[node.obj] = max(self._moved_truth_mm.get(node.obj, 0.0), moved)
+        self._looked_truth_xy[node.obj] = (x, y)
 
     def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
         """The behaviour of the tree a transition is about (by its ``node_id``), or None."""
@@ -276,6 +312,8 @@ class SimulatedRun:
                     final_yaw_error_truth_deg=round(self._truth_yaw_error_deg(target), 4),
                     object_type=target.object_type.name,
                     size_mm=tuple(round(v * 1000, 3) for v in target.object_type.size_m),  # type: ignore[arg-type]
+                    moved_by_later_mm=_rounded(_get(report, keys.key(target.obj, keys.MAX_MOVED_MM))),
+                    moved_by_later_truth_mm=_rounded(self._moved_truth_mm.get(target.obj)),
                 )
             )
         return outcomes

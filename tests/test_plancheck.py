@@ -13,10 +13,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.layout import Part, gap_m
 from bt_arrange.objects import ObjectType
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import CUBE_COLOURS_RGB, ManipulationSettings
-from bt_arrange.trees import MIN_TARGET_SPACING_M, Target, arrangement, check_threshold, correction
+from bt_arrange.trees import Target, arrangement, check_threshold, correction
 from bt_arrange_sim.cell import CameraConfig
 from bt_arrange_sim.scenes import CubeStart, scatter
 
@@ -115,7 +116,10 @@ def test_identical_parts_may_share_a_colour_in_the_scene() -> None:
 
 
 def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:
-    with pytest.raises(PlanError, match=r"^cube blue starts 50 mm from red's target: the pads need at least 90 mm"):
+    with pytest.raises(
+        PlanError,
+        match=r"^cube blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm",
+    ):
         check_plan([RED], starts=[RED_START, CubeStart("blue", 0.55, 0.0, 0.0)], view=VIEW)
 
 
@@ -145,7 +149,10 @@ def assert_valid(plan: list[Target], scene: list[CubeStart] | None) -> None:
             assert any((s.name or s.colour) == target.obj and s.colour == target.colour for s in scene)
     for i, first in enumerate(plan):
         for second in plan[i + 1 :]:
-            assert math.hypot(first.x_m - second.x_m, first.y_m - second.y_m) >= MIN_TARGET_SPACING_M
+            # Parts never overlap or come closer than the 2 mm the layout demands.
+            a = Part("a", first.x_m, first.y_m, first.yaw_rad, 0.05, 0.05).footprint
+            b = Part("b", second.x_m, second.y_m, second.yaw_rad, 0.05, 0.05).footprint
+            assert gap_m(a, b) >= 0.002 - 1e-9
 
 
 @FAST

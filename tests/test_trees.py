@@ -14,13 +14,15 @@ from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.objects import ObjectType
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.trees import (
-    MIN_TARGET_SPACING_M,
     Arrangement,
     Target,
     arrange_one,
     arrangement,
     kinds,
+    parts_of,
+    plan_steps,
     validate_targets,
 )
 
@@ -69,7 +71,11 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
             r"^targets 1 and 2 are both named 'red' \(identical parts need a name each, e\.g\. name='red 1'",
         ),
         ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
-        ([RED, Target("green", 0.45, 0.02)], r"^targets red and green are 80 mm apart: the pads need at least 90 mm"),
+        ([RED, Target("green", 0.45, 0.08)], r"^targets red and green overlap: two parts cannot stand there$"),
+        (
+            [RED, Target("green", 0.45, 0.049)],
+            r"^targets red and green are 1.0 mm apart, under the 2 mm two parts need",
+        ),
     ],
     ids=[
         "empty",
@@ -83,6 +89,7 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
         "unknown colour",
         "two for one colour",
         "out of reach",
+        "overlapping",
         "too close",
     ],
 )
@@ -93,8 +100,8 @@ def test_a_bad_plan_is_one_clear_plan_error(targets, message: str) -> None:
         arrangement(targets)
 
 
-def test_targets_just_far_enough_apart_are_accepted() -> None:
-    other = Target("green", RED.x_m, RED.y_m - MIN_TARGET_SPACING_M - 1e-6)
+def test_targets_2_mm_apart_are_accepted() -> None:
+    other = Target("green", RED.x_m, RED.y_m - 0.052)
     assert validate_targets([RED, other]) == [RED, other]
 
 
@@ -322,3 +329,39 @@ def test_each_skips_the_correction_of_an_object_that_was_not_placed(clock) -> No
     assert find(root, "arrange red").status == Status.FAILURE
     assert find(root, "push red").status == Status.INVALID
     assert isinstance(find(root, "park the arm"), MoveHome)
+
+
+# -- the layout check on each type's real footprint (issues 10 and 14 together) ------------------
+
+SMALL = ObjectType("small", (0.03, 0.03, 0.03))
+BAR = ObjectType("bar", (0.08, 0.04, 0.04))
+
+
+def test_the_layout_reads_each_type_s_footprint_so_small_parts_2_mm_apart_are_accepted() -> None:
+    # 32 mm centre to centre: a 2 mm gap between 30 mm cubes (50 mm cubes there would overlap).
+    first = Target("blue", 0.45, 0.0, name="small 1", object_type=SMALL)
+    second = Target("blue", 0.45 + 0.032, 0.0, name="small 2", object_type=SMALL)
+    assert validate_targets([first, second]) == [first, second]
+    assert [p.size_x_m for p in parts_of([first, second])] == [0.03, 0.03]
+
+
+def test_bars_whose_real_footprints_overlap_are_refused_naming_both() -> None:
+    # 60 mm apart along their 80 mm side: they overlap (two 50 mm cubes there would not).
+    first = Target("orange", 0.45, 0.0, name="bar 1", object_type=BAR)
+    second = Target("orange", 0.51, 0.0, name="bar 2", object_type=BAR)
+    with pytest.raises(PlanError, match=r"^targets bar 1 and bar 2 overlap"):
+        validate_targets([first, second], colours=[*DEFAULT_COLOUR_TABLE.names, "orange"])
+
+
+def test_bars_2_mm_apart_end_to_end_are_accepted_without_the_old_90_mm_spacing() -> None:
+    # Held across their 40 mm side, whose faces stay free in a row along their 80 mm side.
+    bars = [Target("orange", 0.40 + i * 0.082, 0.0, name=f"bar {i}", object_type=BAR) for i in range(3)]
+    assert validate_targets(bars, colours=[*DEFAULT_COLOUR_TABLE.names, "orange"]) == bars
+
+
+def test_a_bar_is_held_and_released_only_across_the_side_the_stroke_spans() -> None:
+    bar = Target("orange", 0.45, 0.0, object_type=BAR)
+    assert parts_of([bar])[0].grasp_axes == (BAR.grasp_axis,) == ("y",)
+    assert parts_of([RED])[0].grasp_axes == ("x", "y")
+    steps = plan_steps([bar], order=None)
+    assert steps[0].release.axis == BAR.grasp_axis

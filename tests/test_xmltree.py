@@ -12,7 +12,9 @@ from bt_arrange.display import blackboard_access
 from bt_arrange.xmltree import XmlTreeError
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
-PYTHON_TREES = sorted(TREES.glob("*.py"))
+#: Dense trees (``XML_TWIN = False``: their Pick, Place and Push carry where the pads go among
+#: neighbours, which the XML node models do not hold yet) are run by tests/integration instead.
+PYTHON_TREES = [p for p in sorted(TREES.glob("*.py")) if "XML_TWIN = False" not in p.read_text()]
 
 
 def build(path):
@@ -195,3 +197,9 @@ def test_show_writes_xml_to_a_file_and_reads_it_back(capsys, tmp_path):
     assert out.read_text() == (TREES / "four_cubes.xml").read_text()
     assert cli.main(["show", str(out)]) == 0
     assert "correct yellow to 1 mm" in capsys.readouterr().out
+
+
+def test_a_dense_tree_is_refused_by_the_writer_not_written_without_its_pads():
+    dense = build(TREES / "dense_block.py")
+    with pytest.raises(xmltree.XmlTreeError, match="not a registered node|among neighbours"):
+        xmltree.to_xml(dense, tree_id="dense")

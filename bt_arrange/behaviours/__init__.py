@@ -12,7 +12,7 @@ from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, St
 from bt_arrange.behaviours.context import ArmBrake, Context
 from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.behaviours.handling import GraspGuard, Pick, Place, Push, holding
-from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, offset_in_target_frame_mm
+from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, Recheck, offset_in_target_frame_mm
 
 __all__ = [
     "ArmBrake",
@@ -28,6 +28,7 @@ __all__ = [
     "Pick",
     "Place",
     "Push",
+    "Recheck",
     "Stage",
     "StagedBehaviour",
     "holding",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import py_trees
@@ -14,6 +15,7 @@ from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, On
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
+from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
@@ -39,6 +41,11 @@ def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool =
         return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
 
     return plan
+
+
+def _axis_yaw_offset_rad(axis: str) -> float:
+    """Gripper yaw minus the target's yaw for pads that close across the target frame's ``axis``."""
+    return math.pi / 2 if axis == "y" else 0.0
 
 
 def _wrist_yaw(context: Context) -> float:
@@ -85,14 +92,23 @@ class Pick(StagedBehaviour):
     check from the finger width that the pads hold the cube across two faces, lift. A bad grasp
     (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
     lifting and fails with the width, so a retry can look and pick again.
+
+    ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
+    come down in the free room beside two faces and nowhere else.
     """
 
-    def __init__(self, name: str, obj: str, object_type: ObjectType | None = None) -> None:
+    def __init__(
+        self, name: str, obj: str, object_type: ObjectType | None = None, grasp: Release | None = None
+    ) -> None:
         super().__init__(name)
         self.obj = obj
         #: The part's type: the pads close across its narrower side (``ObjectType.grasp_axis``).
         self.object_type = object_type or CUBE
+        self.grasp = grasp
         self.reads(keys.key(obj, keys.POSE))
+        if grasp is not None:
+            self.reads(keys.key(obj, keys.TARGET))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
 
@@ -103,16 +119,31 @@ class Pick(StagedBehaviour):
         kind = self.object_type
         grasp_m, approach_m, _ = heights_m(s, kind)
         x, y = pose.x_m, pose.y_m
-        yaw = nearest_symmetric_yaw(pose.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad)
+        opening_m = s.open_width_m
+        if self.grasp is None:
+            yaw = nearest_symmetric_yaw(
+                pose.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
+        else:
+            target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+            # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.
+            offset_rad = _axis_yaw_offset_rad(self.grasp.axis)
+            across = target.yaw_rad + offset_rad
+            yaw = nearest_symmetric_yaw(
+                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.symmetry_rad),
+                _wrist_yaw(context),
+                GRIPPER_SYMMETRY_RAD,
+            )
+            opening_m = self.grasp.opening_m
         return [
-            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(s.open_width_m), wait=False),
+            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, approach_m, yaw)),
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
             MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, grasp_m, yaw)),
             GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
-            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(s.open_width_m)), self._bad),
+            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
             MoveStage(stage.LIFT_CUBE, _line_to(x, y, approach_m, yaw)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
@@ -148,13 +179,36 @@ class Pick(StagedBehaviour):
 
 
 class Place(StagedBehaviour):
-    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat."""
+    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat.
 
-    def __init__(self, name: str, obj: str, object_type: ObjectType | None = None) -> None:
+    ``release`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    stand across that axis of the target's frame and open only to ``release.opening_m``, and a
+    staged release lets go ``release.offset_m`` (target frame) away from the target, where the
+    pads fit, for pushes to bring it home.
+
+    ``where="pick"`` sets the part down where it was picked (``/<obj>/pose``) instead: a part
+    about to go among neighbours is set down and looked at once more, so the next grasp is
+    centred on it and its offset in the pads (unknown while held) does not carry into a neighbour.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        object_type: ObjectType | None = None,
+        release: Release | None = None,
+        where: str = "target",
+    ) -> None:
         super().__init__(name)
+        if where not in ("target", "pick"):
+            raise BtArrangeError(f"place {name!r}: where={where!r}, choose target or pick")
         self.obj = obj
         self.object_type = object_type or CUBE
+        self.release = release
+        self.where = where
         self.reads(keys.key(obj, keys.TARGET))
+        if where == "pick":
+            self.reads(keys.key(obj, keys.POSE))
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -163,18 +217,39 @@ class Place(StagedBehaviour):
         kind = self.object_type
         grasp_m, approach_m, _ = heights_m(s, kind)
         x, y = target.x_m, target.y_m
-        # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
-        # will do (any quarter turn for a square top, a half turn otherwise).
-        yaw = nearest_symmetric_yaw(target.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad)
+        opening_m = s.open_width_m
+        if self.where == "pick":
+            picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
+            x, y = picked.x_m, picked.y_m
+            yaw = nearest_symmetric_yaw(
+                picked.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
+        elif self.release is None:
+            # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
+            # will do (any quarter turn for a square top, a half turn otherwise).
+            yaw = nearest_symmetric_yaw(
+                target.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
+        else:
+            offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
+            x, y = x + float(offset[0]), y + float(offset[1])
+            across = target.yaw_rad + _axis_yaw_offset_rad(self.release.axis)
+            yaw = nearest_symmetric_yaw(across, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
+            opening_m = self.release.opening_m
         return [
             MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, approach_m, yaw)),
             MoveStage(stage.LOWER_CUBE, _line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
-            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(s.open_width_m)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m)),
             MoveStage(stage.RETREAT, _line_to(x, y, approach_m, yaw)),
         ]
 
     def success_message(self) -> str:
         """Feedback once released."""
+        if self.where == "pick":
+            return f"{self.obj} set down where it was picked, to be looked at and picked again"
+        if self.release is not None and self.release.staged:
+            dx, dy = self.release.offset_m
+            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target, to push home"
         return f"{self.obj} released at its target"
 
 
@@ -197,6 +272,12 @@ class Push(StagedBehaviour):
     local calibration error as the camera sees it, which an absolute push never corrects by itself):
     after a push along an axis aimed at ``aim``, the cube's measured position minus ``aim`` is added to
     that axis' bias, and the next push along it aims the bias short of the target.
+
+    ``towards`` (directions of the target's frame, ``"+x"``, ``"-y"`` ...; default all four) are
+    the directions it may push: a side a neighbour blocks is never pushed from. When the offset
+    can only be corrected from a blocked side, Push fails saying so and writes the direction it
+    needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
+    pushed from.
     """
 
     def __init__(
@@ -206,6 +287,9 @@ class Push(StagedBehaviour):
         strategy: str = "paper",
         object_type: ObjectType | None = None,
         yaw_threshold_deg: float | None = None,
+        *,
+        towards: tuple[str, ...] | None = None,
+        opening_m: float | None = None,
     ) -> None:
         super().__init__(name)
         if strategy not in PUSH_STRATEGIES:
@@ -216,12 +300,18 @@ class Push(StagedBehaviour):
         #: With a yaw error (``/<obj>/yaw_error_deg``) at or above this, a push is made even when the
         #: offset along its axis is below ``min_push_m``: the pads' line contact squares the part.
         self.yaw_threshold_deg = yaw_threshold_deg
+        #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
+        #: width); default the paper's width minus a pad's thickness.
+        self.opening_m = opening_m
+        if towards is not None and any(d not in DIRECTIONS for d in towards):
+            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
+        self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
         if yaw_threshold_deg is not None:
             self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
-        self.writes(keys.key(obj, keys.PUSH_AXIS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
         if strategy == "learned":
             for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
                 self.reads(keys.key(obj, field))
@@ -239,9 +329,20 @@ class Push(StagedBehaviour):
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
         if self.strategy == "learned":
             axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
+            needed = ("+" if distance_m >= 0 else "-") + axis
+            choice: str | Blocked = axis
+            if abs(distance_m) >= s.min_push_m and needed not in self.towards:
+                choice = Blocked(needed, distance_m * 1000)
         else:
-            axis = self.choose_axis(preferred, offset_xy_mm, s.min_push_m * 1000)
-            distance_m = (offset_xy_mm[0] if axis == "x" else offset_xy_mm[1]) / 1000
+            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
+            if not isinstance(choice, Blocked):
+                distance_m = (offset_xy_mm[0] if choice == "x" else offset_xy_mm[1]) / 1000
+        if isinstance(choice, Blocked):
+            self.pushed = None
+            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
+            blocked = choice
+            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+        axis = choice
         self.write(axis_key, "y" if axis == "x" else "x")
         self.pushed = (axis, distance_m)
         self.squaring = False
@@ -250,8 +351,18 @@ class Push(StagedBehaviour):
                 return []
             # Within reach of the target but turned: a push of the line contact alone squares it.
             self.squaring = True
+        sign = math.copysign(1.0, distance_m)
+        if self.squaring:
+            # A squaring push barely moves the part: make it from a free side, whichever sign.
+            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in self.towards]
+            if not free:
+                self.squaring = False
+                return []
+            sign = free[0]
+            distance_m = math.copysign(abs(distance_m), sign)
+            self.pushed = (axis, distance_m)
         unit = np.array([1.0, 0.0, 0.0]) if axis == "x" else np.array([0.0, 1.0, 0.0])
-        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * math.copysign(1.0, distance_m)
+        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * sign
         heading = math.atan2(direction[1], direction[0])
         # The closing axis lies across the push; the gripper is symmetric under a half turn.
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
@@ -261,6 +372,9 @@ class Push(StagedBehaviour):
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * abs(distance_m)
         back = end - direction * s.push_clearance_m
+        if self.opening_m is not None:
+            # Among neighbours: the fingers stay within the face's width (the layout's opening).
+            opening_m = min(opening_m, self.opening_m)
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], approach_m, yaw)),
@@ -332,6 +446,28 @@ class Push(StagedBehaviour):
         return (bias[0], bias[1]), axis, wanted[0 if axis == "x" else 1]
 
     @staticmethod
+    def choose_side(
+        preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float, towards: tuple[str, ...]
+    ) -> str | Blocked:
+        """The axis to push along (as ``choose_axis``) among the free directions, or what blocks it.
+
+        An axis whose offset needs a push towards a direction not in ``towards`` is skipped; when
+        every axis with an offset of a push or more is so, the answer is ``Blocked``.
+        """
+        along = {"x": offset_xy_mm[0], "y": offset_xy_mm[1]}
+
+        def needs(axis: str) -> str:
+            return ("+" if along[axis] >= 0 else "-") + axis
+
+        axis = Push.choose_axis(preferred, offset_xy_mm, min_push_mm)
+        other = "y" if axis == "x" else "x"
+        if abs(along[axis]) < min_push_mm or needs(axis) in towards:
+            return axis
+        if abs(along[other]) >= min_push_mm and needs(other) in towards:
+            return other
+        return Blocked(needs(axis), along[axis])
+
+    @staticmethod
     def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
         """The preferred (alternated) axis, unless its offset is below a push and the other's is not."""
         other = "y" if preferred == "x" else "x"
@@ -349,6 +485,23 @@ class Push(StagedBehaviour):
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
             return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
         return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
+
+
+@dataclass(frozen=True)
+class Blocked:
+    """A correction Push cannot make: the part must move ``towards`` (target frame) by ``offset_mm``."""
+
+    towards: str
+    offset_mm: float
+
+    def reason(self, obj: str) -> str:
+        """The feedback: which side, and what happens next."""
+        side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
+        return (
+            f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
+            "where a neighbour leaves the pads no room: pick it up and release it again "
+            "on the side it can be pushed from"
+        )
 
 
 class GraspGuard(py_trees.decorators.EternalGuard):

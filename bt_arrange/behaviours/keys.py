@@ -11,6 +11,9 @@
 | ``/<obj>/yaw_error_deg`` | ``float``, measured minus target yaw (folded) | Inspect | RepeatUntilWithin, Push |
 | ``/<obj>/placed_yaw_error_deg`` | ``float``, the yaw error after placing | Inspect(after placing) | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
+| ``/<obj>/blocked_towards`` | ``"+x"`` ..., a push a neighbour blocks | Push | the tree's restaging |
+| ``/<obj>/moved_mm`` | ``float``, how far it moved since it was last looked at | Recheck | reports |
+| ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
 | ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
 | ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
 """
@@ -26,6 +29,9 @@ CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
 YAW_ERROR_DEG = "yaw_error_deg"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
+BLOCKED_TOWARDS = "blocked_towards"
+MOVED_MM = "moved_mm"
+MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
 LAST_PUSH = "last_push"
 

@@ -289,3 +289,52 @@ class Inspect(Detect):
         """Feedback with the offset."""
         yaw_text = f"yaw error {self.yaw_error_deg:+.2f} deg"
         return f"{super().success_message()}; {yaw_text}; {self.offset_mm:.2f} mm from the target"
+
+
+class Recheck(Inspect):
+    """Look again at a part placed earlier, after a neighbour's release and pushes: did they move it.
+
+    An Inspect (the offset to its target is written afresh, so a correction loop after it pushes
+    the part back when it moved beyond the threshold) that also writes how far the part moved
+    since it was last looked at, ``/<obj>/moved_mm`` (camera), and the most any later step moved
+    it, ``/<obj>/max_moved_mm``. ``after`` names the step whose effect is checked.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        colour: str | None = None,
+        after: str = "",
+        object_type: ObjectType | None = None,
+        kind_targets: Sequence[PlanarPose] = (),
+    ) -> None:
+        super().__init__(name, obj, colour, object_type=object_type, kind_targets=kind_targets)
+        self.after = after
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.MAX_MOVED_MM))
+        self.writes(keys.key(obj, keys.MOVED_MM), keys.key(obj, keys.MAX_MOVED_MM))
+        self.moved_mm: float | None = None
+        self._before: Pose | None = None
+
+    def on_found(self, pose: Pose) -> None:
+        """Compare with the pose it had when last looked at, then as Inspect."""
+        # Detect wrote the new pose already; the one before it was kept by _look.
+        before = self._before
+        self.moved_mm = None
+        if before is not None:
+            self.moved_mm = float(np.hypot(pose.x_m - before.x_m, pose.y_m - before.y_m) * 1000)
+            self.write(keys.key(self.obj, keys.MOVED_MM), self.moved_mm)
+            max_key = keys.key(self.obj, keys.MAX_MOVED_MM)
+            previous = self.blackboard.get(max_key) if self.blackboard.exists(max_key) else 0.0
+            self.write(max_key, max(float(previous), self.moved_mm))
+        super().on_found(pose)
+
+    def _look(self, context: Context) -> str | None:
+        pose_key = keys.key(self.obj, keys.POSE)
+        self._before = self.blackboard.get(pose_key) if self.blackboard.exists(pose_key) else None
+        return super()._look(context)
+
+    def success_message(self) -> str:
+        """Feedback with the offset and the motion since last looked at."""
+        moved = "" if self.moved_mm is None else f"; moved {self.moved_mm:.2f} mm since last looked at"
+        return f"{super().success_message()}{moved}"

@@ -31,6 +31,7 @@ WAIT_FOR_FINGERS = "wait for the fingers"
 LOWER_FINGERS = "lower the fingers"
 BACK_OFF = "back off"
 LIFT_FINGERS = "lift the fingers"
+CHOOSE_PUSH_SIDE = "choose a free side to push from"
 
 # Detect, Inspect, EstimateGraspFromDepth, MoveHome
 PARK = "move out of the camera's view"

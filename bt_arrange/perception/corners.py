@@ -96,6 +96,9 @@ def _intersect_sides(lines: list[FloatArray]) -> FloatArray:
 
 #: The spread (summed min(c, 1 - c) across an edge) of an area-sampled edge without blur.
 SHARP_EDGE_SPREAD = 0.25
+#: The first pass reads the outside colour this far beyond the starting line (pixels): the
+#: starting corners are within a pixel, a sharp edge mixes one more.
+INITIAL_OUTSIDE_PX = 2.0
 
 
 def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
@@ -151,23 +154,22 @@ def _side_edge_points(
     if not face_above:
         x = x[:, ::-1]  # index 0 at the face's end of the band, growing outwards
     # Pixel k of the band covers [k, k + 1] measured outwards from the face's end, so with the
-    # face's covered fraction c_k the edge lies at sum(c_k) from that end.
-    outside = x[:, -2:].mean(axis=1)
-    covered = _covered(x, face, outside)
-    edge = covered.sum(axis=1)
-    spread = np.clip(np.minimum(covered, 1.0 - covered), 0.0, None).sum(axis=1)
-    if near_outside_px is not None:
-        # The outside colour from the first pixel beyond the edge's spread, and nothing beyond
-        # it: a cube's side seen as a strip of 1 or 2 pixels between the face and the table
-        # (they differ a little in chroma) then counts as outside, not as a little bit of face.
-        # Symmetrically, pixels as far inside are pure face and count as exactly 1: summing
-        # only the transition keeps the noise of the pure pixels out of the edge.
-        index = np.arange(x.shape[1])
-        first_out = np.clip(np.ceil(edge + near_outside_px - 0.5).astype(int), 1, x.shape[1] - 1)
-        first_mixed = np.clip(np.floor(edge - near_outside_px + 0.5).astype(int), 0, first_out - 1)
-        outside = x[np.arange(len(x)), first_out]
-        window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
-        edge = first_mixed + np.where(window, _covered(x, face, outside), 0.0).sum(axis=1)
+    # face's covered fraction c_k the edge lies at sum(c_k) from that end. The outside colour
+    # comes from the first pixel beyond the edge's spread, measured from the current line, and
+    # nothing beyond it counts: a cube's side seen as a strip of 1 or 2 pixels between the face
+    # and the table (they differ a little in chroma) then counts as outside, and a neighbour's
+    # face across a gap of a few pixels (2 mm is 4 px) never enters the sum. Pixels as far
+    # inside are pure face and count as exactly 1, which keeps their noise out of the edge.
+    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
+    near_px = INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px
+    index = np.arange(x.shape[1])
+    first_out = np.clip(np.ceil(line_position + near_px - 0.5).astype(int), 1, x.shape[1] - 1)
+    first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 0, first_out - 1)
+    outside = x[np.arange(len(x)), first_out]
+    window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
+    covered = np.where(window, _covered(x, face, outside), 0.0)
+    edge = first_mixed + covered.sum(axis=1)
+    spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
     v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
     contrast = face[None, :] - outside
     contrast_sq = np.einsum("ij,ij->i", contrast, contrast)

@@ -362,7 +362,7 @@ class CubeDetector:
         mask = clean_mask(colour.mask(view.hsv_small), coarse_kernel_px)
         candidates: list[tuple[Blob, FloatArray, float]] = []
         outside_roi = 0
-        for blob in find_blobs(mask, view.scale, view.min_blob_area_px):
+        for blob in self._split_merged(view, colour, find_blobs(mask, view.scale, view.min_blob_area_px)):
             on_plane = pixel_on_plane(view.intrinsics, view.T_W_C, np.asarray(blob.centroid_px), config.top_z_m)
             if on_plane is None:
                 continue
@@ -374,6 +374,39 @@ class CubeDetector:
                 continue
             candidates.append((blob, on_plane, expected_px))
         return candidates, outside_roi
+
+    def _split_merged(self, view: _View, colour: ColourRange, blobs: list[Blob]) -> list[Blob]:
+        """Blobs of the downscaled search, a blob larger than a face looked at again at full resolution.
+
+        Two faces of one colour a few pixels apart (identical parts 2 mm apart) merge in the
+        downscaled image; the full-resolution mask of that blob's box, whose cleaning keeps gaps
+        (``clean_mask``), tells them apart. A blob that stays whole is kept as it was.
+        """
+        if view.scale == 1:
+            return blobs
+        height, width = view.rgb.shape[:2]
+        split: list[Blob] = []
+        for blob in blobs:
+            if (
+                blob.area_px
+                <= self.config.face_area_fraction_range[1] * view.min_blob_area_px / self.config.min_area_fraction
+            ):
+                split.append(blob)
+                continue
+            x, y, w, h = blob.bbox_px
+            x0, y0 = max(0, x - view.scale), max(0, y - view.scale)
+            x1, y1 = min(width, x + w + view.scale), min(height, y + h + view.scale)
+            mask = colour_mask(view.rgb[y0:y1, x0:x1], colour, self.config.kernel_px)
+            parts = find_blobs(mask, 1, view.min_blob_area_px)
+            if len(parts) <= 1:
+                split.append(blob)
+                continue
+            for part in parts:
+                px, py, pw, ph = part.bbox_px
+                centre = (part.centroid_px[0] + x0, part.centroid_px[1] + y0)
+                split.append(Blob(part.area_px, centre, (px + x0, py + y0, pw, ph)))
+        split.sort(key=lambda b: -b.area_px)
+        return split
 
     def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
         config = self.config

@@ -36,7 +36,32 @@ def clean_mask(mask: Mask, kernel_px: int = PAPER_KERNEL_PX) -> Mask:
         return mask
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kernel_px, kernel_px))
     closed = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
-    return np.asarray(cv2.morphologyEx(closed, cv2.MORPH_OPEN, kernel), dtype=np.uint8)
+    cleaned = np.asarray(cv2.morphologyEx(closed, cv2.MORPH_OPEN, kernel), dtype=np.uint8)
+    return _keep_gaps(mask, cleaned, np.asarray(kernel, dtype=np.uint8))
+
+
+def _keep_gaps(mask: Mask, cleaned: Mask, kernel: NDArray[np.uint8]) -> Mask:
+    """Undo the closing's bridges between faces.
+
+    Where two separate regions of the opened mask come within a kernel of each other, take the
+    opened mask instead of the closed one.
+
+    A closing fills any gap narrower than its kernel, so two faces of one colour 2 mm (4 px)
+    apart would become one blob. Each pixel belongs to the nearest region of the opened mask
+    (``cv2.distanceTransformWithLabels``, one label per region); where the labels of adjacent
+    pixels differ lies the middle of a gap, and a kernel around it keeps the real gap.
+    """
+    opened = np.asarray(cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel), dtype=np.uint8)
+    count, _ = cv2.connectedComponents(opened, connectivity=8)
+    if count <= 2:  # background and at most one region: nothing to keep apart
+        return cleaned
+    background = np.where(opened > 0, 0, 1).astype(np.uint8)
+    _, nearest = cv2.distanceTransformWithLabels(background, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_CCOMP)
+    boundary = np.zeros(mask.shape, dtype=np.uint8)
+    boundary[:, 1:] |= (nearest[:, 1:] != nearest[:, :-1]).astype(np.uint8)
+    boundary[1:, :] |= (nearest[1:, :] != nearest[:-1, :]).astype(np.uint8)
+    near_gap = cv2.dilate(boundary, kernel) > 0
+    return np.where(near_gap, opened, cleaned).astype(np.uint8)
 
 
 def colour_mask(rgb: NDArray[np.uint8], colour: ColourRange, kernel_px: int = PAPER_KERNEL_PX) -> Mask:

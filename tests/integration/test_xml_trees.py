@@ -1,7 +1,6 @@
 """A tree exported to XML and read back runs as its Python file does: same statuses, same offsets, same seed."""
 
 import json
-import os
 from dataclasses import asdict
 from pathlib import Path
 
@@ -11,8 +10,6 @@ from bt_arrange import treefile
 from bt_arrange_sim.runs import SimulatedRun
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
-#: The two longer trees run only on request, to keep the suite fast (about 25 s more on 2 cores).
-ALL_RUNS = os.environ.get("BT_ARRANGE_ALL_XML_RUNS") == "1"
 
 
 def run(path: Path) -> tuple[dict, list[dict]]:
@@ -33,8 +30,6 @@ def without_wall_time(report: dict) -> dict:
 
 @pytest.mark.parametrize("stem", ["single_cube", "four_cubes", "row_of_three", "four_cubes_after_all"])
 def test_the_xml_tree_runs_as_its_python_file(stem, request):
-    if stem in ("row_of_three", "four_cubes_after_all") and not ALL_RUNS:
-        pytest.skip("set BT_ARRANGE_ALL_XML_RUNS=1 to run the longer trees from XML too")
     python_report, python_transitions = run(TREES / f"{stem}.py")
     if stem == "four_cubes":  # the recorded CLI run of the XML file, shared with the replay-page tests
         record = request.getfixturevalue("four_cubes_xml_record")

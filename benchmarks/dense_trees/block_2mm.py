@@ -1,0 +1,36 @@
+"""A dense 2 x 2 block: four cubes with 2 mm gaps, placed among their neighbours.
+
+bt-arrange run trees/dense_block.py
+
+The layout (``bt_arrange.layout``) chooses where the pads go: the second and third cubes are
+released at their targets with the pads across their free faces, the last one, boxed in on two
+sides, is released 10 mm away where the pads fit and pushed home from a free side. After each cube
+its placed neighbours are looked at again and corrected if it moved them beyond the threshold.
+"""
+
+from bt_arrange.trees import Arrangement, Target, arrangement
+from bt_arrange_sim.scenes import CubeStart, scatter
+
+#: No XML twin: the XML node models do not hold where the pads go among neighbours yet.
+XML_TWIN = False
+
+#: Gap between neighbouring faces, metres.
+GAP_M = 0.002
+PITCH_M = 0.05 + GAP_M
+
+TARGETS = [
+    Target("red", x_m=0.45, y_m=0.0),
+    Target("green", x_m=0.45 + PITCH_M, y_m=0.0),
+    Target("blue", x_m=0.45, y_m=PITCH_M),
+    Target("yellow", x_m=0.45 + PITCH_M, y_m=PITCH_M),
+]
+
+
+def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
+    """The tree: each cube placed among the ones before it, then its neighbours checked."""
+    return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
+
+
+def create_scene(seed: int = 0) -> list[CubeStart]:
+    """Where the cubes start: scattered, clear of each other and of the block."""
+    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)

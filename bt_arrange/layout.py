@@ -1,0 +1,484 @@
+"""Dense layouts by geometry: where the pads go, in which order the parts are placed, from which sides they are pushed.
+
+Everything is planar and in metres: a part is an oriented rectangle on the table (its footprint,
+size x by y), the pads are the rectangles they sweep while grasping, releasing, pushing and
+backing off. The pads reach below a resting part's top face (they hold a 5 cm cube at mid
+height), so a pad volume that meets a neighbour's footprint means a collision. A plan is checked
+step by step against what is already on the table at that point:
+
+- **release** across two faces of the target's frame (``axis`` "x" or "y": the pads close along
+  it) when both pads fit beside the part (``release_gap_m`` each side, opened to the part's size
+  plus twice that), the part itself lowered with ``place_clearance_m`` to spare;
+- else a **staging** release: offset away from the neighbours (in the target's frame) where the
+  pads fit, then pushed home from its free sides;
+- **pushes** only from free sides: the pads start ``push_clearance_m`` behind a face and are a
+  pad's width deep; a side whose volume meets a neighbour cannot be pushed from. A correction
+  that needs such a side is released again at a ``restage`` pose on the other side.
+
+``plan_layout(parts, settings, order=None)`` chooses an order (a depth-first search that keeps
+every remaining part placeable; the user's order when given) and returns the steps, or raises one
+``PlanError`` naming the parts in the way. No pybullet, no shapely: separating axes on rectangles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+from bt_arrange.errors import PlanError
+
+#: Directions a part can be pushed towards, in its target's frame.
+DIRECTIONS: dict[str, tuple[float, float]] = {"+x": (1.0, 0.0), "-x": (-1.0, 0.0), "+y": (0.0, 1.0), "-y": (0.0, -1.0)}
+
+
+@dataclass(frozen=True)
+class Rect:
+    """An oriented rectangle on the table: centre ``(x_m, y_m)``, ``yaw_rad``, half sizes along its own x and y."""
+
+    x_m: float
+    y_m: float
+    yaw_rad: float
+    half_x_m: float
+    half_y_m: float
+
+    def axes(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Its own x and y axes as world unit vectors."""
+        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
+        return (c, s), (-s, c)
+
+    def corners(self) -> list[tuple[float, float]]:
+        """The four corners, counter-clockwise."""
+        (ax, ay), (bx, by) = self.axes()
+        return [
+            (
+                self.x_m + i * self.half_x_m * ax + j * self.half_y_m * bx,
+                self.y_m + i * self.half_x_m * ay + j * self.half_y_m * by,
+            )
+            for i, j in ((1, 1), (-1, 1), (-1, -1), (1, -1))
+        ]
+
+    def local(self, dx_m: float, dy_m: float, half_x_m: float, half_y_m: float) -> Rect:
+        """A rectangle of the same yaw, centred ``(dx, dy)`` from this one's centre in its frame."""
+        (ax, ay), (bx, by) = self.axes()
+        return Rect(
+            self.x_m + dx_m * ax + dy_m * bx, self.y_m + dx_m * ay + dy_m * by, self.yaw_rad, half_x_m, half_y_m
+        )
+
+    def moved(self, dx_m: float, dy_m: float) -> Rect:
+        """The same rectangle moved by ``(dx, dy)`` in its own frame."""
+        return self.local(dx_m, dy_m, self.half_x_m, self.half_y_m)
+
+
+def _project(rect: Rect, axis: tuple[float, float]) -> tuple[float, float]:
+    values = [x * axis[0] + y * axis[1] for x, y in rect.corners()]
+    return min(values), max(values)
+
+
+def overlap(a: Rect, b: Rect, clearance_m: float = 0.0) -> bool:
+    """True when ``a`` and ``b`` come closer than ``clearance_m`` along some separating axis.
+
+    Separating axes on the four edge normals; with a clearance this is ``a`` grown by it on every
+    side (square corners: slightly conservative at the corners).
+    """
+    if (
+        math.hypot(a.x_m - b.x_m, a.y_m - b.y_m)
+        > math.hypot(a.half_x_m, a.half_y_m) + math.hypot(b.half_x_m, b.half_y_m) + clearance_m
+    ):
+        return False
+    for axis in (*a.axes(), *b.axes()):
+        low_a, high_a = _project(a, axis)
+        low_b, high_b = _project(b, axis)
+        if high_a + clearance_m <= low_b or high_b + clearance_m <= low_a:
+            return False
+    return True
+
+
+def gap_m(a: Rect, b: Rect) -> float:
+    """The distance between two rectangles (0 when they overlap)."""
+    if overlap(a, b):
+        return 0.0
+
+    def point_segment(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
+        dx, dy = r[0] - q[0], r[1] - q[1]
+        if dx == 0.0 and dy == 0.0:
+            return math.hypot(p[0] - q[0], p[1] - q[1])
+        t = max(0.0, min(1.0, ((p[0] - q[0]) * dx + (p[1] - q[1]) * dy) / (dx * dx + dy * dy)))
+        return math.hypot(p[0] - q[0] - t * dx, p[1] - q[1] - t * dy)
+
+    best = math.inf
+    for first, second in ((a, b), (b, a)):
+        corners = second.corners()
+        for p in first.corners():
+            for i in range(4):
+                best = min(best, point_segment(p, corners[i], corners[(i + 1) % 4]))
+    return best
+
+
+@dataclass(frozen=True)
+class Part:
+    """One part at its target: ``name``, target ``(x_m, y_m, yaw_rad)`` and footprint ``size_x_m`` by ``size_y_m``."""
+
+    name: str
+    x_m: float
+    y_m: float
+    yaw_rad: float
+    size_x_m: float
+    size_y_m: float
+    #: The axes of its frame the pads may close across (a bar only across the side the stroke spans).
+    grasp_axes: tuple[str, ...] = ("x", "y")
+
+    @property
+    def footprint(self) -> Rect:
+        """The part at its target."""
+        return Rect(self.x_m, self.y_m, self.yaw_rad, self.size_x_m / 2, self.size_y_m / 2)
+
+    def half(self, axis: str) -> float:
+        """Half its size along its own ``axis``."""
+        return (self.size_x_m if axis == "x" else self.size_y_m) / 2
+
+
+@dataclass(frozen=True)
+class Pads:
+    """What the pads and the placing need, in metres (the 2F-85: pads 22 mm wide, 8 mm thick)."""
+
+    width_m: float = 0.022
+    thickness_m: float = 0.008
+    #: Widest opening: the stroke.
+    max_opening_m: float = 0.085
+    #: Each pad opens this far from the face it released.
+    release_gap_m: float = 0.003
+    #: How far a finger reaches out from the face its pad touches, at a resting part's height: the
+    #: pad is 8 mm thick, but the finger above it (which comes down to the top of a 5 cm cube at
+    #: grasp height) stands 3 mm further out (the URDF's finger box).
+    finger_depth_m: float = 0.011
+    #: A finger keeps this far from a neighbour's face (the arm's error and pybullet's 1 mm
+    #: collision margins; 1 mm was measured to shove a neighbour 1.6 mm).
+    pad_clearance_m: float = 0.002
+    #: A part is lowered with this much room to a neighbour (the placing error).
+    place_clearance_m: float = 0.0015
+    #: The pads start this far behind a face they push.
+    push_clearance_m: float = 0.010
+    #: Two targets closer than this could touch once each lies within the threshold.
+    min_gap_m: float = 0.002
+    #: Staging offsets tried, from the smallest.
+    staging_steps_m: tuple[float, ...] = tuple(0.002 * k for k in range(2, 16))
+
+    @classmethod
+    def from_settings(cls, settings: object) -> Pads:
+        """From ``ManipulationSettings`` (pad size, stroke, push clearance)."""
+        return cls(
+            width_m=float(getattr(settings, "pad_width_m", cls.width_m)),
+            thickness_m=float(getattr(settings, "pad_thickness_m", cls.thickness_m)),
+            finger_depth_m=float(getattr(settings, "pad_thickness_m", cls.thickness_m)) + 0.003,
+            max_opening_m=float(getattr(settings, "open_width_m", cls.max_opening_m)),
+            push_clearance_m=float(getattr(settings, "push_clearance_m", cls.push_clearance_m)),
+        )
+
+    def push_opening_m(self, part: Part, along: str) -> float:
+        """The opening for a push along ``along`` among neighbours: both fingers within the face's width."""
+        across = part.half("y" if along == "x" else "x")
+        return max(0.0, 2 * (across - self.finger_depth_m - self.pad_clearance_m))
+
+    def release_opening_m(self, part: Part, axis: str) -> float:
+        """How far the pads open to release a part held across ``axis``."""
+        return min(self.max_opening_m, 2 * part.half(axis) + 2 * self.release_gap_m)
+
+
+def release_pads(part: Part, at: Rect, axis: str, pads: Pads) -> list[Rect]:
+    """The two rectangles the pads sweep holding, lowering and releasing ``part`` at ``at`` across ``axis``."""
+    half = part.half(axis)
+    depth = pads.release_gap_m + pads.finger_depth_m
+    centre = half + depth / 2
+    if axis == "x":
+        return [at.local(sign * centre, 0.0, depth / 2, pads.width_m / 2) for sign in (1, -1)]
+    return [at.local(0.0, sign * centre, pads.width_m / 2, depth / 2) for sign in (1, -1)]
+
+
+def push_pads(part: Part, at: Rect, towards: str, distance_m: float, pads: Pads) -> Rect:
+    """The rectangle the pads sweep pushing ``part`` (at ``at``) ``distance_m`` towards ``towards``, then backing off.
+
+    The pads stand side by side along the face behind it (opened to ``Pads.push_opening_m``, so
+    the fingers stay within the face's width), start ``push_clearance_m`` behind it, are a pad's
+    width deep, and travel with the face.
+    """
+    ux, uy = DIRECTIONS[towards]
+    along = "x" if ux else "y"
+    half_along = part.half(along)
+    half_across = pads.push_opening_m(part, along) / 2 + pads.finger_depth_m
+    sign = ux + uy
+    # Behind the face, from the face's final place back to the start of the pads.
+    near = half_along - distance_m
+    far = half_along + pads.push_clearance_m + pads.width_m
+    centre = -sign * (near + far) / 2
+    depth = (far - near) / 2
+    if along == "x":
+        return at.local(centre, 0.0, depth, half_across)
+    return at.local(0.0, centre, half_across, depth)
+
+
+def blockers(volumes: Iterable[Rect], placed: Sequence[tuple[str, Rect]], clearance_m: float) -> list[str]:
+    """Names of the placed parts that any of ``volumes`` meets."""
+    names = []
+    for volume in volumes:
+        for name, footprint in placed:
+            if name not in names and overlap(volume, footprint, clearance_m):
+                names.append(name)
+    return names
+
+
+def free_push_directions(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[str, ...]:
+    """The directions ``part`` (at its target) can be pushed towards with nothing of ``placed`` in the pads' way."""
+    at = part.footprint
+    others = [(n, r) for n, r in placed if n != part.name]
+    return tuple(
+        towards
+        for towards in DIRECTIONS
+        if not blockers([push_pads(part, at, towards, 0.0, pads)], others, pads.pad_clearance_m)
+    )
+
+
+@dataclass(frozen=True)
+class Release:
+    """Where and how a part is let go.
+
+    The pads close across ``axis`` of its target's frame and open to ``opening_m``, at ``offset_m``
+    (target frame) from the target; a staged release (an offset) is pushed home from free sides.
+    """
+
+    axis: str
+    opening_m: float
+    offset_m: tuple[float, float] = (0.0, 0.0)
+
+    @property
+    def staged(self) -> bool:
+        """True when released away from the target, to be pushed home."""
+        return self.offset_m != (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One part's step.
+
+    How it is released, which directions it may be pushed towards afterwards, its neighbours on
+    the table then, and how to release it again when a correction needs a blocked side.
+    """
+
+    part: Part
+    release: Release
+    push_towards: tuple[str, ...]
+    neighbours: tuple[str, ...]
+    #: Per blocked direction: the release on the other side, from where a push towards it is free.
+    restage: dict[str, Release] = field(default_factory=dict)
+
+
+def _release_at(
+    part: Part, at: Rect, placed: Sequence[tuple[str, Rect]], pads: Pads, axes: Sequence[str] = ("x", "y")
+) -> tuple[str | None, list[str]]:
+    """An axis across which the pads fit releasing ``part`` at ``at`` (None) and who stands in the way."""
+    if blockers([at], placed, pads.place_clearance_m):
+        return None, blockers([at], placed, pads.place_clearance_m)
+    in_way: list[str] = []
+    for axis in axes:
+        names = blockers(release_pads(part, at, axis, pads), placed, pads.pad_clearance_m)
+        if not names:
+            return axis, []
+        in_way += [n for n in names if n not in in_way]
+    return None, in_way
+
+
+def _staged_release(
+    part: Part,
+    placed: Sequence[tuple[str, Rect]],
+    pads: Pads,
+    directions: Sequence[tuple[int, int]] | None = None,
+    axes: Sequence[str] = ("x", "y"),
+) -> Release | None:
+    """The smallest offset away from the neighbours where the pads fit and pushes home go from free sides."""
+    free = free_push_directions(part, placed, pads)
+    candidates = directions or [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1) if (sx, sy) != (0, 0)]
+    best: tuple[float, Release] | None = None
+    for distance in pads.staging_steps_m:
+        for sx, sy in candidates:
+            # Pushed home towards -s on each axis it is offset along: that side must be free.
+            needed = [d for d, s in (("-x" if sx > 0 else "+x", sx), ("-y" if sy > 0 else "+y", sy)) if s]
+            if any(d not in free for d in needed):
+                continue
+            offset = (sx * distance, sy * distance)
+            staged = part.footprint.moved(*offset)
+            axis, _ = _release_at(part, staged, placed, pads, axes)
+            if axis is None:
+                continue
+            # The pushes home sweep the pads from the staged pose to the target.
+            if any(
+                blockers(
+                    [
+                        push_pads(part, part.footprint.moved(*offset), d, distance, pads),
+                        push_pads(part, part.footprint, d, 0.0, pads),
+                    ],
+                    placed,
+                    pads.pad_clearance_m,
+                )
+                for d in needed
+            ):
+                continue
+            cost = math.hypot(*offset)
+            if best is None or cost < best[0]:
+                best = (cost, Release(axis, pads.release_opening_m(part, axis), offset))
+        if best is not None:
+            return best[1]
+    return None
+
+
+def choose_release(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[Release | None, list[str]]:
+    """Release at the target across free faces, else at a staging pose; None and who is in the way if neither fits."""
+    axis, in_way = _release_at(part, part.footprint, placed, pads, part.grasp_axes)
+    if axis is not None:
+        return Release(axis, pads.release_opening_m(part, axis)), []
+    staged = _staged_release(part, placed, pads, axes=part.grasp_axes)
+    return staged, ([] if staged is not None else in_way)
+
+
+def restage_releases(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> dict[str, Release]:
+    """For each direction a push cannot go (its pads' side is blocked), a release past the target from which it can."""
+    others = [(n, r) for n, r in placed if n != part.name]
+    free = free_push_directions(part, others, pads)
+    # Picked up where it lies (near its target) across faces whose pads fit there, and held so.
+    pick_axes = [
+        a
+        for a in part.grasp_axes
+        if not blockers(release_pads(part, part.footprint, a, pads), others, pads.pad_clearance_m)
+    ]
+    out: dict[str, Release] = {}
+    if not pick_axes:
+        return out
+    for towards, (ux, uy) in DIRECTIONS.items():
+        if towards in free:
+            continue
+        # The part must move towards (ux, uy): release it on that side, past the target, and push back.
+        release = _staged_release(part, others, pads, directions=[(int(ux), int(uy))], axes=pick_axes)
+        if release is not None:
+            out[towards] = release
+    return out
+
+
+def neighbours_of(part: Part, placed: Sequence[tuple[str, Rect]], within_m: float = 0.03) -> tuple[str, ...]:
+    """Placed parts within ``within_m`` of ``part``'s footprint: a push or a release there could move them."""
+    return tuple(name for name, rect in placed if name != part.name and gap_m(part.footprint, rect) <= within_m)
+
+
+def check_gaps(parts: Sequence[Part], pads: Pads) -> None:
+    """Two targets that overlap, or closer than ``pads.min_gap_m``: a ``PlanError`` naming both."""
+    for i, first in enumerate(parts):
+        for second in parts[i + 1 :]:
+            gap = gap_m(first.footprint, second.footprint)
+            if gap <= 0.0:
+                raise PlanError(f"targets {first.name} and {second.name} overlap: two parts cannot stand there")
+            if gap < pads.min_gap_m - 1e-9:
+                raise PlanError(
+                    f"targets {first.name} and {second.name} are {gap * 1000:.1f} mm apart, under the "
+                    f"{pads.min_gap_m * 1000:.0f} mm two parts need so that each can lie within the threshold "
+                    "without touching"
+                )
+
+
+def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence[str] | None = None) -> list[Step]:
+    """The steps of a buildable plan, in placing order, or one ``PlanError`` naming the parts in the way.
+
+    With ``order`` (the parts' names) that order is checked; without, a depth-first search takes
+    the plan's own order where it can and backtracks where it cannot: a step is tried only while
+    every part not yet placed can still be released (parts only ever add obstacles, so a part that
+    cannot be released now never can later).
+    """
+    pads = pads or Pads()
+    parts = list(parts)
+    check_gaps(parts, pads)
+    by_name = {p.name: p for p in parts}
+    if order is not None:
+        names = list(order)
+        if sorted(names) != sorted(by_name):
+            raise PlanError(f"order {names} must name each part once: {', '.join(by_name)}")
+        sequence = [by_name[n] for n in names]
+        placed: list[tuple[str, Rect]] = []
+        for part in sequence:
+            release, in_way = choose_release(part, placed, pads)
+            if release is None:
+                raise PlanError(_no_room(part, in_way, pads, after=True))
+            placed.append((part.name, part.footprint))
+        return _steps(sequence, pads)
+
+    memo: dict[tuple[str, frozenset[str]], tuple[Release | None, list[str]]] = {}
+
+    def release_of(part: Part, placed_names: frozenset[str]) -> tuple[Release | None, list[str]]:
+        key = (part.name, placed_names)
+        if key not in memo:
+            memo[key] = choose_release(part, [(n, by_name[n].footprint) for n in placed_names], pads)
+        return memo[key]
+
+    worst: list[tuple[int, Part, list[str]]] = []
+
+    def search(done: list[Part], left: list[Part]) -> list[Part] | None:
+        if not left:
+            return done
+        names = frozenset(p.name for p in done)
+        options = []
+        for index, part in enumerate(left):
+            release, in_way = release_of(part, names)
+            if release is None:
+                worst.append((len(done), part, in_way))
+                return None  # it will never fit later either: obstacles only grow
+            options.append((index, part))
+        for _, part in options:
+            found = search([*done, part], [p for p in left if p is not part])
+            if found is not None:
+                return found
+        return None
+
+    found = search([], parts)
+    if found is None:
+        depth, part, in_way = max(worst, key=lambda w: w[0])
+        raise PlanError(_no_room(part, in_way, pads, after=False))
+    return _steps(found, pads)
+
+
+def _no_room(part: Part, in_way: Sequence[str], pads: Pads, after: bool) -> str:
+    names = sorted(in_way)
+    who = (", ".join(names[:-1]) + " and " + names[-1]) if len(names) > 1 else (names[0] if names else "its neighbours")
+    when = "in this order" if after else "in any order"
+    return (
+        f"no order and approach builds this plan ({when}): {part.name} has no room for the pads, {who} "
+        f"{'stand' if len(in_way) > 1 else 'stands'} in the way (a pad is {pads.thickness_m * 1000:.0f} mm thick, "
+        f"{pads.width_m * 1000:.0f} mm wide) and no staging pose can push it home from a free side"
+    )
+
+
+def _steps(sequence: Sequence[Part], pads: Pads) -> list[Step]:
+    steps = []
+    placed: list[tuple[str, Rect]] = []
+    for part in sequence:
+        release, _ = choose_release(part, placed, pads)
+        assert release is not None
+        after = [*placed, (part.name, part.footprint)]
+        steps.append(
+            Step(
+                part=part,
+                release=release,
+                push_towards=free_push_directions(part, after, pads),
+                neighbours=neighbours_of(part, placed),
+                restage=restage_releases(part, after, pads),
+            )
+        )
+        placed = after
+    return steps
+
+
+def start_clearance_m(start_half_diagonal_m: float, pads: Pads) -> float:
+    """How far a part's start (its centre) keeps from another part's target footprint.
+
+    Two things come near: the pads picking it (open to the stroke, at any yaw) must not reach the
+    other target's footprint, and the pads working at that target (a push starts
+    ``push_clearance_m`` behind a face and is a pad's width deep) must not reach it.
+    """
+    picking = math.hypot(pads.max_opening_m / 2 + pads.thickness_m, pads.width_m / 2)
+    working = start_half_diagonal_m + pads.push_clearance_m + pads.width_m
+    return max(picking, working) + pads.pad_clearance_m
