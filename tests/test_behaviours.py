@@ -869,3 +869,18 @@ def test_a_squaring_push_with_both_sides_of_its_axis_blocked_is_not_made(context
     run = tick_until_done(push, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert fake_arm(context).commands == [], "never pushes from a side a neighbour blocks"
+
+
+def test_detect_among_identical_parts_2_mm_apart_picks_the_free_one_not_the_pair_between_targets(clock) -> None:
+    # Two placed green cubes 2 mm apart merge into one blob in a binned view, its centre between
+    # their targets (at neither): the search among identical parts reads the full frame instead.
+    placed = [PlanarPose(0.452, 0.0, 0.0), PlanarPose(0.504, 0.0, 0.0)]
+    free = PlanarPose(0.40, -0.20, 0.0)
+    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in (*placed, free)])
+    write({"/green 3/target": PlanarPose(0.556, 0.0, 0.0)})
+    kind_targets = [*placed, PlanarPose(0.556, 0.0, 0.0)]
+    detect = Detect("detect green 3", "green 3", colour="green", kind_targets=kind_targets)
+    run = tick_until_done(set_up(detect, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    pose = read("/green 3/pose")
+    assert 1000 * math.hypot(pose.x_m - free.x_m, pose.y_m - free.y_m) < 0.5

@@ -58,9 +58,18 @@ def offset_in_target_frame_mm(target: PlanarPose, pose: Pose) -> tuple[float, fl
 
 
 def _measure_in_window(
-    context: Context, detector: CubeDetector, colour: str, x_m: float, y_m: float, margin_m: float
+    context: Context,
+    detector: CubeDetector,
+    colour: str,
+    x_m: float,
+    y_m: float,
+    margin_m: float,
+    roi_half_m: float | None = None,
 ) -> Detection | None:
-    """Render only the window around ``(x, y)`` at full resolution and measure the part there."""
+    """Render only the window around ``(x, y)`` at full resolution and measure the part there.
+
+    ``roi_half_m`` (default the window's half size) bounds where a face's centre may lie.
+    """
     camera = context.robot.camera
     x_size, y_size, _ = detector.config.size_m
     half_m = 0.5 * math.hypot(x_size, y_size) + margin_m
@@ -68,7 +77,17 @@ def _measure_in_window(
     if window is None:
         return None
     frame = camera.capture(window=window)
-    return detector.detect(frame, colour, roi=WorldRegion.around(x_m, y_m, half_m))
+    return detector.detect(frame, colour, roi=WorldRegion.around(x_m, y_m, roi_half_m or half_m))
+
+
+def identical_roi_half_m(object_type: ObjectType) -> float:
+    """Where the centre of the part looked for may lie, among identical parts: half its shorter top edge.
+
+    An identical neighbour 2 mm away (or the piece of it a window cuts) has its centre farther
+    than that, so it is not taken for the part; the part itself lies within millimetres of where
+    it is looked for (its target, or where the search view located it).
+    """
+    return 0.5 * min(object_type.top_size_m)
 
 
 def look(
@@ -92,14 +111,21 @@ def look(
     pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
     camera = context.robot.camera
-    detector = context.detector.for_object(object_type or CUBE)
+    kind = object_type or CUBE
+    detector = context.detector.for_object(kind)
+    # Among identical parts a window also shows the neighbours: only a face centred near the spot counts.
+    roi_half_m = identical_roi_half_m(kind) if choose is not None else None
     if expected_xy_m is not None:
-        detection = _measure_in_window(context, detector, colour, *expected_xy_m, EXPECTED_MARGIN_M)
+        detection = _measure_in_window(context, detector, colour, *expected_xy_m, EXPECTED_MARGIN_M, roi_half_m)
         if detection is not None and detection.found:
             return detection
     binning = detector.search_binning(camera.intrinsics, camera.pose_world)
     if binning > 1 or choose is not None:
-        window = PixelWindow.full(camera.intrinsics, binning) if binning > 1 else None
+        # Identical parts 2 mm apart merge into one blob in the binned view (its centre between two
+        # placed parts, at neither's target): among identical parts the search reads the full frame,
+        # whose large blobs the detector splits at full resolution.
+        binned = binning > 1 and choose is None
+        window = PixelWindow.full(camera.intrinsics, binning) if binned else None
         search = camera.capture(window=window) if window is not None else camera.capture()
         located = detector.locate(search, colour)
         if len(located) > 1 and choose is not None:
@@ -110,12 +136,12 @@ def look(
             return detector.detect(search, colour)
         else:
             chosen = located[0]
-        detection = _measure_in_window(context, detector, colour, *chosen, LOCATED_MARGIN_M)
+        detection = _measure_in_window(context, detector, colour, *chosen, LOCATED_MARGIN_M, roi_half_m)
         if detection is not None and detection.found:
             return detection
         if len(located) > 1:
             # The chosen part is not whole in its window: the full frame, around it only.
-            half_m = 0.5 * math.hypot(*detector.config.size_m[:2]) + LOCATED_MARGIN_M
+            half_m = roi_half_m or 0.5 * math.hypot(*detector.config.size_m[:2]) + LOCATED_MARGIN_M
             return detector.detect(camera.capture(), colour, roi=WorldRegion.around(*chosen, half_m))
     return detector.detect(camera.capture(), colour)
 
