@@ -23,7 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange.geometry import fold_yaw
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector
+from bt_arrange.plancheck import CameraView
 from bt_arrange_sim import CUBE_COLOURS_RGB, CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
 
 #: Cube centres: fully inside the image at 70 cm (the view spans about x 0.24..0.76 m and
@@ -35,8 +37,11 @@ MAX_RADIUS_M = 0.80
 MIN_SPACING_M = 0.08
 
 
-def random_scene(rng: np.random.Generator) -> list[tuple[str, float, float, float]]:
-    """One to four cubes of different colours: (colour, x_m, y_m, yaw_rad)."""
+def random_scene(
+    rng: np.random.Generator, kind: ObjectType = CUBE, view: CameraView | None = None
+) -> list[tuple[str, float, float, float]]:
+    """One to four parts of different colours: (colour, x_m, y_m, yaw_rad), whole in ``view`` at any yaw."""
+    spacing_m = max(MIN_SPACING_M, 2 * kind.half_diagonal_m + 0.005)
     count = int(rng.integers(1, len(CUBE_COLOURS_RGB) + 1))
     colours = rng.permutation(sorted(CUBE_COLOURS_RGB))[:count]
     placed: list[tuple[str, float, float, float]] = []
@@ -45,16 +50,28 @@ def random_scene(rng: np.random.Generator) -> list[tuple[str, float, float, floa
             x, y = rng.uniform(*X_RANGE_M), rng.uniform(*Y_RANGE_M)
             if math.hypot(x, y) > MAX_RADIUS_M:
                 continue
-            if all(math.hypot(x - px, y - py) >= MIN_SPACING_M for _, px, py, _ in placed):
+            if (
+                view is not None
+                and kind != CUBE
+                and not view.sees_disc(x, y, kind.half_diagonal_m + 0.005, kind.height_m)
+            ):
+                continue
+            if all(math.hypot(x - px, y - py) >= spacing_m for _, px, py, _ in placed):
                 break
         placed.append((str(colour), x, y, rng.uniform(-math.pi, math.pi)))
     return placed
 
 
-def measure_scene(cell: WorkCell, detector: CubeDetector, scene: list[tuple[str, float, float, float]]) -> dict:
-    """Render one scene and detect each of its cubes; returns the per-cube errors and timings."""
+#: ``--object``: the part every scene holds (the paper's cube, or the issue's 80 x 40 x 40 mm bar).
+OBJECTS = {"cube": CUBE, "bar": ObjectType("bar", (0.08, 0.04, 0.04))}
+
+
+def measure_scene(
+    cell: WorkCell, detector: CubeDetector, scene: list[tuple[str, float, float, float]], kind: ObjectType = CUBE
+) -> dict:
+    """Render one scene and detect each of its parts; returns the per-part errors and timings."""
     for colour, x, y, yaw in scene:
-        cell.add_cube(colour, x, y, yaw)
+        cell.add_object(kind, colour, x, y, yaw)
     cell.settle(0.05)
     start = time.perf_counter()
     frame = cell.camera.capture()
@@ -70,7 +87,7 @@ def measure_scene(cell: WorkCell, detector: CubeDetector, scene: list[tuple[str,
             assert detection.pose_world is not None
             pose = detection.pose_world
             cube["xy_error_mm"] = math.hypot(pose.x_m - true_x, pose.y_m - true_y) * 1000
-            cube["yaw_error_deg"] = abs(math.degrees(fold_yaw(pose.yaw_rad - true_yaw)))
+            cube["yaw_error_deg"] = abs(math.degrees(fold_yaw(pose.yaw_rad - true_yaw, kind.symmetry_rad)))
             if detection.pnp_pose_world is not None:
                 pnp = detection.pnp_pose_world
                 cube["pnp_xy_error_mm"] = math.hypot(pnp.x_m - true_x, pnp.y_m - true_y) * 1000
@@ -119,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--noise", action="store_true", help="turn the camera noise model on")
     parser.add_argument("--width", type=int, default=1920, help="image width in pixels (default 1920)")
     parser.add_argument("--height", type=int, default=1080, help="image height in pixels (default 1080)")
+    parser.add_argument("--object", choices=sorted(OBJECTS), default="cube", help="the part in every scene")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--out", type=Path, help="append each scene to this JSON-lines file as it is measured")
     args = parser.parse_args(argv)
@@ -128,11 +146,12 @@ def main(argv: list[str] | None = None) -> int:
     camera = CameraConfig(width_px=args.width, height_px=args.height)
     noise = CameraNoiseConfig.realistic(seed=args.seed) if args.noise else CameraNoiseConfig()
     rng = np.random.default_rng(args.seed)
-    detector = CubeDetector()
+    kind = OBJECTS[args.object]
+    detector = CubeDetector().for_object(kind)
     scenes = []
     with WorkCell(CellConfig(camera=camera, camera_noise=noise)) as cell:
         for index in range(args.poses):
-            scene = measure_scene(cell, detector, random_scene(rng))
+            scene = measure_scene(cell, detector, random_scene(rng, kind, camera.view()), kind)
             scenes.append(scene)
             if args.out:
                 with args.out.open("a") as out:

@@ -47,6 +47,9 @@ class ObjectReport(Protocol):
     pushes: int
     status: str
     reason: str
+    #: Measured minus target yaw (degrees, folded to the part's symmetry); None when not measured.
+    final_yaw_error_deg: float | None
+    final_yaw_error_truth_deg: float | None
 
 
 class RunReport(Protocol):
@@ -136,7 +139,14 @@ class Backend(Protocol):
         """Check the plan and the scene, build the world, and return the run (not started)."""
         ...
 
-    def scatter(self, colours: Sequence[str], seed: int, avoid: Iterable[Any] = ()) -> list[Any]:
+    def scatter(
+        self,
+        colours: Sequence[str],
+        seed: int,
+        avoid: Iterable[Any] = (),
+        object_types: Sequence[Any] | None = None,
+        names: Sequence[str | None] | None = None,
+    ) -> list[Any]:
         """Where cubes of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
         ...
 

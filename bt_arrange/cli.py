@@ -6,6 +6,7 @@
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
+    bt-arrange examples
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
@@ -117,7 +118,9 @@ def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
-    starts = treefile.scene(module, args.seed)
+    # A plan file names its own seed ([scene] seed); --seed overrides it.
+    seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
+    starts = treefile.scene(module, seed)
 
     backend = backends.load(args.backend)
     with backend.open_run(
@@ -128,7 +131,7 @@ def _run(args: argparse.Namespace) -> int:
         time_limit_s=args.time_limit_s,
         title=Path(args.tree_file).name,
         # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
-        **({"cell": args.cell, "run_seed": args.seed} if args.cell != "ideal" else {}),
+        **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
     ) as run:
         if args.live:
             from bt_arrange.display import LiveView
@@ -149,7 +152,12 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
-    rows = [("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "pushes", "status")]
+    def deg(value: float | None) -> str:
+        return "-" if value is None else f"{value:+.2f}"
+
+    rows = [
+        ("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+    ]
     for o in report.objects:
         x, y, yaw = o.target
         status = o.status if not o.reason else f"{o.status}: {o.reason}"
@@ -160,6 +168,8 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
                 mm(o.placed_offset_mm),
                 mm(o.final_offset_mm),
                 mm(o.final_offset_truth_mm),
+                deg(getattr(o, "final_yaw_error_deg", None)),
+                deg(getattr(o, "final_yaw_error_truth_deg", None)),
                 str(o.pushes),
                 status,
             )
@@ -168,9 +178,12 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
         widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]
         for row in rows:
             print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False)) + "  " + row[-1])
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f", yaw {yaw_threshold:g} deg" if yaw_threshold is not None else ""
         print(
             f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
-            f"truth = the simulator's ground truth (evaluation only); threshold {report.threshold_mm:g} mm"
+            f"yaw errors in deg (after pushing); truth = the simulator's ground truth (evaluation only); "
+            f"threshold {report.threshold_mm:g} mm{yaw_text}"
         )
     if args.record:
         print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
@@ -287,6 +300,19 @@ def _experiment(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _examples(args: argparse.Namespace) -> int:
+    from bt_arrange import examples
+
+    names = examples.names()
+    width = max((len(name) for name in names), default=0)
+    for name in names:
+        print(f"{name.ljust(width)}  {examples.describe(name)}")
+    first = examples.path_of(names[0]) if names else None
+    if first is not None:
+        print(f"run one with: bt-arrange run NAME (the files are in {first.parent})")
+    return EXIT_OK
+
+
 def _show(args: argparse.Namespace) -> int:
     from bt_arrange.display import render_tree
 
@@ -363,10 +389,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "tree_file",
         metavar="TREE_FILE",
-        help="a Python file exposing create_root() and create_scene(), or a BehaviorTree.CPP .xml tree",
+        help="a Python file exposing create_root() and create_scene(), a BehaviorTree.CPP .xml tree, "
+        "a .toml plan, or the name of an example (bt-arrange examples)",
     )
     run.add_argument(
-        "--seed", type=_whole(0), default=0, help="seed of the scene (where the cubes start), 0 or more; default 0"
+        "--seed",
+        type=_whole(0),
+        default=None,
+        help="seed of the scene (where the parts start), 0 or more; default a plan's [scene] seed, else 0",
     )
     run.add_argument(
         "--threshold-mm", type=_millimetres, help="accuracy threshold in mm (the tree file's default if absent)"
@@ -447,6 +477,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="push strategy: paper (alternating x/y, Table 1's; default), learned or diagonal (docs/experiments.md)",
     )
     experiment.set_defaults(handler=_experiment)
+
+    examples = add_command(
+        "examples",
+        "list the example plans shipped in the package (bt-arrange run NAME runs one)",
+        "exit status: 0 listed",
+    )
+    examples.set_defaults(handler=_examples)
 
     info = add_command(
         "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"

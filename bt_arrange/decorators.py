@@ -32,6 +32,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
       left it above the threshold; FAILURE with the child's reason when the child fails.
 
     ``obj`` names the object corrected, for reports that look for the reason an object failed.
+    With ``yaw_key`` and ``yaw_threshold_deg`` the object is within only when the absolute yaw error
+    there (degrees) is under ``yaw_threshold_deg`` too: the loop also corrects yaw.
     """
 
     def __init__(
@@ -43,8 +45,12 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         max_attempts: int,
         corrections_key: str | None = None,
         obj: str | None = None,
+        yaw_key: str | None = None,
+        yaw_threshold_deg: float | None = None,
     ) -> None:
         positive_number("threshold", threshold_mm, "mm", style="unit", finite=False)
+        if yaw_threshold_deg is not None:
+            positive_number("yaw threshold", yaw_threshold_deg, "deg", style="unit", finite=False)
         whole_number("max_attempts", max_attempts, style="unit")
         super().__init__(name=name, child=child)
         self.offset_key = offset_key
@@ -54,8 +60,12 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         #: The object corrected: ``obj``, else the one whose offset it watches (``/<obj>/offset_mm``).
         self.obj = obj if obj is not None else keys.object_of_key(offset_key)
         self.attempts = 0
+        self.yaw_key = yaw_key if yaw_threshold_deg is not None else None
+        self.yaw_threshold_deg = None if yaw_threshold_deg is None else float(yaw_threshold_deg)
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
+        if self.yaw_key is not None:
+            self.blackboard.register_key(self.yaw_key, access=Access.READ)
         if corrections_key is not None:
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
 
@@ -101,17 +111,29 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         if offset is None:
             self.feedback_message = f"no offset at {self.offset_key}: inspect the object before correcting it"
             return Status.FAILURE
-        if offset < self.threshold_mm:
+        yaw = self._yaw_error()
+        yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
+        yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {yaw:+.2f} deg"
+        if offset < self.threshold_mm and yaw_within:
             self.feedback_message = (
-                f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm after {self.attempts} correction(s)"
+                f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm{yaw_text} after {self.attempts} correction(s)"
             )
             return Status.SUCCESS
         if self.attempts >= self.max_attempts:
-            self.feedback_message = (
-                f"offset still {offset:.2f} mm >= {self.threshold_mm:.2f} mm after {self.attempts} correction(s)"
+            what = f"offset still {offset:.2f} mm" + (
+                f" >= {self.threshold_mm:.2f} mm" if offset >= self.threshold_mm else ""
             )
+            if not yaw_within:
+                what += f"{yaw_text} (>= {self.yaw_threshold_deg:.2f} deg)"
+            self.feedback_message = f"{what} after {self.attempts} correction(s)"
             return Status.FAILURE
         return None
+
+    def _yaw_error(self) -> float | None:
+        if self.yaw_key is None or not self.blackboard.exists(self.yaw_key):
+            return None
+        value = self.blackboard.get(self.yaw_key)
+        return None if value is None else float(value)
 
     def _offset(self) -> float | None:
         if not self.blackboard.exists(self.offset_key):

@@ -125,6 +125,8 @@ class Part:
     yaw_rad: float
     size_x_m: float
     size_y_m: float
+    #: The axes of its frame the pads may close across (a bar only across the side the stroke spans).
+    grasp_axes: tuple[str, ...] = ("x", "y")
 
     @property
     def footprint(self) -> Rect:
@@ -330,10 +332,10 @@ def _staged_release(
 
 def choose_release(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[Release | None, list[str]]:
     """Release at the target across free faces, else at a staging pose; None and who is in the way if neither fits."""
-    axis, in_way = _release_at(part, part.footprint, placed, pads)
+    axis, in_way = _release_at(part, part.footprint, placed, pads, part.grasp_axes)
     if axis is not None:
         return Release(axis, pads.release_opening_m(part, axis)), []
-    staged = _staged_release(part, placed, pads)
+    staged = _staged_release(part, placed, pads, axes=part.grasp_axes)
     return staged, ([] if staged is not None else in_way)
 
 
@@ -343,7 +345,9 @@ def restage_releases(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads)
     free = free_push_directions(part, others, pads)
     # Picked up where it lies (near its target) across faces whose pads fit there, and held so.
     pick_axes = [
-        a for a in ("x", "y") if not blockers(release_pads(part, part.footprint, a, pads), others, pads.pad_clearance_m)
+        a
+        for a in part.grasp_axes
+        if not blockers(release_pads(part, part.footprint, a, pads), others, pads.pad_clearance_m)
     ]
     out: dict[str, Release] = {}
     if not pick_axes:

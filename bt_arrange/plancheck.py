@@ -32,14 +32,15 @@ import numpy as np
 
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
-from bt_arrange.geometry import Pose, fold_yaw, rotation_z
+from bt_arrange.geometry import Pose, rotation_z
 from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.objects import CUBE, ObjectType, min_centre_distance_m, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.trees import Target, check_threshold, footprint_m, parts_of, validate_targets
+from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
 #: room for a placing error and for the detector's crop around the face.
@@ -72,6 +73,24 @@ class CameraView:
         if depth[2] <= 0:
             return False
         pixels = self.face_pixels(x_m, y_m, yaw_rad, cube_edge_m / 2 + self.margin_m, cube_edge_m)
+        width, height = self.intrinsics.width_px, self.intrinsics.height_px
+        return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
+
+    def sees_part(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
+        """True when the top face of a part at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
+        if object_type == CUBE:
+            return self.sees_face(x_m, y_m, yaw_rad, object_type.size_m[0])
+        return self._sees_box(x_m, y_m, yaw_rad, object_type)
+
+    def _sees_box(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
+        hx, hy = (v / 2 + self.margin_m for v in object_type.top_size_m)
+        z_m = object_type.height_m
+        box = np.array([[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]])
+        corners = (rotation_z(yaw_rad) @ box.T).T + np.array([x_m, y_m, z_m])
+        depth = (corners - self.camera_pose_world.position_m) @ self.camera_pose_world.rotation
+        if np.any(depth[:, 2] <= 0):
+            return False
+        pixels = project_world(self.intrinsics, self.camera_pose_world, corners)
         width, height = self.intrinsics.width_px, self.intrinsics.height_px
         return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
 
@@ -126,7 +145,11 @@ def check_scene(
     kinematics: ArmKinematics | None = None,
     settings: ManipulationSettings | None = None,
 ) -> list[Any]:
-    """Check where the cubes start (anything with ``colour``, ``x_m``, ``y_m``, ``yaw_rad`` and ``name``)."""
+    """Check where the parts start; parts of one colour must be of one type (identical parts).
+
+    A start is anything with ``colour``, ``x_m``, ``y_m``, ``yaw_rad``, ``name`` and optionally
+    ``object_type``.
+    """
     if isinstance(starts, (str, bytes)) or not isinstance(starts, Iterable):
         raise PlanError(f"the scene must be a list of cube starts (colour, x_m, y_m, yaw_rad), got {starts!r}")
     scene: list[Any] = list(starts)
@@ -134,7 +157,7 @@ def check_scene(
     settings = settings or ManipulationSettings()
     kinematics = kinematics or ArmKinematics()
     names: dict[str, int] = {}
-    by_colour: dict[str, int] = {}
+    by_colour: dict[str, tuple[ObjectType, int]] = {}
     for index, start in enumerate(scene, start=1):
         colour = getattr(start, "colour", None)
         if not isinstance(colour, str):
@@ -150,28 +173,34 @@ def check_scene(
             raise PlanError(
                 f"cubes {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}"
             )
-        if colour in by_colour:
+        kind = object_type_of(start)
+        seen = by_colour.get(colour)
+        if seen is not None and seen[0] != kind:
             raise PlanError(
-                f"cubes {by_colour[colour]} and {index} of the scene are both {colour}: "
-                "the camera tells cubes apart by colour, so each colour is one cube"
+                f"parts {seen[1]} and {index} of the scene are both {colour} but of types {seen[0].name!r} and "
+                f"{kind.name!r}: the camera tells parts apart by colour, so one colour is one type"
             )
-        names[_start_name(start)] = by_colour[colour] = index
-    edge = settings.cube_edge_m
+        names[_start_name(start)] = index
+        by_colour.setdefault(colour, (kind, index))
     for index, start in enumerate(scene, start=1):
+        kind = object_type_of(start)
         where = f"cube {_start_name(start)} starts at ({start.x_m:.3f}, {start.y_m:.3f}) m"
-        if view is not None and not view.sees_face(start.x_m, start.y_m, start.yaw_rad, edge):
-            raise PlanError(f"{where}, outside the camera's view{_view_text(view, edge)}")
-        pick = gripper_down_pose(start.x_m, start.y_m, settings.grasp_height_m, fold_yaw(start.yaw_rad))
+        if view is not None and not view.sees_part(start.x_m, start.y_m, start.yaw_rad, kind):
+            raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.height_m)}")
+        grasp_m = settings.grasp_height_m + (kind.grasp_height_m - CUBE.grasp_height_m)
+        pick = gripper_down_pose(start.x_m, start.y_m, grasp_m, kind.fold_yaw(start.yaw_rad))
         try:
             kinematics.check_reachable(pick)
         except UnreachableError as error:
             raise PlanError(f"{where}, out of the arm's reach: {error}") from error
         for other in scene[index:]:
             distance_m = math.hypot(start.x_m - other.x_m, start.y_m - other.y_m)
-            if distance_m < edge * math.sqrt(2):
+            least_m = min_centre_distance_m(kind, object_type_of(other))
+            if distance_m < least_m:
+                what = "a cube's diagonal" if kind == CUBE and object_type_of(other) == CUBE else "their half diagonals"
                 raise PlanError(
                     f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
-                    f"closer than a cube's {edge * math.sqrt(2) * 1000:.0f} mm diagonal, they would overlap"
+                    f"closer than {what} ({least_m * 1000:.0f} mm), they would overlap"
                 )
     return scene
 
@@ -206,19 +235,18 @@ def check_plan(
     plan = validate_targets(targets, colours=colours, kinematics=kinematics, settings=settings)
     if threshold_mm is not None:
         check_threshold(threshold_mm, settings)
-    edge = settings.cube_edge_m
     if view is not None:
         for target in plan:
-            if not view.sees_face(target.x_m, target.y_m, target.yaw_rad, edge):
+            if not view.sees_part(target.x_m, target.y_m, target.yaw_rad, target.object_type):
+                height_m = target.object_type.height_m
                 raise PlanError(
                     f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is outside the camera's view"
-                    f"{_view_text(view, edge)}: the cube could be placed there but never inspected"
+                    f"{_view_text(view, height_m)}: the cube could be placed there but never inspected"
                 )
     if starts is None:
         return plan
     scene = check_scene(starts, view=view, colours=colours, kinematics=kinematics, settings=settings)
     by_name = {_start_name(start): start for start in scene}
-    by_target = {target.obj: target for target in plan}
     for target in plan:
         start = by_name.get(target.obj)
         if start is None:
@@ -228,17 +256,22 @@ def check_plan(
             raise PlanError(
                 f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}"
             )
+        if object_type_of(start) != target.object_type:
+            raise PlanError(
+                f"target {target.obj} is a {target.object_type.name} ({target.object_type.size_text}) but the "
+                f"scene's {target.obj} is a {object_type_of(start).name} ({object_type_of(start).size_text})"
+            )
     pads = Pads.from_settings(settings)
     for part in parts_of(plan, settings):
         for start in scene:
             if _start_name(start) == part.name:
                 continue
-            size_x, size_y = (
-                footprint_m(by_target[_start_name(start)], settings)
-                if _start_name(start) in by_target
-                else (edge, edge)
+            start_kind = object_type_of(start)
+            # The start's own size (a cube's from the settings' edge): the circle it sweeps as it turns.
+            half_diagonal_m = (
+                settings.cube_edge_m * math.sqrt(2) / 2 if start_kind == CUBE else start_kind.half_diagonal_m
             )
-            need_m = start_clearance_m(math.hypot(size_x, size_y) / 2, pads)
+            need_m = start_clearance_m(half_diagonal_m, pads)
             gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
             if gap < need_m:
                 raise PlanError(

@@ -7,17 +7,17 @@ from dataclasses import dataclass
 
 from bt_arrange.errors import OutOfRangeError
 from bt_arrange.motion.limits import CartesianLimits
+from bt_arrange.objects import CUBE
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE
 from bt_arrange.robot import GRIPPER_FORCE_RANGE_N, GRIPPER_MAX_WIDTH_M
 
-#: Edge length of the paper's cubes, in metres.
-CUBE_EDGE_M = 0.05
-#: Top-face colours (RGB, 0..1) of the paper's four cubes as the simulated cell paints them; the
-#: perception's default colour table covers them (a new colour needs an HSV range there too).
+#: Edge length of the paper's cubes, in metres (``bt_arrange.objects.CUBE``).
+CUBE_EDGE_M = CUBE.size_m[0]
+#: Top-face colours (RGB, 0..1) the simulated cell paints, read from the one colour table
+#: (``bt_arrange.perception.DEFAULT_COLOUR_TABLE``, each range's ``rgb``): kept for callers that
+#: want the paint by name; a new colour goes into the table (a plan's ``[colours.NAME]``).
 CUBE_COLOURS_RGB: dict[str, tuple[float, float, float]] = {
-    "red": (0.80, 0.08, 0.08),
-    "green": (0.10, 0.65, 0.20),
-    "blue": (0.10, 0.25, 0.85),
-    "yellow": (0.90, 0.80, 0.10),
+    name: colour.paint_rgb for name, colour in DEFAULT_COLOUR_TABLE.items()
 }
 #: Sides of every cube: near-white, so a top camera sees only the top face in colour.
 CUBE_SIDE_RGB = (0.85, 0.85, 0.82)

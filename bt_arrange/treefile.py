@@ -5,7 +5,9 @@ simulator, ``create_scene(seed)`` returning where the cubes start. Its own folde
 ``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
 
 A ``.xml`` file is a BehaviorTree.CPP tree, read as data by ``bt_arrange.xmltree`` (no code of
-the file runs) into a module with the same two functions.
+the file runs) into a module with the same two functions; a ``.toml`` file is a plan
+(``bt_arrange.plans``), likewise. A name without a folder or suffix that is not a file is one of
+the examples shipped in the package (``bt_arrange.examples``: ``bt-arrange run six_in_a_row``).
 """
 
 from __future__ import annotations
@@ -26,13 +28,24 @@ def load(path: str | Path) -> ModuleType:
     """Import the tree file at ``path`` (a ``.py`` file), or read it (a BehaviorTree.CPP ``.xml`` file)."""
     path = Path(path)
     if not path.is_file():
-        raise TreeFileError(f"tree file {path} not found")
+        from bt_arrange import examples
+
+        example = examples.path_of(str(path)) if path.name == str(path) and not path.suffix else None
+        if example is None:
+            raise TreeFileError(f"tree file {path} not found")
+        path = example
     if path.suffix == ".xml":
         from bt_arrange import xmltree
 
         return xmltree.load_module(path)
+    if path.suffix == ".toml":
+        from bt_arrange import plans
+
+        return plans.load_module(path)
     if path.suffix != ".py":
-        raise TreeFileError(f"tree file {path} is neither a Python file (.py) nor a BehaviorTree.CPP XML tree (.xml)")
+        raise TreeFileError(
+            f"tree file {path} is neither a Python file (.py), a BehaviorTree.CPP XML tree (.xml) nor a plan (.toml)"
+        )
     spec = importlib.util.spec_from_file_location(f"bt_arrange_tree_{path.stem}", path)
     if spec is None or spec.loader is None:
         raise TreeFileError(f"cannot load tree file {path}")

@@ -29,8 +29,8 @@ that writes ``/<obj>/pose`` will do.
 from __future__ import annotations
 
 import operator
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import py_trees
 
@@ -53,18 +53,23 @@ from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Pads, Part, Release, Step, free_push_directions, plan_layout, restage_releases
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.objects import CUBE, ObjectType, kind_of
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
 
 CORRECT_MODES = ("each", "after_all")
+#: The yaw error (degrees) the correction loop leaves by default.
+DEFAULT_YAW_THRESHOLD_DEG = 1.0
 
 
 @dataclass(frozen=True)
 class Target:
-    """Where one cube should end up: ``colour``, ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
+    """Where one part should end up: ``colour`` (of its top face), ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
 
     ``name`` is the object's blackboard namespace (``/<name>/pose``); it defaults to the colour.
+    ``object_type`` is its size (default the paper's cube, ``bt_arrange.objects.CUBE``). Several
+    targets may share a type and a colour (identical parts): each needs its own name.
     """
 
     colour: str
@@ -72,6 +77,7 @@ class Target:
     y_m: float
     yaw_rad: float = 0.0
     name: str | None = None
+    object_type: ObjectType = field(default=CUBE)
 
     @property
     def obj(self) -> str:
@@ -93,9 +99,11 @@ def validate_targets(
 ) -> list[Target]:
     """Check a plan before anything moves; a ``PlanError`` names the first problem.
 
-    Malformed entries, unknown colours, two targets for one object, a target out of the arm's
-    reach, and a plan no order and approach can build (``plan_steps``: targets that overlap or lie
-    closer than 2 mm, a part the pads find no room beside) are each a clear error.
+    Malformed entries, unknown colours, two targets for one object, one colour on two types, a
+    target out of the arm's reach, and a plan no order and approach can build (``plan_steps``:
+    targets that overlap or lie closer than 2 mm, a part the pads find no room beside, each part's
+    footprint its type's size) are each a clear error. Targets of one type and colour are
+    identical parts (each with its own name).
     """
     if isinstance(targets, (str, bytes)) or not isinstance(targets, Iterable):
         raise PlanError(f"targets must be a list of Target(colour, x_m, y_m, yaw_rad), got {targets!r}")
@@ -104,25 +112,39 @@ def validate_targets(
         raise PlanError("no targets: an arrangement needs at least one Target(colour, x_m, y_m, yaw_rad)")
     known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
     settings = settings or ManipulationSettings()
-    seen: dict[str, int] = {}
+    names: dict[str, int] = {}
+    type_of_colour: dict[str, tuple[ObjectType, int]] = {}
     for index, target in enumerate(plan, start=1):
         if not isinstance(target, Target):
             raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
-        for field in ("x_m", "y_m", "yaw_rad"):
-            finite_number(field, getattr(target, field), where=f"target {index} ({target.colour}): ")
+        for field_name in ("x_m", "y_m", "yaw_rad"):
+            finite_number(field_name, getattr(target, field_name), where=f"target {index} ({target.colour}): ")
+        if not isinstance(target.object_type, ObjectType):
+            raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
         if target.colour not in known:
             raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
-        for taken, what in ((target.obj, "named"), (target.colour, "coloured")):
-            if taken in seen:
-                raise PlanError(
-                    f"targets {seen[taken]} and {index} are both {what} {taken!r}: "
-                    "the camera tells cubes apart by colour, so each colour is one object"
-                )
-        seen[target.obj] = seen[target.colour] = index
+        if target.obj in names:
+            first_index = names[target.obj]
+            hint = (
+                f" (identical parts need a name each, e.g. name='{target.colour} 1' and name='{target.colour} 2')"
+                if target.name is None
+                else ""
+            )
+            raise PlanError(f"targets {first_index} and {index} are both named {target.obj!r}{hint}")
+        names[target.obj] = index
+        seen = type_of_colour.get(target.colour)
+        if seen is not None and seen[0] != target.object_type:
+            raise PlanError(
+                f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
+                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type"
+            )
+        type_of_colour.setdefault(target.colour, (target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]
     kinematics = kinematics or ArmKinematics()
     for target in checked:
-        for height_m in (settings.grasp_height_m, settings.approach_height_m):
+        grasp_m = settings.grasp_height_m + (target.object_type.grasp_height_m - CUBE.grasp_height_m)
+        approach_m = target.object_type.approach_height_m(settings.approach_height_m)
+        for height_m in (grasp_m, approach_m):
             try:
                 kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
             except UnreachableError as error:
@@ -133,18 +155,45 @@ def validate_targets(
     return checked
 
 
+def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
+    """For each target's object, the targets of every part of its kind (type and colour), its own among them.
+
+    Only kinds of several parts (identical parts) are listed; an object alone in its kind is left out.
+    """
+    plan = list(targets)
+    by_kind: dict[tuple[ObjectType, str], list[Target]] = {}
+    for target in plan:
+        by_kind.setdefault(kind_of(target), []).append(target)
+    return {
+        target.obj: tuple(t.planar for t in by_kind[kind_of(target)])
+        for target in plan
+        if len(by_kind[kind_of(target)]) > 1
+    }
+
+
 def footprint_m(target: Target, settings: ManipulationSettings | None = None) -> tuple[float, float]:
-    """The part's size on the table (x, y in its own frame, metres): its type's, else the cube's edge."""
-    size = getattr(target, "size_xy_m", None)
-    if size is not None:
-        return float(size[0]), float(size[1])
-    edge = (settings or ManipulationSettings()).cube_edge_m
-    return edge, edge
+    """The part's size on the table (x, y in its own frame, metres): its type's top face.
+
+    The cube's is the settings' edge (``cube_edge_m``, 50 mm unless a test changes it).
+    """
+    kind = getattr(target, "object_type", CUBE)
+    if kind == CUBE:
+        edge = (settings or ManipulationSettings()).cube_edge_m
+        return edge, edge
+    return float(kind.top_size_m[0]), float(kind.top_size_m[1])
 
 
 def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
-    """The plan's targets as footprints for ``bt_arrange.layout``."""
-    return [Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t, settings)) for t in targets]
+    """The plan's targets as footprints for ``bt_arrange.layout``, each held only across a side the stroke spans."""
+    return [
+        Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t, settings), grasp_axes=_grasp_axes(t.object_type))
+        for t in targets
+    ]
+
+
+def _grasp_axes(kind: ObjectType) -> tuple[str, ...]:
+    """The axes of the part's frame the pads may close across: its grasp axis, and the other too on a square top."""
+    return ("x", "y") if kind.square_top else (kind.grasp_axis,)
 
 
 def plan_steps(
@@ -190,7 +239,7 @@ def by_camera() -> Locate:
     """Find the object with the top camera's colour detection: ``Detect "detect <obj>"`` (the default)."""
 
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
-        return Detect(f"detect {target.obj}", target.obj, target.colour)
+        return Detect(f"detect {target.obj}", target.obj, target.colour, target.object_type)
 
     return locate
 
@@ -205,6 +254,11 @@ def by_depth(
     """
 
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
+        if target.object_type != CUBE:
+            raise PlanError(
+                f"target {target.obj}: the depth-only grasp estimator knows the paper's 5 cm cube only, "
+                f"not a {target.object_type.name} ({target.object_type.size_text})"
+            )
         return EstimateGraspFromDepth(
             f"estimate {target.obj} grasp from depth",
             target.obj,
@@ -218,38 +272,64 @@ def by_depth(
 
 
 def transfer(
-    target: Target, max_regrasps: int = 3, *, locate: Locate | None = None, release: Release | None = None
+    target: Target,
+    max_regrasps: int = 3,
+    *,
+    locate: Locate | None = None,
+    kind_targets: Sequence[PlanarPose] = (),
+    release: Release | None = None,
 ) -> py_trees.behaviour.Behaviour:
-    """Locate, pick and place one object; a cube lost on the way is located and picked again.
+    """Locate, pick and place one object; a part lost on the way is located and picked again.
 
-    ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect);
-    ``release`` says where the pads go among neighbours (``bt_arrange.layout``; default: anywhere).
+    ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
+    ``kind_targets`` (identical parts: the targets of the kind) let a Detect choose a part that
+    is not at one of them. ``release`` says where the pads go among neighbours
+    (``bt_arrange.layout``; default: anywhere).
     """
     obj = target.obj
-    find = locate or by_camera()
+    kind = target.object_type
+
+    def find() -> py_trees.behaviour.Behaviour:
+        finder = (locate or by_camera())(target)
+        if kind_targets and isinstance(finder, Detect):
+            finder.among(kind_targets)
+        return finder
+
     look_again: list[py_trees.behaviour.Behaviour] = []
     if release is not None:
         # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
         # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
         # at it again, and pick it centred.
         look_again = [
-            GraspGuard(f"while setting {obj} down", Place(f"set {obj} down to look again", obj, where="pick")),
-            find(target),
-            Pick(f"pick {obj} centred", obj),
+            GraspGuard(
+                f"while setting {obj} down",
+                Place(f"set {obj} down to look again", obj, kind, where="pick"),
+            ),
+            find(),
+            Pick(f"pick {obj} centred", obj, kind),
         ]
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            find(target),
-            Pick(f"pick {obj}", obj),
+            find(),
+            Pick(f"pick {obj}", obj, kind),
             *look_again,
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, release=release)),
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, kind, release=release)),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
     # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
+
+
+def inspect(
+    target: Target, name: str, *, after_placing: bool = False, kind_targets: Sequence[PlanarPose] = ()
+) -> Inspect:
+    """The Inspect of one object (its type, colour and, for identical parts, the targets of its kind)."""
+    return Inspect(
+        name, target.obj, target.colour, after_placing, object_type=target.object_type, kind_targets=kind_targets
+    )
 
 
 def check_strategy(strategy: object) -> str:
@@ -265,13 +345,15 @@ def correction(
     max_pushes: int = 10,
     strategy: str = "paper",
     *,
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
     towards: tuple[str, ...] | None = None,
     restage: dict[str, Release] | None = None,
     push_opening_m: float | None = None,
     count: bool = True,
     label: str = "",
 ) -> py_trees.behaviour.Behaviour:
-    """Push and inspect one object until it lies within ``threshold_mm`` of its target.
+    """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
     ``towards``: the directions (target frame) it may be pushed, the sides a neighbour blocks left
     out (default all four). ``restage``: per blocked direction, a release on the other side; when
@@ -279,12 +361,21 @@ def correction(
     from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
     ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, ``"learned"``
     or ``"diagonal"``.
+    ``yaw_threshold_deg=None`` corrects the position only.
     """
     check_threshold(threshold_mm)
     check_strategy(strategy)
-    obj, colour = target.obj, target.colour
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    obj = target.obj
     push: py_trees.behaviour.Behaviour = Push(
-        f"push {obj}{label}", obj, strategy, towards=towards, opening_m=push_opening_m
+        f"push {obj}{label}",
+        obj,
+        strategy,
+        target.object_type,
+        yaw_threshold_deg,
+        towards=towards,
+        opening_m=push_opening_m,
     )
     if restage:
         push = py_trees.composites.Selector(
@@ -295,7 +386,7 @@ def correction(
     push_and_look = py_trees.composites.Sequence(
         name=f"push and inspect {obj}{label}",
         memory=True,
-        children=[push, Inspect(f"inspect {obj}{label}", obj, colour)],
+        children=[push, inspect(target, f"inspect {obj}{label}", kind_targets=kind_targets)],
     )
     return RepeatUntilWithin(
         name=f"correct {obj} to {threshold_mm:g} mm{label}",
@@ -305,6 +396,8 @@ def correction(
         max_attempts=max_pushes,
         corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
         obj=obj,
+        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+        yaw_threshold_deg=yaw_threshold_deg,
     )
 
 
@@ -320,8 +413,11 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
                 name=f"{obj} needs a push {towards}{label}",
                 check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
             ),
-            Pick(f"pick {obj} again{label}", obj, grasp=release),
-            GraspGuard(f"while holding {obj} again{label}", Place(f"place {obj} again{label}", obj, release=release)),
+            Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release),
+            GraspGuard(
+                f"while holding {obj} again{label}",
+                Place(f"place {obj} again{label}", obj, target.object_type, release=release),
+            ),
         ],
     )
 
@@ -336,13 +432,18 @@ def arrange_one(
     step: Step | None = None,
     neighbours: Sequence[tuple[Target, tuple[str, ...], dict[str, Release]]] = (),
     strategy: str = "paper",
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
+    kind_of_neighbour: Mapping[str, Sequence[PlanarPose]] | None = None,
 ) -> py_trees.behaviour.Behaviour:
-    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the threshold.
+    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds.
 
     ``step`` (from ``plan_steps``) places it among neighbours: its release, the sides it may be
     pushed from and how to release it again. ``neighbours`` are the parts placed before it nearby,
     each with the directions it may be pushed and its restaging once this one is down: each is
     looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
+    ``kind_targets`` (identical parts) are the targets of its kind; ``kind_of_neighbour`` gives
+    a neighbour's.
     """
     obj = target.obj
     dense = step is not None and _is_dense(step)
@@ -351,13 +452,15 @@ def arrange_one(
     restage = step.restage if dense and step is not None else None
     children: list[py_trees.behaviour.Behaviour] = [
         set_target(target),
-        transfer(target, max_regrasps, locate=locate, release=release),
-        Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
+        transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
+        inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
         correction(
             target,
             threshold_mm,
             max_pushes,
             strategy,
+            yaw_threshold_deg=yaw_threshold_deg,
+            kind_targets=kind_targets,
             towards=towards,
             restage=restage,
             push_opening_m=_opening(step, dense),
@@ -365,17 +468,27 @@ def arrange_one(
     ]
     for neighbour, sides, again in neighbours:
         label = f" after {obj}"
+        neighbour_kind = (kind_of_neighbour or {}).get(neighbour.obj, ())
         children.append(
             py_trees.composites.Sequence(
                 name=f"look again at {neighbour.obj}{label}",
                 memory=True,
                 children=[
-                    Recheck(f"look at {neighbour.obj}{label}", neighbour.obj, neighbour.colour, after=obj),
+                    Recheck(
+                        f"look at {neighbour.obj}{label}",
+                        neighbour.obj,
+                        neighbour.colour,
+                        after=obj,
+                        object_type=neighbour.object_type,
+                        kind_targets=neighbour_kind,
+                    ),
                     correction(
                         neighbour,
                         threshold_mm,
                         max_pushes,
                         strategy,
+                        yaw_threshold_deg=yaw_threshold_deg,
+                        kind_targets=neighbour_kind,
                         towards=sides,
                         restage=again,
                         push_opening_m=_DENSE_PADS.push_opening_m(parts_of([neighbour])[0], "x"),
@@ -392,7 +505,7 @@ _DENSE_PADS = Pads.from_settings(ManipulationSettings())
 
 
 def _opening(step: Step | None, dense: bool) -> float | None:
-    """The push opening among neighbours (square parts: the same along x and y), None for a free part."""
+    """The push opening among neighbours (along x; Push keeps it within the pushed face's own width), None when free."""
     return _DENSE_PADS.push_opening_m(step.part, "x") if dense and step is not None else None
 
 
@@ -420,11 +533,17 @@ class Arrangement(py_trees.composites.Sequence):
         threshold_mm: float,
         *,
         place_all: py_trees.behaviour.Behaviour | None = None,
+        yaw_threshold_deg: float | None = None,
+        colours: ColourTable | None = None,
     ) -> None:
         super().__init__(name=name, memory=True, children=list(children))
         self.targets = targets
         self.threshold_mm = threshold_mm
         self.place_all = place_all
+        #: The yaw error (degrees) the correction loop leaves; None: position only.
+        self.yaw_threshold_deg = yaw_threshold_deg
+        #: The colour table the plan's colours come from: the cell paints with it, the camera reads it.
+        self.colours = colours if colours is not None else DEFAULT_COLOUR_TABLE
 
 
 def arrangement(
@@ -438,6 +557,8 @@ def arrangement(
     locate: Locate | None = None,
     order: Sequence[str] | None = None,
     strategy: str = "paper",
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    colours: ColourTable | Mapping[str, object] | None = None,
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -453,13 +574,22 @@ def arrangement(
     ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's), ``"learned"``
     (``Push``: the larger axis first, each push's landing error learned) or ``"diagonal"`` (learned,
     and the same push corrects the other axis too).
+    ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
+    position only). ``colours`` is the colour table of the plan (default the cell's four; a
+    user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
     """
     check_strategy(strategy)
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm)
     whole_number("max_pushes", max_pushes)
-    plan = validate_targets(targets)
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    if colours is not None and not isinstance(colours, ColourTable):
+        raise PlanError(f"colours must be a ColourTable (bt_arrange.perception), got {type(colours).__name__}")
+    table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
+    plan = validate_targets(targets, colours=table.names)
+    siblings = kinds(plan)
     steps = plan_steps(plan, order=order)
     steps_by_obj = {st.part.name: st for st in steps}
     by_obj = {t.obj: t for t in plan}
@@ -493,6 +623,9 @@ def arrangement(
                 strategy=strategy,
                 step=step,
                 neighbours=neighbours,
+                yaw_threshold_deg=yaw_threshold_deg,
+                kind_targets=siblings.get(target.obj, ()),
+                kind_of_neighbour=siblings,
             )
             children.append(carry_on(subtree, target.obj))
     else:
@@ -507,8 +640,19 @@ def arrangement(
                         memory=True,
                         children=[
                             set_target(t),
-                            transfer(t, max_regrasps, locate=locate, release=_dense_release(steps_by_obj[t.obj])),
-                            Inspect(f"inspect {t.obj} after placing", t.obj, t.colour, after_placing=True),
+                            transfer(
+                                t,
+                                max_regrasps,
+                                locate=locate,
+                                kind_targets=siblings.get(t.obj, ()),
+                                release=_dense_release(steps_by_obj[t.obj]),
+                            ),
+                            inspect(
+                                t,
+                                f"inspect {t.obj} after placing",
+                                after_placing=True,
+                                kind_targets=siblings.get(t.obj, ()),
+                            ),
                         ],
                     ),
                     t.obj,
@@ -529,12 +673,14 @@ def arrangement(
                             py_trees.behaviours.CheckBlackboardVariableExists(
                                 name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
                             ),
-                            Inspect(f"inspect {t.obj} before correcting", t.obj, t.colour),
+                            inspect(t, f"inspect {t.obj} before correcting", kind_targets=siblings.get(t.obj, ())),
                             correction(
                                 t,
                                 threshold_mm,
                                 max_pushes,
                                 strategy,
+                                yaw_threshold_deg=yaw_threshold_deg,
+                                kind_targets=siblings.get(t.obj, ()),
                                 towards=free_push_directions(steps_by_obj[t.obj].part, everything, pads),
                                 restage=restage_releases(steps_by_obj[t.obj].part, everything, pads),
                             ),
@@ -552,4 +698,6 @@ def arrangement(
         targets=plan,
         threshold_mm=float(threshold_mm),
         place_all=children[0] if correct == "after_all" else None,
+        yaw_threshold_deg=None if yaw_threshold_deg is None else float(yaw_threshold_deg),
+        colours=table,
     )

@@ -51,6 +51,8 @@ from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, P
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import BtArrangeError, TreeFileError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.trees import Arrangement, Target, validate_targets
 
 FORMAT_VERSION = "4"
@@ -116,17 +118,36 @@ def _format_planar_pose(pose: PlanarPose) -> str:
     return ";".join(_format_float(v) for v in (pose.x_m, pose.y_m, pose.yaw_rad))
 
 
+def _parse_object_type(text: str) -> ObjectType:
+    """``""`` (the cube) or ``name=x*y*z`` in metres."""
+    if not text.strip():
+        return CUBE
+    name, _, size = text.partition("=")
+    parts = size.split("*")
+    if len(parts) != 3:
+        raise ValueError(f"object type {text!r} is not name=x_m*y_m*z_m")
+    x, y, z = (_parse_float(part) for part in parts)
+    return ObjectType(name.strip(), (x, y, z))
+
+
+def _format_object_type(object_type: ObjectType) -> str:
+    if object_type == CUBE:
+        return ""
+    return f"{object_type.name}=" + "*".join(_format_float(v) for v in object_type.size_m)
+
+
 def _parse_targets(text: str) -> list[Target]:
     targets = []
     for entry in (part.strip() for part in text.split(";")):
         if not entry:
             continue
         fields = [f.strip() for f in entry.split(",")]
-        if len(fields) not in (4, 5):
-            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name]")
+        if len(fields) not in (4, 5, 6):
+            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]")
         colour, x, y, yaw = fields[:4]
-        name = fields[4] if len(fields) == 5 else None
-        targets.append(Target(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name))
+        name = fields[4] if len(fields) >= 5 and fields[4] else None
+        kind = _parse_object_type(fields[5]) if len(fields) == 6 else CUBE
+        targets.append(Target(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name, object_type=kind))
     return targets
 
 
@@ -134,9 +155,62 @@ def _format_targets(targets: list[Target]) -> str:
     entries = []
     for t in targets:
         fields = [t.colour, _format_float(t.x_m), _format_float(t.y_m), _format_float(t.yaw_rad)]
-        if t.name is not None and t.name != t.colour:
-            fields.append(t.name)
+        named = t.name is not None and t.name != t.colour
+        if named or t.object_type != CUBE:
+            fields.append(t.name if named and t.name is not None else "")
+        if t.object_type != CUBE:
+            fields.append(_format_object_type(t.object_type))
         entries.append(",".join(fields))
+    return ";".join(entries)
+
+
+def _parse_poses(text: str) -> tuple[PlanarPose, ...]:
+    """Planar poses ``x_m,y_m,yaw_rad`` separated by ``;`` (empty: none)."""
+    poses = []
+    for entry in (part.strip() for part in text.split(";")):
+        if entry:
+            poses.append(_parse_planar_pose(entry.replace(",", ";")))
+    return tuple(poses)
+
+
+def _format_poses(poses: tuple[PlanarPose, ...]) -> str:
+    return ";".join(_format_planar_pose(p).replace(";", ",") for p in poses)
+
+
+def _parse_colours(text: str) -> ColourTable:
+    """A plan's own colours beside the default table: ``name:rgb:r,g,b`` or ``name:hsv:h0-h1+h2-h3,s0-s1,v0-v1``."""
+    table = DEFAULT_COLOUR_TABLE
+    for entry in (part.strip() for part in text.split(";")):
+        if not entry:
+            continue
+        name, kind, values = (f.strip() for f in (entry.split(":", 2) + ["", ""])[:3])
+        if kind == "rgb":
+            r, g, b = (_parse_float(v) for v in values.split(","))
+            table = table.with_colour(ColourRange.around_rgb(name, (r, g, b)))
+        elif kind == "hsv":
+            hues, saturation, value = values.split(",")
+            ranges = tuple(tuple(_parse_float(v) for v in h.split("-")) for h in hues.split("+"))
+            s0, s1 = (_parse_float(v) for v in saturation.split("-"))
+            v0, v1 = (_parse_float(v) for v in value.split("-"))
+            table = table.with_colour(ColourRange(name, ranges, (s0, s1), (v0, v1)))  # type: ignore[arg-type]
+        else:
+            raise ValueError(f"colour {entry!r} is not name:rgb:r,g,b or name:hsv:h0-h1,s0-s1,v0-v1")
+    return table
+
+
+def _format_colours(table: ColourTable) -> str:
+    entries = []
+    for name, colour in table.items():
+        if DEFAULT_COLOUR_TABLE.get(name) == colour:
+            continue
+        if colour.rgb is not None and ColourRange.around_rgb(name, colour.rgb) == colour:
+            entries.append(f"{name}:rgb:" + ",".join(_format_float(v) for v in colour.rgb))
+        else:
+            hues = "+".join(f"{_format_float(lo)}-{_format_float(hi)}" for lo, hi in colour.hue_ranges_deg)
+            (s0, s1), (v0, v1) = colour.saturation_range, colour.value_range
+            entries.append(
+                f"{name}:hsv:{hues},{_format_float(s0)}-{_format_float(s1)},{_format_float(v0)}-{_format_float(v1)}"
+            )
     return ";".join(entries)
 
 
@@ -146,6 +220,13 @@ INT = PortType("int", _parse_int, str)
 BOOL = PortType("bool", _parse_bool, lambda value: "true" if value else "false")
 PLANAR_POSE = PortType("PlanarPose", _parse_planar_pose, _format_planar_pose)
 TARGETS = PortType("Targets", _parse_targets, _format_targets)
+OBJECT_TYPE = PortType("ObjectType", _parse_object_type, _format_object_type)
+POSES = PortType("PlanarPoses", _parse_poses, _format_poses)
+COLOURS = PortType("Colours", _parse_colours, _format_colours)
+
+
+def _off_if_zero(value: float) -> float | None:
+    return None if value == 0 else value
 
 
 @dataclass(frozen=True)
@@ -213,15 +294,17 @@ def _only(children: Children) -> py_trees.behaviour.Behaviour:
 
 _OBJ = Port("obj", STRING, description="the object's name: its blackboard namespace (/<obj>/pose ...)")
 _COLOUR = Port("colour", STRING, "", "the colour the camera looks for (empty: the object's name)")
+_TYPE = Port("object_type", OBJECT_TYPE, CUBE, "name=x_m*y_m*z_m (empty: the 5 cm cube)")
+_KIND = Port("kind_targets", POSES, (), "identical parts: the targets of the kind, x_m,y_m,yaw_rad;... (empty: none)")
 
 register(
     NodeModel(
         "Detect",
         "Action",
         Detect,
-        (_OBJ, _COLOUR),
-        lambda name, v, _: Detect(name, v["obj"], v["colour"] or None),
-        lambda n: {"obj": n.obj, "colour": n.colour},
+        (_OBJ, _COLOUR, _TYPE, _KIND),
+        lambda name, v, _: Detect(name, v["obj"], v["colour"] or None, v["object_type"], v["kind_targets"]),
+        lambda n: {"obj": n.obj, "colour": n.colour, "object_type": n.object_type, "kind_targets": n.kind_targets},
         description="camera -> /<obj>/pose",
     )
 )
@@ -230,17 +313,30 @@ register(
         "Inspect",
         "Action",
         Inspect,
-        (_OBJ, _COLOUR, Port("after_placing", BOOL, False, "also write /<obj>/placed_offset_mm")),
-        lambda name, v, _: Inspect(name, v["obj"], v["colour"] or None, after_placing=v["after_placing"]),
-        lambda n: {"obj": n.obj, "colour": n.colour, "after_placing": n.after_placing},
-        description="camera -> /<obj>/pose, /<obj>/offset_mm",
+        (_OBJ, _COLOUR, Port("after_placing", BOOL, False, "also write /<obj>/placed_offset_mm"), _TYPE, _KIND),
+        lambda name, v, _: Inspect(
+            name,
+            v["obj"],
+            v["colour"] or None,
+            after_placing=v["after_placing"],
+            object_type=v["object_type"],
+            kind_targets=v["kind_targets"],
+        ),
+        lambda n: {
+            "obj": n.obj,
+            "colour": n.colour,
+            "after_placing": n.after_placing,
+            "object_type": n.object_type,
+            "kind_targets": n.kind_targets,
+        },
+        description="camera -> /<obj>/pose, /<obj>/offset_mm, /<obj>/yaw_error_deg",
     )
 )
 Builder = Callable[[str, dict[str, Any], Children], py_trees.behaviour.Behaviour]
 
 
-def _with_obj(cls: type[Pick] | type[Place] | type[Push]) -> Builder:
-    return lambda name, values, children: cls(name, values["obj"])
+def _with_obj(cls: type[Pick] | type[Place]) -> Builder:
+    return lambda name, values, children: cls(name, values["obj"], values["object_type"])
 
 
 def _with_memory(cls: type[py_trees.composites.Sequence] | type[py_trees.composites.Selector], memory: bool) -> Builder:
@@ -259,11 +355,12 @@ def _named(cls: Callable[[str], py_trees.behaviour.Behaviour]) -> Builder:
     return lambda name, values, children: cls(name)
 
 
-def _obj_only(node: Pick | Place | Push) -> dict[str, Any]:
-    """The port of a Pick, Place or Push; one among neighbours has no XML form yet: refused, never written without."""
+def _refuse_among_neighbours(node: Pick | Place | Push) -> None:
+    """A Pick, Place or Push among neighbours has no XML form yet: refused, never written without its pads."""
     among_neighbours = (
         getattr(node, "grasp", None) is not None
         or getattr(node, "release", None) is not None
+        or getattr(node, "where", "target") != "target"
         or getattr(node, "opening_m", None) is not None
         or (isinstance(node, Push) and set(node.towards) != {"+x", "-x", "+y", "-y"})
     )
@@ -272,21 +369,45 @@ def _obj_only(node: Pick | Place | Push) -> dict[str, Any]:
             f"cannot write {node.name!r} as XML: it is placed or pushed among neighbours (bt_arrange.layout), "
             "which the XML node models do not hold yet"
         )
-    return {"obj": node.obj}
 
 
-for _leaf_cls, _what in ((Pick, "grasp at /<obj>/pose"), (Place, "release at /<obj>/target"), (Push, "one push")):
+def _obj_and_type(node: Pick | Place) -> dict[str, Any]:
+    """The ports of a Pick or Place: its object and type (refused among neighbours)."""
+    _refuse_among_neighbours(node)
+    return {"obj": node.obj, "object_type": node.object_type}
+
+
+def _push_ports(node: Push) -> dict[str, Any]:
+    """The ports of a Push (refused among neighbours)."""
+    _refuse_among_neighbours(node)
+    return {"obj": node.obj, "object_type": node.object_type, "yaw_threshold_deg": node.yaw_threshold_deg or 0.0}
+
+
+for _leaf_cls, _what in ((Pick, "grasp at /<obj>/pose"), (Place, "release at /<obj>/target")):
     register(
         NodeModel(
             _leaf_cls.__name__,
             "Action",
             _leaf_cls,
-            (_OBJ,),
+            (_OBJ, _TYPE),
             _with_obj(_leaf_cls),
-            _obj_only,
+            _obj_and_type,
             description=_what,
         )
     )
+register(
+    NodeModel(
+        "Push",
+        "Action",
+        Push,
+        (_OBJ, _TYPE, Port("yaw_threshold_deg", DOUBLE, 0.0, "square the part at this yaw error [deg] (0: never)")),
+        lambda name, v, _: Push(
+            name, v["obj"], object_type=v["object_type"], yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"])
+        ),
+        _push_ports,
+        description="one push",
+    )
+)
 register(NodeModel("MoveHome", "Action", MoveHome, (), lambda name, v, _: MoveHome(name), description="park the arm"))
 register(
     NodeModel(
@@ -309,6 +430,8 @@ register(
             Port("threshold_mm", DOUBLE, description="succeed once the offset is under this [mm]"),
             Port("max_attempts", INT, 10, "corrections before giving up"),
             Port("corrections_key", STRING, "", "blackboard key counting the corrections (empty: none)"),
+            Port("yaw_key", STRING, "", "blackboard key of the yaw error [deg] (empty: position only)"),
+            Port("yaw_threshold_deg", DOUBLE, 0.0, "succeed once the yaw error is under this too [deg] (0: off)"),
         ),
         lambda name, v, children: RepeatUntilWithin(
             name,
@@ -317,12 +440,16 @@ register(
             threshold_mm=v["threshold_mm"],
             max_attempts=v["max_attempts"],
             corrections_key=v["corrections_key"] or None,
+            yaw_key=v["yaw_key"] or None,
+            yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"]),
         ),
         lambda n: {
             "offset_key": n.offset_key,
             "threshold_mm": n.threshold_mm,
             "max_attempts": n.max_attempts,
             "corrections_key": n.corrections_key or "",
+            "yaw_key": n.yaw_key or "",
+            "yaw_threshold_deg": n.yaw_threshold_deg or 0.0,
         },
         description="re-run the child until the offset is under the threshold",
     )
@@ -335,9 +462,23 @@ register(
         (
             Port("targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name] per object, separated by ;"),
             Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
+            Port("yaw_threshold_deg", DOUBLE, 0.0, "the yaw threshold the report checks [deg] (0: position only)"),
+            Port("colours", COLOURS, DEFAULT_COLOUR_TABLE, "the plan's own colours: name:rgb:r,g,b;... (empty: none)"),
         ),
-        lambda name, v, children: Arrangement(name, children, validate_targets(v["targets"]), v["threshold_mm"]),
-        lambda n: {"targets": n.targets, "threshold_mm": n.threshold_mm},
+        lambda name, v, children: Arrangement(
+            name,
+            children,
+            validate_targets(v["targets"], colours=v["colours"].names),
+            v["threshold_mm"],
+            yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"]),
+            colours=v["colours"],
+        ),
+        lambda n: {
+            "targets": n.targets,
+            "threshold_mm": n.threshold_mm,
+            "yaw_threshold_deg": n.yaw_threshold_deg or 0.0,
+            "colours": n.colours,
+        },
         description="a sequence with memory that knows its plan (the report and the scene come from it)",
     )
 )
@@ -758,7 +899,14 @@ def load_module(path: str | Path) -> ModuleType:
             )
         from bt_arrange import backends  # the default backend's convention, loaded only to run
 
-        return backends.load().scatter([t.colour for t in text_root.targets], seed, avoid=text_root.targets)
+        targets = text_root.targets
+        return backends.load().scatter(
+            [t.colour for t in targets],
+            seed,
+            avoid=targets,
+            object_types=[t.object_type for t in targets],
+            names=[t.name for t in targets],
+        )
 
     module.create_root = create_root  # type: ignore[attr-defined]
     module.create_scene = create_scene  # type: ignore[attr-defined]

@@ -49,11 +49,18 @@ class SimBackend:
             root, starts, cell_config=config, gui=gui, record_dir=record_dir, time_limit_s=time_limit_s, title=title
         )
 
-    def scatter(self, colours: Sequence[str], seed: int, avoid: Iterable[Any] = ()) -> list[Any]:
-        """``bt_arrange_sim.scenes.scatter``: cubes inside the camera's view and the arm's reach."""
+    def scatter(
+        self,
+        colours: Sequence[str],
+        seed: int,
+        avoid: Iterable[Any] = (),
+        object_types: Sequence[Any] | None = None,
+        names: Sequence[str | None] | None = None,
+    ) -> list[Any]:
+        """``bt_arrange_sim.scenes.scatter``: parts inside the camera's view and the arm's reach."""
         from bt_arrange_sim.scenes import scatter
 
-        return scatter(list(colours), seed, avoid=list(avoid))
+        return scatter(list(colours), seed, avoid=list(avoid), object_types=object_types, names=names)
 
     def check(self) -> Iterator[str]:
         """Start a headless cell and report the TCP pose."""

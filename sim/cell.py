@@ -23,11 +23,13 @@ from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics, Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
-from bt_arrange_sim.objects import CUBE_EDGE_M, TABLE_RGB, Contact, create_cube
+from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
 from bt_arrange_sim.realcell import RealCellErrors, hand_eye_base_pose, write_perturbed_urdf
 from bt_arrange_sim.scenes import CubeStart
 
@@ -254,6 +256,10 @@ class WorkCell:
         )
         self._steps = 0
         self.cubes: dict[str, int] = {}
+        #: Each part's type, by name (the cube's unless ``add_object`` said otherwise).
+        self.object_types: dict[str, ObjectType] = {}
+        #: The colour table the cell paints from: the one the camera's detector reads.
+        self.colours: ColourTable = DEFAULT_COLOUR_TABLE
         self.table_id = self._create_table()
         errors = self.config.errors
         # A real cell's arm: the perturbed URDF (the planner keeps the nominal one), mounted where
@@ -362,24 +368,52 @@ class WorkCell:
     # -- cubes -----------------------------------------------------------------------------
 
     def add_cube(self, colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0, name: str | None = None) -> str:
-        """Put a cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
-        name = name or colour
+        """Put a 5 cm cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
+        return self.add_object(CUBE, colour, x_m, y_m, yaw_rad, name=name)
+
+    def add_object(
+        self,
+        object_type: ObjectType,
+        colour: str | ColourRange,
+        x_m: float,
+        y_m: float,
+        yaw_rad: float = 0.0,
+        name: str | None = None,
+    ) -> str:
+        """Put a cuboid of ``object_type`` on the table, resting at (x, y, yaw), top face ``colour``; returns its name.
+
+        ``colour`` is a name of ``self.colours`` (the table the camera reads) or a ``ColourRange``
+        (painted with its ``paint_rgb``); the name defaults to the colour's.
+        """
+        colour_name = colour.name if isinstance(colour, ColourRange) else colour
+        name = name or colour_name
         if name in self.cubes:
             raise ValueError(f"a cube named {name!r} is already in the cell")
         objects = self.config.errors.objects
-        # A real cell's cubes: each edge off by its tolerance (the perception assumes the nominal edge).
-        edge_m = CUBE_EDGE_M + (
-            float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
+        # A real cell's parts: each edge off by its tolerance (the perception assumes the nominal size).
+        edge_error_m = float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
+        built = (
+            dataclasses.replace(object_type, size_m=tuple(v + edge_error_m for v in object_type.size_m))
+            if edge_error_m
+            else object_type
         )
-        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=edge_m / 2)
-        self.cubes[name] = create_cube(
-            self.client, colour, pose.position_m, pose.quaternion_xyzw, self.config.physics.cube_contact, edge_m=edge_m
+        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=built.height_m / 2)
+        self.cubes[name] = create_object(
+            self.client,
+            built,
+            colour,
+            pose.position_m,
+            pose.quaternion_xyzw,
+            self.config.physics.cube_contact,
+            self.colours,
         )
+        self.object_types[name] = object_type
         return name
 
     def remove_cube(self, name: str) -> None:
         """Take a cube off the table."""
         self.client.removeBody(self.cubes.pop(name))
+        self.object_types.pop(name, None)
 
     # -- ground truth: evaluation and error injection only ---------------------------------
 
@@ -389,9 +423,9 @@ class WorkCell:
         return Pose(np.array(position), np.array(orientation))
 
     def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
-        """True (x_m, y_m, yaw_rad) of a cube, yaw folded to its 90-degree symmetry."""
+        """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry (90 degrees for a square top, else 180)."""
         pose = self.cube_pose_truth(name)
-        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad)
+        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).symmetry_rad)
 
     def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.
@@ -434,7 +468,8 @@ class WorkCell:
     def add_cubes(self, starts: Iterable[CubeStart]) -> None:
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""
         for start in starts:
-            self.add_cube(start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name)
+            kind = getattr(start, "object_type", None) or CUBE
+            self.add_object(kind, start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name)
 
     def cube_in_gripper_truth(self, name: str) -> bool:
         """True when both finger pads touch the cube."""

@@ -34,10 +34,10 @@ from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
 from bt_arrange.plancheck import check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
-from bt_arrange.settings import CUBE_COLOURS_RGB
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
 from bt_arrange_sim.scenes import CubeStart
@@ -70,6 +70,13 @@ class ObjectOutcome:
     pushes: int
     status: str
     reason: str = ""
+    #: Measured minus target yaw, folded to the part's symmetry (degrees): camera, then ground truth.
+    placed_yaw_error_deg: float | None = None
+    final_yaw_error_deg: float | None = None
+    final_yaw_error_truth_deg: float | None = None
+    #: The part's type and its size (mm), for the report.
+    object_type: str = "cube"
+    size_mm: tuple[float, float, float] = (50.0, 50.0, 50.0)
     #: The most later steps (a neighbour's release and pushes) moved it between two looks at it:
     #: by the camera (``Recheck``), and by ground truth at the same moments; None when never looked at again.
     moved_by_later_mm: float | None = None
@@ -87,6 +94,7 @@ class SimulationReport:
     wall_seconds: float
     timed_out: bool
     transitions: list[Transition] = field(default_factory=list, repr=False)
+    yaw_threshold_deg: float | None = None
 
     @property
     def all_within_threshold(self) -> bool:
@@ -102,6 +110,7 @@ class SimulationReport:
             "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
             "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
+            "yaw_threshold_deg": self.yaw_threshold_deg,
             "tree_status": self.tree_status,
             "timed_out": self.timed_out,
             "sim_seconds": round(self.sim_seconds, 3),
@@ -134,10 +143,13 @@ class SimulatedRun:
         # Everything a user can get wrong is checked here, before the world is built.
         scene = list(starts)
         view = cell_config.camera.view()
+        #: The colour table of the plan: the cell paints with it and the camera's detector reads it.
+        self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
         if isinstance(root, Arrangement):
-            check_plan(root.targets, threshold_mm=root.threshold_mm, starts=scene, view=view, colours=CUBE_COLOURS_RGB)
+            check_plan(root.targets, threshold_mm=root.threshold_mm, starts=scene, view=view, colours=self.colours)
+            check_colours_apart(root.targets, self.colours)
         else:
-            check_scene(scene, view=view, colours=CUBE_COLOURS_RGB)
+            check_scene(scene, view=view, colours=self.colours)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
         if gui:
             require_display()
@@ -145,11 +157,12 @@ class SimulatedRun:
         #: Every node of the tree by its id (as text): transitions name their node by it.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
         self.cell = WorkCell(cell_config, gui=gui)
+        self.cell.colours = self.colours
         self.cell.add_cubes(scene)
         self.cell.settle(SETTLE_S)
         #: World time when the tree starts: the report and the live view count from here.
         self.start_s = self.cell.clock.now()
-        self.context = Context.create(self.cell.robot)
+        self.context = Context.create(self.cell.robot, detector=CubeDetector(self.colours))
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
@@ -196,6 +209,7 @@ class SimulatedRun:
             objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
             tree_status=result.status.value,
             threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
+            yaw_threshold_deg=self.root.yaw_threshold_deg if isinstance(self.root, Arrangement) else None,
             sim_seconds=result.sim_seconds,
             wall_seconds=result.wall_seconds,
             timed_out=result.timed_out,
@@ -239,8 +253,13 @@ class SimulatedRun:
             self._save_image("after_placing")
 
     def _track_truth(self, node: Inspect) -> None:
-        """Ground truth at each look at an object; at a ``Recheck``, how far it moved since the last look."""
-        x, y, _ = self.cell.cube_planar_truth(node.obj)
+        """Ground truth at each look at an object; at a ``Recheck``, how far it moved since the last look.
+
+        With identical parts the part looked at is the one of its kind nearest its target (``part_of``).
+        """
+        targets = self.root.targets if isinstance(self.root, Arrangement) else []
+        target = next((t for t in targets if t.obj == node.obj), None)
+        x, y, _ = self.cell.cube_planar_truth(self.part_of(target) if target is not None else node.obj)
         before = self._looked_truth_xy.get(node.obj)
         if isinstance(node, Recheck) and before is not None:
             moved = math.hypot(x - before[0], y - before[1]) * 1000
@@ -275,7 +294,8 @@ class SimulatedRun:
         for target in self.root.targets:
             placed = _get(report, keys.key(target.obj, keys.PLACED_OFFSET_MM))
             final = _get(report, keys.key(target.obj, keys.OFFSET_MM))
-            status = self._status(final)
+            final_yaw = _get(report, keys.key(target.obj, keys.YAW_ERROR_DEG))
+            status = self._status(final, final_yaw)
             outcomes.append(
                 ObjectOutcome(
                     name=target.obj,
@@ -287,6 +307,11 @@ class SimulatedRun:
                     pushes=int(_get(report, keys.key(target.obj, keys.CORRECTIONS)) or 0),
                     status=status,
                     reason="" if status == "within" else (self._last_failure(transitions, target.obj) or stopped),
+                    placed_yaw_error_deg=_rounded(_get(report, keys.key(target.obj, keys.PLACED_YAW_ERROR_DEG))),
+                    final_yaw_error_deg=_rounded(final_yaw),
+                    final_yaw_error_truth_deg=round(self._truth_yaw_error_deg(target), 4),
+                    object_type=target.object_type.name,
+                    size_mm=tuple(round(v * 1000, 3) for v in target.object_type.size_m),  # type: ignore[arg-type]
                     moved_by_later_mm=_rounded(_get(report, keys.key(target.obj, keys.MAX_MOVED_MM))),
                     moved_by_later_truth_mm=_rounded(self._moved_truth_mm.get(target.obj)),
                 )
@@ -303,15 +328,52 @@ class SimulatedRun:
                 return transition.feedback
         return ""
 
-    def _status(self, final_offset_mm: float | None) -> str:
+    def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
+        """Within only when the offset and (with a yaw threshold) the yaw error are under their thresholds."""
         assert isinstance(self.root, Arrangement)
         if final_offset_mm is None:
             return "failed"
-        return "within" if final_offset_mm < self.root.threshold_mm else "outside"
+        yaw_threshold = self.root.yaw_threshold_deg
+        yaw_within = yaw_threshold is None or final_yaw_error_deg is None or abs(final_yaw_error_deg) < yaw_threshold
+        return "within" if final_offset_mm < self.root.threshold_mm and yaw_within else "outside"
+
+    def part_of(self, target: Target) -> str:
+        """The part of the cell that is ``target``'s (ground truth).
+
+        The one of its name, or, for identical parts, the one of its kind nearest the target.
+        """
+        assert isinstance(self.root, Arrangement)
+        siblings = [t for t in self.root.targets if t.colour == target.colour and t.object_type == target.object_type]
+        if len(siblings) <= 1:
+            return target.obj
+        names = {t.obj for t in siblings}
+        candidates = [name for name in self.cell.cubes if name in names]
+
+        def distance(name: str) -> float:
+            x, y, _ = self.cell.cube_planar_truth(name)
+            return math.hypot(x - target.x_m, y - target.y_m)
+
+        return min(candidates, key=distance) if candidates else target.obj
 
     def _truth_offset_mm(self, target: Target) -> float:
-        x, y, _ = self.cell.cube_planar_truth(target.obj)
+        x, y, _ = self.cell.cube_planar_truth(self.part_of(target))
         return PlanarPose(x, y).distance_to(target.planar) * 1000
+
+    def _truth_yaw_error_deg(self, target: Target) -> float:
+        _, _, yaw = self.cell.cube_planar_truth(self.part_of(target))
+        return math.degrees(target.object_type.yaw_error_rad(yaw, target.yaw_rad))
+
+
+def check_colours_apart(targets: Iterable[Target], colours: ColourTable) -> None:
+    """A ``PlanError`` when one colour of the plan would be read as another (one's range holds the other's paint)."""
+    used = sorted({t.colour for t in targets}, key=list(colours.names).index)
+    for name in used:
+        for other in used:
+            if other != name and colours[name].contains_rgb(colours[other].paint_rgb):
+                raise PlanError(
+                    f"colours {name!r} and {other!r} of the plan overlap: {name}'s range holds {other}'s paint "
+                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart"
+                )
 
 
 def prepare_record_dir(path: Path | str) -> Path:

@@ -740,6 +740,8 @@ def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
         "/red/offset_mm",
         "/red/offset_xy_mm",
         "/red/placed_offset_mm",
+        "/red/yaw_error_deg",
+        "/red/placed_yaw_error_deg",
     }
 
 
@@ -875,3 +877,54 @@ def test_a_diagonal_push_does_not_go_sideways_towards_a_blocked_side(clock) -> N
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "pushed +3.00 mm along x"
     assert push.across_m == 0.0
+
+
+# -- a squaring push among neighbours (issues 10 and 14 together) ----------------------------
+
+
+def test_a_squaring_push_among_neighbours_goes_from_a_free_side(context: Context) -> None:
+    # Within reach (0.1 mm along x) but turned 3 degrees: the line contact squares it. A neighbour
+    # on the -x side blocks a push towards +x, so the squaring push goes towards -x.
+    write(
+        {
+            "/red/pose": cube_pose(0.5, 0.0),
+            "/red/target": PlanarPose(0.5, 0.0, 0.0),
+            "/red/offset_xy_mm": (0.1, 0.0),
+            "/red/yaw_error_deg": 3.0,
+        }
+    )
+    push = set_up(Push("push red", "red", yaw_threshold_deg=1.0, towards=("-x", "+y", "-y")), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "squared the part with a push of -0.10 mm along x"
+    assert fake_arm(context).commands, "the squaring push is made"
+
+
+def test_a_squaring_push_with_both_sides_of_its_axis_blocked_is_not_made(context: Context) -> None:
+    write(
+        {
+            "/red/pose": cube_pose(0.5, 0.0),
+            "/red/target": PlanarPose(0.5, 0.0, 0.0),
+            "/red/offset_xy_mm": (0.1, 0.0),
+            "/red/yaw_error_deg": 3.0,
+        }
+    )
+    push = set_up(Push("push red", "red", yaw_threshold_deg=1.0, towards=("+y", "-y")), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert fake_arm(context).commands == [], "never pushes from a side a neighbour blocks"
+
+
+def test_detect_among_identical_parts_2_mm_apart_picks_the_free_one_not_the_pair_between_targets(clock) -> None:
+    # Two placed green cubes 2 mm apart merge into one blob in a binned view, its centre between
+    # their targets (at neither): the search among identical parts reads the full frame instead.
+    placed = [PlanarPose(0.452, 0.0, 0.0), PlanarPose(0.504, 0.0, 0.0)]
+    free = PlanarPose(0.40, -0.20, 0.0)
+    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in (*placed, free)])
+    write({"/green 3/target": PlanarPose(0.556, 0.0, 0.0)})
+    kind_targets = [*placed, PlanarPose(0.556, 0.0, 0.0)]
+    detect = Detect("detect green 3", "green 3", colour="green", kind_targets=kind_targets)
+    run = tick_until_done(set_up(detect, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    pose = read("/green 3/pose")
+    assert 1000 * math.hypot(pose.x_m - free.x_m, pose.y_m - free.y_m) < 0.5

@@ -94,7 +94,10 @@ def bad_tree_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
     a_file.write_text("x")
     return {
         "missing": (str(tmp_path / "nope.py"), "nope.py not found"),
-        "not python": (tree(tmp_path, "tree.txt", "x"), "is neither a Python file (.py) nor a BehaviorTree"),
+        "not python": (
+            tree(tmp_path, "tree.txt", "x"),
+            "is neither a Python file (.py), a BehaviorTree.CPP XML tree (.xml) nor a plan (.toml)",
+        ),
         "syntax error": (tree(tmp_path, "syntax.py", "def create_root(:\n"), "syntax error at line 1"),
         "raises on import": (tree(tmp_path, "boom.py", "1 / 0\n"), "ZeroDivisionError"),
         "no create_root": (tree(tmp_path, "empty.py", "X = 1\n"), "defines no create_root()"),
@@ -314,3 +317,100 @@ def test_generated_experiment_options_run_trials_or_are_refused_in_one_line(opti
     code, _, err = call(argv)
     if code != "simulated":
         assert_refused(code, err)
+
+
+# -- plan files (.toml): every mistake names the file, the entry and the problem ---------------
+
+GOOD_PLAN = """
+[objects.bar]
+size_mm = [80, 40, 40]
+
+[colours.orange]
+rgb = [1.0, 0.5, 0.0]
+
+[[targets]]
+object = "bar"
+colour = "orange"
+x_mm = 500
+y_mm = -150
+"""
+
+BAD_PLANS = {
+    "not toml": ("targets = [", "not TOML"),
+    "unknown top key": ("threshold = 1\n" + GOOD_PLAN, "the top level: unknown key 'threshold'"),
+    "unknown target key": (
+        GOOD_PLAN.replace("x_mm = 500", 'x_mm = 500\ncolor = "red"'),
+        "[[targets]] 1: unknown key 'color'",
+    ),
+    "unknown object key": (GOOD_PLAN.replace("size_mm", "size"), "[objects.bar]: unknown key 'size'"),
+    "cannot span": (GOOD_PLAN.replace("[80, 40, 40]", "[100, 90, 40]"), "no horizontal side the gripper can span"),
+    "colour without rgb": (GOOD_PLAN.replace("rgb = [1.0, 0.5, 0.0]", ""), "[colours.orange]: a colour needs rgb"),
+    "unknown colour": (GOOD_PLAN.replace('colour = "orange"', 'colour = "teal"'), 'unknown colour "teal"'),
+    "unknown type": (GOOD_PLAN.replace('object = "bar"', 'object = "beam"'), 'unknown object type "beam"'),
+    "negative size": (GOOD_PLAN.replace("[80, 40, 40]", "[80, -40, 40]"), "has an edge that is not positive"),
+    "size not a number": (GOOD_PLAN.replace("[80, 40, 40]", '[80, "40", 40]'), 'size_mm = "40" is not a number'),
+    "missing coordinate": (GOOD_PLAN.replace("y_mm = -150", ""), "[[targets]] 1: missing y_mm"),
+    "out of reach": (GOOD_PLAN.replace("x_mm = 500", "x_mm = 1500"), "out of reach"),
+}
+
+
+@pytest.mark.parametrize("command", ["run", "show"])
+@pytest.mark.parametrize("case", sorted(BAD_PLANS))
+def test_a_bad_plan_file_is_one_line_naming_the_file_and_entry(tmp_path: Path, command: str, case: str) -> None:
+    text, fragment = BAD_PLANS[case]
+    path = tmp_path / "plan.toml"
+    path.write_text(text)
+    code, _, err = call([command, str(path)])
+    line = assert_refused(code, err)
+    assert str(path) in line and fragment in line, line
+
+
+def test_a_good_plan_file_reaches_the_world(tmp_path: Path) -> None:
+    path = tmp_path / "plan.toml"
+    path.write_text(GOOD_PLAN)
+    code, _, err = call(["run", str(path)])
+    assert code == "simulated", err
+
+
+plan_values = st.one_of(
+    st.integers(-200, 900),
+    st.floats(allow_nan=True),
+    st.text(max_size=4),
+    st.booleans(),
+    st.lists(st.integers(-50, 120), max_size=4),
+)
+plan_keys = st.sampled_from(["object", "colour", "x_mm", "y_mm", "yaw_deg", "name", "size_mm", "rgb", "seed", "colr"])
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(
+    edits=st.dictionaries(plan_keys, plan_values, max_size=3),
+    size=st.lists(st.integers(-20, 120), min_size=0, max_size=4),
+)
+def test_a_generated_plan_file_runs_or_is_refused_by_the_contract(tmp_path: Path, edits: dict, size: list) -> None:
+    def toml(value: object) -> str:
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        if isinstance(value, str):
+            return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(value, float) and value != value:
+            return "nan"
+        if isinstance(value, list):
+            return "[" + ", ".join(toml(v) for v in value) + "]"
+        return (
+            repr(value)
+            if not isinstance(value, float) or abs(value) != float("inf")
+            else ("inf" if value > 0 else "-inf")
+        )
+
+    target = {"object": "bar", "colour": "orange", "x_mm": 500, "y_mm": -150, **edits}
+    lines = [f"[objects.bar]\nsize_mm = {toml(size)}", "[colours.orange]\nrgb = [1.0, 0.5, 0.0]", "[[targets]]"]
+    lines += [f"{key} = {toml(value)}" for key, value in target.items()]
+    path = tmp_path / "generated.toml"
+    path.write_text("\n".join(lines) + "\n")
+    code, _, err = call(["run", str(path)])
+    if code != "simulated":
+        line = assert_refused(code, err)
+        assert str(path) in line, line

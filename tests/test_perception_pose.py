@@ -81,9 +81,7 @@ def test_yaw_is_folded_to_the_cubes_symmetry() -> None:
         assert face is not None
         pose = cube_centre_in_world(camera, face.T_C_F, EDGE_M)
         assert -45.0 <= math.degrees(pose.yaw_rad) < 45.0
-        assert math.degrees(pose.yaw_rad) == pytest.approx(
-            math.degrees(fold_yaw(math.radians(yaw_deg))), abs=1e-6
-        )
+        assert math.degrees(pose.yaw_rad) == pytest.approx(math.degrees(fold_yaw(math.radians(yaw_deg))), abs=1e-6)
 
 
 def test_plane_fit_measures_a_lifted_face_as_larger() -> None:

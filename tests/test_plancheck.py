@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.layout import Part, gap_m
+from bt_arrange.objects import ObjectType
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import CUBE_COLOURS_RGB, ManipulationSettings
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
@@ -95,8 +96,8 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
         ([RED_START, CubeStart("purple", 0.6, 0.2, 0.0)], r"^cube 2 of the scene: unknown colour 'purple'"),
         ([RED_START, CubeStart("red", 0.6, 0.2, 0.0)], r"^cubes 1 and 2 of the scene are both named 'red'$"),
         (
-            [RED_START, CubeStart("red", 0.6, 0.2, 0.0, name="other red")],
-            r"^cubes 1 and 2 of the scene are both red: the camera tells cubes apart by colour",
+            [RED_START, CubeStart("red", 0.6, 0.2, 0.0, "red bar", ObjectType("bar", (0.08, 0.04, 0.04)))],
+            r"^parts 1 and 2 of the scene are both red but of types 'cube' and 'bar': the camera tells parts apart",
         ),
         ([CubeStart("red", math.nan, 0.0, 0.0)], r"^cube 1 of the scene \(red\): x_m=nan is not a finite number$"),
         ([("red", 0.5, 0.0, 0.0)], r"^cube 1 of the scene is \('red', 0\.5, 0\.0, 0\.0\), not a cube start"),
@@ -107,6 +108,11 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
 def test_a_bad_scene_is_one_plan_error(starts: object, message: str) -> None:
     with pytest.raises(PlanError, match=message):
         check_scene(starts, view=VIEW)  # type: ignore[arg-type]
+
+
+def test_identical_parts_may_share_a_colour_in_the_scene() -> None:
+    twins = [RED_START, CubeStart("red", 0.6, 0.2, 0.0, name="other red")]
+    assert check_scene(twins, view=VIEW) == twins
 
 
 def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:

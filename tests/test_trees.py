@@ -13,7 +13,18 @@ from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, P
 from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.trees import Arrangement, Target, arrange_one, arrangement, validate_targets
+from bt_arrange.objects import ObjectType
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.trees import (
+    Arrangement,
+    Target,
+    arrange_one,
+    arrangement,
+    kinds,
+    parts_of,
+    plan_steps,
+    validate_targets,
+)
 
 RED = Target("red", 0.45, 0.10)
 GREEN = Target("green", 0.45, -0.10, 0.3)
@@ -57,7 +68,7 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
         ),
         (
             [RED, Target("red", 0.55, -0.1)],
-            r"^targets 1 and 2 are both named 'red': the camera tells cubes apart by colour, so each colour is one",
+            r"^targets 1 and 2 are both named 'red' \(identical parts need a name each, e\.g\. name='red 1'",
         ),
         ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
         ([RED, Target("green", 0.45, 0.08)], r"^targets red and green overlap: two parts cannot stand there$"),
@@ -99,9 +110,16 @@ def test_the_known_colours_can_be_given() -> None:
         validate_targets([RED, GREEN], colours=["red", "blue"])
 
 
-def test_two_names_for_one_colour_is_a_plan_error_the_camera_cannot_tell_them_apart() -> None:
+def test_two_names_for_one_colour_and_type_are_identical_parts() -> None:
     first, second = Target("red", 0.45, 0.1, name="first"), Target("red", 0.45, -0.1, name="second")
-    with pytest.raises(PlanError, match=r"^targets 1 and 2 are both .*'red'"):
+    assert validate_targets([first, second]) == [first, second]
+    assert kinds([first, second]) == {"first": (first.planar, second.planar), "second": (first.planar, second.planar)}
+
+
+def test_one_colour_on_two_types_is_a_plan_error_the_camera_cannot_tell_them_apart() -> None:
+    bar = ObjectType("bar", (0.08, 0.04, 0.04))
+    first, second = Target("red", 0.45, 0.1, name="first"), Target("red", 0.45, -0.1, name="bar", object_type=bar)
+    with pytest.raises(PlanError, match=r"^targets 1 and 2 are both red but of types 'cube' and 'bar'"):
         validate_targets([first, second])
 
 
@@ -311,3 +329,39 @@ def test_each_skips_the_correction_of_an_object_that_was_not_placed(clock) -> No
     assert find(root, "arrange red").status == Status.FAILURE
     assert find(root, "push red").status == Status.INVALID
     assert isinstance(find(root, "park the arm"), MoveHome)
+
+
+# -- the layout check on each type's real footprint (issues 10 and 14 together) ------------------
+
+SMALL = ObjectType("small", (0.03, 0.03, 0.03))
+BAR = ObjectType("bar", (0.08, 0.04, 0.04))
+
+
+def test_the_layout_reads_each_type_s_footprint_so_small_parts_2_mm_apart_are_accepted() -> None:
+    # 32 mm centre to centre: a 2 mm gap between 30 mm cubes (50 mm cubes there would overlap).
+    first = Target("blue", 0.45, 0.0, name="small 1", object_type=SMALL)
+    second = Target("blue", 0.45 + 0.032, 0.0, name="small 2", object_type=SMALL)
+    assert validate_targets([first, second]) == [first, second]
+    assert [p.size_x_m for p in parts_of([first, second])] == [0.03, 0.03]
+
+
+def test_bars_whose_real_footprints_overlap_are_refused_naming_both() -> None:
+    # 60 mm apart along their 80 mm side: they overlap (two 50 mm cubes there would not).
+    first = Target("orange", 0.45, 0.0, name="bar 1", object_type=BAR)
+    second = Target("orange", 0.51, 0.0, name="bar 2", object_type=BAR)
+    with pytest.raises(PlanError, match=r"^targets bar 1 and bar 2 overlap"):
+        validate_targets([first, second], colours=[*DEFAULT_COLOUR_TABLE.names, "orange"])
+
+
+def test_bars_2_mm_apart_end_to_end_are_accepted_without_the_old_90_mm_spacing() -> None:
+    # Held across their 40 mm side, whose faces stay free in a row along their 80 mm side.
+    bars = [Target("orange", 0.40 + i * 0.082, 0.0, name=f"bar {i}", object_type=BAR) for i in range(3)]
+    assert validate_targets(bars, colours=[*DEFAULT_COLOUR_TABLE.names, "orange"]) == bars
+
+
+def test_a_bar_is_held_and_released_only_across_the_side_the_stroke_spans() -> None:
+    bar = Target("orange", 0.45, 0.0, object_type=BAR)
+    assert parts_of([bar])[0].grasp_axes == (BAR.grasp_axis,) == ("y",)
+    assert parts_of([RED])[0].grasp_axes == ("x", "y")
+    steps = plan_steps([bar], order=None)
+    assert steps[0].release.axis == BAR.grasp_axis

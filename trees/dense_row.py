@@ -4,7 +4,7 @@ bt-arrange run trees/dense_row.py
 
 Each cube after the first is released at its target with the pads across its free y faces (a
 pad never enters a 2 mm gap), pushed only from free sides, and the cube before it is looked at
-again once it is down. (A row of five identical parts needs identical-part perception.)
+again once it is down. The same row of five identical cubes: trees/dense_row_identical.py.
 """
 
 from bt_arrange.trees import Arrangement, Target, arrangement

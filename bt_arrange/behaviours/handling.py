@@ -17,6 +17,8 @@ from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.settings import ManipulationSettings
 
 
 def _to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
@@ -41,14 +43,46 @@ def _line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool =
     return plan
 
 
+def _axis_yaw_offset_rad(axis: str) -> float:
+    """Gripper yaw minus the target's yaw for pads that close across the target frame's ``axis``."""
+    return math.pi / 2 if axis == "y" else 0.0
+
+
 def _wrist_yaw(context: Context) -> float:
     return context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
 
 
-def holding(context: Context) -> bool:
-    """True when the closed fingers still stand a cube's width apart."""
-    settings = context.settings
-    return context.robot.gripper.width() > settings.cube_edge_m - settings.grasp_width_tolerance_m
+def holding(context: Context, object_type: ObjectType | None = None) -> bool:
+    """True when the closed fingers still stand the held part's width apart (default: a cube's)."""
+    return context.robot.gripper.width() > min_held_width_m(context.settings, object_type or CUBE)
+
+
+def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """Fingers closed narrower than this hold nothing: the side grasped, less the tolerance."""
+    return _grasp_width_m(settings, object_type) - settings.grasp_width_tolerance_m
+
+
+def _grasp_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    return settings.cube_edge_m if object_type == CUBE else object_type.grasp_width_m
+
+
+def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """A grip wider than this holds the part turned (the cube's margin over its edge, for any side)."""
+    return _grasp_width_m(settings, object_type) + (settings.max_grip_width_m - settings.cube_edge_m)
+
+
+def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[float, float, float]:
+    """(grasp, approach, push) TCP heights for a part: the settings' for the cube, moved by the part's height.
+
+    The grasp holds the part through its centre of mass where the pads allow
+    (``ObjectType.grasp_height_m``); moves above the table rise with a taller part.
+    """
+    shift_m = object_type.grasp_height_m - CUBE.grasp_height_m
+    return (
+        settings.grasp_height_m + shift_m,
+        object_type.approach_height_m(settings.approach_height_m),
+        settings.push_height_m + shift_m,
+    )
 
 
 class Pick(StagedBehaviour):
@@ -64,9 +98,13 @@ class Pick(StagedBehaviour):
     come down in the free room beside two faces and nowhere else.
     """
 
-    def __init__(self, name: str, obj: str, grasp: Release | None = None) -> None:
+    def __init__(
+        self, name: str, obj: str, object_type: ObjectType | None = None, grasp: Release | None = None
+    ) -> None:
         super().__init__(name)
         self.obj = obj
+        #: The part's type: the pads close across its narrower side (``ObjectType.grasp_axis``).
+        self.object_type = object_type or CUBE
         self.grasp = grasp
         self.reads(keys.key(obj, keys.POSE))
         if grasp is not None:
@@ -78,28 +116,35 @@ class Pick(StagedBehaviour):
         """Open, approach, descend, close, check, lift."""
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
         s = context.settings
+        kind = self.object_type
+        grasp_m, approach_m, _ = heights_m(s, kind)
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
         if self.grasp is None:
-            yaw = nearest_symmetric_yaw(pose.yaw_rad, _wrist_yaw(context))
+            yaw = nearest_symmetric_yaw(
+                pose.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
         else:
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
-            # The quarter turn of the part's measured yaw whose closing axis is the chosen one.
-            across = target.yaw_rad + (math.pi / 2 if self.grasp.axis == "y" else 0.0)
+            # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.
+            offset_rad = _axis_yaw_offset_rad(self.grasp.axis)
+            across = target.yaw_rad + offset_rad
             yaw = nearest_symmetric_yaw(
-                nearest_symmetric_yaw(pose.yaw_rad, across), _wrist_yaw(context), GRIPPER_SYMMETRY_RAD
+                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.symmetry_rad),
+                _wrist_yaw(context),
+                GRIPPER_SYMMETRY_RAD,
             )
             opening_m = self.grasp.opening_m
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, approach_m, yaw)),
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
-            MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, s.grasp_height_m, yaw)),
+            MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, grasp_m, yaw)),
             GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
             OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
-            MoveStage(stage.LIFT_CUBE, _line_to(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.LIFT_CUBE, _line_to(x, y, approach_m, yaw)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
 
@@ -110,17 +155,20 @@ class Pick(StagedBehaviour):
         """Record whether the pads hold the cube across two faces; never fails by itself."""
         s = context.settings
         self.grip_width_m = width = max(0.0, context.robot.gripper.width())
-        low, high = s.cube_edge_m - s.grasp_width_tolerance_m, s.max_grip_width_m
+        kind = self.object_type
+        low, high = min_held_width_m(s, kind), max_grip_width_m(s, kind)
+        side_mm = _grasp_width_m(s, kind) * 1000
+        what = f"{side_mm:.0f} mm cube" if kind.square_top else f"{kind.name} ({side_mm:.0f} mm across)"
         self.bad_grasp = None
         if width < low:
             self.bad_grasp = (
                 f"no cube between the pads: the fingers closed to {width * 1000:.1f} mm, "
-                f"a {s.cube_edge_m * 1000:.0f} mm cube holds them at least {low * 1000:.1f} mm apart"
+                f"a {what} holds them at least {low * 1000:.1f} mm apart"
             )
         elif width > high:
             self.bad_grasp = (
                 f"the pads hold the cube across its corners: {width * 1000:.1f} mm apart, more than the "
-                f"{high * 1000:.1f} mm of a {s.cube_edge_m * 1000:.0f} mm cube held nearly square (it is turned)"
+                f"{high * 1000:.1f} mm of a {what} held nearly square (it is turned)"
             )
         return None
 
@@ -143,11 +191,19 @@ class Place(StagedBehaviour):
     centred on it and its offset in the pads (unknown while held) does not carry into a neighbour.
     """
 
-    def __init__(self, name: str, obj: str, release: Release | None = None, where: str = "target") -> None:
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        object_type: ObjectType | None = None,
+        release: Release | None = None,
+        where: str = "target",
+    ) -> None:
         super().__init__(name)
         if where not in ("target", "pick"):
             raise BtArrangeError(f"place {name!r}: where={where!r}, choose target or pick")
         self.obj = obj
+        self.object_type = object_type or CUBE
         self.release = release
         self.where = where
         self.reads(keys.key(obj, keys.TARGET))
@@ -158,26 +214,33 @@ class Place(StagedBehaviour):
         """Carry, lower, open, retreat."""
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         s = context.settings
+        kind = self.object_type
+        grasp_m, approach_m, _ = heights_m(s, kind)
         x, y = target.x_m, target.y_m
         opening_m = s.open_width_m
         if self.where == "pick":
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
             x, y = picked.x_m, picked.y_m
-            yaw = nearest_symmetric_yaw(picked.yaw_rad, _wrist_yaw(context))
+            yaw = nearest_symmetric_yaw(
+                picked.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
         elif self.release is None:
-            # The grasp squared the cube to the pads, so any quarter turn of the target yaw will do.
-            yaw = nearest_symmetric_yaw(target.yaw_rad, _wrist_yaw(context))
+            # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
+            # will do (any quarter turn for a square top, a half turn otherwise).
+            yaw = nearest_symmetric_yaw(
+                target.yaw_rad + kind.grasp_yaw_offset_rad, _wrist_yaw(context), kind.symmetry_rad
+            )
         else:
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])
-            across = target.yaw_rad + (math.pi / 2 if self.release.axis == "y" else 0.0)
+            across = target.yaw_rad + _axis_yaw_offset_rad(self.release.axis)
             yaw = nearest_symmetric_yaw(across, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
             opening_m = self.release.opening_m
         return [
-            MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, s.approach_height_m, yaw)),
-            MoveStage(stage.LOWER_CUBE, _line_to(x, y, s.grasp_height_m + s.release_clearance_m, yaw)),
+            MoveStage(stage.CARRY_ABOVE_TARGET, _to_pose(x, y, approach_m, yaw)),
+            MoveStage(stage.LOWER_CUBE, _line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
             GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m)),
-            MoveStage(stage.RETREAT, _line_to(x, y, s.approach_height_m, yaw)),
+            MoveStage(stage.RETREAT, _line_to(x, y, approach_m, yaw)),
         ]
 
     def success_message(self) -> str:
@@ -234,6 +297,8 @@ class Push(StagedBehaviour):
         name: str,
         obj: str,
         strategy: str = "paper",
+        object_type: ObjectType | None = None,
+        yaw_threshold_deg: float | None = None,
         *,
         towards: tuple[str, ...] | None = None,
         opening_m: float | None = None,
@@ -243,6 +308,10 @@ class Push(StagedBehaviour):
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
         self.strategy = strategy
         self.obj = obj
+        self.object_type = object_type or CUBE
+        #: With a yaw error (``/<obj>/yaw_error_deg``) at or above this, a push is made even when the
+        #: offset along its axis is below ``min_push_m``: the pads' line contact squares the part.
+        self.yaw_threshold_deg = yaw_threshold_deg
         #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
         #: width); default the paper's width minus a pad's thickness.
         self.opening_m = opening_m
@@ -250,6 +319,8 @@ class Push(StagedBehaviour):
             raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
         self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
+        if yaw_threshold_deg is not None:
+            self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
         self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
@@ -260,6 +331,7 @@ class Push(StagedBehaviour):
         self.pushed: tuple[str, float] | None = None
         #: Strategy "diagonal": the last push's sideways part (m, signed along the other axis).
         self.across_m = 0.0
+        self.squaring = False
 
     def stages(self, context: Context) -> list[Stage]:
         """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
@@ -293,17 +365,32 @@ class Push(StagedBehaviour):
         axis = choice
         self.write(axis_key, "y" if axis == "x" else "x")
         self.pushed = (axis, distance_m)
+        self.squaring = False
         if abs(distance_m) < s.min_push_m:
-            return []
+            if not self._turned():
+                return []
+            # Within reach of the target but turned: a push of the line contact alone squares it.
+            self.squaring = True
+        sign = math.copysign(1.0, distance_m)
+        if self.squaring:
+            # A squaring push barely moves the part: make it from a free side, whichever sign.
+            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in self.towards]
+            if not free:
+                self.squaring = False
+                return []
+            sign = free[0]
+            distance_m = math.copysign(abs(distance_m), sign)
+            self.pushed = (axis, distance_m)
         unit = np.array([1.0, 0.0, 0.0]) if axis == "x" else np.array([0.0, 1.0, 0.0])
-        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * math.copysign(1.0, distance_m)
+        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * sign
+        heading = math.atan2(direction[1], direction[0])
         # The closing axis lies across the push; the gripper is symmetric under a half turn.
-        yaw = nearest_symmetric_yaw(
-            math.atan2(direction[1], direction[0]) + math.pi / 2, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD
-        )
+        yaw = nearest_symmetric_yaw(heading + math.pi / 2, _wrist_yaw(context), GRIPPER_SYMMETRY_RAD)
+        opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
+        _, approach_m, push_m = heights_m(s, self.object_type)
         centre = np.array([pose.x_m, pose.y_m])
-        begin = centre - direction * (s.push_reach_m + s.push_clearance_m)
-        end = centre - direction * s.push_reach_m + direction * abs(distance_m)
+        begin = centre - direction * (reach_m + s.push_clearance_m)
+        end = centre - direction * reach_m + direction * abs(distance_m)
         if self.across_m:
             other = np.array([0.0, 1.0, 0.0]) if axis == "x" else np.array([1.0, 0.0, 0.0])
             across = (rotation_z(target.yaw_rad) @ other)[:2] * self.across_m
@@ -312,16 +399,39 @@ class Push(StagedBehaviour):
             begin = begin - across * (s.push_clearance_m / abs(distance_m))
             end = end + across
         back = end - direction * s.push_clearance_m
-        opening_m = s.push_opening_m if self.opening_m is None else self.opening_m
+        if self.opening_m is not None:
+            # Among neighbours: the fingers stay within the face's width (the layout's opening).
+            opening_m = min(opening_m, self.opening_m)
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], s.approach_height_m, yaw)),
+            MoveStage(stage.MOVE_BEHIND_CUBE, _to_pose(begin[0], begin[1], approach_m, yaw)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
-            MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], s.push_height_m, yaw)),
-            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], s.push_height_m, yaw, pushing=True)),
-            MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], s.push_height_m, yaw)),
-            MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], s.approach_height_m, yaw)),
+            MoveStage(stage.LOWER_FINGERS, _line_to(begin[0], begin[1], push_m, yaw)),
+            MoveStage(stage.push(distance_m, axis), _line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(stage.BACK_OFF, _line_to(back[0], back[1], push_m, yaw)),
+            MoveStage(stage.LIFT_FINGERS, _line_to(back[0], back[1], approach_m, yaw)),
         ]
+
+    def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
+        """(opening, reach) for the face pushed along ``heading_rad``.
+
+        Both pads meet the face near its edges (the face's width less a pad's thickness, at most
+        the open width); the TCP stops half the part's depth along the push plus half a pad from
+        its centre when the pads touch. The settings' figures for the cube.
+        """
+        if self.object_type == CUBE:
+            return s.push_opening_m, s.push_reach_m
+        width_m, depth_m = self.object_type.pushed_face(heading_rad, object_yaw_rad)
+        return min(width_m - s.pad_thickness_m, s.open_width_m), depth_m / 2 + s.pad_width_m / 2
+
+    def _turned(self) -> bool:
+        """True when the measured yaw error is at or above ``yaw_threshold_deg``."""
+        if self.yaw_threshold_deg is None:
+            return False
+        yaw_key = keys.key(self.obj, keys.YAW_ERROR_DEG)
+        if not self.blackboard.exists(yaw_key):
+            return False
+        return abs(float(self.blackboard.get(yaw_key))) >= self.yaw_threshold_deg
 
     def _learned_push(self, offset_xy_mm: tuple[float, float], min_push_mm: float) -> tuple[str, float]:
         """Strategy "learned": update the bias from the last push's response, then choose axis and distance."""
@@ -412,6 +522,8 @@ class Push(StagedBehaviour):
         """Feedback with the push made."""
         assert self.pushed is not None
         axis, distance_m = self.pushed
+        if self.squaring:
+            return f"squared the part with a push of {distance_m * 1000:+.2f} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
             return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
         if self.across_m:
@@ -449,6 +561,8 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         super().__init__(name=name, child=child, condition=self._holding)
         #: The object held: ``obj``, else the child's (a Place knows its object).
         self.obj: str | None = obj if obj is not None else getattr(child, "obj", None)
+        #: The held part's type: the child's (a Place knows it), else the cube.
+        self.object_type: ObjectType = getattr(child, "object_type", None) or CUBE
         self.context: Context | None = None
 
     def setup(self, **kwargs: object) -> None:
@@ -462,12 +576,12 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     def _holding(self) -> bool:
         if self.context is None:
             return True
-        if holding(self.context):
+        if holding(self.context, self.object_type):
             return True
-        s = self.context.settings
+        low_m = min_held_width_m(self.context.settings, self.object_type)
         self.feedback_message = (
             f"the cube left the gripper: fingers at {self.context.robot.gripper.width() * 1000:.1f} mm, "
-            f"under the {(s.cube_edge_m - s.grasp_width_tolerance_m) * 1000:.1f} mm of a held cube"
+            f"under the {low_m * 1000:.1f} mm of a held cube"
         )
         return False
 

@@ -8,6 +8,8 @@
 | ``/<obj>/offset_xy_mm`` | ``(float, float)``, target minus pose in the target's frame | Inspect | Push |
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
 | ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
+| ``/<obj>/yaw_error_deg`` | ``float``, measured minus target yaw (folded) | Inspect | RepeatUntilWithin, Push |
+| ``/<obj>/placed_yaw_error_deg`` | ``float``, the yaw error after placing | Inspect(after placing) | reports |
 | ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
 | ``/<obj>/blocked_towards`` | ``"+x"`` ..., a push a neighbour blocks | Push | the tree's restaging |
 | ``/<obj>/moved_mm`` | ``float``, how far it moved since it was last looked at | Recheck | reports |
@@ -25,6 +27,8 @@ OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
 PUSH_AXIS = "push_axis"
+YAW_ERROR_DEG = "yaw_error_deg"
+PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
 BLOCKED_TOWARDS = "blocked_towards"
 MOVED_MM = "moved_mm"
 MAX_MOVED_MM = "max_moved_mm"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -11,8 +12,17 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
-from bt_arrange.perception import Detection, WorldRegion
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
 from bt_arrange.robot import PixelWindow
+
+#: A part counts as "at a target" (placed already) when its centre lies within this fraction of
+#: its shorter top edge from a target of its kind: a placed part lies within millimetres of its
+#: target, a part waiting to be picked starts at least 12 cm from every target (scenes, plan check).
+AT_TARGET_FRACTION = 0.5
+
+#: Chooses one of several blobs (world x, y) of a colour; None: none will do (with the reason).
+Chooser = Callable[[tuple[tuple[float, float], ...]], "tuple[tuple[float, float] | None, str]"]
 
 #: The arm counts as parked (out of the camera's view) within this joint distance of home.
 PARKED_TOLERANCE_RAD = 0.01
@@ -49,45 +59,99 @@ def offset_in_target_frame_mm(target: PlanarPose, pose: Pose) -> tuple[float, fl
     return float(local[0] * 1000), float(local[1] * 1000)
 
 
-def _measure_in_window(context: Context, colour: str, x_m: float, y_m: float, margin_m: float) -> Detection | None:
-    """Render only the window around ``(x, y)`` at full resolution and measure the cube there."""
-    camera, detector = context.robot.camera, context.detector
-    half_m = detector.config.cube_edge_m / math.sqrt(2.0) + margin_m
+def _measure_in_window(
+    context: Context,
+    detector: CubeDetector,
+    colour: str,
+    x_m: float,
+    y_m: float,
+    margin_m: float,
+    roi_half_m: float | None = None,
+) -> Detection | None:
+    """Render only the window around ``(x, y)`` at full resolution and measure the part there.
+
+    ``roi_half_m`` (default the window's half size) bounds where a face's centre may lie.
+    """
+    camera = context.robot.camera
+    x_size, y_size, _ = detector.config.size_m
+    half_m = 0.5 * math.hypot(x_size, y_size) + margin_m
     window = detector.window_around(camera.intrinsics, camera.pose_world, x_m, y_m, half_m)
     if window is None:
         return None
     frame = camera.capture(window=window)
-    return detector.detect(frame, colour, roi=WorldRegion.around(x_m, y_m, half_m))
+    return detector.detect(frame, colour, roi=WorldRegion.around(x_m, y_m, roi_half_m or half_m))
 
 
-def look(context: Context, colour: str, expected_xy_m: tuple[float, float] | None = None) -> Detection:
-    """Find the cube of ``colour``, rendering (or reading out) only the pixels a detection needs.
+def identical_roi_half_m(object_type: ObjectType) -> float:
+    """Where the centre of the part looked for may lie, among identical parts: half its shorter top edge.
 
-    1. With ``expected_xy_m`` (where the cube should be), a full-resolution window around it.
+    An identical neighbour 2 mm away (or the piece of it a window cuts) has its centre farther
+    than that, so it is not taken for the part; the part itself lies within millimetres of where
+    it is looked for (its target, or where the search view located it).
+    """
+    return 0.5 * min(object_type.top_size_m)
+
+
+def look(
+    context: Context,
+    colour: str,
+    expected_xy_m: tuple[float, float] | None = None,
+    object_type: ObjectType | None = None,
+    choose: Chooser | None = None,
+) -> Detection:
+    """Find the part of ``colour``, rendering (or reading out) only the pixels a detection needs.
+
+    1. With ``expected_xy_m`` (where the part should be), a full-resolution window around it.
     2. Otherwise, or when that window does not show one whole face: a binned view of the whole
        image finds the blobs of the colour; none, or several, is the outcome (as the full frame
-       would say); one is measured in a full-resolution window around it.
+       would say) unless ``choose`` picks one of several (identical parts); one is measured in a
+       full-resolution window around it.
     3. A face the window does not show whole (cut by the window, covered) is looked at in the
        full frame, whose outcome and reason stand.
 
-    A window shows the pixels the full frame has there, so a window's detection is the full
-    frame's (docs/perception.md).
+    ``object_type`` (default the cube) sets the size the detector expects. A window shows the
+    pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
-    camera, detector = context.robot.camera, context.detector
+    camera = context.robot.camera
+    kind = object_type or CUBE
+    detector = context.detector.for_object(kind)
+    # Among identical parts a window also shows the neighbours: only a face centred near the spot counts.
+    roi_half_m = identical_roi_half_m(kind) if choose is not None else None
     if expected_xy_m is not None:
-        detection = _measure_in_window(context, colour, *expected_xy_m, EXPECTED_MARGIN_M)
+        detection = _measure_in_window(context, detector, colour, *expected_xy_m, EXPECTED_MARGIN_M, roi_half_m)
         if detection is not None and detection.found:
             return detection
     binning = detector.search_binning(camera.intrinsics, camera.pose_world)
-    if binning > 1:
-        search = camera.capture(window=PixelWindow.full(camera.intrinsics, binning))
+    if binning > 1 or choose is not None:
+        # Identical parts 2 mm apart merge into one blob in the binned view (its centre between two
+        # placed parts, at neither's target): among identical parts the search reads the full frame,
+        # whose large blobs the detector splits at full resolution.
+        binned = binning > 1 and choose is None
+        window = PixelWindow.full(camera.intrinsics, binning) if binned else None
+        search = camera.capture(window=window) if window is not None else camera.capture()
         located = detector.locate(search, colour)
-        if len(located) != 1:
+        if len(located) > 1 and choose is not None:
+            chosen, reason = choose(located)
+            if chosen is None:
+                return Detection(colour, DetectionStatus.NOT_FOUND, reason, candidates_xy_m=located)
+        elif len(located) != 1:
             return detector.detect(search, colour)
-        detection = _measure_in_window(context, colour, *located[0], LOCATED_MARGIN_M)
+        else:
+            chosen = located[0]
+        detection = _measure_in_window(context, detector, colour, *chosen, LOCATED_MARGIN_M, roi_half_m)
         if detection is not None and detection.found:
             return detection
+        if len(located) > 1:
+            # The chosen part is not whole in its window: the full frame, around it only.
+            half_m = roi_half_m or 0.5 * math.hypot(*detector.config.size_m[:2]) + LOCATED_MARGIN_M
+            return detector.detect(camera.capture(), colour, roi=WorldRegion.around(*chosen, half_m))
     return detector.detect(camera.capture(), colour)
+
+
+def at_a_target(xy_m: tuple[float, float], kind_targets: Sequence[PlanarPose], object_type: ObjectType) -> bool:
+    """True when a part at ``xy_m`` lies at one of ``kind_targets`` (see ``AT_TARGET_FRACTION``)."""
+    radius_m = AT_TARGET_FRACTION * min(object_type.top_size_m)
+    return any(math.hypot(xy_m[0] - t.x_m, xy_m[1] - t.y_m) < radius_m for t in kind_targets)
 
 
 class MoveHome(StagedBehaviour):
@@ -105,18 +169,41 @@ class MoveHome(StagedBehaviour):
 class Detect(StagedBehaviour):
     """Find an object with the top camera and write its measured pose to ``/<obj>/pose``.
 
-    The arm first moves out of the camera's view when it is not parked. A cube the camera
+    The arm first moves out of the camera's view when it is not parked. A part the camera
     cannot see (not found, ambiguous, partial) is a FAILURE whose feedback says why. The camera
-    renders only what the detection needs (``look``): a binned full view to find the cube, a
+    renders only what the detection needs (``look``): a binned full view to find the part, a
     full-resolution window around it to measure it.
+
+    ``object_type`` is the part's size (default the cube). ``kind_targets`` are the targets of
+    every part of this type and colour (identical parts, the object's own among them): with
+    several blobs of the colour, Detect picks one that is not at any of them (a part is "at a
+    target" within half its shorter top edge, ``AT_TARGET_FRACTION``), the one nearest the
+    object's own target (``/<obj>/target``, when set), so parts already placed stay put.
     """
 
-    def __init__(self, name: str, obj: str, colour: str | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        colour: str | None = None,
+        object_type: ObjectType | None = None,
+        kind_targets: Sequence[PlanarPose] = (),
+    ) -> None:
         super().__init__(name)
         self.obj = obj
         self.colour = colour or obj
+        self.object_type = object_type or CUBE
+        self.kind_targets: tuple[PlanarPose, ...] = tuple(kind_targets)
         self.writes(keys.key(obj, keys.POSE))
+        if self.kind_targets:
+            self.reads(keys.key(obj, keys.TARGET))
         self.found: Pose | None = None
+
+    def among(self, kind_targets: Sequence[PlanarPose]) -> None:
+        """Make this the Detect of one of several identical parts: the targets of its kind."""
+        self.kind_targets = tuple(kind_targets)
+        if self.kind_targets:
+            self.reads(keys.key(self.obj, keys.TARGET))
 
     def stages(self, context: Context) -> list[Stage]:
         """Park if needed, then look."""
@@ -125,11 +212,33 @@ class Detect(StagedBehaviour):
         return [looking] if is_parked(context) else [park_stage(), looking]
 
     def expected_xy_m(self) -> tuple[float, float] | None:
-        """Where the cube should be, to look there first; None: search the whole view."""
+        """Where the part should be, to look there first; None: search the whole view."""
         return None
 
+    def own_target(self) -> PlanarPose | None:
+        """The object's target, when the tree has set it."""
+        target_key = keys.key(self.obj, keys.TARGET)
+        if not self.kind_targets or not self.blackboard.exists(target_key):
+            return None
+        value = self.blackboard.get(target_key)
+        return value if isinstance(value, PlanarPose) else None
+
+    def choose(self, located: tuple[tuple[float, float], ...]) -> tuple[tuple[float, float] | None, str]:
+        """Of several parts of the kind: one not at a target of the kind, nearest the own target."""
+        free = [xy for xy in located if not at_a_target(xy, self.kind_targets, self.object_type)]
+        if not free:
+            return None, (
+                f"all {len(located)} {self.colour} {self.object_type.name}s lie at targets of their kind: "
+                "none left to pick"
+            )
+        target = self.own_target()
+        if target is None:
+            return free[0], ""
+        return min(free, key=lambda xy: math.hypot(xy[0] - target.x_m, xy[1] - target.y_m)), ""
+
     def _look(self, context: Context) -> str | None:
-        detection = look(context, self.colour, self.expected_xy_m())
+        chooser = self.choose if self.kind_targets else None
+        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser)
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
@@ -150,42 +259,64 @@ class Detect(StagedBehaviour):
 
 
 class Inspect(Detect):
-    """Detect again and write the offset to the target: ``/<obj>/offset_mm`` and ``/<obj>/offset_xy_mm``.
+    """Detect again and write the offset and the yaw error to the target.
+
+    The keys: ``/<obj>/offset_mm``, ``/<obj>/offset_xy_mm`` and ``/<obj>/yaw_error_deg`` (measured
+    minus target yaw, folded to the shape's symmetry).
 
     Looks through a window around the target first, and searches the whole view only when the
-    cube is not there.
+    part is not there. With identical parts (``kind_targets``), Inspect follows the part nearest
+    its target: the one this subtree placed.
 
-    ``after_placing=True`` also records the offset as ``/<obj>/placed_offset_mm`` (the paper's
-    "after placing" figure).
+    ``after_placing=True`` also records the offset as ``/<obj>/placed_offset_mm`` and the yaw error
+    as ``/<obj>/placed_yaw_error_deg`` (the paper's "after placing" figures).
     """
 
-    def __init__(self, name: str, obj: str, colour: str | None = None, after_placing: bool = False) -> None:
-        super().__init__(name, obj, colour)
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        colour: str | None = None,
+        after_placing: bool = False,
+        object_type: ObjectType | None = None,
+        kind_targets: Sequence[PlanarPose] = (),
+    ) -> None:
+        super().__init__(name, obj, colour, object_type, kind_targets)
         self.after_placing = after_placing
         self.reads(keys.key(obj, keys.TARGET))
-        self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM))
+        self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM), keys.key(obj, keys.YAW_ERROR_DEG))
         if after_placing:
-            self.writes(keys.key(obj, keys.PLACED_OFFSET_MM))
+            self.writes(keys.key(obj, keys.PLACED_OFFSET_MM), keys.key(obj, keys.PLACED_YAW_ERROR_DEG))
         self.offset_mm: float | None = None
+        self.yaw_error_deg: float | None = None
 
     def expected_xy_m(self) -> tuple[float, float] | None:
-        """The target: a placed or pushed cube lies near it."""
+        """The target: a placed or pushed part lies near it."""
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         return target.x_m, target.y_m
+
+    def choose(self, located: tuple[tuple[float, float], ...]) -> tuple[tuple[float, float] | None, str]:
+        """Of several parts of the kind: the one nearest the target (the part this subtree placed)."""
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+        return min(located, key=lambda xy: math.hypot(xy[0] - target.x_m, xy[1] - target.y_m)), ""
 
     def on_found(self, pose: Pose) -> None:
         """Compare with the target and write the offsets."""
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         dx_mm, dy_mm = offset_in_target_frame_mm(target, pose)
         self.offset_mm = math.hypot(dx_mm, dy_mm)
+        self.yaw_error_deg = math.degrees(self.object_type.yaw_error_rad(pose.yaw_rad, target.yaw_rad))
         self.write(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm)
         self.write(keys.key(self.obj, keys.OFFSET_XY_MM), (dx_mm, dy_mm))
+        self.write(keys.key(self.obj, keys.YAW_ERROR_DEG), self.yaw_error_deg)
         if self.after_placing:
             self.write(keys.key(self.obj, keys.PLACED_OFFSET_MM), self.offset_mm)
+            self.write(keys.key(self.obj, keys.PLACED_YAW_ERROR_DEG), self.yaw_error_deg)
 
     def success_message(self) -> str:
         """Feedback with the offset."""
-        return f"{super().success_message()}; {self.offset_mm:.2f} mm from the target"
+        yaw_text = f"yaw error {self.yaw_error_deg:+.2f} deg"
+        return f"{super().success_message()}; {yaw_text}; {self.offset_mm:.2f} mm from the target"
 
 
 class Recheck(Inspect):
@@ -197,8 +328,16 @@ class Recheck(Inspect):
     it, ``/<obj>/max_moved_mm``. ``after`` names the step whose effect is checked.
     """
 
-    def __init__(self, name: str, obj: str, colour: str | None = None, after: str = "") -> None:
-        super().__init__(name, obj, colour)
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        colour: str | None = None,
+        after: str = "",
+        object_type: ObjectType | None = None,
+        kind_targets: Sequence[PlanarPose] = (),
+    ) -> None:
+        super().__init__(name, obj, colour, object_type=object_type, kind_targets=kind_targets)
         self.after = after
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.MAX_MOVED_MM))
         self.writes(keys.key(obj, keys.MOVED_MM), keys.key(obj, keys.MAX_MOVED_MM))

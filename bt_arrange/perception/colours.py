@@ -38,6 +38,8 @@ class ColourRange:
     hue_ranges_deg: tuple[tuple[float, float], ...]
     saturation_range: tuple[float, float] = (0.40, 1.0)
     value_range: tuple[float, float] = (0.15, 1.0)
+    #: The colour a simulated cell paints the top face (RGB, 0..1); None: the middle of the range.
+    rgb: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         if not self.name:
@@ -54,6 +56,29 @@ class ColourRange:
                 raise PerceptionError(
                     f"colour {self.name!r}: {label} range ({low}, {high}) must satisfy 0 <= low <= high <= 1"
                 )
+        if self.rgb is not None:
+            if len(self.rgb) != 3 or not all(0.0 <= float(v) <= 1.0 for v in self.rgb):
+                raise PerceptionError(f"colour {self.name!r}: rgb {self.rgb!r} must be three numbers in 0..1")
+            object.__setattr__(self, "rgb", tuple(float(v) for v in self.rgb))
+
+    @property
+    def paint_rgb(self) -> tuple[float, float, float]:
+        """The RGB (0..1) a simulated cell paints this colour with: ``rgb``, or the middle of the range.
+
+        The middle is the first hue interval's centre (of the wrapped interval for a colour split at
+        hue 0) at the middle of the saturation and value ranges, so the mask of the range holds it.
+        """
+        if self.rgb is not None:
+            return self.rgb
+        if len(self.hue_ranges_deg) == 2 and self.hue_ranges_deg[0][0] == 0.0:
+            low, high = self.hue_ranges_deg[1][0] - 360.0, self.hue_ranges_deg[0][1]
+        else:
+            low, high = self.hue_ranges_deg[0]
+        hue = ((low + high) / 2.0) % 360.0
+        saturation = sum(self.saturation_range) / 2.0
+        value = sum(self.value_range) / 2.0
+        red, green, blue = colorsys.hsv_to_rgb(hue / 360.0, saturation, value)
+        return (red, green, blue)
 
     @classmethod
     def around(
@@ -63,14 +88,15 @@ class ColourRange:
         hue_tolerance_deg: float = 20.0,
         min_saturation: float = 0.40,
         min_value: float = 0.15,
+        rgb: tuple[float, float, float] | None = None,
     ) -> ColourRange:
-        """A range of ``hue_deg +- hue_tolerance_deg``, split in two where it crosses hue 0."""
+        """A range of ``hue_deg +- hue_tolerance_deg``, split in two where it crosses hue 0 (``rgb``: the paint)."""
         if not 0.0 < hue_tolerance_deg < 180.0:
             raise PerceptionError(f"colour {name!r}: hue tolerance {hue_tolerance_deg} deg must be in (0, 180)")
         low = (hue_deg - hue_tolerance_deg) % 360.0
         high = (hue_deg + hue_tolerance_deg) % 360.0
         ranges = ((low, high),) if low <= high else ((0.0, high), (low, 360.0))
-        return cls(name, ranges, (min_saturation, 1.0), (min_value, 1.0))
+        return cls(name, ranges, (min_saturation, 1.0), (min_value, 1.0), rgb)
 
     @classmethod
     def around_rgb(
@@ -92,7 +118,7 @@ class ColourRange:
                 f"colour {name!r}: {rgb} is nearly grey (saturation {saturation:.2f}); "
                 "greys cannot be told apart from the table by hue"
             )
-        return cls.around(name, hue * 360.0, hue_tolerance_deg, saturation * saturation_fraction, min_value)
+        return cls.around(name, hue * 360.0, hue_tolerance_deg, saturation * saturation_fraction, min_value, rgb)
 
     def _cv_bounds(self) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
         """Inclusive 8-bit HSV bounds for ``cv2.inRange``, one pair per hue interval."""
@@ -183,17 +209,18 @@ class ColourTable(Mapping[str, ColourRange]):
         return ColourTable([r for n, r in self._ranges.items() if n != name])
 
 
-#: The cubes of the simulated cell (top faces, 0..1 RGB): red (0.80, 0.08, 0.08) at hue 0,
+#: The one colour table of the cell, shared by the simulated cell (which paints each top face with
+#: ``rgb``) and the detector (which reads it with the range): red (0.80, 0.08, 0.08) at hue 0,
 #: yellow (0.90, 0.80, 0.10) at 53 deg, green (0.10, 0.65, 0.20) at 131 deg, blue
 #: (0.10, 0.25, 0.85) at 228 deg, all with saturation 0.85..0.90. The ranges keep 15..40 deg of
 #: hue margin, accept half that saturation and down to 15 % value, so a face lit at 45 % still
 #: passes, while the near-white cube sides, the grey table and the grey/black robot (saturation
-#: below 0.1) never do.
+#: below 0.1) never do. A user's colour joins it with ``with_colour`` (a plan's ``[colours.NAME]``).
 DEFAULT_COLOUR_TABLE = ColourTable(
     [
-        ColourRange.around("red", 0.0, 20.0),
-        ColourRange.around("yellow", 53.0, 15.0),
-        ColourRange.around("green", 131.0, 40.0),
-        ColourRange.around("blue", 228.0, 28.0),
+        ColourRange.around("red", 0.0, 20.0, rgb=(0.80, 0.08, 0.08)),
+        ColourRange.around("yellow", 53.0, 15.0, rgb=(0.90, 0.80, 0.10)),
+        ColourRange.around("green", 131.0, 40.0, rgb=(0.10, 0.65, 0.20)),
+        ColourRange.around("blue", 228.0, 28.0, rgb=(0.10, 0.25, 0.85)),
     ]
 )

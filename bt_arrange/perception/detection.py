@@ -101,6 +101,9 @@ class DetectorConfig:
     cube_edge_m: float = 0.05
     #: World z of the table top; the top faces lie one edge above it.
     table_z_m: float = 0.0
+    #: A cuboid's size (x, y, z in metres) instead of the cube's edge: its top face is x by y,
+    #: ``z`` above the table (``CubeDetector.for_object`` sets it from an ``ObjectType``).
+    object_size_m: tuple[float, float, float] | None = None
     #: The paper's 7x7 closing and opening, applied at full resolution.
     kernel_px: int = PAPER_KERNEL_PX
     #: Blobs smaller than this are specks, not cubes, and are ignored.
@@ -126,9 +129,38 @@ class DetectorConfig:
     coarse_face_edge_px: float = 24.0
 
     @property
+    def size_m(self) -> tuple[float, float, float]:
+        """The part's size (x, y, z): ``object_size_m``, or the cube's edge three times."""
+        if self.object_size_m is not None:
+            return self.object_size_m
+        return (self.cube_edge_m, self.cube_edge_m, self.cube_edge_m)
+
+    @property
+    def square_top(self) -> bool:
+        """True when the top face is a square (within 0.5 mm)."""
+        x, y, _ = self.size_m
+        return abs(x - y) < 0.0005
+
+    @property
+    def symmetry_rad(self) -> float:
+        """90 degrees for a square top, 180 for a rectangle: the turns that show the same face."""
+        return math.pi / 2 if self.square_top else math.pi
+
+    @property
+    def face_text(self) -> str:
+        """The top face in words: ``5.0 cm square`` or ``8.0 x 4.0 cm rectangle``."""
+        x, y, _ = self.size_m
+        return f"{x * 100:.0f} cm square" if self.square_top else f"{x * 100:.1f} x {y * 100:.1f} cm rectangle"
+
+    def face_area_px(self, intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray) -> float:
+        """Image area of one top face centred at ``centre_world`` (level, axis-aligned), pixels."""
+        x, y, _ = self.size_m
+        return expected_face_area_px(intrinsics, T_W_C, centre_world, x, y)
+
+    @property
     def top_z_m(self) -> float:
         """World z of the cubes' top faces."""
-        return self.table_z_m + self.cube_edge_m
+        return self.table_z_m + self.size_m[2]
 
 
 @dataclass(frozen=True)
@@ -136,7 +168,7 @@ class Detection:
     """The outcome of looking for one colour in one frame.
 
     ``pose_world`` is ``T_W_O`` of the cube's centre (set only when FOUND) from the configured
-    :class:`PoseModel`, its yaw folded into ``[-45, 45)`` degrees. Quality figures:
+    :class:`PoseModel`, its yaw folded into ``[-45, 45)`` degrees (``[-90, 90)`` for a rectangle). Quality figures:
     ``corners_px``, the refined top-face corners (undistorted pixel coordinates);
     ``reprojection_error_px``, the RMS distance between them and the model's projected face;
     ``area_px``, the blob's area, and ``expected_area_px``, a face's expected area there;
@@ -207,6 +239,14 @@ class CubeDetector:
         self.colours = colours
         self.config = config or DetectorConfig()
 
+    def for_object(self, object_type: object | None) -> CubeDetector:
+        """A detector like this one for parts of ``object_type`` (an ``ObjectType``; None or the cube: itself)."""
+        size = getattr(object_type, "size_m", None)
+        if size is None or tuple(size) == self.config.size_m:
+            return self
+        x_m, y_m, z_m = (float(v) for v in size)
+        return CubeDetector(self.colours, replace(self.config, object_size_m=(x_m, y_m, z_m)))
+
     def detect(self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None) -> Detection:
         """Look for the cube of ``colour``; raises PerceptionError for a colour not in the table."""
         colour_range = self.colours[colour]
@@ -238,7 +278,8 @@ class CubeDetector:
         centre = pixel_on_plane(intrinsics, T_W_C, np.array([intrinsics.cx_px, intrinsics.cy_px]), self.config.top_z_m)
         if centre is None:
             raise PerceptionError(f"the camera at {T_W_C} does not look down at the table plane")
-        edge_px = math.sqrt(expected_face_area_px(intrinsics, T_W_C, centre, self.config.cube_edge_m))
+        x_m, y_m, _ = self.config.size_m
+        edge_px = math.sqrt(self.config.face_area_px(intrinsics, T_W_C, centre) * min(x_m, y_m) / max(x_m, y_m))
         return max(1, int(edge_px // face_edge_px))
 
     def window_around(
@@ -285,8 +326,10 @@ class CubeDetector:
         for pixel in ([0, 0], [width - 1, 0], [0, height - 1], [width - 1, height - 1], centre_px):
             point = pixel_on_plane(intrinsics, T_W_C, np.asarray(pixel, dtype=float), config.top_z_m)
             if point is not None:
-                areas.append(expected_face_area_px(intrinsics, T_W_C, point, config.cube_edge_m))
-        centre_edge_px = math.sqrt(expected_face_area_px(intrinsics, T_W_C, on_table, config.cube_edge_m))
+                areas.append(config.face_area_px(intrinsics, T_W_C, point))
+        # The face's shorter side sets the downscaling, so a narrow face keeps enough pixels across.
+        x_m, y_m, _ = config.size_m
+        centre_edge_px = math.sqrt(config.face_area_px(intrinsics, T_W_C, on_table) * min(x_m, y_m) / max(x_m, y_m))
         scale = int(np.clip(centre_edge_px // config.coarse_face_edge_px, 1, 8))
         # Downscale by an exact integer factor, so that small and full-resolution pixels align.
         small = rgb[: height // scale * scale, : width // scale * scale]
@@ -323,7 +366,7 @@ class CubeDetector:
             on_plane = pixel_on_plane(view.intrinsics, view.T_W_C, np.asarray(blob.centroid_px), config.top_z_m)
             if on_plane is None:
                 continue
-            expected_px = expected_face_area_px(view.intrinsics, view.T_W_C, on_plane, config.cube_edge_m)
+            expected_px = config.face_area_px(view.intrinsics, view.T_W_C, on_plane)
             if blob.area_px < config.min_area_fraction * expected_px:
                 continue
             if roi is not None and not roi.contains(on_plane[0], on_plane[1]):
@@ -413,12 +456,11 @@ class CubeDetector:
         sub-pixel corners; then the pose from the corners and its reprojection check.
         """
         name = colour.name
-        edge_px = math.sqrt(expected_px)
         area_px: float | None = None
         try:
-            contour, area_px = self._face_contour(view, colour, blob, edge_px)
+            contour, area_px = self._face_contour(view, colour, blob, expected_px)
             self._check_whole_face(view, name, contour, area_px, expected_px)
-            polygon, outline = self._check_square_outline(contour, edge_px)
+            polygon, outline = self._check_square_outline(contour, expected_px)
             corners = self._refine(view, polygon, outline)
             if corners is None:
                 raise _Rejected("edges could not be measured below a pixel")
@@ -430,9 +472,11 @@ class CubeDetector:
         return self._pose_from_corners(view, name, corners, area_px, expected_px, xy)
 
     def _face_contour(
-        self, view: _View, colour: ColourRange, blob: Blob, edge_px: float
+        self, view: _View, colour: ColourRange, blob: Blob, expected_px: float
     ) -> tuple[NDArray[np.int32], float]:
         """The blob's outline at full resolution (image pixels) and its area; rejected if it vanished."""
+        x_m, y_m, _ = self.config.size_m
+        edge_px = math.sqrt(expected_px * min(x_m, y_m) / max(x_m, y_m))
         height, width = view.rgb.shape[:2]
         # The downscaled blob's box is accurate to a few pixels: add room for the sides.
         margin = int(max(12, 0.25 * edge_px)) + view.scale
@@ -471,8 +515,11 @@ class CubeDetector:
         if not low <= ratio <= high:
             raise _Rejected(f"blob is {ratio:.0%} of a face: covered, or not a whole top face")
 
-    def _check_square_outline(self, contour: NDArray[np.int32], edge_px: float) -> tuple[FloatArray, FloatArray]:
-        """Four convex corners, sides of a face's length, a contour that keeps to them: (polygon, outline)."""
+    def _check_square_outline(self, contour: NDArray[np.int32], expected_px: float) -> tuple[FloatArray, FloatArray]:
+        """Four convex corners, sides of a face's length, a contour that keeps to them: (polygon, outline).
+
+        A rectangle's opposite sides pair up: one pair must match its x edge, the other its y edge.
+        """
         config = self.config
         vertices = approximate_quadrilateral(contour)
         if len(vertices) != 4:
@@ -485,10 +532,22 @@ class CubeDetector:
         outline = refine_contour_lines(contour, polygon)
         sides_px = np.linalg.norm(outline - np.roll(outline, -1, axis=0), axis=1)
         low, high = config.side_length_fraction_range
-        if not (low * edge_px <= sides_px.min() and sides_px.max() <= high * edge_px):
+        x_m, y_m, _ = config.size_m
+        px_per_m = math.sqrt(expected_px / (x_m * y_m))
+        expected_x_px, expected_y_px = x_m * px_per_m, y_m * px_per_m
+        # Either pair of opposite sides may be the x edges: the assignment that fits better.
+        ratios = []
+        for first, second in ((expected_x_px, expected_y_px), (expected_y_px, expected_x_px)):
+            expected = np.array([first, second, first, second])
+            ratios.append(sides_px / expected)
+        ratio = min(ratios, key=lambda r: float(np.max(np.abs(r - 1.0))))
+        if not (low <= ratio.min() and ratio.max() <= high):
+            expected_text = (
+                f"{expected_x_px:.0f}" if config.square_top else f"{expected_x_px:.0f} and {expected_y_px:.0f}"
+            )
             raise _Rejected(
                 f"outline sides {sides_px.min():.0f}..{sides_px.max():.0f} px, "
-                f"expected {edge_px:.0f}: not a square face?"
+                f"expected {expected_text}: not a {'square' if config.square_top else config.face_text} face?"
             )
         # Where the contour leaves the quadrilateral, something covers the face (or
         # Douglas-Peucker forced four corners on a shape that has more).
@@ -508,9 +567,11 @@ class CubeDetector:
     ) -> Detection:
         """The cube's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
         config = self.config
-        face = solve_face_pose(corners, view.intrinsics.matrix, config.cube_edge_m)
-        pnp_pose = None if face is None else cube_centre_in_world(view.T_W_C, face.T_C_F, config.cube_edge_m)
-        plane = fit_square_on_plane(corners, view.intrinsics, view.T_W_C, config.top_z_m, config.cube_edge_m)
+        x_m, y_m, z_m = config.size_m
+        other = None if config.square_top else y_m
+        face = solve_face_pose(corners, view.intrinsics.matrix, x_m, other_edge_m=other)
+        pnp_pose = None if face is None else cube_centre_in_world(view.T_W_C, face.T_C_F, z_m, config.symmetry_rad)
+        plane = fit_square_on_plane(corners, view.intrinsics, view.T_W_C, config.top_z_m, x_m, other)
         # Everything measured so far, as a PARTIAL outcome that the checks below complete.
         measured = Detection(
             name,
@@ -527,14 +588,14 @@ class CubeDetector:
         if config.pose_model is PoseModel.RESTING:
             if plane is None:
                 return replace(measured, reason=f"{name} corners do not meet the table plane")
-            if abs(plane.edge_m / config.cube_edge_m - 1.0) > config.max_edge_error_fraction:
+            if abs(plane.edge_m / x_m - 1.0) > config.max_edge_error_fraction:
                 return replace(
                     measured,
                     reason=f"{name} face measures {plane.edge_m * 100:.1f} cm on the table plane, not "
-                    f"{config.cube_edge_m * 100:.1f} cm: not resting on the table?",
+                    f"{x_m * 100:.1f} cm: not resting on the table?",
                 )
             pose = Pose.from_planar(plane.centre_m[0], plane.centre_m[1], plane.yaw_rad, config.top_z_m)
-            pose = pose @ Pose(np.array([0.0, 0.0, -config.cube_edge_m / 2.0]))
+            pose = pose @ Pose(np.array([0.0, 0.0, -z_m / 2.0]))
             error_px = plane.reprojection_error_px
         else:
             if face is None or pnp_pose is None:
@@ -543,8 +604,7 @@ class CubeDetector:
         if error_px > config.max_reprojection_error_px:
             return replace(
                 measured,
-                reason=f"{name} corners are not a {config.cube_edge_m * 100:.0f} cm square "
-                f"(reprojection error {error_px:.2f} px)",
+                reason=f"{name} corners are not a {config.face_text} (reprojection error {error_px:.2f} px)",
                 reprojection_error_px=error_px,
             )
         return replace(

@@ -21,6 +21,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -41,14 +42,33 @@ class PoseModel(str, enum.Enum):
     FREE = "free"
 
 
-def square_object_points(edge_m: float) -> FloatArray:
+def square_object_points(edge_m: float, other_edge_m: float | None = None) -> FloatArray:
     """The top face's corners in the face frame (z out of the cube), in the order of the corners.
 
     Seen from above, like the camera sees them, they run clockwise on screen: the order of
-    :func:`~bt_arrange.perception.segmentation.order_corners`.
+    :func:`~bt_arrange.perception.segmentation.order_corners`. ``other_edge_m`` (default
+    ``edge_m``) is a rectangle's y edge; the first side (corner 0 to 1) runs along x.
     """
-    h = edge_m / 2.0
-    return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+    hx = edge_m / 2.0
+    hy = hx if other_edge_m is None else other_edge_m / 2.0
+    return np.array([[-hx, hy, 0.0], [hx, hy, 0.0], [hx, -hy, 0.0], [-hx, -hy, 0.0]])
+
+
+def match_rectangle_sides(points: FloatArray, edge_m: float, other_edge_m: float | None) -> FloatArray:
+    """The four corners rolled by one when that makes the first side (0 to 1) the x edge.
+
+    A square needs no roll. For a rectangle, the pair of sides nearer the x edge's length in
+    proportion is the x pair (``points`` in metres on a plane, or pixels: only ratios count).
+    """
+    if other_edge_m is None or abs(edge_m - other_edge_m) < 1e-9:
+        return points
+    pts = np.asarray(points, dtype=float)
+    sides = np.linalg.norm(pts - np.roll(pts, -1, axis=0), axis=1)
+    first, second = sides[0] + sides[2], sides[1] + sides[3]
+    # x pair first when the first pair's share of the perimeter is nearer x's share.
+    share_x = edge_m / (edge_m + other_edge_m)
+    keep = abs(first / (first + second) - share_x) <= abs(second / (first + second) - share_x)
+    return pts if keep else np.roll(pts, -1, axis=0)
 
 
 #: Turns the face frame by 180 degrees about its x axis: z out of the cube <-> z into it.
@@ -68,9 +88,17 @@ def _rms_px(projected: FloatArray, measured: FloatArray) -> float:
 
 
 def solve_face_pose(
-    corners_px: FloatArray, camera_matrix: FloatArray, edge_m: float, distortion: FloatArray | None = None
+    corners_px: FloatArray,
+    camera_matrix: FloatArray,
+    edge_m: float,
+    distortion: FloatArray | None = None,
+    other_edge_m: float | None = None,
 ) -> FacePose | None:
     """PnP of a square face of known edge from its four corners (ordered as ``order_corners``).
+
+    ``other_edge_m`` makes it a rectangle of ``edge_m`` (x) by ``other_edge_m`` (y); the corners are
+    rolled so that the first side is the x edge (``match_rectangle_sides``). IPPE_SQUARE needs a
+    square, so a rectangle starts from ITERATIVE alone.
 
     Starts from ``SOLVEPNP_IPPE_SQUARE`` (the planar solution) and from ``SOLVEPNP_ITERATIVE``,
     which for four coplanar points starts from the homography of the face's plane (the paper's
@@ -82,16 +110,24 @@ def solve_face_pose(
     face from behind, with the corners in reverse order, and its pose flipped back. Returns
     None when no start gives a finite pose.
     """
-    object_points = square_object_points(edge_m)
-    image_points = np.asarray(corners_px, dtype=np.float64).reshape(4, 1, 2)
+    square = other_edge_m is None or abs(other_edge_m - edge_m) < 1e-9
+    object_points = square_object_points(edge_m, None if square else other_edge_m)
+    corners = np.asarray(corners_px, dtype=np.float64).reshape(4, 2)
+    if not square:
+        corners = match_rectangle_sides(corners, edge_m, other_edge_m)
+    image_points = corners.reshape(4, 1, 2)
     dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=np.float64)
     starts: list[tuple[FloatArray, FloatArray]] = []
     # Seen from behind, the face's corners run the other way round: reverse them, so that
     # IPPE_SQUARE's object points are the face frame turned by 180 degrees about x.
     behind = image_points[[3, 2, 1, 0]]
-    count, rvecs, tvecs, _ = cv2.solvePnPGeneric(
-        object_points, behind, camera_matrix, dist, flags=cv2.SOLVEPNP_IPPE_SQUARE
-    )
+    count: int = 0
+    rvecs: Any = []
+    tvecs: Any = []
+    if square:
+        count, rvecs, tvecs, _ = cv2.solvePnPGeneric(
+            object_points, behind, camera_matrix, dist, flags=cv2.SOLVEPNP_IPPE_SQUARE
+        )
     for rvec, tvec in zip(rvecs[:count], tvecs[:count], strict=True):
         if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
             continue
@@ -137,7 +173,12 @@ class PlaneFit:
 
 
 def fit_square_on_plane(
-    corners_px: FloatArray, intrinsics: CameraIntrinsics, T_W_C: Pose, plane_z_m: float, edge_m: float
+    corners_px: FloatArray,
+    intrinsics: CameraIntrinsics,
+    T_W_C: Pose,
+    plane_z_m: float,
+    edge_m: float,
+    other_edge_m: float | None = None,
 ) -> PlaneFit | None:
     """x, y and yaw of a level square face on the plane ``z = plane_z_m`` from its four corners.
 
@@ -146,7 +187,12 @@ def fit_square_on_plane(
     four points gives the pose. Unlike 6-DoF PnP, an error in the face's apparent size cannot
     turn into a tilt or a depth, and so into a sideways shift of the centre. Corners are
     undistorted pixels. Returns None if a ray misses the plane.
+
+    ``other_edge_m`` makes it a rectangle of ``edge_m`` along its x axis by ``other_edge_m``: the
+    yaw is then that of the x edges, folded to 180 degrees (``edge_m`` of the result is the fitted
+    x edge).
     """
+    square = other_edge_m is None or abs(other_edge_m - edge_m) < 1e-9
     points = []
     for corner in np.asarray(corners_px, dtype=float).reshape(4, 2):
         point = pixel_on_plane(intrinsics, T_W_C, corner, plane_z_m)
@@ -154,10 +200,17 @@ def fit_square_on_plane(
             return None
         points.append(point[:2])
     world = np.array(points)
-    h = edge_m / 2.0
-    model = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])  # counter-clockwise seen from above
+    measured_px = np.asarray(corners_px, dtype=float).reshape(4, 2)
+    if not square:
+        rolled = match_rectangle_sides(world, edge_m, other_edge_m)
+        if not np.array_equal(rolled, world):
+            world, measured_px = rolled, np.roll(measured_px, -1, axis=0)
+    hx = edge_m / 2.0
+    hy = hx if square or other_edge_m is None else other_edge_m / 2.0
+    model = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])  # counter-clockwise seen from above
     if _signed_area(world) < 0:
-        model = model[::-1].copy()
+        # Clockwise corners: the model's order reversed keeps its first side along x.
+        model = np.array([[-hx, hy], [hx, hy], [hx, -hy], [-hx, -hy]])
     centre = world.mean(axis=0)
     relative = world - centre
     # Procrustes rotation: the angle that best turns the model's corners onto the measured ones.
@@ -167,26 +220,28 @@ def fit_square_on_plane(
     rotated = model @ rotation_z(yaw_rad)[:2, :2].T
     scale = float(np.sum(rotated * relative) / np.sum(model * model))
     fitted = np.column_stack([rotated + centre, np.full(4, plane_z_m)])
-    error_px = _rms_px(project_world(intrinsics, T_W_C, fitted), np.asarray(corners_px, dtype=float))
-    return PlaneFit(np.array([centre[0], centre[1], plane_z_m]), fold_yaw(yaw_rad), scale * edge_m, error_px)
+    error_px = _rms_px(project_world(intrinsics, T_W_C, fitted), measured_px)
+    symmetry = math.pi / 2 if square else math.pi
+    return PlaneFit(np.array([centre[0], centre[1], plane_z_m]), fold_yaw(yaw_rad, symmetry), scale * edge_m, error_px)
 
 
 def _signed_area(points: FloatArray) -> float:
     return 0.5 * float(np.sum(points[:, 0] * np.roll(points[:, 1], -1) - np.roll(points[:, 0], -1) * points[:, 1]))
 
 
-def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float) -> Pose:
+def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float, symmetry_rad: float = math.pi / 2) -> Pose:
     """Eq. 1 for the cube's centre, with the yaw folded to the cube's 90-degree symmetry.
 
-    The centre lies half an edge below the top face, along the face normal into the cube. The
-    face frame's x axis is turned by a multiple of 90 degrees about the normal so that the
-    returned yaw lies in ``[-45, 45)`` degrees: every such turn shows the same cube.
+    The centre lies half an edge (``edge_m``: the height) below the top face, along the face normal
+    into the cube. The face frame's x axis is turned by a multiple of ``symmetry_rad`` (90 degrees
+    for a square top, 180 for a rectangle) about the normal so that the returned yaw lies in
+    ``[-symmetry/2, symmetry/2)``: every such turn shows the same part.
     """
     T_W_F = T_W_C @ T_C_F
     T_W_O = T_W_F @ Pose(np.array([0.0, 0.0, -edge_m / 2.0]))
     yaw_rad = T_W_O.yaw_rad
-    quarter_turns = round((fold_yaw(yaw_rad) - yaw_rad) / (math.pi / 2.0))
-    return Pose.from_rotation(T_W_O.position_m, T_W_O.rotation @ rotation_z(quarter_turns * math.pi / 2.0))
+    turns = round((fold_yaw(yaw_rad, symmetry_rad) - yaw_rad) / symmetry_rad)
+    return Pose.from_rotation(T_W_O.position_m, T_W_O.rotation @ rotation_z(turns * symmetry_rad))
 
 
 def tilt_deg(T_W_O: Pose) -> float:
@@ -222,12 +277,19 @@ def project_world(intrinsics: CameraIntrinsics, T_W_C: Pose, points_world: Float
     )
 
 
-def expected_face_area_px(intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray, edge_m: float) -> float:
-    """Image area of a level square face of ``edge_m`` centred at ``centre_world``, in pixels.
+def expected_face_area_px(
+    intrinsics: CameraIntrinsics,
+    T_W_C: Pose,
+    centre_world: FloatArray,
+    edge_m: float,
+    other_edge_m: float | None = None,
+) -> float:
+    """Image area of a level square face of ``edge_m`` (by ``other_edge_m``) centred at ``centre_world``, in pixels.
 
-    Projects the square's corners, so it holds for any camera pose, not only straight down.
+    Projects the face's corners, so it holds for any camera pose, not only straight down.
     """
     h = edge_m / 2.0
-    corners = np.asarray(centre_world, dtype=float) + np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+    k = h if other_edge_m is None else other_edge_m / 2.0
+    corners = np.asarray(centre_world, dtype=float) + np.array([[-h, -k, 0.0], [h, -k, 0.0], [h, k, 0.0], [-h, k, 0.0]])
     p = project_world(intrinsics, T_W_C, corners)
     return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))

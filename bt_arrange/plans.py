@@ -1,0 +1,358 @@
+"""Plan files: an arrangement as data (TOML), beside Python and XML tree files.
+
+``load(path)`` reads a plan and returns a :class:`Plan` with ``create_root(...)`` and
+``create_scene(seed)``, the two functions of a tree file, so the runner treats both alike
+(``bt_arrange.treefile.load`` hands ``.toml`` files here). The format (docs/plans.md) is a contract::
+
+    threshold_mm = 1.0          # optional, default 1.0
+    yaw_threshold_deg = 1.0     # optional, default 1.0
+    correct = "each"            # optional: "each" (Algorithm 1) or "after_all"
+    max_pushes = 10             # optional, default 10
+
+    [objects.bar]               # a user's type; "cube" (50 x 50 x 50 mm) is built in
+    size_mm = [80, 40, 40]      # mass_kg, friction: optional simulator settings
+
+    [colours.orange]            # a user's colour: rgb in 0..1 (paint, and the HSV range around it),
+    rgb = [1.0, 0.5, 0.0]       # or hue_deg = [low, high], saturation = [low, high], value = [low, high]
+
+    [[targets]]
+    object = "bar"              # optional, default "cube"
+    colour = "orange"
+    x_mm = 560
+    y_mm = -60
+    yaw_deg = 30                # optional, default 0
+    name = "orange bar"         # optional; default the colour, numbered for identical parts
+
+    [scene]                     # simulator only, optional: where the objects start
+    seed = 0                    # scattered clear of each other and of the targets; --seed overrides
+    # or [[scene.starts]] with object, colour, x_mm, y_mm, yaw_deg (name optional)
+
+Every mistake is one ``PlanError`` naming the file, the entry and the problem, raised while the
+plan loads, before anything moves.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.objects import CUBE, ObjectStart, ObjectType
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+TOP_KEYS = ("threshold_mm", "yaw_threshold_deg", "correct", "max_pushes", "objects", "colours", "targets", "scene")
+OBJECT_KEYS = ("size_mm", "mass_kg", "friction")
+COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
+TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name")
+SCENE_KEYS = ("seed", "starts")
+START_KEYS = TARGET_KEYS
+
+
+@dataclass
+class Plan:
+    """A loaded plan file: its targets, colour table and options, and where the parts start.
+
+    ``create_root(...)`` builds the arrangement tree (``bt_arrange.trees.arrangement``) and
+    ``create_scene(seed)`` says where the parts start in a simulator: the plan's own starts, or
+    parts scattered by the backend from ``seed`` (default the plan's ``[scene] seed``, else 0).
+    """
+
+    path: Path
+    targets: list[Any]
+    colours: ColourTable
+    object_types: dict[str, ObjectType]
+    threshold_mm: float = 1.0
+    yaw_threshold_deg: float = 1.0
+    correct: str = "each"
+    max_pushes: int = 10
+    seed: int = 0
+    starts: list[ObjectStart] | None = None
+    raw: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def create_root(
+        self,
+        threshold_mm: float | None = None,
+        max_pushes: int | None = None,
+        correct: str | None = None,
+        yaw_threshold_deg: float | None = None,
+    ) -> Any:
+        """The arrangement tree; options given here override the file's."""
+        from bt_arrange.trees import arrangement
+
+        try:
+            return arrangement(
+                self.targets,
+                threshold_mm=self.threshold_mm if threshold_mm is None else threshold_mm,
+                max_pushes=self.max_pushes if max_pushes is None else max_pushes,
+                correct=self.correct if correct is None else correct,
+                yaw_threshold_deg=self.yaw_threshold_deg if yaw_threshold_deg is None else yaw_threshold_deg,
+                colours=self.colours,
+            )
+        except BtArrangeError as error:
+            raise PlanError(f"{self.path}: {error}") from error
+
+    def create_scene(self, seed: int | None = None) -> list[ObjectStart]:
+        """Where the parts start: the file's ``[[scene.starts]]``, or scattered from ``seed`` by the default backend."""
+        if self.starts is not None:
+            return list(self.starts)
+        from bt_arrange import backends
+
+        chosen = self.seed if seed is None else seed
+        backend = backends.load()
+        try:
+            return list(
+                backend.scatter(
+                    [t.colour for t in self.targets],
+                    chosen,
+                    avoid=self.targets,
+                    object_types=[t.object_type for t in self.targets],
+                    names=[t.name for t in self.targets],
+                )
+            )
+        except BtArrangeError as error:
+            raise PlanError(f"{self.path}: [scene] seed {chosen}: {error}") from error
+
+
+def load(path: str | Path) -> Plan:
+    """Read and check the plan file at ``path``; a ``PlanError`` names the file, the entry and the problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise PlanError(f"plan file {path} not found") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise PlanError(f"cannot read plan file {path}: {error}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise PlanError(f"{path}: not TOML: {error}") from None
+    plan = _Reader(path).read(data)
+    plan.create_root()  # every check of the tree builder (reach, layout, thresholds) now, before anything moves
+    return plan
+
+
+def load_module(path: str | Path) -> ModuleType:
+    """A plan file as a tree-file module: ``create_root()``, ``create_scene(seed)`` and ``plan``."""
+    plan = load(path)
+    module = ModuleType(f"bt_arrange_plan_{Path(path).stem}")
+    module.__file__ = str(path)
+    module.plan = plan  # type: ignore[attr-defined]
+    module.create_root = plan.create_root  # type: ignore[attr-defined]
+    module.create_scene = plan.create_scene  # type: ignore[attr-defined]
+    #: The seed ``bt-arrange run`` uses when no --seed is given.
+    module.default_seed = plan.seed  # type: ignore[attr-defined]
+    return module
+
+
+class _Reader:
+    """Turns the parsed TOML into a Plan, naming the file and the entry in every error."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, where: str, problem: str) -> PlanError:
+        return PlanError(f"{self.path}: {where}: {problem}")
+
+    def keys(self, table: Any, known: Sequence[str], where: str) -> dict[str, Any]:
+        if not isinstance(table, dict):
+            raise self.fail(where, f"must be a table, got {_shown(table)}")
+        for key in table:
+            if key not in known:
+                raise self.fail(where, f"unknown key {key!r} (known: {', '.join(known)})")
+        return table
+
+    def number(self, value: Any, where: str, name: str, *, positive: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise self.fail(where, f"{name} = {_shown(value)} is not a number")
+        if positive and value <= 0:
+            raise self.fail(where, f"{name} = {_shown(value)} must be positive")
+        return float(value)
+
+    def pair(self, value: Any, where: str, name: str) -> tuple[float, float]:
+        if not isinstance(value, list) or len(value) != 2:
+            raise self.fail(where, f"{name} = {_shown(value)} is not a [low, high] pair")
+        low, high = (self.number(v, where, name) for v in value)
+        return low, high
+
+    def read(self, data: dict[str, Any]) -> Plan:
+        self.keys(data, TOP_KEYS, "the top level")
+        options: dict[str, Any] = {}
+        for key in ("threshold_mm", "yaw_threshold_deg"):
+            if key in data:
+                options[key] = self.number(data[key], "the top level", key, positive=True)
+        if "correct" in data:
+            if data["correct"] not in ("each", "after_all"):
+                raise self.fail("the top level", f'correct = {_shown(data["correct"])}: choose "each" or "after_all"')
+            options["correct"] = data["correct"]
+        if "max_pushes" in data:
+            value = data["max_pushes"]
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise self.fail("the top level", f"max_pushes = {_shown(value)} is not a whole number, 0 or more")
+            options["max_pushes"] = value
+        types = self.object_types(data.get("objects", {}))
+        colours = self.colour_table(data.get("colours", {}))
+        if "targets" not in data:
+            raise self.fail("the top level", "no [[targets]]: a plan needs at least one")
+        targets = self.targets(data["targets"], types, colours)
+        seed, starts = self.scene(data.get("scene", {}), types, colours, targets)
+        return Plan(self.path, targets, colours, types, seed=seed, starts=starts, raw=data, **options)
+
+    def object_types(self, table: Any) -> dict[str, ObjectType]:
+        types = {"cube": CUBE}
+        if not isinstance(table, dict):
+            raise self.fail("[objects]", f"must be a table of types, got {_shown(table)}")
+        for name, entry in table.items():
+            where = f"[objects.{name}]"
+            self.keys(entry, OBJECT_KEYS, where)
+            if name == "cube":
+                raise self.fail(where, "'cube' is built in (50 x 50 x 50 mm): name your type otherwise")
+            if "size_mm" not in entry:
+                raise self.fail(where, "missing size_mm = [x, y, z]")
+            size = entry["size_mm"]
+            if not isinstance(size, list) or len(size) != 3:
+                raise self.fail(where, f"size_mm = {_shown(size)} is not three numbers [x, y, z] in mm")
+            edges = [self.number(v, where, "size_mm") for v in size]
+            if min(edges) <= 0:
+                raise self.fail(where, f"size_mm = {_shown(size)} has an edge that is not positive")
+            mass = self.number(entry["mass_kg"], where, "mass_kg", positive=True) if "mass_kg" in entry else None
+            friction = self.number(entry["friction"], where, "friction", positive=True) if "friction" in entry else None
+            try:
+                types[name] = ObjectType(name, (edges[0] / 1000, edges[1] / 1000, edges[2] / 1000), mass, friction)
+            except PlanError as error:
+                raise self.fail(where, str(error)) from None
+        return types
+
+    def colour_table(self, table: Any) -> ColourTable:
+        colours = DEFAULT_COLOUR_TABLE
+        if not isinstance(table, dict):
+            raise self.fail("[colours]", f"must be a table of colours, got {_shown(table)}")
+        for name, entry in table.items():
+            where = f"[colours.{name}]"
+            self.keys(entry, COLOUR_KEYS, where)
+            rgb = None
+            if "rgb" in entry:
+                value = entry["rgb"]
+                if not isinstance(value, list) or len(value) != 3:
+                    raise self.fail(where, f"rgb = {_shown(value)} is not three numbers in 0..1")
+                channels = [self.number(v, where, "rgb") for v in value]
+                if not all(0.0 <= c <= 1.0 for c in channels):
+                    raise self.fail(where, f"rgb = {_shown(value)}: each channel must be in 0..1")
+                rgb = (channels[0], channels[1], channels[2])
+            has_hsv = any(key in entry for key in ("hue_deg", "saturation", "value"))
+            try:
+                if has_hsv:
+                    if "hue_deg" not in entry:
+                        raise self.fail(where, "an HSV range needs hue_deg = [low, high] (saturation, value optional)")
+                    hue = self.pair(entry["hue_deg"], where, "hue_deg")
+                    low, high = hue
+                    hues = ((low, high),) if low <= high else ((0.0, high), (low, 360.0))
+                    saturation = self.pair(entry.get("saturation", [0.4, 1.0]), where, "saturation")
+                    value_range = self.pair(entry.get("value", [0.15, 1.0]), where, "value")
+                    colour = ColourRange(name, hues, saturation, value_range, rgb)
+                elif rgb is not None:
+                    colour = ColourRange.around_rgb(name, rgb)
+                else:
+                    raise self.fail(
+                        where, "a colour needs rgb = [r, g, b] (0..1) or an HSV range (hue_deg = [low, high])"
+                    )
+            except BtArrangeError as error:
+                if isinstance(error, PlanError) and str(error).startswith(str(self.path)):
+                    raise
+                raise self.fail(where, str(error)) from None
+            colours = colours.with_colour(colour)
+        return colours
+
+    def entry(
+        self,
+        entry: Any,
+        where: str,
+        types: dict[str, ObjectType],
+        colours: ColourTable,
+    ) -> tuple[ObjectType, str, float, float, float, str | None]:
+        self.keys(entry, TARGET_KEYS, where)
+        type_name = entry.get("object", "cube")
+        if not isinstance(type_name, str) or type_name not in types:
+            raise self.fail(
+                where, f"unknown object type {_shown(type_name)} (known: {', '.join(types)}; add [objects.NAME])"
+            )
+        if "colour" not in entry:
+            raise self.fail(where, "missing colour")
+        colour = entry["colour"]
+        if not isinstance(colour, str) or colour not in colours:
+            raise self.fail(
+                where,
+                f"unknown colour {_shown(colour)}: not in the table ({', '.join(colours.names)}) "
+                "and no [colours.NAME] with rgb",
+            )
+        for key in ("x_mm", "y_mm"):
+            if key not in entry:
+                raise self.fail(where, f"missing {key}")
+        x_mm = self.number(entry["x_mm"], where, "x_mm")
+        y_mm = self.number(entry["y_mm"], where, "y_mm")
+        yaw_deg = self.number(entry.get("yaw_deg", 0.0), where, "yaw_deg")
+        name = entry.get("name")
+        if name is not None and (not isinstance(name, str) or not name.strip() or "/" in name):
+            raise self.fail(where, f"name = {_shown(name)} must be a non-empty text without '/'")
+        return types[type_name], colour, x_mm / 1000, y_mm / 1000, math.radians(yaw_deg), name
+
+    def targets(self, entries: Any, types: dict[str, ObjectType], colours: ColourTable) -> list[Any]:
+        from bt_arrange.trees import Target
+
+        if not isinstance(entries, list) or not entries:
+            raise self.fail("[[targets]]", "must be a list of targets with at least one entry")
+        read = [self.entry(entry, f"[[targets]] {i}", types, colours) for i, entry in enumerate(entries, start=1)]
+        counts: dict[str, int] = {}
+        for _, colour, *_ in read:
+            counts[colour] = counts.get(colour, 0) + 1
+        numbers: dict[str, int] = {}
+        targets = []
+        for kind, colour, x_m, y_m, yaw_rad, name in read:
+            if name is None and counts[colour] > 1:
+                numbers[colour] = numbers.get(colour, 0) + 1
+                name = f"{colour} {numbers[colour]}"
+            targets.append(Target(colour, x_m, y_m, yaw_rad, name=name, object_type=kind))
+        return targets
+
+    def scene(
+        self, table: Any, types: dict[str, ObjectType], colours: ColourTable, targets: list[Any]
+    ) -> tuple[int, list[ObjectStart] | None]:
+        self.keys(table, SCENE_KEYS, "[scene]")
+        seed = table.get("seed", 0)
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise self.fail("[scene]", f"seed = {_shown(seed)} is not a whole number, 0 or more")
+        if "starts" not in table:
+            return seed, None
+        entries = table["starts"]
+        if not isinstance(entries, list):
+            raise self.fail("[[scene.starts]]", "must be a list of starts")
+        # A start without a name takes the name of the next target of its kind, in order.
+        names_by_kind: dict[tuple[str, str], list[str]] = {}
+        for target in targets:
+            names_by_kind.setdefault((target.object_type.name, target.colour), []).append(target.obj)
+        starts = []
+        for index, entry in enumerate(entries, start=1):
+            kind, colour, x_m, y_m, yaw_rad, name = self.entry(entry, f"[[scene.starts]] {index}", types, colours)
+            if name is None:
+                waiting = names_by_kind.get((kind.name, colour), [])
+                name = waiting.pop(0) if waiting else None
+            starts.append(ObjectStart(colour, x_m, y_m, yaw_rad, name, kind))
+        return seed, starts
+
+
+def _shown(value: Any) -> str:
+    """A TOML value as the user wrote it, roughly."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value)

@@ -1,0 +1,32 @@
+"""Every example plan shipped in the package runs headless, every part within 1 mm and 1 degree by ground truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bt_arrange import examples, treefile
+from bt_arrange_sim.runs import SimulatedRun
+
+TREES = Path(__file__).resolve().parents[2] / "trees"
+
+
+def test_the_examples_under_trees_are_the_packaged_ones() -> None:
+    for name in examples.names():
+        path = examples.path_of(name)
+        assert path is not None
+        assert (TREES / f"{name}.toml").read_text() == path.read_text()
+
+
+@pytest.mark.parametrize("name", examples.names())
+def test_an_example_plan_arranges_every_part(name: str) -> None:
+    module = treefile.load(name)
+    root = treefile.build_root(module)
+    with SimulatedRun(root, treefile.scene(module, module.default_seed)) as run:
+        report = run.run()
+    assert report.objects and len(report.objects) == len(root.targets)
+    for outcome in report.objects:
+        assert outcome.status == "within", outcome
+        assert outcome.final_offset_truth_mm < 1.0, outcome
+        assert abs(outcome.final_yaw_error_truth_deg) < 1.0, outcome

@@ -1,0 +1,33 @@
+"""A dense row of identical parts: five green cubes with 2 mm gaps along x.
+
+bt-arrange run trees/dense_row_identical.py
+
+The camera tells the five apart by where they lie (docs/objects.md): Detect picks a cube that is
+not at a target of its kind, Inspect and the neighbours' rechecks follow the one nearest each
+target. As in trees/dense_row.py each cube after the first is released with the pads across its
+free y faces (a pad never enters a 2 mm gap), pushed only from free sides, and the cube before it
+is looked at again once it is down.
+"""
+
+from bt_arrange.trees import Arrangement, Target, arrangement
+from bt_arrange_sim.scenes import CubeStart, scatter
+
+#: No XML twin: the XML node models do not hold where the pads go among neighbours yet.
+XML_TWIN = False
+
+#: Gap between neighbouring faces, metres.
+GAP_M = 0.002
+PITCH_M = 0.05 + GAP_M
+COUNT = 5
+
+TARGETS = [Target("green", x_m=0.40 + i * PITCH_M, y_m=0.0, name=f"green {i + 1}") for i in range(COUNT)]
+
+
+def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
+    """The tree: cube by cube along the row, each neighbour checked after the next is down."""
+    return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
+
+
+def create_scene(seed: int = 0) -> list[CubeStart]:
+    """Where the cubes start: scattered, clear of each other and of the row."""
+    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS, names=[t.obj for t in TARGETS])
