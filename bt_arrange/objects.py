@@ -184,10 +184,11 @@ CUBE = ObjectType("cube", (0.05, 0.05, 0.05))
 
 
 @dataclass(frozen=True)
-class ObjectStart:
-    """Where a part starts on the table: colour, (x, y) in metres, yaw in radians, its name and type.
+class PartOnTable:
+    """A part at a planar pose: the colour of its top face, (x, y) in metres, yaw in radians, its name and type.
 
-    ``name`` defaults to the colour (a target of the same name is the part's target).
+    ``name`` is the part's blackboard namespace (``/<name>/pose``); it defaults to the colour.
+    The fields a target and a start share.
     """
 
     colour: str
@@ -199,8 +200,13 @@ class ObjectStart:
 
     @property
     def obj(self) -> str:
-        """The part's name."""
+        """The part's name: its blackboard namespace."""
         return self.name or self.colour
+
+
+@dataclass(frozen=True)
+class ObjectStart(PartOnTable):
+    """Where a part starts on the table (a target of the same name is the part's target)."""
 
 
 def object_type_of(thing: object) -> ObjectType:

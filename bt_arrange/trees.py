@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import py_trees
 
@@ -53,7 +53,7 @@ from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Pads, Part, Release, Step, free_push_directions, plan_layout, restage_releases
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.objects import CUBE, ObjectType, kind_of
+from bt_arrange.objects import CUBE, ObjectType, PartOnTable, kind_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
@@ -64,25 +64,13 @@ DEFAULT_YAW_THRESHOLD_DEG = 1.0
 
 
 @dataclass(frozen=True)
-class Target:
+class Target(PartOnTable):
     """Where one part should end up: ``colour`` (of its top face), ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
 
     ``name`` is the object's blackboard namespace (``/<name>/pose``); it defaults to the colour.
     ``object_type`` is its size (default the paper's cube, ``bt_arrange.objects.CUBE``). Several
     targets may share a type and a colour (identical parts): each needs its own name.
     """
-
-    colour: str
-    x_m: float
-    y_m: float
-    yaw_rad: float = 0.0
-    name: str | None = None
-    object_type: ObjectType = field(default=CUBE)
-
-    @property
-    def obj(self) -> str:
-        """The object's name: its blackboard namespace."""
-        return self.name or self.colour
 
     @property
     def planar(self) -> PlanarPose:
