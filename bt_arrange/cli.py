@@ -5,6 +5,7 @@
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
+                          [--object cube|bar]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange examples
     bt-arrange info
@@ -214,15 +215,19 @@ EXPERIMENT_OPTIONS = (
     ("cell", "ideal"),
     ("strategy", "paper"),
     ("thresholds", None),
+    ("object_name", "cube"),
     ("executor", "local"),
     ("scheduler", None),
 )
 
 
-def _experiment_options(backend: Backend, experiment: Experiment, args: argparse.Namespace) -> dict[str, Any]:
+def _experiment_options(
+    backend: Backend, experiment: Experiment, args: argparse.Namespace, rows: list[str]
+) -> dict[str, Any]:
     """The experiment's options (``EXPERIMENT_OPTIONS``), checked by the backend's ``check_options``.
 
-    Only non-defaults are passed on; ``--workers`` is one of the Protocol's own arguments.
+    Only non-defaults are passed on; ``--workers`` is one of the Protocol's own arguments. With
+    ``--object``, the check also gets the rows (a row may not know every type).
     """
     options = {key: getattr(args, key) for key, default in EXPERIMENT_OPTIONS if getattr(args, key) != default}
     check = getattr(experiment, "check_options", None)
@@ -233,6 +238,7 @@ def _experiment_options(backend: Backend, experiment: Experiment, args: argparse
             cell=args.cell,
             strategy=args.strategy,
             workers=args.workers,
+            **({"rows": rows} if "object_name" in options else {}),
             **{key: value for key, value in options.items() if key not in ("cell", "strategy")},
         )
     return options
@@ -259,7 +265,7 @@ def _experiment(args: argparse.Namespace) -> int:
     if args.thresholds is not None and args.threshold_mm is not None:
         raise BtArrangeError("give --threshold-mm or --thresholds, not both")
     _check_threshold_option(args.threshold_mm)
-    options = _experiment_options(backend, experiment, args)
+    options = _experiment_options(backend, experiment, args, rows)
     try:
         backend.prepare_out(args.out)
     except BtArrangeError as error:
@@ -475,6 +481,13 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("paper", "learned", "diagonal"),
         default="paper",
         help="push strategy: paper (alternating x/y, Table 1's; default), learned or diagonal (docs/experiments.md)",
+    )
+    experiment.add_argument(
+        "--object",
+        dest="object_name",
+        metavar="NAME",
+        default="cube",
+        help="the part's type: cube (the paper's 50 mm cube; default) or bar (80 x 40 x 40 mm)",
     )
     experiment.set_defaults(handler=_experiment)
 

@@ -181,6 +181,19 @@ def max_grasp_width_m() -> float:
 
 #: The paper's 5 cm cube of hard wood (the default type).
 CUBE = ObjectType("cube", (0.05, 0.05, 0.05))
+#: An 80 x 40 x 40 mm bar: the cuboid of the examples and of ``bt-arrange experiment --object bar``.
+BAR = ObjectType("bar", (0.08, 0.04, 0.04))
+#: The types known by name without a plan file.
+BUILT_IN_TYPES: dict[str, ObjectType] = {t.name: t for t in (CUBE, BAR)}
+
+
+def built_in_type(name: str) -> ObjectType:
+    """The built-in type of this name; a ``PlanError`` naming the known ones otherwise."""
+    try:
+        return BUILT_IN_TYPES[name]
+    except KeyError:
+        known = ", ".join(sorted(BUILT_IN_TYPES))
+        raise PlanError(f"unknown object type {name!r}: the built-in types are {known}") from None
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,9 @@
 
 Each row runs its trials with a single-cube arrangement (a random start and a random target per
 trial, both seeded from the experiment's seed, the row and the trial number), with the row's
-injected errors. A campaign is the product of its lists (the thresholds and the cells; objects
-would join the same way): every combination gets its own folder with ``trials.jsonl``, the
+injected errors. A campaign is the product of its lists (the thresholds and the cells); the part's
+type (``--object``: the cube, or a built-in type such as the 80 x 40 x 40 mm bar) is one value
+for the whole campaign, like the push strategy: every combination gets its own folder with ``trials.jsonl``, the
 summaries and Fig. 4. Each finished trial is appended at once; a rerun into the same folder runs only the
 trials missing there. Offsets are the camera's measurements, as in the paper; the simulator's
 ground truth is recorded beside them.
@@ -31,6 +32,7 @@ import numpy as np
 
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.objects import ObjectType, built_in_type
 from bt_arrange.trees import check_threshold
 
 #: Rows: Table 1's four in the paper's order, then every other error of the paper's Sec. 3 alone,
@@ -116,20 +118,23 @@ class TrialSpec:
     cell: str = "ideal"
     #: The push strategy: ``paper`` (Table 1's), ``learned`` or ``diagonal`` (``bt_arrange.behaviours.Push``).
     strategy: str = "paper"
+    #: The part's type: a name of ``bt_arrange.objects.BUILT_IN_TYPES`` (``cube``, ``bar``).
+    object_name: str = "cube"
 
 
 @dataclass(frozen=True)
 class Combination:
-    """One point of a campaign's product of lists: a threshold and a cell (objects would join here).
+    """One point of a campaign's product of lists: a threshold and a cell.
 
-    The push strategy is one value for the whole campaign; it is carried here so every trial and
-    every folder's records name it.
+    The push strategy and the part's type (``object_name``) are one value each for the whole
+    campaign; they are carried here so every trial and every folder's records name them.
     """
 
     threshold_mm: float
     #: ``ideal``, ``real`` or a ``.toml`` file, as given to ``--cell``.
     cell: str = "ideal"
     strategy: str = "paper"
+    object_name: str = "cube"
 
     @property
     def folder(self) -> str:
@@ -139,7 +144,7 @@ class Combination:
 
     def spec(self, row: str, index: int, seed: int) -> TrialSpec:
         """The trial ``index`` of ``row`` under this combination."""
-        return TrialSpec(row, index, seed, self.threshold_mm, self.cell, self.strategy)
+        return TrialSpec(row, index, seed, self.threshold_mm, self.cell, self.strategy, self.object_name)
 
     def owns(self, record: dict) -> bool:
         """True when ``record`` is a trial of this combination (records before ``cell`` were the ideal cell's)."""
@@ -147,6 +152,7 @@ class Combination:
             record.get("threshold_mm") == self.threshold_mm
             and record.get("cell", "ideal") == self.cell
             and record.get("strategy", "paper") == self.strategy
+            and record.get("object", "cube") == self.object_name
         )
 
 
@@ -156,12 +162,15 @@ def cell_label(cell: str) -> str:
 
 
 def combinations(
-    thresholds_mm: Sequence[float], cells: Sequence[str] = ("ideal",), strategy: str = "paper"
+    thresholds_mm: Sequence[float],
+    cells: Sequence[str] = ("ideal",),
+    strategy: str = "paper",
+    object_name: str = "cube",
 ) -> list[Combination]:
     """The campaign: the product of the lists (thresholds, then cells), in order, duplicates removed."""
     seen: list[Combination] = []
     for threshold_mm, cell in itertools.product(thresholds_mm, cells):
-        combination = Combination(float(threshold_mm), cell, strategy)
+        combination = Combination(float(threshold_mm), cell, strategy, object_name)
         if combination not in seen:
             seen.append(combination)
     return seen
@@ -218,6 +227,14 @@ def parse_cells(cells: str | Sequence[str]) -> list[str]:
     return list(dict.fromkeys(items))
 
 
+def parse_object(name: str) -> ObjectType:
+    """The part's type for ``--object``: a built-in type's name; a one-line ``PlanError`` otherwise."""
+    try:
+        return built_in_type(name)
+    except PlanError as error:
+        raise PlanError(f"--object {name!r}: {error}") from None
+
+
 def run_trial(spec: TrialSpec) -> dict:
     """Run one trial in a fresh cell and return its record (a JSON-able dict); one per process at a time."""
     with _TRIAL_LOCK:
@@ -231,13 +248,15 @@ def _run_trial(spec: TrialSpec) -> dict:
 
     wall_start = time.perf_counter()
     rng = np.random.default_rng([spec.seed, ROWS.index(spec.row), spec.index])
+    kind = parse_object(spec.object_name)
     target = Target(
         "red",
         float(rng.uniform(*TARGET_X_RANGE_M)),
         float(rng.uniform(*TARGET_Y_RANGE_M)),
         float(rng.uniform(-math.pi / 4, math.pi / 4)),
+        object_type=kind,
     )
-    starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target])
+    starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target], object_types=[kind])
     if spec.row == "grasp-estimator":
         root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)), spec.strategy)
     else:
@@ -259,6 +278,7 @@ def _run_trial(spec: TrialSpec) -> dict:
         "threshold_mm": spec.threshold_mm,
         "cell": spec.cell,
         "strategy": spec.strategy,
+        "object": spec.object_name,
         "target": [round(v, 6) for v in outcome.target],
         "placed_mm": outcome.placed_offset_mm,
         "pushed_mm": outcome.final_offset_mm,
@@ -294,13 +314,24 @@ def check_options(
     executor: str | Executor | None = "local",
     workers: int = 1,
     scheduler: str | None = None,
+    object_name: str = "cube",
+    rows: Iterable[str] = (),
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
-    ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, and ``--executor`` with
-    ``--workers`` and ``--scheduler``.
+    ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
+    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``.
     """
-    _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler)
+    _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
+    check_object_rows(object_name, rows)
+
+
+def check_object_rows(object_name: str, rows: Iterable[str]) -> None:
+    """A ``PlanError`` when a row cannot run the type: the depth-only estimator knows the cube only."""
+    if object_name != "cube" and "grasp-estimator" in rows:
+        raise PlanError(
+            f"--object {object_name}: the grasp-estimator row's depth-only estimator knows the paper's 5 cm cube only"
+        )
 
 
 def _plan(
@@ -311,6 +342,7 @@ def _plan(
     executor: str | Executor | None,
     workers: int,
     scheduler: str | None,
+    object_name: str = "cube",
 ) -> tuple[list[Combination], bool]:
     """The campaign's combinations, and whether its one combination is written straight into ``out_dir``."""
     from bt_arrange.trees import check_strategy
@@ -320,6 +352,7 @@ def _plan(
         check_strategy(strategy)
     except PlanError as error:
         raise PlanError(f"--strategy {strategy!r}: {error}") from error
+    parse_object(object_name)
     cells = parse_cells(cell)
     if thresholds is None:
         sweep = [threshold_mm]
@@ -333,7 +366,7 @@ def _plan(
         raise PlanError("--scheduler needs --executor dask")
     # A sweep, or several cells, keeps one folder per combination; one threshold and one cell write into out_dir.
     flat = thresholds is None and len(cells) == 1
-    return combinations(sweep, cells, strategy), flat
+    return combinations(sweep, cells, strategy, object_name), flat
 
 
 def row_injectors(row: str) -> list:
@@ -402,6 +435,7 @@ def run_experiment(
     strategy: str = "paper",
     thresholds: str | Sequence[float] | None = None,
     scheduler: str | None = None,
+    object_name: str = "cube",
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
@@ -411,6 +445,7 @@ def run_experiment(
       (no ``thresholds``) write straight into ``out_dir``; otherwise every combination gets its
       folder (``Combination.folder``), ``out_dir`` gets ``campaign.json`` and ``thresholds.png``, and
       each returned row also names its ``threshold_mm``, ``cell`` and ``folder``.
+    - ``object_name`` (``--object``): the part's type, a built-in type's name (``cube``, ``bar``).
     - ``executor``: ``"local"`` (a process pool of ``workers`` processes, each trial in its own
       pybullet world; one worker runs in this process), ``"dask"`` (``bt_arrange_sim.executors``:
       a ``LocalCluster`` of ``workers``, or the cluster at ``scheduler``), or any
@@ -425,7 +460,9 @@ def run_experiment(
         check_threshold(threshold_mm)
     except PlanError as error:
         raise PlanError(f"--threshold-mm {threshold_mm!r}: {error}") from error
-    combos, flat = _plan(threshold_mm, cell, strategy, thresholds, executor, workers, scheduler)
+    combos, flat = _plan(threshold_mm, cell, strategy, thresholds, executor, workers, scheduler, object_name)
+    rows = list(rows)
+    check_object_rows(object_name, rows)
     if executor == "dask":
         from bt_arrange_sim import executors
 
@@ -496,9 +533,9 @@ def run_campaign(
                 raise PlanError(
                     f"{folder / 'trials.jsonl'} holds trials of another experiment (seed {record.get('seed')}, "
                     f"threshold {record.get('threshold_mm')} mm, cell {record.get('cell', 'ideal')}, strategy "
-                    f"{record.get('strategy', 'paper')}); choose another --out for seed {seed}, "
-                    f"threshold {combination.threshold_mm:g} mm, cell {combination.cell}, "
-                    f"strategy {combination.strategy}"
+                    f"{record.get('strategy', 'paper')}, object {record.get('object', 'cube')}); choose another --out "
+                    f"for seed {seed}, threshold {combination.threshold_mm:g} mm, cell {combination.cell}, "
+                    f"strategy {combination.strategy}, object {combination.object_name}"
                 )
         done = {(record["row"], record["trial"]) for record in existing}
         # Trial by trial across the rows: an interrupted campaign has measured every row about as often.

@@ -47,6 +47,7 @@ from bt_arrange.behaviours.handling import Blocked
 from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
+from bt_arrange.objects import BAR
 from bt_arrange.robot import PixelWindow
 from bt_arrange.settings import ManipulationSettings
 
@@ -928,3 +929,117 @@ def test_detect_among_identical_parts_2_mm_apart_picks_the_free_one_not_the_pair
     assert run.status == Status.SUCCESS, run.feedback
     pose = read("/green 3/pose")
     assert 1000 * math.hypot(pose.x_m - free.x_m, pose.y_m - free.y_m) < 0.5
+
+
+# -- a bar: grasp, push and squaring from the type's size (issue 14) ---------------------------
+
+
+def bar_pose(x_m: float, y_m: float, yaw_rad: float = 0.0) -> Pose:
+    return Pose.from_planar(x_m, y_m, yaw_rad, BAR.height_m / 2)
+
+
+def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(clock) -> None:
+    assert BAR.size_m == (0.08, 0.04, 0.04)
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.04)
+    yaw = math.radians(17.0)
+    write({"/bar/pose": bar_pose(0.5, 0.1, yaw)})
+    run = tick_until_done(set_up(Pick("pick bar", "bar", object_type=BAR), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "holding bar, fingers 40.0 mm apart"
+    assert_never_blocks(run)
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", SETTINGS.open_width_m),
+        ("close", SETTINGS.grip_force_n),
+    ]
+    grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
+    # Mid-pad at the bar's centre of mass where the pads allow: 22.75 mm, the pads 4 mm off the table.
+    assert BAR.grasp_height_m == pytest.approx(0.02275)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, BAR.grasp_height_m], atol=1e-6)
+    # The closing axis (the gripper's yaw) lies along the bar's y axis, across its 40 mm side.
+    assert fold_yaw(grasp.yaw_rad - (yaw + math.pi / 2), math.pi) == pytest.approx(0.0, abs=1e-4)
+
+
+def push_bar_setup(context: Context, offset_xy_mm: tuple[float, float], yaw_error_deg: float | None = None) -> Push:
+    values: dict[str, object] = {
+        "/bar/pose": bar_pose(0.5, 0.05),
+        "/bar/target": PlanarPose(0.5, 0.05, 0.0),
+        "/bar/offset_xy_mm": offset_xy_mm,
+    }
+    if yaw_error_deg is not None:
+        values["/bar/yaw_error_deg"] = yaw_error_deg
+    write(values)
+    push = Push("push bar", "bar", object_type=BAR, yaw_threshold_deg=None if yaw_error_deg is None else 1.0)
+    return set_up(push, context)
+
+
+def pushed_path(context: Context, push: Push) -> tuple[Run, np.ndarray]:
+    """Run a push of the bar at (0.5, 0.05) along +x; its TCP positions relative to the bar."""
+    run = tick_until_done(push, context)
+    arm = fake_arm(context)
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands])
+    return run, tcp - np.array([0.5, 0.05, 0.0])
+
+
+def test_push_of_a_bar_along_its_long_axis_uses_the_end_faces_opening_and_reach(context: Context) -> None:
+    push = push_bar_setup(context, (3.0, 0.0))
+    s = SETTINGS
+    # Along x the pads meet an end face: 40 mm wide, the bar 80 mm deep along the push.
+    opening_m, reach_m = push.face_geometry(s, 0.0, 0.0)
+    assert opening_m == pytest.approx(0.04 - s.pad_thickness_m)
+    assert reach_m == pytest.approx(0.04 + s.pad_width_m / 2)
+    assert push.face_geometry(s, math.pi / 2, 0.0) == pytest.approx(
+        (0.08 - s.pad_thickness_m, 0.02 + s.pad_width_m / 2)
+    )
+    run, tcp = pushed_path(context, push)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed +3.00 mm along x"
+    assert [(c.kind, c.value) for c in fake_gripper(context).commands] == [("open", pytest.approx(opening_m))]
+    deepest = int(np.argmax(tcp[:, 0]))
+    assert tcp[deepest, 0] == pytest.approx(-reach_m + 0.003, abs=1e-6)
+    assert tcp[deepest, 2] == pytest.approx(BAR.grasp_height_m, abs=1e-6), "pads 4 mm above the table"
+    low = tcp[:, 2] < SETTINGS.approach_height_m - 0.001
+    np.testing.assert_allclose(tcp[low, 1], 0.0, atol=1e-6)  # lowered and pushed on the long axis
+
+
+def test_a_bar_within_reach_but_turned_past_the_yaw_threshold_gets_a_squaring_push(context: Context) -> None:
+    push = push_bar_setup(context, (0.1, 0.0), yaw_error_deg=1.5)
+    run, tcp = pushed_path(context, push)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "squared the part with a push of +0.10 mm along x"
+    _, reach_m = push.face_geometry(SETTINGS, 0.0, 0.0)
+    assert tcp[:, 0].max() == pytest.approx(-reach_m + 0.0001, abs=1e-6), "the pads reach the end face"
+
+
+def test_a_bar_within_reach_and_square_is_not_pushed(context: Context) -> None:
+    push = push_bar_setup(context, (0.1, 0.0), yaw_error_deg=0.5)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "nothing to push: 0.10 mm along x"
+    assert fake_arm(context).commands == []
+
+
+def test_detect_among_identical_parts_chooses_a_free_one_nearest_its_own_target(clock) -> None:
+    # Four green cubes: two at targets of their kind (one of them right beside the own target),
+    # two free. Detect takes the free one nearer the own target, never a placed one.
+    placed = [PlanarPose(0.45, 0.10, 0.0), PlanarPose(0.45, 0.0, 0.0)]
+    own = PlanarPose(0.45, -0.09, 0.0)
+    near_free, far_free = PlanarPose(0.62, -0.15, 0.0), PlanarPose(0.65, 0.20, 0.0)
+    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in (*placed, far_free, near_free)])
+    write({"/green 3/target": own})
+    detect = Detect("detect green 3", "green 3", colour="green", kind_targets=[*placed, own])
+    run = tick_until_done(set_up(detect, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    pose = read("/green 3/pose")
+    assert isinstance(pose, Pose)
+    assert 1000 * math.hypot(pose.x_m - near_free.x_m, pose.y_m - near_free.y_m) < 0.5
+
+
+def test_detect_when_every_identical_part_is_at_a_target_fails_saying_so(clock) -> None:
+    placed = [PlanarPose(0.45, 0.10, 0.0), PlanarPose(0.45, 0.0, 0.0)]
+    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in placed])
+    write({"/green 2/target": placed[1]})
+    detect = Detect("detect green 2", "green 2", colour="green", kind_targets=placed)
+    run = tick_until_done(set_up(detect, context), context)
+    assert run.status == Status.FAILURE
+    assert "lie at targets of their kind" in run.feedback

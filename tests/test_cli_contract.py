@@ -189,6 +189,8 @@ def test_every_tree_file_that_cannot_run_in_the_cell_is_one_line(tmp_path: Path)
         (["experiment", "--scheduler", "tcp://10.0.0.5:8786", "--out", "{dir}"], "--scheduler needs --executor dask"),
         (["experiment", "--executor", "dask", "--scheduler", "", "--out", "{dir}"], "--scheduler is empty"),
         (["experiment", "--cell", "ideal,lab", "--out", "{dir}"], "--cell lab: unknown cell 'lab'"),
+        (["experiment", "--object", "beam", "--out", "{dir}"], "--object 'beam': unknown object type 'beam'"),
+        (["experiment", "--object", "bar", "--rows", "grasp-estimator", "--out", "{dir}"], "5 cm cube only"),
         (["info", "--bogus"], "unrecognized arguments: --bogus"),
         (["bogus"], "invalid choice: 'bogus'"),
         ([], "the following arguments are required: COMMAND"),

@@ -23,6 +23,7 @@ from bt_arrange.checks import finite_number
 from bt_arrange.errors import OutOfRangeError, PlanError
 from bt_arrange.geometry import Pose
 from bt_arrange.motion import nearest_symmetric_yaw
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.runner import Transition
 
 if TYPE_CHECKING:
@@ -187,16 +188,41 @@ class Injector(ABC):
             x, y, yaw = truth.x_m, truth.y_m, truth.yaw_rad
         return x, y, self._closing_yaw(yaw)
 
+    @property
+    def object_type(self) -> ObjectType:
+        """The type of the part injected into (its target's; the cube when the tree names none)."""
+        for target in getattr(self.run.root, "targets", ()):
+            if getattr(target, "obj", None) == self.cube:
+                return target.object_type
+        return CUBE
+
     def _closing_yaw(self, cube_yaw_rad: float) -> float:
-        """The yaw Pick will close at for a cube seen at ``cube_yaw_rad``: the quarter turn nearest the wrist."""
+        """The yaw Pick will close at for a part seen at ``cube_yaw_rad``, as Pick chooses it.
+
+        Across the type's grasped side (``ObjectType.grasp_yaw_offset_rad``), the turn of its
+        symmetry (a quarter for a cube, a half for a bar) nearest the wrist.
+        """
         context = self.run.context
         wrist = context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
-        return nearest_symmetric_yaw(cube_yaw_rad, wrist)
+        kind = self.object_type
+        return nearest_symmetric_yaw(cube_yaw_rad + kind.grasp_yaw_offset_rad, wrist, kind.symmetry_rad)
 
     def _fits(self, x_m: float, y_m: float, yaw_rad: float, reference: tuple[float, float, float]) -> bool:
-        """True when a cube at (x, y, yaw) can still be grasped by pads closing around ``reference``."""
+        """True when a part at (x, y, yaw) can still be grasped by pads closing around ``reference``."""
         settings = self.run.context.settings
-        return grasp_fits(x_m, y_m, yaw_rad, reference, settings.cube_edge_m, settings.open_width_m)
+        kind = self.object_type
+        if kind == CUBE:
+            return grasp_fits(x_m, y_m, yaw_rad, reference, settings.cube_edge_m, settings.open_width_m)
+        return grasp_fits(
+            x_m,
+            y_m,
+            yaw_rad + kind.grasp_yaw_offset_rad,
+            reference,
+            kind.grasp_width_m,
+            settings.open_width_m,
+            along_pads_m=max(kind.top_size_m),
+            symmetry_rad=kind.symmetry_rad,
+        )
 
 
 class _NodeFinder:
@@ -241,6 +267,8 @@ def grasp_fits(
     reference: tuple[float, float, float],
     edge_m: float,
     open_width_m: float,
+    along_pads_m: float | None = None,
+    symmetry_rad: float = math.pi / 2,
 ) -> bool:
     """The paper's grasp feasibility: the pads still close on the cube.
 
@@ -254,12 +282,19 @@ def grasp_fits(
     ``edge / 2 * (cos a - sin a)`` either side of its centre along the pads, and the pads' centre
     must stay between them (measured: with the centre beyond, a cube turned by 37 deg and 15 mm
     off along the pads was squeezed out sideways and thrown off the table's view).
+
+    A cuboid: ``edge_m`` is the side the pads close on (its extent along the closing axis when
+    square to the pads, ``yaw_rad`` the direction of that side), ``along_pads_m`` the other one
+    (default ``edge_m``), ``symmetry_rad`` its top face's (a half turn for a bar). Turned by ``a``,
+    its half extent across is ``edge / 2 * cos a + along / 2 * sin a`` and the pads first meet the
+    vertical edges ``along / 2 * cos a - edge / 2 * sin a`` either side of its centre.
     """
     rx, ry, closing_yaw = reference
-    # Turned by more than 45 degrees is turned the other way: fold into [0, 45] degrees.
-    turn = abs((yaw_rad - closing_yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4)
-    half_extent_m = edge_m / 2 * (math.cos(turn) + math.sin(turn))
-    along_pads_limit_m = edge_m / 2 * (math.cos(turn) - math.sin(turn))
+    along_m = edge_m if along_pads_m is None else along_pads_m
+    # Turned by more than half the symmetry is turned the other way: fold into [0, symmetry / 2].
+    turn = abs((yaw_rad - closing_yaw + symmetry_rad / 2) % symmetry_rad - symmetry_rad / 2)
+    half_extent_m = edge_m / 2 * math.cos(turn) + along_m / 2 * math.sin(turn)
+    along_pads_limit_m = along_m / 2 * math.cos(turn) - edge_m / 2 * math.sin(turn)
     offset = np.array([x_m - rx, y_m - ry])
     across = abs(float(offset @ np.array([math.cos(closing_yaw), math.sin(closing_yaw)])))
     along_pads = abs(float(offset @ np.array([-math.sin(closing_yaw), math.cos(closing_yaw)])))

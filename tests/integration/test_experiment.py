@@ -1,6 +1,7 @@
 """The experiment command on a few trials: files, resuming, refusing another experiment's folder, rows, sweeps."""
 
 import json
+import math
 from concurrent.futures import Executor, Future
 
 import pytest
@@ -19,7 +20,7 @@ from bt_arrange_sim.experiment import (
     run_campaign,
     run_experiment,
 )
-from bt_arrange_sim.injection import INJECTORS
+from bt_arrange_sim.injection import INJECTORS, grasp_fits
 
 
 def test_an_experiment_writes_its_trials_summaries_and_figure_and_resumes(tmp_path):
@@ -227,3 +228,32 @@ def test_the_executor_option_opens_dask_through_the_executors_module(tmp_path, m
     assert (tmp_path / "threshold-2mm" / "trials.jsonl").exists()
     with pytest.raises(PlanError, match="--scheduler needs --executor dask"):
         experiment.check_options(scheduler="tcp://10.0.0.5:8786")
+
+
+def test_grasp_feasibility_of_a_bar_uses_its_size_not_the_cubes_edge():
+    # A bar (40 mm closed on, 80 mm along the pads) square to an 85 mm opening: 22.5 mm across.
+    bar = {"edge_m": 0.04, "open_width_m": 0.085, "along_pads_m": 0.08, "symmetry_rad": math.pi}
+    assert grasp_fits(0.0225, 0.0, 0.0, (0.0, 0.0, 0.0), **bar)
+    assert not grasp_fits(0.0235, 0.0, 0.0, (0.0, 0.0, 0.0), **bar)
+    assert not grasp_fits(0.0225, 0.0, 0.0, (0.0, 0.0, 0.0), 0.05, 0.085), "a cube leaves 17.5 mm"
+    # Along the pads the bar is held while their centre stays on it: up to 40 mm, not a cube's 25.
+    assert grasp_fits(0.0, 0.039, 0.0, (0.0, 0.0, 0.0), **bar)
+    assert not grasp_fits(0.0, 0.041, 0.0, (0.0, 0.0, 0.0), **bar)
+    # Turned 10 degrees it spans 20 cos + 40 sin = 26.6 mm each side across the closing axis.
+    turn = math.radians(10.0)
+    half_extent_m = 0.02 * math.cos(turn) + 0.04 * math.sin(turn)
+    assert grasp_fits(0.0425 - half_extent_m - 1e-4, 0.0, turn, (0.0, 0.0, 0.0), **bar)
+    assert not grasp_fits(0.0425 - half_extent_m + 1e-4, 0.0, turn, (0.0, 0.0, 0.0), **bar)
+
+
+def test_an_experiment_with_a_bar_runs_its_trials_with_the_bar_and_names_it(tmp_path):
+    summary = run_experiment(["translation"], trials=1, seed=3, threshold_mm=1.0, out_dir=tmp_path, object_name="bar")
+    (record,) = read_trials(tmp_path / "trials.jsonl")
+    assert record["object"] == "bar"
+    assert record["injected"]["pick_translation"]["fired"]
+    assert record["status"] == "within", record["reason"]
+    assert summary[0]["trials"] == 1
+    with pytest.raises(PlanError, match="holds trials of another experiment"):
+        run_experiment(["translation"], trials=1, seed=3, threshold_mm=1.0, out_dir=tmp_path)
+    with pytest.raises(PlanError, match=r"^--object 'beam': unknown object type 'beam'"):
+        run_experiment(["system"], trials=1, seed=3, threshold_mm=1.0, out_dir=tmp_path / "x", object_name="beam")
