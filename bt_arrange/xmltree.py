@@ -35,6 +35,7 @@ py_trees                          BehaviorTree.CPP v4
 from __future__ import annotations
 
 import math
+import operator
 import re
 import xml.parsers.expat
 from collections.abc import Callable, Iterator
@@ -48,9 +49,11 @@ import py_trees
 from py_trees.common import ParallelPolicy
 
 from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push
+from bt_arrange.behaviours.looking import Recheck
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import BtArrangeError, TreeFileError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.trees import Arrangement, Target, validate_targets
@@ -214,6 +217,45 @@ def _format_colours(table: ColourTable) -> str:
     return ";".join(entries)
 
 
+def _parse_release(text: str) -> Release | None:
+    """``""`` (not among neighbours) or ``axis;opening_m[;offset_x_m;offset_y_m]`` (target frame)."""
+    if not text.strip():
+        return None
+    parts = [part.strip() for part in text.split(";")]
+    if len(parts) not in (2, 4):
+        raise ValueError(f"{text!r} is not axis;opening_m[;offset_x_m;offset_y_m]")
+    axis = parts[0]
+    if axis not in ("x", "y"):
+        raise ValueError(f"axis {axis!r} is not x or y")
+    opening_m = _parse_float(parts[1])
+    if opening_m <= 0:
+        raise ValueError(f"opening_m {parts[1]!r} is not positive")
+    offset_m = (_parse_float(parts[2]), _parse_float(parts[3])) if len(parts) == 4 else (0.0, 0.0)
+    return Release(axis, opening_m, offset_m)
+
+
+def _format_release(release: Release | None) -> str:
+    if release is None:
+        return ""
+    text = f"{release.axis};{_format_float(release.opening_m)}"
+    if release.staged:
+        text += ";" + ";".join(_format_float(v) for v in release.offset_m)
+    return text
+
+
+def _parse_directions(text: str) -> tuple[str, ...]:
+    """Directions of the target's frame, ``+x,-y`` ... (``""``: none)."""
+    directions = tuple(part.strip() for part in text.split(",") if part.strip())
+    unknown = [d for d in directions if d not in DIRECTIONS]
+    if unknown:
+        raise ValueError(f"direction {unknown[0]!r} is not one of {', '.join(DIRECTIONS)}")
+    return directions
+
+
+def _format_directions(directions: tuple[str, ...]) -> str:
+    return ",".join(directions)
+
+
 STRING = PortType("std::string", str, str)
 DOUBLE = PortType("double", _parse_float, _format_float)
 INT = PortType("int", _parse_int, str)
@@ -223,6 +265,8 @@ TARGETS = PortType("Targets", _parse_targets, _format_targets)
 OBJECT_TYPE = PortType("ObjectType", _parse_object_type, _format_object_type)
 POSES = PortType("PlanarPoses", _parse_poses, _format_poses)
 COLOURS = PortType("Colours", _parse_colours, _format_colours)
+RELEASE = PortType("Release", _parse_release, _format_release)
+DIRECTIONS_TYPE = PortType("Directions", _parse_directions, _format_directions)
 
 
 def _off_if_zero(value: float) -> float | None:
@@ -231,17 +275,22 @@ def _off_if_zero(value: float) -> float | None:
 
 @dataclass(frozen=True)
 class Port:
-    """An input port: its name, type, default (``None``: required) and what it means."""
+    """An input port: its name, type, default and what it means.
+
+    ``required`` ports have no default. An ``optional`` port (one added after files were written
+    without it) is written only when its value is not the default, so those files stay as they were.
+    """
 
     name: str
     type: PortType
     default: Any = None
     description: str = ""
+    optional: bool = False
 
     @property
     def required(self) -> bool:
-        """A port without a default must be given."""
-        return self.default is None
+        """A port without a default must be given (an optional one's default may be ``None``)."""
+        return self.default is None and not self.optional
 
 
 # ----------------------------------------------------------------------------------------------
@@ -335,10 +384,6 @@ register(
 Builder = Callable[[str, dict[str, Any], Children], py_trees.behaviour.Behaviour]
 
 
-def _with_obj(cls: type[Pick] | type[Place]) -> Builder:
-    return lambda name, values, children: cls(name, values["obj"], values["object_type"])
-
-
 def _with_memory(cls: type[py_trees.composites.Sequence] | type[py_trees.composites.Selector], memory: bool) -> Builder:
     return lambda name, values, children: cls(name, memory, children)
 
@@ -355,57 +400,118 @@ def _named(cls: Callable[[str], py_trees.behaviour.Behaviour]) -> Builder:
     return lambda name, values, children: cls(name)
 
 
-def _refuse_among_neighbours(node: Pick | Place | Push) -> None:
-    """A Pick, Place or Push among neighbours has no XML form yet: refused, never written without its pads."""
-    among_neighbours = (
-        getattr(node, "grasp", None) is not None
-        or getattr(node, "release", None) is not None
-        or getattr(node, "where", "target") != "target"
-        or getattr(node, "opening_m", None) is not None
-        or (isinstance(node, Push) and set(node.towards) != {"+x", "-x", "+y", "-y"})
+_GRASP = Port(
+    "grasp",
+    RELEASE,
+    None,
+    "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], pads across that axis of the target's frame "
+    "(empty: the free grasp)",
+    optional=True,
+)
+_RELEASE = Port(
+    "release",
+    RELEASE,
+    None,
+    "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], released that far from the target "
+    "(empty: at the target, fully open)",
+    optional=True,
+)
+_WHERE = Port("where", STRING, "target", "target, or pick: set down where it was picked", optional=True)
+_TOWARDS = Port(
+    "towards",
+    DIRECTIONS_TYPE,
+    tuple(DIRECTIONS),
+    "the directions it may be pushed, +x,-y ... of the target's frame (default all four)",
+    optional=True,
+)
+_OPENING = Port(
+    "opening_m", DOUBLE, 0.0, "the finger opening for pushing among neighbours [m] (0: default)", optional=True
+)
+
+register(
+    NodeModel(
+        "Pick",
+        "Action",
+        Pick,
+        (_OBJ, _TYPE, _GRASP),
+        lambda name, v, _: Pick(name, v["obj"], v["object_type"], grasp=v["grasp"]),
+        lambda n: {"obj": n.obj, "object_type": n.object_type, "grasp": n.grasp},
+        description="grasp at /<obj>/pose",
     )
-    if among_neighbours:
-        raise XmlTreeError(
-            f"cannot write {node.name!r} as XML: it is placed or pushed among neighbours (bt_arrange.layout), "
-            "which the XML node models do not hold yet"
-        )
-
-
-def _obj_and_type(node: Pick | Place) -> dict[str, Any]:
-    """The ports of a Pick or Place: its object and type (refused among neighbours)."""
-    _refuse_among_neighbours(node)
-    return {"obj": node.obj, "object_type": node.object_type}
+)
+register(
+    NodeModel(
+        "Place",
+        "Action",
+        Place,
+        (_OBJ, _TYPE, _RELEASE, _WHERE),
+        lambda name, v, _: Place(name, v["obj"], v["object_type"], release=v["release"], where=v["where"]),
+        lambda n: {"obj": n.obj, "object_type": n.object_type, "release": n.release, "where": n.where},
+        description="release at /<obj>/target",
+    )
+)
 
 
 def _push_ports(node: Push) -> dict[str, Any]:
-    """The ports of a Push (refused among neighbours)."""
-    _refuse_among_neighbours(node)
-    return {"obj": node.obj, "object_type": node.object_type, "yaw_threshold_deg": node.yaw_threshold_deg or 0.0}
+    """The ports of a Push, among neighbours or not."""
+    return {
+        "obj": node.obj,
+        "object_type": node.object_type,
+        "yaw_threshold_deg": node.yaw_threshold_deg or 0.0,
+        "towards": node.towards,
+        "opening_m": node.opening_m or 0.0,
+        "strategy": node.strategy,
+    }
 
 
-for _leaf_cls, _what in ((Pick, "grasp at /<obj>/pose"), (Place, "release at /<obj>/target")):
-    register(
-        NodeModel(
-            _leaf_cls.__name__,
-            "Action",
-            _leaf_cls,
-            (_OBJ, _TYPE),
-            _with_obj(_leaf_cls),
-            _obj_and_type,
-            description=_what,
-        )
-    )
 register(
     NodeModel(
         "Push",
         "Action",
         Push,
-        (_OBJ, _TYPE, Port("yaw_threshold_deg", DOUBLE, 0.0, "square the part at this yaw error [deg] (0: never)")),
+        (
+            _OBJ,
+            _TYPE,
+            Port("yaw_threshold_deg", DOUBLE, 0.0, "square the part at this yaw error [deg] (0: never)"),
+            _TOWARDS,
+            _OPENING,
+            Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
+        ),
         lambda name, v, _: Push(
-            name, v["obj"], object_type=v["object_type"], yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"])
+            name,
+            v["obj"],
+            strategy=v["strategy"],
+            object_type=v["object_type"],
+            yaw_threshold_deg=_off_if_zero(v["yaw_threshold_deg"]),
+            towards=v["towards"],
+            opening_m=_off_if_zero(v["opening_m"]),
         ),
         _push_ports,
         description="one push",
+    )
+)
+register(
+    NodeModel(
+        "Recheck",
+        "Action",
+        Recheck,
+        (_OBJ, _COLOUR, Port("after", STRING, "", "the step whose effect is checked"), _TYPE, _KIND),
+        lambda name, v, _: Recheck(
+            name,
+            v["obj"],
+            v["colour"] or None,
+            after=v["after"],
+            object_type=v["object_type"],
+            kind_targets=v["kind_targets"],
+        ),
+        lambda n: {
+            "obj": n.obj,
+            "colour": n.colour,
+            "after": n.after,
+            "object_type": n.object_type,
+            "kind_targets": n.kind_targets,
+        },
+        description="camera -> /<obj>/pose, /<obj>/offset_mm, /<obj>/moved_mm: did a neighbour's step move it",
     )
 )
 register(NodeModel("MoveHome", "Action", MoveHome, (), lambda name, v, _: MoveHome(name), description="park the arm"))
@@ -513,6 +619,35 @@ register(
             name=name, variable_name=v["variable_name"]
         ),
         lambda n: {"variable_name": n.variable_name},
+    )
+)
+
+
+def _equals_ports(node: py_trees.behaviours.CheckBlackboardVariableValue) -> dict[str, Any]:
+    check = node.check
+    value = check.value_generator()
+    if check.operator is not operator.eq or not isinstance(value, str):
+        raise XmlTreeError(
+            f"cannot write {node.name!r} as XML: CheckBlackboardVariableValue compares with {check.operator!r} "
+            f"and a {type(value).__name__}, and XML trees check a text for equality only"
+        )
+    return {"variable_name": check.variable, "expected_value": value}
+
+
+register(
+    NodeModel(
+        "CheckBlackboardVariableValue",
+        "Condition",
+        py_trees.behaviours.CheckBlackboardVariableValue,
+        (
+            Port("variable_name", STRING, description="absolute blackboard key"),
+            Port("expected_value", STRING, description="succeed when the variable equals this text"),
+        ),
+        lambda name, v, _: py_trees.behaviours.CheckBlackboardVariableValue(
+            name=name,
+            check=py_trees.common.ComparisonExpression(v["variable_name"], v["expected_value"], operator.eq),
+        ),
+        _equals_ports,
     )
 )
 
@@ -655,7 +790,7 @@ def to_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree", *, com
             continue
         lines.append(f"    <{model.category} ID={quoteattr(model.tag)}>")
         for port in model.ports:
-            default = "" if port.default is None else f" default={quoteattr(port.type.format(port.default))}"
+            default = "" if port.required else f" default={quoteattr(port.type.format(port.default))}"
             lines.append(
                 f"      <input_port name={quoteattr(port.name)} type={quoteattr(port.type.name)}{default}>"
                 f"{escape(port.description)}</input_port>"
@@ -676,6 +811,8 @@ def _write_node(node: py_trees.behaviour.Behaviour, lines: list[str], depth: int
     values = model.ports_of(node)
     attributes = [f"name={quoteattr(node.name)}"]
     for port in model.ports:
+        if port.optional and values[port.name] == port.default:
+            continue
         attributes.append(f"{port.name}={quoteattr(port.type.format(values[port.name]))}")
     indent = "  " * depth
     opening = f"{indent}<{model.tag} {' '.join(attributes)}"

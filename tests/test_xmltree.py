@@ -12,9 +12,7 @@ from bt_arrange.display import blackboard_access
 from bt_arrange.xmltree import XmlTreeError
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
-#: Dense trees (``XML_TWIN = False``: their Pick, Place and Push carry where the pads go among
-#: neighbours, which the XML node models do not hold yet) are run by tests/integration instead.
-PYTHON_TREES = [p for p in sorted(TREES.glob("*.py")) if "XML_TWIN = False" not in p.read_text()]
+PYTHON_TREES = sorted(TREES.glob("*.py"))
 
 
 def build(path):
@@ -199,7 +197,57 @@ def test_show_writes_xml_to_a_file_and_reads_it_back(capsys, tmp_path):
     assert "correct yellow to 1 mm" in capsys.readouterr().out
 
 
-def test_a_dense_tree_is_refused_by_the_writer_not_written_without_its_pads():
+def test_a_dense_tree_keeps_where_the_pads_go_through_xml():
     dense = build(TREES / "dense_block.py")
-    with pytest.raises(xmltree.XmlTreeError, match="not a registered node|among neighbours"):
-        xmltree.to_xml(dense, tree_id="dense")
+    reloaded = xmltree.from_xml(xmltree.to_xml(dense, tree_id="dense"))
+    for original, copy in zip(dense.iterate(), reloaded.iterate(), strict=True):
+        for attribute in ("grasp", "release", "where", "towards", "opening_m", "after"):
+            assert getattr(copy, attribute, None) == getattr(original, attribute, None), (original.name, attribute)
+    releases = [n.release for n in reloaded.iterate() if isinstance(n, xmltree.Place) and n.release is not None]
+    assert any(r.staged for r in releases) and any(not r.staged for r in releases)
+
+
+@pytest.mark.parametrize(
+    ("tag", "port", "value"),
+    [
+        ("Pick", "grasp", "z;0.06"),
+        ("Pick", "grasp", "x;0.06;0.01"),
+        ("Place", "release", "x;-0.06"),
+        ("Place", "release", "y;nan"),
+        ("Push", "towards", "+x,up"),
+        ("Push", "opening_m", "__import__('os')"),
+    ],
+)
+def test_a_bad_dense_port_value_is_a_one_line_error_naming_tag_port_and_line(tag, port, value):
+    text = textwrap.dedent(
+        f"""\
+        <root BTCPP_format="4">
+          <BehaviorTree ID="t">
+            <{tag} name="n" obj="red" {port}="{value}"/>
+          </BehaviorTree>
+        </root>
+        """
+    )
+    with pytest.raises(XmlTreeError) as caught:
+        xmltree.from_xml(text, source="bad.xml")
+    message = str(caught.value)
+    assert message.startswith("bad.xml line 3: ") and f"<{tag}> {port}=" in message and "\n" not in message
+
+
+def test_a_place_with_an_unknown_where_is_refused_with_its_line():
+    text = (
+        '<root BTCPP_format="4"><BehaviorTree ID="t">\n<Place name="n" obj="red" where="moon"/></BehaviorTree></root>'
+    )
+    with pytest.raises(XmlTreeError, match=r"line 2: <Place name='n'>: .*where='moon'"):
+        xmltree.from_xml(text)
+
+
+def test_a_push_strategy_survives_xml_and_an_unknown_one_is_refused_with_its_line():
+    from bt_arrange.trees import Target, arrangement
+
+    root = arrangement([Target("red", x_m=0.45, y_m=0.05)], strategy="diagonal")
+    text = xmltree.to_xml(root, tree_id="t")
+    reloaded = xmltree.from_xml(text)
+    assert [n.strategy for n in reloaded.iterate() if isinstance(n, xmltree.Push)] == ["diagonal"]
+    with pytest.raises(XmlTreeError, match=r"line \d+: <Push name='push red'>: push strategy 'sideways'"):
+        xmltree.from_xml(text.replace('strategy="diagonal"', 'strategy="sideways"'))

@@ -11,9 +11,6 @@ its placed neighbours are looked at again and corrected if it moved them beyond 
 from bt_arrange.trees import Arrangement, Target, arrangement
 from bt_arrange_sim.scenes import CubeStart, scatter
 
-#: No XML twin: the XML node models do not hold where the pads go among neighbours yet.
-XML_TWIN = False
-
 #: Gap between neighbouring faces, metres.
 GAP_M = 0.003
 PITCH_M = 0.05 + GAP_M

@@ -12,9 +12,6 @@ is looked at again once it is down.
 from bt_arrange.trees import Arrangement, Target, arrangement
 from bt_arrange_sim.scenes import CubeStart, scatter
 
-#: No XML twin: the XML node models do not hold where the pads go among neighbours yet.
-XML_TWIN = False
-
 #: Gap between neighbouring faces, metres.
 GAP_M = 0.002
 PITCH_M = 0.05 + GAP_M

@@ -28,7 +28,17 @@ def without_wall_time(report: dict) -> dict:
     return {k: v for k, v in report.items() if k != "wall_seconds"}
 
 
-@pytest.mark.parametrize("stem", ["single_cube", "four_cubes", "row_of_three", "four_cubes_after_all"])
+@pytest.mark.parametrize(
+    "stem",
+    [
+        "single_cube",
+        "four_cubes",
+        "row_of_three",
+        "four_cubes_after_all",
+        "dense_block",
+        "dense_row",
+    ],
+)
 def test_the_xml_tree_runs_as_its_python_file(stem, request):
     python_report, python_transitions = run(TREES / f"{stem}.py")
     if stem == "four_cubes":  # the recorded CLI run of the XML file, shared with the replay-page tests
