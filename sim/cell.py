@@ -163,35 +163,21 @@ class CellConfig:
 
 
 @contextlib.contextmanager
-def _quiet_connect() -> Iterator[None]:
-    """Silence C-level stdout while connecting: pybullet prints ``argv[0]=``, which would spoil ``--json``."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 1)
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(devnull)
+def _silenced(fd: int) -> Iterator[None]:
+    """Silence a C-level stream (1 stdout, 2 stderr) for the duration, where Python's redirection cannot reach.
 
-
-@contextlib.contextmanager
-def _quiet_stderr() -> Iterator[None]:
-    """Silence C-level stderr while pybullet is first imported.
-
-    pybullet prints its build time there, which broke the experiment's progress bar (drawn on
-    stderr) once per worker.
+    pybullet prints ``argv[0]=`` on stdout when it connects, which would spoil ``--json``, and
+    its build time on stderr when first imported, which broke the experiment's progress bar
+    (drawn on stderr) once per worker.
     """
-    sys.stderr.flush()
-    saved = os.dup(2)
+    (sys.stdout if fd == 1 else sys.stderr).flush()
+    saved = os.dup(fd)
     devnull = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(devnull, 2)
+        os.dup2(devnull, fd)
         yield
     finally:
-        os.dup2(saved, 2)
+        os.dup2(saved, fd)
         os.close(saved)
         os.close(devnull)
 
@@ -200,7 +186,7 @@ def import_pybullet():  # noqa: ANN201 - the pybullet module
     """``import pybullet`` without its build-time banner on stderr."""
     if "pybullet" in sys.modules:
         return sys.modules["pybullet"]
-    with _quiet_stderr():
+    with _silenced(2):
         import pybullet
     return pybullet
 
@@ -248,7 +234,7 @@ class WorkCell:
         self.config = config or CellConfig()
         physics = self.config.physics
         self._substeps = physics.substeps
-        with _quiet_connect():
+        with _silenced(1):
             self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         self.client.setGravity(0.0, 0.0, -physics.gravity_m_s2)
         self.client.setPhysicsEngineParameter(
