@@ -5,7 +5,7 @@
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
-                          [--object cube|bar]
+                          [--object cube|bar[,...]]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
     bt-arrange examples
     bt-arrange info
@@ -485,9 +485,10 @@ def build_parser() -> argparse.ArgumentParser:
     experiment.add_argument(
         "--object",
         dest="object_name",
-        metavar="NAME",
+        metavar="NAME[,NAME...]",
         default="cube",
-        help="the part's type: cube (the paper's 50 mm cube; default) or bar (80 x 40 x 40 mm)",
+        help="the part's type: cube (the paper's 50 mm cube; default) or bar (80 x 40 x 40 mm); "
+        "several, comma-separated (cube,bar), one folder each",
     )
     experiment.set_defaults(handler=_experiment)
 

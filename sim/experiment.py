@@ -124,10 +124,10 @@ class TrialSpec:
 
 @dataclass(frozen=True)
 class Combination:
-    """One point of a campaign's product of lists: a threshold and a cell.
+    """One point of a campaign's product of lists: a threshold, a cell and a part's type.
 
-    The push strategy and the part's type (``object_name``) are one value each for the whole
-    campaign; they are carried here so every trial and every folder's records name them.
+    The push strategy is one value for the whole campaign; it is carried here so every trial and
+    every folder's records name it.
     """
 
     threshold_mm: float
@@ -140,7 +140,10 @@ class Combination:
     def folder(self) -> str:
         """The combination's folder name inside the campaign folder (the ideal cell is not named)."""
         name = f"threshold-{self.threshold_mm:g}mm"
-        return name if self.cell == "ideal" else f"{name}-cell-{cell_label(self.cell)}"
+        if self.cell != "ideal":
+            name += f"-cell-{cell_label(self.cell)}"
+        # The cube is not named either, so a campaign's folders read as before types were a list.
+        return name if self.object_name == "cube" else f"{name}-object-{self.object_name}"
 
     def spec(self, row: str, index: int, seed: int) -> TrialSpec:
         """The trial ``index`` of ``row`` under this combination."""
@@ -165,11 +168,11 @@ def combinations(
     thresholds_mm: Sequence[float],
     cells: Sequence[str] = ("ideal",),
     strategy: str = "paper",
-    object_name: str = "cube",
+    object_names: Sequence[str] = ("cube",),
 ) -> list[Combination]:
-    """The campaign: the product of the lists (thresholds, then cells), in order, duplicates removed."""
+    """The campaign: the product of the lists (thresholds, cells, then types), in order, duplicates removed."""
     seen: list[Combination] = []
-    for threshold_mm, cell in itertools.product(thresholds_mm, cells):
+    for threshold_mm, cell, object_name in itertools.product(thresholds_mm, cells, object_names):
         combination = Combination(float(threshold_mm), cell, strategy, object_name)
         if combination not in seen:
             seen.append(combination)
@@ -233,6 +236,17 @@ def parse_object(name: str) -> ObjectType:
         return built_in_type(name)
     except PlanError as error:
         raise PlanError(f"--object {name!r}: {error}") from None
+
+
+def parse_objects(names: str | Sequence[str]) -> list[str]:
+    """Types from ``--object`` (``cube``, ``bar``, or several: ``cube,bar``), each checked; duplicates dropped."""
+    items = [part.strip() for part in names.split(",")] if isinstance(names, str) else [str(n) for n in names]
+    items = [item for item in items if item]
+    if not items:
+        raise PlanError(f"--object {names!r} is empty; give a type such as cube, or several: cube,bar")
+    for item in items:
+        parse_object(item)
+    return list(dict.fromkeys(items))
 
 
 def run_trial(spec: TrialSpec) -> dict:
@@ -314,7 +328,7 @@ def check_options(
     executor: str | Executor | None = "local",
     workers: int = 1,
     scheduler: str | None = None,
-    object_name: str = "cube",
+    object_name: str | Sequence[str] = "cube",
     rows: Iterable[str] = (),
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
@@ -326,12 +340,14 @@ def check_options(
     check_object_rows(object_name, rows)
 
 
-def check_object_rows(object_name: str, rows: Iterable[str]) -> None:
-    """A ``PlanError`` when a row cannot run the type: the depth-only estimator knows the cube only."""
-    if object_name != "cube" and "grasp-estimator" in rows:
-        raise PlanError(
-            f"--object {object_name}: the grasp-estimator row's depth-only estimator knows the paper's 5 cm cube only"
-        )
+def check_object_rows(object_name: str | Sequence[str], rows: Iterable[str]) -> None:
+    """A ``PlanError`` when a row cannot run a type: the depth-only estimator knows the cube only."""
+    rows = list(rows)
+    for name in parse_objects(object_name):
+        if name != "cube" and "grasp-estimator" in rows:
+            raise PlanError(
+                f"--object {name}: the grasp-estimator row's depth-only estimator knows the paper's 5 cm cube only"
+            )
 
 
 def _plan(
@@ -342,7 +358,7 @@ def _plan(
     executor: str | Executor | None,
     workers: int,
     scheduler: str | None,
-    object_name: str = "cube",
+    object_name: str | Sequence[str] = "cube",
 ) -> tuple[list[Combination], bool]:
     """The campaign's combinations, and whether its one combination is written straight into ``out_dir``."""
     from bt_arrange.trees import check_strategy
@@ -352,7 +368,7 @@ def _plan(
         check_strategy(strategy)
     except PlanError as error:
         raise PlanError(f"--strategy {strategy!r}: {error}") from error
-    parse_object(object_name)
+    object_names = parse_objects(object_name)
     cells = parse_cells(cell)
     if thresholds is None:
         sweep = [threshold_mm]
@@ -364,9 +380,9 @@ def _plan(
         check_choice(executor or "local", workers, scheduler)
     elif scheduler is not None:
         raise PlanError("--scheduler needs --executor dask")
-    # A sweep, or several cells, keeps one folder per combination; one threshold and one cell write into out_dir.
-    flat = thresholds is None and len(cells) == 1
-    return combinations(sweep, cells, strategy, object_name), flat
+    # A sweep, several cells or several types keep one folder per combination; one of each writes into out_dir.
+    flat = thresholds is None and len(cells) == 1 and len(object_names) == 1
+    return combinations(sweep, cells, strategy, object_names), flat
 
 
 def row_injectors(row: str) -> list:
@@ -435,17 +451,18 @@ def run_experiment(
     strategy: str = "paper",
     thresholds: str | Sequence[float] | None = None,
     scheduler: str | None = None,
-    object_name: str = "cube",
+    object_name: str | Sequence[str] = "cube",
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
     - ``thresholds`` (``"0.29,0.5,1"`` or a sequence, in mm) sweeps the threshold and replaces
       ``threshold_mm``; ``cell`` is one cell (``ideal``, ``real``, ``FILE.toml``) or several
-      (``"ideal,real"`` or a sequence). The campaign is their product. One threshold and one cell
-      (no ``thresholds``) write straight into ``out_dir``; otherwise every combination gets its
-      folder (``Combination.folder``), ``out_dir`` gets ``campaign.json`` and ``thresholds.png``, and
-      each returned row also names its ``threshold_mm``, ``cell`` and ``folder``.
-    - ``object_name`` (``--object``): the part's type, a built-in type's name (``cube``, ``bar``).
+      (``"ideal,real"`` or a sequence); ``object_name`` (``--object``) one part's type, a built-in
+      type's name (``cube``, ``bar``), or several (``"cube,bar"`` or a sequence). The campaign is
+      their product. One threshold, one cell and one type (no ``thresholds``) write straight into
+      ``out_dir``; otherwise every combination gets its folder (``Combination.folder``), ``out_dir``
+      gets ``campaign.json`` and ``thresholds.png``, and each returned row also names its
+      ``threshold_mm``, ``cell``, ``object`` and ``folder``.
     - ``executor``: ``"local"`` (a process pool of ``workers`` processes, each trial in its own
       pybullet world; one worker runs in this process), ``"dask"`` (``bt_arrange_sim.executors``:
       a ``LocalCluster`` of ``workers``, or the cluster at ``scheduler``), or any
@@ -596,12 +613,13 @@ def run_campaign(
 
 
 def campaign_rows(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path]) -> list[dict]:
-    """Every combination's summary rows, each with its threshold, cell, strategy and folder name."""
+    """Every combination's summary rows, each with its threshold, cell, strategy, part's type and folder name."""
     return [
         {
             "threshold_mm": c.threshold_mm,
             "cell": c.cell,
             "strategy": c.strategy,
+            "object": c.object_name,
             "folder": folders[c].name,
             **row,
         }
@@ -627,19 +645,24 @@ def plot_thresholds(rows: list[dict], path: Path) -> None:
 
     fig, (offset_ax, pushes_ax) = plt.subplots(1, 2, figsize=(10.5, 4.4))
     cells = list(dict.fromkeys(r.get("cell", "ideal") for r in rows))
-    for row_name, cell in itertools.product(dict.fromkeys(r["row"] for r in rows), cells):
+    kinds = list(dict.fromkeys(r.get("object", "cube") for r in rows))
+    for row_name, cell, kind in itertools.product(dict.fromkeys(r["row"] for r in rows), cells, kinds):
         mine = sorted(
             (
                 r
                 for r in rows
-                if r["row"] == row_name and r.get("cell", "ideal") == cell and r["pushed_mean_mm"] is not None
+                if r["row"] == row_name
+                and r.get("cell", "ideal") == cell
+                and r.get("object", "cube") == kind
+                and r["pushed_mean_mm"] is not None
             ),
             key=_threshold,
         )
         if not mine:
             continue
-        # One line per row, and per cell when the campaign has several.
-        name = row_name if len(cells) == 1 else f"{row_name} ({cell_label(cell)})"
+        # One line per row, and per cell and type when the campaign has several.
+        extra = ([cell_label(cell)] if len(cells) > 1 else []) + ([kind] if len(kinds) > 1 else [])
+        name = row_name if not extra else f"{row_name} ({', '.join(extra)})"
         thresholds = [r["threshold_mm"] for r in mine]
         (line,) = offset_ax.plot(thresholds, [r["pushed_mean_mm"] for r in mine], "o-", label=name)
         offset_ax.plot(thresholds, [r["pushed_max_mm"] for r in mine], "v:", color=line.get_color(), alpha=0.7)
@@ -718,7 +741,8 @@ def markdown_table(summary: list[dict]) -> str:
     """Table 1 as Markdown: ours (camera) beside the paper's simulation, mean ± std in mm.
 
     A campaign's rows (``run_experiment`` with several combinations: each row names its ``folder``)
-    give one table per combination, under a heading naming its threshold, cell and folder.
+    give one table per combination, under a heading naming its threshold, cell, strategy, part's type
+    (when not the cube) and folder.
     """
     if any("folder" in s for s in summary):
         parts = []
@@ -727,7 +751,10 @@ def markdown_table(summary: list[dict]) -> str:
             first = mine[0]
             parts.append(
                 f"## threshold {first['threshold_mm']:g} mm, cell {cell_label(first['cell'])}, "
-                f"strategy {first['strategy']} ({folder})\n\n" + _table(mine)
+                f"strategy {first['strategy']}"
+                + (f", object {first['object']}" if first.get("object", "cube") != "cube" else "")
+                + f" ({folder})\n\n"
+                + _table(mine)
             )
         return "\n".join(parts)
     return _table(summary)

@@ -8,7 +8,8 @@ through its camera; nothing the tree reports is touched, and no cube is ever fix
 | name | error (paper, Fig. 2) | when | magnitude (default) |
 |---|---|---|---|
 | ``perception_offset`` | a) pose estimation | detection before the pick | ``max_m`` = 0.010 m camera shift |
-| ``pick_translation`` | b) translation | after that detection | ``max_m`` = 0.025 m per axis |
+| ``pick_translation`` | b) translation | after that detection | ``max_m`` = 0.025 m: a shift up to 2.5 cm long in any direction |
+| ``pick_translation_xy`` | b) translation, read per axis | after that detection | ``max_m`` = 0.025 m in x and in y |
 | ``pick_rotation`` | c) orientation | after that detection | ``max_deg`` = 40 deg |
 | ``surface_shift`` | d) surface | "close on the cube" | ``max_m`` = 0.003 m along the pads |
 | ``transport_slip`` | e) grip | "carry above the target" | ``duration_s`` = 0.05 s, ``friction_scale`` = 0 |
@@ -60,7 +61,7 @@ from bt_arrange_sim.injection.framework import (
     read_blackboard,
 )
 from bt_arrange_sim.injection.perception import PerceptionOffset
-from bt_arrange_sim.injection.picking import PickRotation, PickTranslation, SurfaceShift
+from bt_arrange_sim.injection.picking import PickRotation, PickTranslation, PickTranslationXY, SurfaceShift
 from bt_arrange_sim.injection.placement import ReleaseHeight, ReleaseStick, ReleaseTilt
 from bt_arrange_sim.injection.registry import INJECTORS, attach_all, child_generator, make_injector, make_injectors
 from bt_arrange_sim.injection.transport import TransportSlip
@@ -77,6 +78,7 @@ __all__ = [
     "PerceptionOffset",
     "PickRotation",
     "PickTranslation",
+    "PickTranslationXY",
     "ReleaseHeight",
     "ReleaseStick",
     "ReleaseTilt",

@@ -12,7 +12,7 @@ from bt_arrange.checks import whole_number
 from bt_arrange.errors import OutOfRangeError, PlanError
 from bt_arrange_sim.injection.framework import Injector
 from bt_arrange_sim.injection.perception import PerceptionOffset
-from bt_arrange_sim.injection.picking import PickRotation, PickTranslation, SurfaceShift
+from bt_arrange_sim.injection.picking import PickRotation, PickTranslation, PickTranslationXY, SurfaceShift
 from bt_arrange_sim.injection.placement import ReleaseHeight, ReleaseStick, ReleaseTilt
 from bt_arrange_sim.injection.transport import TransportSlip
 
@@ -26,6 +26,7 @@ INJECTORS: dict[str, type[Injector]] = {
     for cls in (
         PerceptionOffset,
         PickTranslation,
+        PickTranslationXY,
         PickRotation,
         SurfaceShift,
         TransportSlip,

@@ -116,6 +116,9 @@ def test_a_threshold_sweep_writes_a_folder_per_combination_and_the_threshold_fig
             p.name for p in (tmp_path / folder).iterdir()
         }
     assert (tmp_path / "thresholds.png").stat().st_size > 0
+    assert "## threshold 1 mm, cell ideal, strategy paper, object bar (threshold-1mm-object-bar)" in (
+        experiment.markdown_table(summary)
+    )
     campaign = json.loads((tmp_path / "campaign.json").read_text())
     assert sorted(r["threshold_mm"] for r in campaign) == [0.5, 2.0]
     # The same trial (same start, same target) under both thresholds: only the threshold differs.
@@ -155,6 +158,7 @@ def _quick_trial(spec):
         "threshold_mm": spec.threshold_mm,
         "cell": spec.cell,
         "strategy": spec.strategy,
+        "object": spec.object_name,
         "target": [0.5, 0.0, 0.0],
         "placed_mm": 2.0,
         "pushed_mm": 0.5,
@@ -244,6 +248,39 @@ def test_grasp_feasibility_of_a_bar_uses_its_size_not_the_cubes_edge():
     half_extent_m = 0.02 * math.cos(turn) + 0.04 * math.sin(turn)
     assert grasp_fits(0.0425 - half_extent_m - 1e-4, 0.0, turn, (0.0, 0.0, 0.0), **bar)
     assert not grasp_fits(0.0425 - half_extent_m + 1e-4, 0.0, turn, (0.0, 0.0, 0.0), **bar)
+
+
+def test_types_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
+    import bt_arrange_sim.experiment as experiment
+
+    combos = combinations([1.0], ["ideal", "real"], object_names=["cube", "bar"])
+    assert [(c.cell, c.object_name) for c in combos] == [
+        ("ideal", "cube"),
+        ("ideal", "bar"),
+        ("real", "cube"),
+        ("real", "bar"),
+    ]
+    assert [c.folder for c in combos] == [
+        "threshold-1mm",
+        "threshold-1mm-object-bar",
+        "threshold-1mm-cell-real",
+        "threshold-1mm-cell-real-object-bar",
+    ]
+    assert combos[1].spec("system", 0, 7).object_name == "bar"
+    assert experiment.parse_objects(" cube, bar ,cube") == ["cube", "bar"]
+
+    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    summary = run_experiment(["system"], trials=2, seed=1, threshold_mm=1.0, out_dir=tmp_path, object_name="cube,bar")
+    assert [(r["object"], r["folder"], r["trials"]) for r in summary] == [
+        ("cube", "threshold-1mm", 2),
+        ("bar", "threshold-1mm-object-bar", 2),
+    ]
+    assert {r["object"] for r in read_trials(tmp_path / "threshold-1mm-object-bar" / "trials.jsonl")} == {"bar"}
+    assert [r["object"] for r in json.loads((tmp_path / "campaign.json").read_text())] == ["cube", "bar"]
+    assert (tmp_path / "thresholds.png").stat().st_size > 0
+    # One type in a list is a flat experiment, as before types were a list.
+    flat = run_experiment(["system"], trials=1, seed=1, threshold_mm=1.0, out_dir=tmp_path / "flat", object_name=["bar"])
+    assert "folder" not in flat[0] and (tmp_path / "flat" / "trials.jsonl").exists()
 
 
 def test_an_experiment_with_a_bar_runs_its_trials_with_the_bar_and_names_it(tmp_path):

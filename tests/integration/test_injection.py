@@ -183,6 +183,7 @@ def test_every_paper_error_has_an_injector_made_from_its_name_with_defaults():
     assert list(INJECTORS) == [
         "perception_offset",
         "pick_translation",
+        "pick_translation_xy",
         "pick_rotation",
         "surface_shift",
         "transport_slip",
@@ -243,6 +244,22 @@ def test_generators_come_from_the_seed_and_the_injectors_name():
     assert draws(3, "pick_translation") != draws(4, "pick_translation")
     assert draws(3, "pick_translation") != draws(3, "pick_rotation")
     assert draws(3, "pick_translation") != draws(3, "pick_translation", 1)
+
+
+def test_the_translation_shift_is_up_to_its_length_in_any_direction_and_the_xy_reading_fills_the_square():
+    """``pick_translation`` draws a length uniform up to 2.5 cm and a direction; ``_xy`` each axis in +-2.5 cm."""
+    radial, square = PickTranslation(), make_injector("pick_translation_xy")
+    radial._rng, square._rng = np.random.default_rng(0), np.random.default_rng(0)
+    shifts = np.array([radial._draw() for _ in range(4000)]) * 1000
+    lengths = np.hypot(shifts[:, 0], shifts[:, 1])
+    assert lengths.max() <= 25.0 and np.abs(shifts).max() <= 25.0
+    # Uniform in length (a disc's area would put three quarters of the draws beyond 12.5 mm).
+    assert np.mean(lengths < 12.5) == pytest.approx(0.5, abs=0.03)
+    directions = np.arctan2(shifts[:, 1], shifts[:, 0])
+    assert np.histogram(directions, bins=8, range=(-np.pi, np.pi))[0].min() > 400
+    corners = np.array([square._draw() for _ in range(4000)]) * 1000
+    assert np.abs(corners).max() <= 25.0
+    assert np.mean(np.hypot(corners[:, 0], corners[:, 1]) > 25.0) == pytest.approx(1 - np.pi / 4, abs=0.03)
 
 
 def test_grasp_feasibility_binds_across_the_closing_axis_only():
@@ -323,6 +340,8 @@ def test_pick_translation_moves_the_detected_cube_and_the_grasp_centres_it_along
     shift = _xy_mm(before.cube, after.cube)
     np.testing.assert_allclose(shift, [record["dx_mm"], record["dy_mm"]], atol=1e-3)
     assert max(abs(record["dx_mm"]), abs(record["dy_mm"])) <= 25.0
+    assert record["distance_mm"] == pytest.approx(math.hypot(record["dx_mm"], record["dy_mm"]), abs=2e-3)
+    assert record["distance_mm"] <= 25.0
     close = trial.probe.stages[stages.CLOSE_ON_CUBE]
     closing_axis = close.tcp.rotation[:2, 0] / np.linalg.norm(close.tcp.rotation[:2, 0])
     assert abs(shift @ closing_axis) <= 17.5, "the limit binds across the closing axis"
