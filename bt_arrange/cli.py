@@ -12,7 +12,7 @@
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
 tree-file or plan error (a one-line message, never a traceback), 130 when interrupted, 141 when
-the reader of the output went away (``| head``).
+the reader of the output went away (``| head``), 143 when terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -21,7 +21,9 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
+import threading
 from importlib import metadata
 from pathlib import Path
 from typing import Any, NoReturn
@@ -31,13 +33,14 @@ from bt_arrange.backends import Backend, Experiment, RunReport
 from bt_arrange.errors import BackendError, BtArrangeError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
-EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, EXIT_TERMINATED = 0, 1, 2, 130, 141, 143
 EXIT_CODES_HELP = """exit status:
   0    every object ended within the threshold (measured by the camera)
   1    an object did not (outside, failed, or the time limit stopped the run)
   2    a usage, tree-file or plan error: one line on stderr, before anything moves
   130  interrupted (Ctrl-C); what was logged so far is kept
-  141  the reader of the output went away (e.g. | head)"""
+  141  the reader of the output went away (e.g. | head)
+  143  terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -507,9 +510,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived: unwinds like Ctrl-C, so a campaign's pool is shut down and its files closed.
+
+    A ``BaseException``, so no ``except Exception`` on the way (a lost trial's) swallows it.
+    """
+
+
+def _terminate(signum: int, frame: object, *, main_pid: int) -> None:
+    if os.getpid() != main_pid:
+        # A forked pool worker inherits the handler: it ends as SIGTERM would have ended it.
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bt-arrange`` console script."""
     args = build_parser().parse_args(argv)
+    main_pid = os.getpid()
+    # Signal handlers belong to the main thread (a test or an embedding may call main from another).
+    handles_sigterm = threading.current_thread() is threading.main_thread()
+    if handles_sigterm:
+        previous = signal.signal(signal.SIGTERM, lambda signum, frame: _terminate(signum, frame, main_pid=main_pid))
     try:
         code = int(args.handler(args))
         sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
@@ -525,6 +549,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("bt-arrange: interrupted; what was logged so far is kept", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Terminated:
+        print("bt-arrange: terminated; what was logged so far is kept", file=sys.stderr)
+        return EXIT_TERMINATED
+    finally:
+        if handles_sigterm:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -87,7 +87,8 @@ def test_every_error_of_section_3_is_a_row_with_its_injectors():
         *("system", "translation", "orientation", "grasp-estimator", "perception", "surface", "slip"),
         *("sticking", "release", "tilt", "all"),
     }
-    assert set(ROW_INJECTORS["all"]) == set(INJECTORS), "the all row injects every error"
+    # Every error once: pick_translation_xy is another reading of the translation error, not another error.
+    assert set(ROW_INJECTORS["all"]) == set(INJECTORS) - {"pick_translation_xy"}, "the all row injects every error"
     for row in ROWS:
         assert [i.name for i in row_injectors(row)] == list(ROW_INJECTORS[row])
     assert all(len(ROW_INJECTORS[row]) == 1 for row in ROWS[4:-1])
@@ -294,3 +295,55 @@ def test_an_experiment_with_a_bar_runs_its_trials_with_the_bar_and_names_it(tmp_
         run_experiment(["translation"], trials=1, seed=3, threshold_mm=1.0, out_dir=tmp_path)
     with pytest.raises(PlanError, match=r"^--object 'beam': unknown object type 'beam'"):
         run_experiment(["system"], trials=1, seed=3, threshold_mm=1.0, out_dir=tmp_path / "x", object_name="beam")
+
+
+def test_sigterm_stops_the_pool_keeps_the_finished_trials_and_exits_143(tmp_path):
+    """A cluster's job limit sends SIGTERM: the command and its pool workers end, what finished stays."""
+    import contextlib
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "campaign"
+    command = [sys.executable, "-m", "bt_arrange.cli", "experiment", "--rows", "system", "--trials", "40"]
+    process = subprocess.Popen(
+        [*command, "--workers", "2", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+
+    def kill_the_group() -> None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+
+    try:
+        deadline = time.monotonic() + 120
+        while not read_trials(out / "trials.jsonl") and time.monotonic() < deadline and process.poll() is None:
+            time.sleep(0.2)
+        assert process.poll() is None, "the campaign ended before it could be terminated"
+        process.send_signal(signal.SIGTERM)
+        # Workers left running would hold the pipes open: communicate would time out.
+        _, stderr = process.communicate(timeout=60)
+    except BaseException:
+        kill_the_group()
+        raise
+    assert process.returncode == 143, stderr
+    assert stderr.strip().splitlines()[-1] == "bt-arrange: terminated; what was logged so far is kept"
+    assert "Traceback" not in stderr
+    finished = read_trials(out / "trials.jsonl")
+    assert 1 <= len(finished) < 40
+    # No worker of the pool is left in the command's process group.
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(process.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        kill_the_group()
+        pytest.fail("pool workers outlived the terminated command")
