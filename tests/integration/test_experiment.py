@@ -117,9 +117,6 @@ def test_a_threshold_sweep_writes_a_folder_per_combination_and_the_threshold_fig
             p.name for p in (tmp_path / folder).iterdir()
         }
     assert (tmp_path / "thresholds.png").stat().st_size > 0
-    assert "## threshold 1 mm, cell ideal, strategy paper, object bar (threshold-1mm-object-bar)" in (
-        experiment.markdown_table(summary)
-    )
     campaign = json.loads((tmp_path / "campaign.json").read_text())
     assert sorted(r["threshold_mm"] for r in campaign) == [0.5, 2.0]
     # The same trial (same start, same target) under both thresholds: only the threshold differs.
@@ -279,6 +276,9 @@ def test_types_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
     assert {r["object"] for r in read_trials(tmp_path / "threshold-1mm-object-bar" / "trials.jsonl")} == {"bar"}
     assert [r["object"] for r in json.loads((tmp_path / "campaign.json").read_text())] == ["cube", "bar"]
     assert (tmp_path / "thresholds.png").stat().st_size > 0
+    assert "## threshold 1 mm, cell ideal, strategy paper, object bar (threshold-1mm-object-bar)" in (
+        experiment.markdown_table(summary)
+    )
     # One type in a list is a flat experiment, as before types were a list.
     flat = run_experiment(["system"], trials=1, seed=1, threshold_mm=1.0, out_dir=tmp_path / "flat", object_name=["bar"])
     assert "folder" not in flat[0] and (tmp_path / "flat" / "trials.jsonl").exists()
