@@ -47,7 +47,7 @@ from bt_arrange.behaviours.handling import Blocked
 from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
-from bt_arrange.objects import BAR
+from bt_arrange.objects import BAR, CUBE, ObjectType
 from bt_arrange.robot import PixelWindow
 from bt_arrange.settings import ManipulationSettings
 
@@ -559,7 +559,12 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     # Fingers side by side along the pushed face: the closing axis lies across the push.
     assert fold_yaw(behind.yaw_rad - math.atan2(across[1], across[0]), math.pi) == pytest.approx(0.0, abs=1e-4)
     gripper = fake_gripper(context)
-    assert [(c.kind, c.value) for c in gripper.commands] == [("open", s.cube_edge_m - s.pad_thickness_m)]
+    # The cube (yaw 0.1 rad) is turned from the push: its leading corner on the middle of a pad.
+    turn_rad = abs(fold_yaw(math.atan2(towards[1], towards[0]) - 0.1, math.pi / 2))
+    corner_m = s.cube_edge_m * (math.cos(turn_rad) - math.sin(turn_rad))
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", pytest.approx(max(0.0, corner_m - s.pad_thickness_m)))
+    ]
 
     before = len(arm.commands)
     rest = tick_until_done(push, context)
@@ -575,6 +580,44 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     assert tcp[-1, 2] == pytest.approx(s.approach_height_m, abs=1e-6), "lifted"
     axis = "x" if "x" in rest.feedback else "y"
     assert rest.feedback == f"pushed {math.copysign(distance_mm, sum(offset_xy_mm)):+.2f} mm along {axis}"
+
+
+def leading_corner_across_mm(pose: Pose, kind: ObjectType, towards: np.ndarray, line_xy: np.ndarray) -> float:
+    """How far (mm) beside the pushing TCP's line the footprint's corner furthest along ``towards`` lies."""
+    corners = kind.footprint_m(pose.x_m, pose.y_m, pose.yaw_rad)
+    leading = corners[int(np.argmax(corners @ towards))]
+    across = np.array([-towards[1], towards[0]])
+    return abs(float((leading - line_xy) @ across)) * 1000
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 4.0, 9.42, 12.85, 20.0, 30.0, -12.85])
+@pytest.mark.parametrize(
+    ("kind", "axis"), [(CUBE, "x"), (CUBE, "y"), (BAR, "x"), (BAR, "y")], ids=["cube x", "cube y", "bar x", "bar y"]
+)
+def test_the_leading_corner_of_a_turned_part_meets_a_pad_not_the_gap_between_them(
+    context: Context, kind: ObjectType, axis: str, turn_deg: float
+) -> None:
+    # Table 1's translation trial 62: placed 9.4 deg turned, the cube's leading corner lay between
+    # the pads opened to the face's width (42 mm apart); each pad stopped on one of the faces
+    # beside the corner, 4.2 mm short of home and turned 12.8 deg, and later pushes did not move it.
+    offset_xy_mm = (-4.2, 0.0) if axis == "x" else (0.0, -3.2)
+    towards = np.array([-1.0, 0.0]) if axis == "x" else np.array([0.0, -1.0])
+    pose = Pose.from_planar(0.5, 0.05, math.radians(turn_deg), kind.size_m[2] / 2)
+    write({"/red/pose": pose, "/red/target": PlanarPose(0.5, 0.05, 0.0), "/red/offset_xy_mm": offset_xy_mm})
+    push = set_up(Push("push red", "red", object_type=kind), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    (opening,) = [c.value for c in fake_gripper(context).commands if c.kind == "open"]
+    arm = fake_arm(context)
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands])
+    low = tcp[tcp[:, 2] < SETTINGS.approach_height_m - 0.001, :2]  # lowered beside the part
+    line_xy = low[int(np.argmax(low @ towards))]
+    corner_mm = leading_corner_across_mm(pose, kind, towards, line_xy)
+    inner_mm, outer_mm = opening * 500, opening * 500 + SETTINGS.pad_thickness_m * 1000
+    assert inner_mm - 1e-6 <= corner_mm <= outer_mm + 1e-6, (
+        f"the leading corner {corner_mm:.1f} mm beside the push's line misses the pads "
+        f"({inner_mm:.1f} to {outer_mm:.1f} mm)"
+    )
 
 
 # -- interruption --------------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError
-from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose, fold_yaw, rotation_z
 from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
@@ -418,11 +418,24 @@ class Push(StagedBehaviour):
         Both pads meet the face near its edges (the face's width less a pad's thickness, at most
         the open width); the TCP stops half the part's depth along the push plus half a pad from
         its centre when the pads touch. The settings' figures for the cube.
+
+        A part turned by ``phi`` from square to the push (``object_yaw_rad``, measured) leads with
+        a corner ``width / 2 cos phi - depth / 2 sin phi`` beside the push's line: the pads close
+        so that corner meets the middle of a pad (the opening ``width cos phi - depth sin phi``
+        less a pad's thickness; the paper's when square). Left in the gap between the pads, the
+        corner wedges there: each pad stops on one of the two faces beside it, which neither
+        squares the part nor pushes it home (a cube turned 9.4 deg, with the paper's opening,
+        stopped 4.2 mm short, turned 12.8 deg, and later pushes to the same line did not move it).
         """
         if self.object_type == CUBE:
-            return s.push_opening_m, s.push_reach_m
-        width_m, depth_m = self.object_type.pushed_face(heading_rad, object_yaw_rad)
-        return min(width_m - s.pad_thickness_m, s.open_width_m), depth_m / 2 + s.pad_width_m / 2
+            width_m = depth_m = s.cube_edge_m
+            opening_m, reach_m = s.push_opening_m, s.push_reach_m
+        else:
+            width_m, depth_m = self.object_type.pushed_face(heading_rad, object_yaw_rad)
+            opening_m, reach_m = min(width_m - s.pad_thickness_m, s.open_width_m), depth_m / 2 + s.pad_width_m / 2
+        turn_rad = abs(fold_yaw(heading_rad - object_yaw_rad, math.pi / 2))
+        corner_m = width_m * math.cos(turn_rad) - depth_m * math.sin(turn_rad)
+        return max(0.0, min(opening_m, corner_m - s.pad_thickness_m)), reach_m
 
     def _turned(self) -> bool:
         """True when the measured yaw error is at or above ``yaw_threshold_deg``."""
