@@ -8,7 +8,7 @@ through its camera; nothing the tree reports is touched, and no cube is ever fix
 | name | error (paper, Fig. 2) | when | magnitude (default) |
 |---|---|---|---|
 | ``perception_offset`` | a) pose estimation | detection before the pick | ``max_m`` = 0.010 m camera shift |
-| ``pick_translation`` | b) translation | after that detection | ``max_m`` = 0.025 m: a shift up to 2.5 cm long in any direction |
+| ``pick_translation`` | b) translation | after that detection | ``max_m`` = 0.025 m: up to 2.5 cm, any direction |
 | ``pick_translation_xy`` | b) translation, read per axis | after that detection | ``max_m`` = 0.025 m in x and in y |
 | ``pick_rotation`` | c) orientation | after that detection | ``max_deg`` = 40 deg |
 | ``surface_shift`` | d) surface | "close on the cube" | ``max_m`` = 0.003 m along the pads |

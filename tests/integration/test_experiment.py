@@ -280,7 +280,9 @@ def test_types_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
         experiment.markdown_table(summary)
     )
     # One type in a list is a flat experiment, as before types were a list.
-    flat = run_experiment(["system"], trials=1, seed=1, threshold_mm=1.0, out_dir=tmp_path / "flat", object_name=["bar"])
+    flat = run_experiment(
+        ["system"], trials=1, seed=1, threshold_mm=1.0, out_dir=tmp_path / "flat", object_name=["bar"]
+    )
     assert "folder" not in flat[0] and (tmp_path / "flat" / "trials.jsonl").exists()
 
 
