@@ -50,7 +50,8 @@ class ManipulationSettings:
     #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
     grasp_width_tolerance_m: float = 0.003
     #: A grip wider than this holds the cube more than about 13 degrees off square, or by two of its
-    #: vertical edges (a cube turned 29 degrees or more under the pads: 68 mm apart): let go, look again.
+    #: vertical edges (a cube turned about 27 degrees or more under the pads: 67 to 70 mm apart, measured):
+    #: Pick squares it (``squaring``) and lets go to look again only when it is still this wide.
     #: Narrower turned grips are kept, as in the paper's orientation error: the pushes square the cube.
     max_grip_width_m: float = 0.060
     #: A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned

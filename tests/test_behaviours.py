@@ -446,9 +446,7 @@ def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> N
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [c.kind for c in gripper.commands] == ["open", "close", "open", "close", "open", "close"]
     first, squaring, final = (
-        arm.tcp_pose_at(command_at(arm.commands, c.time_s).positions_rad)
-        for c in gripper.commands
-        if c.kind == "close"
+        arm.tcp_pose_at(command_at(arm.commands, c.time_s).positions_rad) for c in gripper.commands if c.kind == "close"
     )
     # The squaring close stands half a pad's width along the pads (across the closing axis), the last at the centre.
     closing = np.array([math.cos(first.yaw_rad), math.sin(first.yaw_rad)])
