@@ -95,13 +95,14 @@ class Pick(StagedBehaviour):
 
     A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned
     about 27 degrees or more: its corners stick on the pads, and no closing force turns it) is
-    squared first, as a real gripper's fingertips align the part: open, sweep
-    ``settings.squaring_sweep_m`` along the closing axis (towards the robot) so one pad meets
-    the cube's leading corner and pushes it as a flat fence until a face lies flush with it, then
-    close again there, which drags the cube back to the centre across the pads. The fence turns
-    the cube about the corner it touches, so the cube ends off centre along the pads: that offset
-    shows up after placing. Only a grip still wide after the squaring lets go and fails. Among
-    neighbours (``grasp``) there is no room to sweep: a turned grip lets go at once.
+    squared by contact first, as a real gripper's fingertips align the part
+    (``settings.squaring``): "shift" opens, moves ``squaring_shift_m`` along the pads so the
+    corner on one pad falls beyond its edge, closes (the pad's edge turns the face), opens, comes
+    back to the measured centre and closes again; "sweep" opens and sweeps ``squaring_sweep_m``
+    along the closing axis (towards the robot) so one pad pushes the cube's leading corner as a
+    flat fence, then closes there. Either turns the cube about a corner, so it ends off centre
+    along the pads: that offset shows up after placing. Only a grip still that wide lets go and
+    fails. Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
 
     ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
     close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
