@@ -23,6 +23,10 @@ CUBE_COLOURS_RGB: dict[str, tuple[float, float, float]] = {
 CUBE_SIDE_RGB = (0.85, 0.85, 0.82)
 
 
+#: How ``Pick`` squares a cube pinched across its corners (``ManipulationSettings.squaring``).
+SQUARINGS = ("shift", "sweep", "off")
+
+
 @dataclass(frozen=True)
 class ManipulationSettings:
     """Geometry and forces for 5 cm cubes on a table at z = 0 (metres, newtons, seconds).
@@ -46,9 +50,22 @@ class ManipulationSettings:
     #: A closed grip narrower than the cube by more than this means the cube is not between the pads.
     grasp_width_tolerance_m: float = 0.003
     #: A grip wider than this holds the cube more than about 13 degrees off square, or by two of its
-    #: vertical edges (a cube turned 29 degrees or more under the pads: 68 mm apart): let go, look again.
+    #: vertical edges (a cube turned about 27 degrees or more under the pads: 67 to 70 mm apart, measured):
+    #: Pick squares it (``squaring``) and lets go to look again only when it is still this wide.
     #: Narrower turned grips are kept, as in the paper's orientation error: the pushes square the cube.
     max_grip_width_m: float = 0.060
+    #: A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned
+    #: about 27 degrees or more; no closing force turns it, its corners stick on the pads) is squared
+    #: before it is given up (``Pick``): "shift" opens, moves ``squaring_shift_m`` along the pads so
+    #: one corner falls beyond a pad's edge, closes (the pad's edge turns the face square), opens,
+    #: comes back to the measured centre and closes again; "sweep" opens and sweeps
+    #: ``squaring_sweep_m`` along the closing axis, a pad pushing the cube's leading corner as a
+    #: flat fence, then closes; "off" lets go at once.
+    squaring: str = "shift"
+    #: Half a pad's width: the pad's edge comes to where its centre was, so the corner that landed
+    #: on it (within 11 mm of its centre for any turn of 27 to 45 degrees) falls beyond it.
+    squaring_shift_m: float = 0.011
+    squaring_sweep_m: float = 0.060
     #: Pads of the 2F-85: at an opening of edge - thickness the two pad centres sit on the cube's edges.
     pad_thickness_m: float = 0.008
     pad_width_m: float = 0.022
@@ -66,6 +83,8 @@ class ManipulationSettings:
     gripper_timeout_s: float = 2.0
 
     def __post_init__(self) -> None:
+        if self.squaring not in SQUARINGS:
+            raise OutOfRangeError(f"squaring {self.squaring!r}: choose one of {', '.join(SQUARINGS)}")
         low, high = GRIPPER_FORCE_RANGE_N
         if not low <= self.grip_force_n <= high:
             raise OutOfRangeError(f"grip force {self.grip_force_n:.1f} N is outside {low:.0f} to {high:.0f} N")

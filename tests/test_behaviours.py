@@ -44,7 +44,7 @@ from bt_arrange.behaviours import (
     stages,
 )
 from bt_arrange.behaviours.handling import Blocked
-from bt_arrange.errors import BtArrangeError, MotionError, UnreachableError
+from bt_arrange.errors import BtArrangeError, MotionError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose
 from bt_arrange.objects import BAR, CUBE, ObjectType
@@ -392,14 +392,108 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
 
-def test_pick_that_holds_a_turned_cube_by_its_corners_lets_go_and_fails(clock) -> None:
-    # A cube turned ~30 degrees under the pads is gripped across two vertical edges, 68 mm apart.
+def test_pick_that_still_holds_a_turned_cube_by_its_corners_after_squaring_lets_go_and_fails(clock) -> None:
+    # A cube turned ~30 degrees under the pads is gripped across two vertical edges, 68 mm apart,
+    # and (in this fake) the squaring closes leave it so.
     context = make_context(clock, object_width_m=0.068)
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
+    assert run.feedback == (
+        "the pads hold the cube across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
+        "held nearly square (it is turned) after squaring a 68.0 mm grip"
+    )
+    feedback = [t.feedback for t in run.ticks]
+    assert feedback.index(stages.CLOSE_ON_SQUARED_CUBE) < feedback.index(stages.LET_GO_OF_BAD_GRASP)
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
+
+
+def _squared_by_the_second_close(context: Context, squared_width_m: float) -> None:
+    """The fake cube is pinched across its corners by the first close and square from the next one on."""
+    gripper = fake_gripper(context)
+    close = gripper.close
+
+    def close_then_square(force_n: float) -> None:
+        close(force_n)
+        gripper.object_width_m = squared_width_m
+
+    gripper.close = close_then_square  # type: ignore[method-assign]
+
+
+def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> None:
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.068)
+    _squared_by_the_second_close(context, 0.0505)
+    write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "holding red, fingers 50.5 mm apart (squared from a 68.0 mm grip across its corners)"
+    assert_never_blocks(run)
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen == [
+        stages.MOVE_ABOVE_CUBE,
+        stages.WAIT_FOR_OPEN_FINGERS,
+        stages.DESCEND_TO_CUBE,
+        stages.CLOSE_ON_CUBE,
+        stages.OPEN_TO_SQUARE,
+        stages.SHIFT_ALONG_PADS,
+        stages.CLOSE_TO_SQUARE,
+        stages.OPEN_SQUARED_CUBE,
+        stages.RECENTRE_ON_CUBE,
+        stages.CLOSE_ON_SQUARED_CUBE,
+        stages.LIFT_CUBE,
+    ]
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [c.kind for c in gripper.commands] == ["open", "close", "open", "close", "open", "close"]
+    first, squaring, final = (
+        arm.tcp_pose_at(command_at(arm.commands, c.time_s).positions_rad) for c in gripper.commands if c.kind == "close"
+    )
+    # The squaring close stands half a pad's width along the pads (across the closing axis), the last at the centre.
+    closing = np.array([math.cos(first.yaw_rad), math.sin(first.yaw_rad)])
+    shift = squaring.position_m[:2] - first.position_m[:2]
+    assert float(np.linalg.norm(shift)) == pytest.approx(SETTINGS.squaring_shift_m, abs=1e-5)
+    assert float(shift @ closing) == pytest.approx(0.0, abs=1e-5)
+    np.testing.assert_allclose(final.position_m, [0.5, 0.1, SETTINGS.grasp_height_m], atol=1e-6)
+    np.testing.assert_allclose(arm.tcp_pose().position_m, [0.5, 0.1, SETTINGS.approach_height_m], atol=1e-6)
+
+
+def test_pick_squaring_by_a_sweep_pushes_along_the_closing_axis_towards_the_base(clock) -> None:
+    context = make_context(clock, object_width_m=0.069, settings=ManipulationSettings(squaring="sweep"))
+    _squared_by_the_second_close(context, 0.051)
+    write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen[seen.index(stages.CLOSE_ON_CUBE) + 1 :] == [
+        stages.OPEN_TO_SQUARE,
+        stages.SWEEP_TO_SQUARE,
+        stages.CLOSE_ON_SQUARED_CUBE,
+        stages.LIFT_CUBE,
+    ]
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    first, final = (
+        arm.tcp_pose_at(command_at(arm.commands, c.time_s).positions_rad) for c in gripper.commands if c.kind == "close"
+    )
+    sweep = final.position_m[:2] - first.position_m[:2]
+    closing = np.array([math.cos(first.yaw_rad), math.sin(first.yaw_rad)])
+    assert abs(float(sweep @ closing)) == pytest.approx(SETTINGS.squaring_sweep_m, abs=1e-5), "along the closing axis"
+    assert float(sweep @ first.position_m[:2]) < 0.0, "towards the robot's base"
+    # The lift goes straight up from where the sweep ended.
+    np.testing.assert_allclose(arm.tcp_pose().position_m[:2], final.position_m[:2], atol=1e-6)
+
+
+def test_pick_with_squaring_off_lets_a_cube_pinched_across_its_corners_go_at_once(clock) -> None:
+    context = make_context(clock, object_width_m=0.068, settings=ManipulationSettings(squaring="off"))
+    write({"/red/pose": cube_pose(0.45, -0.05)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
     assert run.feedback.startswith("the pads hold the cube across its corners: 68.0 mm apart")
-    assert stages.LET_GO_OF_BAD_GRASP in [t.feedback for t in run.ticks]
+    assert [c.kind for c in fake_gripper(context).commands] == ["open", "close", "open"]
+
+
+def test_an_unknown_squaring_is_a_one_line_error() -> None:
+    with pytest.raises(OutOfRangeError, match="squaring 'twist': choose one of shift, sweep, off"):
+        ManipulationSettings(squaring="twist")
 
 
 @pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])

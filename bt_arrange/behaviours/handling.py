@@ -93,6 +93,17 @@ class Pick(StagedBehaviour):
     (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
     lifting and fails with the width, so a retry can look and pick again.
 
+    A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned
+    about 27 degrees or more: its corners stick on the pads, and no closing force turns it) is
+    squared by contact first, as a real gripper's fingertips align the part
+    (``settings.squaring``): "shift" opens, moves ``squaring_shift_m`` along the pads so the
+    corner on one pad falls beyond its edge, closes (the pad's edge turns the face), opens, comes
+    back to the measured centre and closes again; "sweep" opens and sweeps ``squaring_sweep_m``
+    along the closing axis (towards the robot) so one pad pushes the cube's leading corner as a
+    flat fence, then closes there. Either turns the cube about a corner, so it ends off centre
+    along the pads: that offset shows up after placing. Only a grip still that wide lets go and
+    fails. Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
+
     ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
     close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
     come down in the free room beside two faces and nowhere else.
@@ -111,6 +122,9 @@ class Pick(StagedBehaviour):
             self.reads(keys.key(obj, keys.TARGET))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
+        #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.
+        self.squared_from_width_m: float | None = None
+        self._sweep_m = np.zeros(2)
 
     def stages(self, context: Context) -> list[Stage]:
         """Open, approach, descend, close, check, lift."""
@@ -135,6 +149,16 @@ class Pick(StagedBehaviour):
                 GRIPPER_SYMMETRY_RAD,
             )
             opening_m = self.grasp.opening_m
+        self.squared_from_width_m = None
+        self._sweep_m = np.zeros(2)
+        squaring: list[Stage] = []
+        if self.grasp is None and s.squaring != "off":
+            squaring = self._squaring_stages(s, x, y, grasp_m, yaw, opening_m)
+
+        def lift_plan(context: Context, q: FloatArray) -> Motion:
+            # Straight up from where the close ended (after a squaring sweep, that far along).
+            return _line_to(x + self._sweep_m[0], y + self._sweep_m[1], approach_m, yaw)(context, q)
+
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_ABOVE_CUBE, _to_pose(x, y, approach_m, yaw)),
@@ -142,11 +166,65 @@ class Pick(StagedBehaviour):
             MoveStage(stage.DESCEND_TO_CUBE, _line_to(x, y, grasp_m, yaw)),
             GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
+            *squaring,
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
             OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
-            MoveStage(stage.LIFT_CUBE, _line_to(x, y, approach_m, yaw)),
+            MoveStage(stage.LIFT_CUBE, lift_plan),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
+
+    def _squaring_stages(
+        self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
+    ) -> list[Stage]:
+        """Stages that square a cube pinched across its corners, each run only after such a grip."""
+        closing = np.array([math.cos(yaw), math.sin(yaw)])
+        towards_base = -math.copysign(1.0, float(closing @ np.array([x, y])))
+
+        def open_() -> GripperStage:
+            return GripperStage(stage.OPEN_TO_SQUARE, lambda c: c.robot.gripper.open(opening_m))
+
+        def close(name: str) -> GripperStage:
+            return GripperStage(name, lambda c: c.robot.gripper.close(s.grip_force_n))
+
+        def line(name: str, offset: FloatArray, pushing: bool = False) -> MoveStage:
+            def plan(context: Context, q: FloatArray) -> Motion:
+                self._sweep_m = offset
+                return _line_to(x + offset[0], y + offset[1], grasp_m, yaw, pushing=pushing)(context, q)
+
+            return MoveStage(name, plan)
+
+        if s.squaring == "sweep":
+            steps: list[Stage] = [
+                open_(),
+                line(stage.SWEEP_TO_SQUARE, closing * towards_base * s.squaring_sweep_m, pushing=True),
+                close(stage.CLOSE_ON_SQUARED_CUBE),
+            ]
+        else:  # "shift"
+            along_pads = np.array([-math.sin(yaw), math.cos(yaw)]) * s.squaring_shift_m
+            steps = [
+                open_(),
+                line(stage.SHIFT_ALONG_PADS, along_pads),
+                close(stage.CLOSE_TO_SQUARE),
+                GripperStage(stage.OPEN_SQUARED_CUBE, lambda c: c.robot.gripper.open(opening_m)),
+                line(stage.RECENTRE_ON_CUBE, np.zeros(2)),
+                close(stage.CLOSE_ON_SQUARED_CUBE),
+            ]
+        steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
+        return [OnlyIf(step, self._turned) for step in steps]
+
+    def _turned(self, context: Context) -> bool:
+        """The first close pinched a turned cube across its corners (wider than a square grip)."""
+        high_m = max_grip_width_m(context.settings, self.object_type)
+        return self.grip_width_m is not None and self.grip_width_m > high_m
+
+    def _check_squared_grasp(self, context: Context) -> str | None:
+        """After the squaring sweep and close: record the first width, then check the new grip."""
+        self.squared_from_width_m = self.grip_width_m
+        result = self._check_grasp(context)
+        if self.bad_grasp is not None:
+            assert self.squared_from_width_m is not None
+            self.bad_grasp += f" after squaring a {self.squared_from_width_m * 1000:.1f} mm grip"
+        return result
 
     def _bad(self, context: Context) -> bool:
         return self.bad_grasp is not None
@@ -175,7 +253,10 @@ class Pick(StagedBehaviour):
     def success_message(self) -> str:
         """Feedback with the grip width."""
         assert self.grip_width_m is not None
-        return f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
+        message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
+        if self.squared_from_width_m is not None:
+            message += f" (squared from a {self.squared_from_width_m * 1000:.1f} mm grip across its corners)"
+        return message
 
 
 class Place(StagedBehaviour):

@@ -74,3 +74,24 @@ def test_a_push_squares_up_a_turned_cube():
         x0, y0, _ = cell.cube_planar_truth("red")
         ScriptedPickPlace(cell).push(x0, y0, "x", 0.015)
         assert abs(cell.cube_planar_truth("red")[2]) < math.radians(0.3)
+
+
+def test_a_cube_turned_33_degrees_under_the_pads_is_squared_and_held_without_a_regrasp():
+    """The first close pinches two vertical edges (~69 mm apart); Pick's squaring closes bring it into the band."""
+    from bt_arrange.behaviours.handling import max_grip_width_m, min_held_width_m
+    from bt_arrange.objects import CUBE
+    from bt_arrange.settings import ManipulationSettings
+
+    settings = ManipulationSettings()
+    with WorkCell() as cell:
+        cell.add_cube("red", 0.45, 0.05, math.radians(33.0))
+        cell.settle(0.3)
+        x, y, _ = cell.cube_planar_truth("red")
+        # The gripper comes down square to the pose before the turn, as after PickRotation's injection.
+        pick = ScriptedPickPlace(cell, settings=settings).pick(x, y, 0.0)
+        assert pick.grasped, pick.feedback
+        assert "squared from a" in pick.feedback, "the first close pinched it across its corners"
+        assert min_held_width_m(settings, CUBE) < pick.grip_width_m <= max_grip_width_m(settings, CUBE)
+        assert cell.cube_pose_truth("red").z_m > 0.08, "lifted with the gripper"
+        _, _, yaw = cell.cube_planar_truth("red")
+        assert abs(math.degrees(yaw)) < 15.0, "turned most of the way back to square"
