@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bt_arrange.behaviours.handling import SQUARED_FEEDBACK
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.objects import ObjectType, built_in_type
@@ -285,6 +286,9 @@ def _run_trial(spec: TrialSpec) -> dict:
         report = run.run()
     (outcome,) = report.objects
     bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
+    squarings = [
+        t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and SQUARED_FEEDBACK in t.feedback
+    ]
     return {
         "row": spec.row,
         "trial": spec.index,
@@ -301,6 +305,8 @@ def _run_trial(spec: TrialSpec) -> dict:
         "pushes": outcome.pushes,
         "regrasps": len(bad_grasps),
         "regrasp_reasons": bad_grasps,
+        # Picks that squared a cube pinched across its corners instead of letting go (Pick's "squaring").
+        "squarings": len(squarings),
         "status": outcome.status,
         "reason": outcome.reason,
         "injected": {injector.name: injector.record() for injector in injectors},
@@ -714,6 +720,7 @@ def summarise(records: list[dict], rows: list[str]) -> list[dict]:
                 "pushed_truth_max_mm": _stat(pushed_truth, np.max),
                 "failed_trials": sum(r["status"] == "failed" for r in mine),
                 "regrasp_trials": sum(r.get("regrasps", 0) > 0 for r in mine),
+                "squared_trials": sum(r.get("squarings", 0) > 0 for r in mine),
                 "paper_placed_mean_mm": paper[0],
                 "paper_placed_std_mm": paper[1],
                 "paper_pushed_mean_mm": paper[2],
@@ -767,9 +774,9 @@ def _table(summary: list[dict]) -> str:
 
     lines = [
         "| row | trials | after placing | after pushing | paper: after placing | paper: after pushing "
-        "| pushes (mean) | within threshold | max after pushing | regrasped trials "
+        "| pushes (mean) | within threshold | max after pushing | regrasped trials | squared in the grasp "
         "| ground truth after pushing (mean / max) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s in summary:
         truth = (
@@ -784,7 +791,7 @@ def _table(summary: list[dict]) -> str:
             f"| {pm(s['paper_placed_mean_mm'], s['paper_placed_std_mm'])} "
             f"| {pm(s['paper_pushed_mean_mm'], s['paper_pushed_std_mm'])} "
             f"| {_mm_or_dash(s['pushes_mean'])} | {success} | {_mm_or_dash(s.get('pushed_max_mm'))} "
-            f"| {s.get('regrasp_trials', 0)} | {truth} |"
+            f"| {s.get('regrasp_trials', 0)} | {s.get('squared_trials', 0)} | {truth} |"
         )
     return (
         "Offsets Δd_xy in mm, mean ± std, measured by the top camera (as in the paper); ground truth from the "

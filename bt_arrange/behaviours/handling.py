@@ -85,6 +85,10 @@ def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[
     )
 
 
+#: Pick's success feedback holds this when it squared a cube it had pinched across its corners.
+SQUARED_FEEDBACK = "squared from a"
+
+
 class Pick(StagedBehaviour):
     """Grasp the object at its measured pose (``/<obj>/pose``) and lift it.
 
@@ -255,7 +259,7 @@ class Pick(StagedBehaviour):
         assert self.grip_width_m is not None
         message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
         if self.squared_from_width_m is not None:
-            message += f" (squared from a {self.squared_from_width_m * 1000:.1f} mm grip across its corners)"
+            message += f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners)"
         return message
 
 

@@ -13,12 +13,14 @@ from bt_arrange_sim.experiment import (
     ROWS,
     CampaignIncompleteError,
     combinations,
+    markdown_table,
     parse_rows,
     parse_thresholds,
     read_trials,
     row_injectors,
     run_campaign,
     run_experiment,
+    summarise,
 )
 from bt_arrange_sim.injection import INJECTORS, grasp_fits
 
@@ -349,3 +351,17 @@ def test_sigterm_stops_the_pool_keeps_the_finished_trials_and_exits_143(tmp_path
     else:
         kill_the_group()
         pytest.fail("pool workers outlived the terminated command")
+
+
+def test_the_summary_counts_regrasped_trials_and_trials_squared_in_the_grasp():
+    base = {"row": "orientation", "placed_mm": 5.0, "pushed_mm": 0.2, "pushed_truth_mm": 0.2, "pushes": 1}
+    records = [
+        {**base, "status": "within", "regrasps": 0, "squarings": 1},
+        {**base, "status": "within", "regrasps": 1, "squarings": 1},
+        {**base, "status": "within", "regrasps": 0, "squarings": 0},
+        {**base, "status": "within"},  # a record written before squarings were counted
+    ]
+    (row,) = summarise(records, ["orientation"])
+    assert (row["regrasp_trials"], row["squared_trials"]) == (1, 2)
+    assert "| regrasped trials | squared in the grasp |" in markdown_table([row])
+    assert "| 1 | 2 |" in markdown_table([row])
