@@ -24,7 +24,7 @@ CUBE_SIDE_RGB = (0.85, 0.85, 0.82)
 
 
 #: How ``Pick`` squares a cube pinched across its corners (``ManipulationSettings.squaring``).
-SQUARINGS = ("shift", "sweep", "off")
+SQUARINGS = ("shift", "sweep", "turn", "off")
 
 
 @dataclass(frozen=True)
@@ -60,12 +60,19 @@ class ManipulationSettings:
     #: one corner falls beyond a pad's edge, closes (the pad's edge turns the face square), opens,
     #: comes back to the measured centre and closes again; "sweep" opens and sweeps
     #: ``squaring_sweep_m`` along the closing axis, a pad pushing the cube's leading corner as a
-    #: flat fence, then closes; "off" lets go at once.
+    #: flat fence, then closes; "turn" opens, turns the wrist by ``squaring_turn_deg`` about the
+    #: TCP's vertical axis and closes, and if the grip is still that wide, opens, turns to minus
+    #: that from the first yaw and closes again (the centred close then squares the cube about its
+    #: centre, as it does any cube turned less than about 27 degrees); "off" lets go at once.
     squaring: str = "shift"
     #: Half a pad's width: the pad's edge comes to where its centre was, so the corner that landed
     #: on it (within 11 mm of its centre for any turn of 27 to 45 degrees) falls beyond it.
     squaring_shift_m: float = 0.011
     squaring_sweep_m: float = 0.060
+    #: The wrist turn of ``squaring = "turn"`` (degrees): it brings a pinched turn of 27 to 45 degrees
+    #: to 4.5 to 22.5 degrees from the pads, under the 27 at which the corners stick (the middle of
+    #: the 18 to 27 degrees that bring both 27 and 45 under 27).
+    squaring_turn_deg: float = 22.5
     #: Pads of the 2F-85: at an opening of edge - thickness the two pad centres sit on the cube's edges.
     pad_thickness_m: float = 0.008
     pad_width_m: float = 0.022
@@ -85,6 +92,8 @@ class ManipulationSettings:
     def __post_init__(self) -> None:
         if self.squaring not in SQUARINGS:
             raise OutOfRangeError(f"squaring {self.squaring!r}: choose one of {', '.join(SQUARINGS)}")
+        if not 0.0 < self.squaring_turn_deg < 45.0:
+            raise OutOfRangeError(f"squaring turn {self.squaring_turn_deg:g} deg must lie between 0 and 45 deg")
         low, high = GRIPPER_FORCE_RANGE_N
         if not low <= self.grip_force_n <= high:
             raise OutOfRangeError(f"grip force {self.grip_force_n:.1f} N is outside {low:.0f} to {high:.0f} N")

@@ -105,8 +105,15 @@ class Pick(StagedBehaviour):
     back to the measured centre and closes again; "sweep" opens and sweeps ``squaring_sweep_m``
     along the closing axis (towards the robot) so one pad pushes the cube's leading corner as a
     flat fence, then closes there. Either turns the cube about a corner, so it ends off centre
-    along the pads: that offset shows up after placing. Only a grip still that wide lets go and
-    fails. Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
+    along the pads: that offset shows up after placing. "turn" opens, turns the wrist by
+    ``squaring_turn_deg`` about the TCP's vertical axis at grasp height and closes: a cube pinched
+    at 27 to 45 degrees is then 4.5 to 22.5 degrees from the pads, and the centred close squares
+    it about its centre, as any cube turned less than about 27 degrees; a grip still that wide
+    (the cube was turned the other way) opens, turns to minus that from the measured yaw and
+    closes again. The decision reads only the finger width; the lift keeps the turned yaw (the
+    cube is square in the pads there, and Place turns it to the target's yaw modulo its
+    symmetry). Only a grip still that wide lets go and fails.
+    Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
 
     ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
     close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
@@ -129,6 +136,8 @@ class Pick(StagedBehaviour):
         #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.
         self.squared_from_width_m: float | None = None
         self._sweep_m = np.zeros(2)
+        #: How far the wrist turned from the measured yaw to square a pinched cube (rad): the lift keeps it.
+        self.wrist_turn_rad = 0.0
 
     def stages(self, context: Context) -> list[Stage]:
         """Open, approach, descend, close, check, lift."""
@@ -155,13 +164,17 @@ class Pick(StagedBehaviour):
             opening_m = self.grasp.opening_m
         self.squared_from_width_m = None
         self._sweep_m = np.zeros(2)
+        self.wrist_turn_rad = 0.0
         squaring: list[Stage] = []
         if self.grasp is None and s.squaring != "off":
             squaring = self._squaring_stages(s, x, y, grasp_m, yaw, opening_m)
 
         def lift_plan(context: Context, q: FloatArray) -> Motion:
-            # Straight up from where the close ended (after a squaring sweep, that far along).
-            return _line_to(x + self._sweep_m[0], y + self._sweep_m[1], approach_m, yaw)(context, q)
+            # Straight up from where the close ended (after a squaring sweep, that far along; after a
+            # squaring turn, at the turned yaw: the cube is square in the pads there).
+            return _line_to(x + self._sweep_m[0], y + self._sweep_m[1], approach_m, yaw + self.wrist_turn_rad)(
+                context, q
+            )
 
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
@@ -181,6 +194,8 @@ class Pick(StagedBehaviour):
         self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
     ) -> list[Stage]:
         """Stages that square a cube pinched across its corners, each run only after such a grip."""
+        if s.squaring == "turn":
+            return self._turn_stages(s, x, y, grasp_m, yaw, opening_m)
         closing = np.array([math.cos(yaw), math.sin(yaw)])
         towards_base = -math.copysign(1.0, float(closing @ np.array([x, y])))
 
@@ -216,14 +231,59 @@ class Pick(StagedBehaviour):
         steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
         return [OnlyIf(step, self._turned) for step in steps]
 
+    def _turn_stages(
+        self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
+    ) -> list[Stage]:
+        """Squaring by a wrist turn: ``+squaring_turn_deg`` after a pinched grip, ``-`` only if still pinched.
+
+        The width alone tells which way the cube was turned: turned the other way, ``+`` leaves it
+        pinched (further from square), and ``-`` from the measured yaw brings it within reach.
+        """
+        turn_rad = math.radians(s.squaring_turn_deg)
+
+        def turn(name: str, turn_rad: float) -> MoveStage:
+            def plan(context: Context, q: FloatArray) -> Motion:
+                self.wrist_turn_rad = turn_rad
+                # At grasp height, about the TCP's vertical axis (the last wrist joint alone): the open
+                # pads (85 mm apart) clear a centred cube's corners (35.4 mm from its centre).
+                return _to_pose(x, y, grasp_m, yaw + turn_rad)(context, q)
+
+            return MoveStage(name, plan)
+
+        def open_(name: str) -> GripperStage:
+            return GripperStage(name, lambda c: c.robot.gripper.open(opening_m))
+
+        def close(name: str) -> GripperStage:
+            return GripperStage(name, lambda c: c.robot.gripper.close(s.grip_force_n))
+
+        one_way: list[Stage] = [
+            open_(stage.OPEN_TO_SQUARE),
+            turn(stage.TURN_WRIST_TO_SQUARE, turn_rad),
+            close(stage.CLOSE_ON_TURNED_CUBE),
+            InstantStage(stage.CHECK_TURNED_GRASP, self._check_squared_grasp),
+        ]
+        other_way: list[Stage] = [
+            open_(stage.OPEN_TO_TURN_BACK),
+            turn(stage.TURN_WRIST_OTHER_WAY, -turn_rad),
+            close(stage.CLOSE_ON_SQUARED_CUBE),
+            InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp),
+        ]
+        guarded: list[Stage] = [OnlyIf(step, self._turned) for step in one_way]
+        return guarded + [OnlyIf(step, self._still_turned) for step in other_way]
+
+    def _still_turned(self, context: Context) -> bool:
+        """A squaring close left the grip as wide as a pinch (the first wrist turn went the wrong way)."""
+        return self.squared_from_width_m is not None and self._turned(context)
+
     def _turned(self, context: Context) -> bool:
         """The first close pinched a turned cube across its corners (wider than a square grip)."""
         high_m = max_grip_width_m(context.settings, self.object_type)
         return self.grip_width_m is not None and self.grip_width_m > high_m
 
     def _check_squared_grasp(self, context: Context) -> str | None:
-        """After the squaring sweep and close: record the first width, then check the new grip."""
-        self.squared_from_width_m = self.grip_width_m
+        """After a squaring close: record the first close's width (once), then check the new grip."""
+        if self.squared_from_width_m is None:
+            self.squared_from_width_m = self.grip_width_m
         result = self._check_grasp(context)
         if self.bad_grasp is not None:
             assert self.squared_from_width_m is not None
@@ -259,7 +319,10 @@ class Pick(StagedBehaviour):
         assert self.grip_width_m is not None
         message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
         if self.squared_from_width_m is not None:
-            message += f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners)"
+            turned = f", the wrist turned {math.degrees(self.wrist_turn_rad):+.1f} deg" if self.wrist_turn_rad else ""
+            message += (
+                f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners{turned})"
+            )
         return message
 
 
