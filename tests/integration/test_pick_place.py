@@ -95,3 +95,31 @@ def test_a_cube_turned_33_degrees_under_the_pads_is_squared_and_held_without_a_r
         assert cell.cube_pose_truth("red").z_m > 0.08, "lifted with the gripper"
         _, _, yaw = cell.cube_planar_truth("red")
         assert abs(math.degrees(yaw)) < 15.0, "turned most of the way back to square"
+
+
+@pytest.mark.parametrize("turn_deg", [33.0, -33.0])
+def test_a_cube_turned_33_degrees_either_way_is_squared_by_a_wrist_turn_and_held_square(turn_deg):
+    """``squaring = "turn"``: the wrist turns +22.5 deg (turned the other way, then -22.5), the close squares it."""
+    from bt_arrange.behaviours.handling import max_grip_width_m, min_held_width_m
+    from bt_arrange.geometry import fold_yaw
+    from bt_arrange.objects import CUBE
+    from bt_arrange.settings import ManipulationSettings
+
+    settings = ManipulationSettings(squaring="turn")
+    with WorkCell() as cell:
+        cell.add_cube("red", 0.45, 0.05, math.radians(turn_deg))
+        cell.settle(0.3)
+        x, y, _ = cell.cube_planar_truth("red")
+        script = ScriptedPickPlace(cell, settings=settings)
+        pick = script.pick(x, y, 0.0)
+        assert pick.grasped, pick.feedback
+        assert "squared from a" in pick.feedback, "the first close pinched it across its corners"
+        wrist_turn = math.copysign(settings.squaring_turn_deg, turn_deg)
+        assert f"the wrist turned {wrist_turn:+.1f} deg" in pick.feedback
+        assert min_held_width_m(settings, CUBE) < pick.grip_width_m <= max_grip_width_m(settings, CUBE)
+        assert cell.cube_pose_truth("red").z_m > 0.08, "lifted with the gripper"
+        tcp = script.context.planner.kinematics.forward(cell.robot.arm.joint_positions())
+        held_x, held_y, yaw = cell.cube_planar_truth("red")
+        assert abs(math.degrees(fold_yaw(yaw - tcp.yaw_rad))) < 5.0, "held square to the pads at the turned wrist"
+        # Squared about its centre, not pivoted about a corner ("shift" moves it 13-19 mm along the pads).
+        assert math.hypot(held_x - tcp.position_m[0], held_y - tcp.position_m[1]) < 3e-3
