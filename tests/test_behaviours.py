@@ -422,7 +422,8 @@ def _squared_by_the_second_close(context: Context, squared_width_m: float) -> No
 
 
 def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.068)
+    shift = ManipulationSettings(squaring="shift")
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.068, settings=shift)
     _squared_by_the_second_close(context, 0.0505)
     write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)

@@ -82,7 +82,7 @@ def test_a_cube_turned_33_degrees_under_the_pads_is_squared_and_held_without_a_r
     from bt_arrange.objects import CUBE
     from bt_arrange.settings import ManipulationSettings
 
-    settings = ManipulationSettings()
+    settings = ManipulationSettings(squaring="shift")
     with WorkCell() as cell:
         cell.add_cube("red", 0.45, 0.05, math.radians(33.0))
         cell.settle(0.3)
