@@ -105,10 +105,11 @@ class PickRotation(Injector):
     less than about 27 deg the centred close turns it towards square and it is placed 0.03 to 6.6 mm
     off, growing with the angle. Turned by 27 deg or more its corners land on the pads' faces and
     the pads pinch two vertical edges (67 to 70 mm apart); Pick squares it (``settings.squaring``,
-    default "shift": a close half a pad's width along the pads, then a centred one), which turns
-    it about the pinched corner and so moves it along the pads: placed 0.1 to 25.5 mm off,
-    13.5 +- 5.6 mm at 27-35 deg, 18.9 +- 3.1 mm at 35-40 deg, none regrasped. Row 3 after placing: 7.93 +- 7.74 mm
-    against the paper's 3.03 +- 4.70.
+    default "turn": the wrist turned 22.5 deg one way, then the other if still pinched, and a
+    centred close), which squares it about its centre: placed 0.95 +- 0.68 mm off at 27-35 deg,
+    2.40 +- 1.72 mm at 35-40 deg, none regrasped ("shift", pivoting it about the pinched corner:
+    13.5 and 18.9 mm). Row 3 after placing: 1.70 +- 1.60 mm ("shift" 7.93 +- 7.74) against the
+    paper's 3.03 +- 4.70.
 
     Record: ``dyaw_deg``, ``draws``, ``time_s``.
     """
