@@ -199,12 +199,6 @@ class Pick(StagedBehaviour):
         closing = np.array([math.cos(yaw), math.sin(yaw)])
         towards_base = -math.copysign(1.0, float(closing @ np.array([x, y])))
 
-        def open_() -> GripperStage:
-            return GripperStage(stage.OPEN_TO_SQUARE, lambda c: c.robot.gripper.open(opening_m))
-
-        def close(name: str) -> GripperStage:
-            return GripperStage(name, lambda c: c.robot.gripper.close(s.grip_force_n))
-
         def line(name: str, offset: FloatArray, pushing: bool = False) -> MoveStage:
             def plan(context: Context, q: FloatArray) -> Motion:
                 self._sweep_m = offset
@@ -214,19 +208,19 @@ class Pick(StagedBehaviour):
 
         if s.squaring == "sweep":
             steps: list[Stage] = [
-                open_(),
+                _open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SWEEP_TO_SQUARE, closing * towards_base * s.squaring_sweep_m, pushing=True),
-                close(stage.CLOSE_ON_SQUARED_CUBE),
+                _close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
             ]
         else:  # "shift"
             along_pads = np.array([-math.sin(yaw), math.cos(yaw)]) * s.squaring_shift_m
             steps = [
-                open_(),
+                _open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SHIFT_ALONG_PADS, along_pads),
-                close(stage.CLOSE_TO_SQUARE),
-                GripperStage(stage.OPEN_SQUARED_CUBE, lambda c: c.robot.gripper.open(opening_m)),
+                _close_stage(stage.CLOSE_TO_SQUARE, s.grip_force_n),
+                _open_stage(stage.OPEN_SQUARED_CUBE, opening_m),
                 line(stage.RECENTRE_ON_CUBE, np.zeros(2)),
-                close(stage.CLOSE_ON_SQUARED_CUBE),
+                _close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
             ]
         steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
         return [OnlyIf(step, self._turned) for step in steps]
@@ -250,22 +244,16 @@ class Pick(StagedBehaviour):
 
             return MoveStage(name, plan)
 
-        def open_(name: str) -> GripperStage:
-            return GripperStage(name, lambda c: c.robot.gripper.open(opening_m))
-
-        def close(name: str) -> GripperStage:
-            return GripperStage(name, lambda c: c.robot.gripper.close(s.grip_force_n))
-
         one_way: list[Stage] = [
-            open_(stage.OPEN_TO_SQUARE),
+            _open_stage(stage.OPEN_TO_SQUARE, opening_m),
             turn(stage.TURN_WRIST_TO_SQUARE, turn_rad),
-            close(stage.CLOSE_ON_TURNED_CUBE),
+            _close_stage(stage.CLOSE_ON_TURNED_CUBE, s.grip_force_n),
             InstantStage(stage.CHECK_TURNED_GRASP, self._check_squared_grasp),
         ]
         other_way: list[Stage] = [
-            open_(stage.OPEN_TO_TURN_BACK),
+            _open_stage(stage.OPEN_TO_TURN_BACK, opening_m),
             turn(stage.TURN_WRIST_OTHER_WAY, -turn_rad),
-            close(stage.CLOSE_ON_SQUARED_CUBE),
+            _close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
             InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp),
         ]
         guarded: list[Stage] = [OnlyIf(step, self._turned) for step in one_way]
@@ -324,6 +312,16 @@ class Pick(StagedBehaviour):
                 f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners{turned})"
             )
         return message
+
+
+def _open_stage(name: str, opening_m: float) -> GripperStage:
+    """Open the fingers to ``opening_m`` and wait for them."""
+    return GripperStage(name, lambda c: c.robot.gripper.open(opening_m))
+
+
+def _close_stage(name: str, force_n: float) -> GripperStage:
+    """Close the fingers with ``force_n`` and wait for them to stop."""
+    return GripperStage(name, lambda c: c.robot.gripper.close(force_n))
 
 
 class Place(StagedBehaviour):
