@@ -46,7 +46,7 @@ from bt_arrange.behaviours import (
     Recheck,
     keys,
 )
-from bt_arrange.behaviours.handling import PUSH_STRATEGIES
+from bt_arrange.behaviours.push import PUSH_STRATEGIES
 from bt_arrange.checks import finite_number, positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, UnreachableError

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bt_arrange.behaviours.handling import SQUARED_FEEDBACK
+from bt_arrange.behaviours.pick import SQUARED_FEEDBACK
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.objects import ObjectType, built_in_type

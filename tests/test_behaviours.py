@@ -43,7 +43,7 @@ from bt_arrange.behaviours import (
     offset_in_target_frame_mm,
     stages,
 )
-from bt_arrange.behaviours.handling import Blocked
+from bt_arrange.behaviours.push import Blocked
 from bt_arrange.errors import BtArrangeError, MotionError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import ArmKinematics, LinearMotion, gripper_down_pose

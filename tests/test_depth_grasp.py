@@ -17,9 +17,8 @@ import pytest
 from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
-from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import GraspGuard, Pick, keys
 from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
-from bt_arrange.behaviours.handling import GraspGuard, Pick
 from bt_arrange.errors import PerceptionError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.motion import DEFAULT_HOME_Q

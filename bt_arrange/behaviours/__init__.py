@@ -11,8 +11,12 @@ from bt_arrange.behaviours import keys, stages
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import ArmBrake, Context
 from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
-from bt_arrange.behaviours.handling import GraspGuard, Pick, Place, Push, holding
+from bt_arrange.behaviours.guards import GraspGuard
 from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, Recheck, offset_in_target_frame_mm
+from bt_arrange.behaviours.moves import holding
+from bt_arrange.behaviours.pick import Pick
+from bt_arrange.behaviours.place import Place
+from bt_arrange.behaviours.push import Push
 
 __all__ = [
     "ArmBrake",

@@ -78,7 +78,7 @@ def test_a_push_squares_up_a_turned_cube():
 
 def test_a_cube_turned_33_degrees_under_the_pads_is_squared_and_held_without_a_regrasp():
     """The first close pinches two vertical edges (~69 mm apart); Pick's squaring closes bring it into the band."""
-    from bt_arrange.behaviours.handling import max_grip_width_m, min_held_width_m
+    from bt_arrange.behaviours.moves import max_grip_width_m, min_held_width_m
     from bt_arrange.objects import CUBE
     from bt_arrange.settings import ManipulationSettings
 
@@ -100,7 +100,7 @@ def test_a_cube_turned_33_degrees_under_the_pads_is_squared_and_held_without_a_r
 @pytest.mark.parametrize("turn_deg", [33.0, -33.0])
 def test_a_cube_turned_33_degrees_either_way_is_squared_by_a_wrist_turn_and_held_square(turn_deg):
     """``squaring = "turn"``: the wrist turns +22.5 deg (turned the other way, then -22.5), the close squares it."""
-    from bt_arrange.behaviours.handling import max_grip_width_m, min_held_width_m
+    from bt_arrange.behaviours.moves import max_grip_width_m, min_held_width_m
     from bt_arrange.geometry import fold_yaw
     from bt_arrange.objects import CUBE
     from bt_arrange.settings import ManipulationSettings

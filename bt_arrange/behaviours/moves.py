@@ -1,0 +1,91 @@
+"""What Pick, Place, Push and the guard share.
+
+Stage planners (a joint move, a TCP line), the fingers' stages, the held part's widths and heights.
+"""
+
+from __future__ import annotations
+
+import math
+
+from bt_arrange.behaviours.base import GripperStage
+from bt_arrange.behaviours.context import Context
+from bt_arrange.geometry import FloatArray
+from bt_arrange.motion import Motion, gripper_down_pose
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.settings import ManipulationSettings
+
+
+def to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
+    """A stage planner: a joint-space move to a gripper-down pose (fast, path free)."""
+
+    def plan(context: Context, q: FloatArray) -> Motion:
+        return context.planner.move_to_pose(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+
+    return plan
+
+
+def line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False):  # noqa: ANN202
+    """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
+
+    ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    """
+
+    def plan(context: Context, q: FloatArray) -> Motion:
+        limits = context.settings.push_limits if pushing else None
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
+
+    return plan
+
+
+def axis_yaw_offset_rad(axis: str) -> float:
+    """Gripper yaw minus the target's yaw for pads that close across the target frame's ``axis``."""
+    return math.pi / 2 if axis == "y" else 0.0
+
+
+def wrist_yaw_rad(context: Context) -> float:
+    """The yaw of the wrist's last joint now (rad): a new grasp turns it the least."""
+    return context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
+
+
+def holding(context: Context, object_type: ObjectType | None = None) -> bool:
+    """True when the closed fingers still stand the held part's width apart (default: a cube's)."""
+    return context.robot.gripper.width() > min_held_width_m(context.settings, object_type or CUBE)
+
+
+def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """Fingers closed narrower than this hold nothing: the side grasped, less the tolerance."""
+    return grasp_width_m(settings, object_type) - settings.grasp_width_tolerance_m
+
+
+def grasp_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """The width of the side the pads close on (m)."""
+    return settings.cube_edge_m if object_type == CUBE else object_type.grasp_width_m
+
+
+def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """A grip wider than this holds the part turned (the cube's margin over its edge, for any side)."""
+    return grasp_width_m(settings, object_type) + (settings.max_grip_width_m - settings.cube_edge_m)
+
+
+def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[float, float, float]:
+    """(grasp, approach, push) TCP heights for a part: the settings' for the cube, moved by the part's height.
+
+    The grasp holds the part through its centre of mass where the pads allow
+    (``ObjectType.grasp_height_m``); moves above the table rise with a taller part.
+    """
+    shift_m = object_type.grasp_height_m - CUBE.grasp_height_m
+    return (
+        settings.grasp_height_m + shift_m,
+        object_type.approach_height_m(settings.approach_height_m),
+        settings.push_height_m + shift_m,
+    )
+
+
+def open_stage(name: str, opening_m: float) -> GripperStage:
+    """Open the fingers to ``opening_m`` and wait for them."""
+    return GripperStage(name, lambda c: c.robot.gripper.open(opening_m))
+
+
+def close_stage(name: str, force_n: float) -> GripperStage:
+    """Close the fingers with ``force_n`` and wait for them to stop."""
+    return GripperStage(name, lambda c: c.robot.gripper.close(force_n))

@@ -1,0 +1,257 @@
+"""Pick: grasp a part at its measured pose, check the grip, square a pinched cube, lift."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
+from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
+from bt_arrange.behaviours.context import Context
+from bt_arrange.behaviours.moves import (
+    axis_yaw_offset_rad,
+    close_stage,
+    grasp_width_m,
+    heights_m,
+    line_to,
+    max_grip_width_m,
+    min_held_width_m,
+    open_stage,
+    to_pose,
+    wrist_yaw_rad,
+)
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose
+from bt_arrange.layout import Release
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, nearest_symmetric_yaw
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.settings import ManipulationSettings
+
+#: Pick's success feedback holds this when it squared a cube it had pinched across its corners.
+SQUARED_FEEDBACK = "squared from a"
+
+
+class Pick(StagedBehaviour):
+    """Grasp the object at its measured pose (``/<obj>/pose``) and lift it.
+
+    Approach above it with the pads square to its faces, descend, close with a force limit,
+    check from the finger width that the pads hold the cube across two faces, lift. A bad grasp
+    (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
+    lifting and fails with the width, so a retry can look and pick again.
+
+    A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned
+    about 27 degrees or more: its corners stick on the pads, and no closing force turns it) is
+    squared by contact first, as a real gripper's fingertips align the part
+    (``settings.squaring``): "shift" opens, moves ``squaring_shift_m`` along the pads so the
+    corner on one pad falls beyond its edge, closes (the pad's edge turns the face), opens, comes
+    back to the measured centre and closes again; "sweep" opens and sweeps ``squaring_sweep_m``
+    along the closing axis (towards the robot) so one pad pushes the cube's leading corner as a
+    flat fence, then closes there. Either turns the cube about a corner, so it ends off centre
+    along the pads: that offset shows up after placing. "turn" opens, turns the wrist by
+    ``squaring_turn_deg`` about the TCP's vertical axis at grasp height and closes: a cube pinched
+    at 27 to 45 degrees is then 4.5 to 22.5 degrees from the pads, and the centred close squares
+    it about its centre, as any cube turned less than about 27 degrees; a grip still that wide
+    (the cube was turned the other way) opens, turns to minus that from the measured yaw and
+    closes again. The decision reads only the finger width; the lift keeps the turned yaw (the
+    cube is square in the pads there, and Place turns it to the target's yaw modulo its
+    symmetry). Only a grip still that wide lets go and fails.
+    Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
+
+    ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
+    come down in the free room beside two faces and nowhere else.
+    """
+
+    def __init__(
+        self, name: str, obj: str, object_type: ObjectType | None = None, grasp: Release | None = None
+    ) -> None:
+        super().__init__(name)
+        self.obj = obj
+        #: The part's type: the pads close across its narrower side (``ObjectType.grasp_axis``).
+        self.object_type = object_type or CUBE
+        self.grasp = grasp
+        self.reads(keys.key(obj, keys.POSE))
+        if grasp is not None:
+            self.reads(keys.key(obj, keys.TARGET))
+        self.grip_width_m: float | None = None
+        self.bad_grasp: str | None = None
+        #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.
+        self.squared_from_width_m: float | None = None
+        self._sweep_m = np.zeros(2)
+        #: How far the wrist turned from the measured yaw to square a pinched cube (rad): the lift keeps it.
+        self.wrist_turn_rad = 0.0
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Open, approach, descend, close, check, lift."""
+        pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
+        s = context.settings
+        kind = self.object_type
+        grasp_m, approach_m, _ = heights_m(s, kind)
+        x, y = pose.x_m, pose.y_m
+        opening_m = s.open_width_m
+        if self.grasp is None:
+            yaw = nearest_symmetric_yaw(
+                pose.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+            )
+        else:
+            target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+            # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.
+            offset_rad = axis_yaw_offset_rad(self.grasp.axis)
+            across = target.yaw_rad + offset_rad
+            yaw = nearest_symmetric_yaw(
+                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.symmetry_rad),
+                wrist_yaw_rad(context),
+                GRIPPER_SYMMETRY_RAD,
+            )
+            opening_m = self.grasp.opening_m
+        self.squared_from_width_m = None
+        self._sweep_m = np.zeros(2)
+        self.wrist_turn_rad = 0.0
+        squaring: list[Stage] = []
+        if self.grasp is None and s.squaring != "off":
+            squaring = self._squaring_stages(s, x, y, grasp_m, yaw, opening_m)
+
+        def lift_plan(context: Context, q: FloatArray) -> Motion:
+            # Straight up from where the close ended (after a squaring sweep, that far along; after a
+            # squaring turn, at the turned yaw: the cube is square in the pads there).
+            return line_to(x + self._sweep_m[0], y + self._sweep_m[1], approach_m, yaw + self.wrist_turn_rad)(
+                context, q
+            )
+
+        return [
+            GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
+            MoveStage(stage.MOVE_ABOVE_CUBE, to_pose(x, y, approach_m, yaw)),
+            GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
+            MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw)),
+            GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
+            InstantStage(stage.CHECK_GRASP, self._check_grasp),
+            *squaring,
+            # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
+            OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
+            MoveStage(stage.LIFT_CUBE, lift_plan),
+            InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
+        ]
+
+    def _squaring_stages(
+        self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
+    ) -> list[Stage]:
+        """Stages that square a cube pinched across its corners, each run only after such a grip."""
+        if s.squaring == "turn":
+            return self._turn_stages(s, x, y, grasp_m, yaw, opening_m)
+        closing = np.array([math.cos(yaw), math.sin(yaw)])
+        towards_base = -math.copysign(1.0, float(closing @ np.array([x, y])))
+
+        def line(name: str, offset: FloatArray, pushing: bool = False) -> MoveStage:
+            def plan(context: Context, q: FloatArray) -> Motion:
+                self._sweep_m = offset
+                return line_to(x + offset[0], y + offset[1], grasp_m, yaw, pushing=pushing)(context, q)
+
+            return MoveStage(name, plan)
+
+        if s.squaring == "sweep":
+            steps: list[Stage] = [
+                open_stage(stage.OPEN_TO_SQUARE, opening_m),
+                line(stage.SWEEP_TO_SQUARE, closing * towards_base * s.squaring_sweep_m, pushing=True),
+                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+            ]
+        else:  # "shift"
+            along_pads = np.array([-math.sin(yaw), math.cos(yaw)]) * s.squaring_shift_m
+            steps = [
+                open_stage(stage.OPEN_TO_SQUARE, opening_m),
+                line(stage.SHIFT_ALONG_PADS, along_pads),
+                close_stage(stage.CLOSE_TO_SQUARE, s.grip_force_n),
+                open_stage(stage.OPEN_SQUARED_CUBE, opening_m),
+                line(stage.RECENTRE_ON_CUBE, np.zeros(2)),
+                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+            ]
+        steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
+        return [OnlyIf(step, self._turned) for step in steps]
+
+    def _turn_stages(
+        self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
+    ) -> list[Stage]:
+        """Squaring by a wrist turn: ``+squaring_turn_deg`` after a pinched grip, ``-`` only if still pinched.
+
+        The width alone tells which way the cube was turned: turned the other way, ``+`` leaves it
+        pinched (further from square), and ``-`` from the measured yaw brings it within reach.
+        """
+        turn_rad = math.radians(s.squaring_turn_deg)
+
+        def turn(name: str, turn_rad: float) -> MoveStage:
+            def plan(context: Context, q: FloatArray) -> Motion:
+                self.wrist_turn_rad = turn_rad
+                # At grasp height, about the TCP's vertical axis (the last wrist joint alone): the open
+                # pads (85 mm apart) clear a centred cube's corners (35.4 mm from its centre).
+                return to_pose(x, y, grasp_m, yaw + turn_rad)(context, q)
+
+            return MoveStage(name, plan)
+
+        one_way: list[Stage] = [
+            open_stage(stage.OPEN_TO_SQUARE, opening_m),
+            turn(stage.TURN_WRIST_TO_SQUARE, turn_rad),
+            close_stage(stage.CLOSE_ON_TURNED_CUBE, s.grip_force_n),
+            InstantStage(stage.CHECK_TURNED_GRASP, self._check_squared_grasp),
+        ]
+        other_way: list[Stage] = [
+            open_stage(stage.OPEN_TO_TURN_BACK, opening_m),
+            turn(stage.TURN_WRIST_OTHER_WAY, -turn_rad),
+            close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+            InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp),
+        ]
+        guarded: list[Stage] = [OnlyIf(step, self._turned) for step in one_way]
+        return guarded + [OnlyIf(step, self._still_turned) for step in other_way]
+
+    def _still_turned(self, context: Context) -> bool:
+        """A squaring close left the grip as wide as a pinch (the first wrist turn went the wrong way)."""
+        return self.squared_from_width_m is not None and self._turned(context)
+
+    def _turned(self, context: Context) -> bool:
+        """The first close pinched a turned cube across its corners (wider than a square grip)."""
+        high_m = max_grip_width_m(context.settings, self.object_type)
+        return self.grip_width_m is not None and self.grip_width_m > high_m
+
+    def _check_squared_grasp(self, context: Context) -> str | None:
+        """After a squaring close: record the first close's width (once), then check the new grip."""
+        if self.squared_from_width_m is None:
+            self.squared_from_width_m = self.grip_width_m
+        result = self._check_grasp(context)
+        if self.bad_grasp is not None:
+            assert self.squared_from_width_m is not None
+            self.bad_grasp += f" after squaring a {self.squared_from_width_m * 1000:.1f} mm grip"
+        return result
+
+    def _bad(self, context: Context) -> bool:
+        return self.bad_grasp is not None
+
+    def _check_grasp(self, context: Context) -> str | None:
+        """Record whether the pads hold the cube across two faces; never fails by itself."""
+        s = context.settings
+        self.grip_width_m = width = max(0.0, context.robot.gripper.width())
+        kind = self.object_type
+        low, high = min_held_width_m(s, kind), max_grip_width_m(s, kind)
+        side_mm = grasp_width_m(s, kind) * 1000
+        what = f"{side_mm:.0f} mm cube" if kind.square_top else f"{kind.name} ({side_mm:.0f} mm across)"
+        self.bad_grasp = None
+        if width < low:
+            self.bad_grasp = (
+                f"no cube between the pads: the fingers closed to {width * 1000:.1f} mm, "
+                f"a {what} holds them at least {low * 1000:.1f} mm apart"
+            )
+        elif width > high:
+            self.bad_grasp = (
+                f"the pads hold the cube across its corners: {width * 1000:.1f} mm apart, more than the "
+                f"{high * 1000:.1f} mm of a {what} held nearly square (it is turned)"
+            )
+        return None
+
+    def success_message(self) -> str:
+        """Feedback with the grip width."""
+        assert self.grip_width_m is not None
+        message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
+        if self.squared_from_width_m is not None:
+            turned = f", the wrist turned {math.degrees(self.wrist_turn_rad):+.1f} deg" if self.wrist_turn_rad else ""
+            message += (
+                f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners{turned})"
+            )
+        return message

@@ -1,0 +1,97 @@
+"""Place: carry the held part above its target (or back where it was picked), lower, release, retreat."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
+from bt_arrange.behaviours.base import GripperStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.context import Context
+from bt_arrange.behaviours.moves import (
+    axis_yaw_offset_rad,
+    heights_m,
+    line_to,
+    to_pose,
+    wrist_yaw_rad,
+)
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.geometry import PlanarPose, Pose, rotation_z
+from bt_arrange.layout import Release
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
+from bt_arrange.objects import CUBE, ObjectType
+
+
+class Place(StagedBehaviour):
+    """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat.
+
+    ``release`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    stand across that axis of the target's frame and open only to ``release.opening_m``, and a
+    staged release lets go ``release.offset_m`` (target frame) away from the target, where the
+    pads fit, for pushes to bring it home.
+
+    ``where="pick"`` sets the part down where it was picked (``/<obj>/pose``) instead: a part
+    about to go among neighbours is set down and looked at once more, so the next grasp is
+    centred on it and its offset in the pads (unknown while held) does not carry into a neighbour.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        object_type: ObjectType | None = None,
+        release: Release | None = None,
+        where: str = "target",
+    ) -> None:
+        super().__init__(name)
+        if where not in ("target", "pick"):
+            raise BtArrangeError(f"place {name!r}: where={where!r}, choose target or pick")
+        self.obj = obj
+        self.object_type = object_type or CUBE
+        self.release = release
+        self.where = where
+        self.reads(keys.key(obj, keys.TARGET))
+        if where == "pick":
+            self.reads(keys.key(obj, keys.POSE))
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Carry, lower, open, retreat."""
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+        s = context.settings
+        kind = self.object_type
+        grasp_m, approach_m, _ = heights_m(s, kind)
+        x, y = target.x_m, target.y_m
+        opening_m = s.open_width_m
+        if self.where == "pick":
+            picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
+            x, y = picked.x_m, picked.y_m
+            yaw = nearest_symmetric_yaw(
+                picked.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+            )
+        elif self.release is None:
+            # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
+            # will do (any quarter turn for a square top, a half turn otherwise).
+            yaw = nearest_symmetric_yaw(
+                target.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+            )
+        else:
+            offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
+            x, y = x + float(offset[0]), y + float(offset[1])
+            across = target.yaw_rad + axis_yaw_offset_rad(self.release.axis)
+            yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+            opening_m = self.release.opening_m
+        return [
+            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw)),
+            MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m)),
+            MoveStage(stage.RETREAT, line_to(x, y, approach_m, yaw)),
+        ]
+
+    def success_message(self) -> str:
+        """Feedback once released."""
+        if self.where == "pick":
+            return f"{self.obj} set down where it was picked, to be looked at and picked again"
+        if self.release is not None and self.release.staged:
+            dx, dy = self.release.offset_m
+            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target, to push home"
+        return f"{self.obj} released at its target"

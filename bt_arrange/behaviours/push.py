@@ -1,0 +1,333 @@
+"""Push: one corrective push of a placed part towards its target, by one of three strategies."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bt_arrange.behaviours import keys
+from bt_arrange.behaviours import stages as stage
+from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.context import Context
+from bt_arrange.behaviours.moves import (
+    heights_m,
+    line_to,
+    to_pose,
+    wrist_yaw_rad,
+)
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.geometry import PlanarPose, Pose, fold_yaw, rotation_z
+from bt_arrange.layout import DIRECTIONS
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
+from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.settings import ManipulationSettings
+
+#: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
+PUSH_STRATEGIES = ("paper", "learned", "diagonal")
+
+#: Strategy "diagonal": the most a push may move the cube across its axis, per millimetre along it.
+#: The pads drag the cube sideways by friction (pads 1.2 on the cube: slipping only beyond about
+#: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the cube.
+DIAGONAL_ACROSS_RATIO = 0.6
+
+
+class Push(StagedBehaviour):
+    """One corrective push along the target's x or y axis, alternating between pushes.
+
+    Reads the measured pose and the offset (``/<obj>/offset_xy_mm``, target minus pose in the
+    target's frame); pushes along ``/<obj>/push_axis`` (x first) by that axis' offset, unless it is
+    below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
+    opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
+    also squares the cube up); the pads start on the side away from the target, push, back off.
+
+    ``strategy="paper"`` (the default, and what Table 1 uses) is the paper's: alternate x and y,
+    push by the axis' offset. ``strategy="learned"`` is ours: push the axis with the larger offset,
+    and learn from each push's response where pushes along that axis land beyond their aim (the arm's
+    local calibration error as the camera sees it, which an absolute push never corrects by itself):
+    after a push along an axis aimed at ``aim``, the cube's measured position minus ``aim`` is added to
+    that axis' bias, and the next push along it aims the bias short of the target.
+
+    ``towards`` (directions of the target's frame, ``"+x"``, ``"-y"`` ...; default all four) are
+    the directions it may push: a side a neighbour blocks is never pushed from. When the offset
+    can only be corrected from a blocked side, Push fails saying so and writes the direction it
+    needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
+    pushed from.
+
+    ``strategy="diagonal"`` is "learned" whose push also corrects the other axis: the pads move
+    across the push by that axis' offset (at most ``DIAGONAL_ACROSS_RATIO`` of the push's length)
+    while they press on the face, and the cube follows them by friction, so one push can correct x
+    and y together. The sideways part is a relative motion of the pads, so the arm's absolute
+    error does not enter it and it is not learned. It moves sideways only towards a free side
+    (``towards``): a neighbour across the push is never shoved.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        strategy: str = "paper",
+        object_type: ObjectType | None = None,
+        yaw_threshold_deg: float | None = None,
+        *,
+        towards: tuple[str, ...] | None = None,
+        opening_m: float | None = None,
+    ) -> None:
+        super().__init__(name)
+        if strategy not in PUSH_STRATEGIES:
+            raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+        self.strategy = strategy
+        self.obj = obj
+        self.object_type = object_type or CUBE
+        #: With a yaw error (``/<obj>/yaw_error_deg``) at or above this, a push is made even when the
+        #: offset along its axis is below ``min_push_m``: the pads' line contact squares the part.
+        self.yaw_threshold_deg = yaw_threshold_deg
+        #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
+        #: width); default the paper's width minus a pad's thickness.
+        self.opening_m = opening_m
+        if towards is not None and any(d not in DIRECTIONS for d in towards):
+            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
+        self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
+        if yaw_threshold_deg is not None:
+            self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
+        # Push reads the axis it alternates from and writes the next one.
+        self.reads(keys.key(obj, keys.PUSH_AXIS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
+        if strategy in ("learned", "diagonal"):
+            for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
+                self.reads(keys.key(obj, field))
+                self.writes(keys.key(obj, field))
+        self.pushed: tuple[str, float] | None = None
+        #: Strategy "diagonal": the last push's sideways part (m, signed along the other axis).
+        self.across_m = 0.0
+        self.squaring = False
+
+    def stages(self, context: Context) -> list[Stage]:
+        """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
+        s = context.settings
+        pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
+        target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
+        offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
+        axis_key = keys.key(self.obj, keys.PUSH_AXIS)
+        preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
+        self.across_m = 0.0
+        if self.strategy in ("learned", "diagonal"):
+            axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
+            needed = ("+" if distance_m >= 0 else "-") + axis
+            choice: str | Blocked = axis
+            if abs(distance_m) >= s.min_push_m and needed not in self.towards:
+                choice = Blocked(needed, distance_m * 1000)
+            if self.strategy == "diagonal" and not isinstance(choice, Blocked):
+                across_mm = self.across_push_mm(offset_xy_mm, axis, distance_m * 1000, s.min_push_m * 1000)
+                # Sideways only towards a free side: a neighbour there is never shoved.
+                across_towards = ("+" if across_mm >= 0 else "-") + ("y" if axis == "x" else "x")
+                self.across_m = across_mm / 1000 if across_towards in self.towards else 0.0
+        else:
+            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
+            if not isinstance(choice, Blocked):
+                distance_m = (offset_xy_mm[0] if choice == "x" else offset_xy_mm[1]) / 1000
+        if isinstance(choice, Blocked):
+            self.pushed = None
+            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
+            blocked = choice
+            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+        axis = choice
+        self.write(axis_key, "y" if axis == "x" else "x")
+        self.pushed = (axis, distance_m)
+        self.squaring = False
+        if abs(distance_m) < s.min_push_m:
+            if not self._turned():
+                return []
+            # Within reach of the target but turned: a push of the line contact alone squares it.
+            self.squaring = True
+        sign = math.copysign(1.0, distance_m)
+        if self.squaring:
+            # A squaring push barely moves the part: make it from a free side, whichever sign.
+            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in self.towards]
+            if not free:
+                self.squaring = False
+                return []
+            sign = free[0]
+            distance_m = math.copysign(abs(distance_m), sign)
+            self.pushed = (axis, distance_m)
+        unit = np.array([1.0, 0.0, 0.0]) if axis == "x" else np.array([0.0, 1.0, 0.0])
+        direction = (rotation_z(target.yaw_rad) @ unit)[:2] * sign
+        heading = math.atan2(direction[1], direction[0])
+        # The closing axis lies across the push; the gripper is symmetric under a half turn.
+        yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+        opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
+        _, approach_m, push_m = heights_m(s, self.object_type)
+        centre = np.array([pose.x_m, pose.y_m])
+        begin = centre - direction * (reach_m + s.push_clearance_m)
+        end = centre - direction * reach_m + direction * abs(distance_m)
+        if self.across_m:
+            other = np.array([0.0, 1.0, 0.0]) if axis == "x" else np.array([1.0, 0.0, 0.0])
+            across = (rotation_z(target.yaw_rad) @ other)[:2] * self.across_m
+            # One straight line that meets the face where a straight push would and moves sideways
+            # by ``across`` over the part in contact: it starts that far the other way, scaled.
+            begin = begin - across * (s.push_clearance_m / abs(distance_m))
+            end = end + across
+        back = end - direction * s.push_clearance_m
+        if self.opening_m is not None:
+            # Among neighbours: the fingers stay within the face's width (the layout's opening).
+            opening_m = min(opening_m, self.opening_m)
+        return [
+            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
+            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw)),
+            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
+            MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw)),
+            MoveStage(stage.push(distance_m, axis), line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw)),
+            MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
+        ]
+
+    def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
+        """(opening, reach) for the face pushed along ``heading_rad``.
+
+        Both pads meet the face near its edges (the face's width less a pad's thickness, at most
+        the open width); the TCP stops half the part's depth along the push plus half a pad from
+        its centre when the pads touch. The settings' figures for the cube.
+
+        A part turned by ``phi`` from square to the push (``object_yaw_rad``, measured) leads with
+        a corner ``width / 2 cos phi - depth / 2 sin phi`` beside the push's line: the pads close
+        so that corner meets the middle of a pad (the opening ``width cos phi - depth sin phi``
+        less a pad's thickness; the paper's when square). Left in the gap between the pads, the
+        corner wedges there: each pad stops on one of the two faces beside it, which neither
+        squares the part nor pushes it home (a cube turned 9.4 deg, with the paper's opening,
+        stopped 4.2 mm short, turned 12.8 deg, and later pushes to the same line did not move it).
+        """
+        if self.object_type == CUBE:
+            width_m = depth_m = s.cube_edge_m
+            opening_m, reach_m = s.push_opening_m, s.push_reach_m
+        else:
+            width_m, depth_m = self.object_type.pushed_face(heading_rad, object_yaw_rad)
+            opening_m, reach_m = min(width_m - s.pad_thickness_m, s.open_width_m), depth_m / 2 + s.pad_width_m / 2
+        turn_rad = abs(fold_yaw(heading_rad - object_yaw_rad, math.pi / 2))
+        corner_m = width_m * math.cos(turn_rad) - depth_m * math.sin(turn_rad)
+        return max(0.0, min(opening_m, corner_m - s.pad_thickness_m)), reach_m
+
+    def _turned(self) -> bool:
+        """True when the measured yaw error is at or above ``yaw_threshold_deg``."""
+        if self.yaw_threshold_deg is None:
+            return False
+        yaw_key = keys.key(self.obj, keys.YAW_ERROR_DEG)
+        if not self.blackboard.exists(yaw_key):
+            return False
+        return abs(float(self.blackboard.get(yaw_key))) >= self.yaw_threshold_deg
+
+    def _learned_push(self, offset_xy_mm: tuple[float, float], min_push_mm: float) -> tuple[str, float]:
+        """Strategy "learned": update the bias from the last push's response, then choose axis and distance."""
+        bias_key, last_key = keys.key(self.obj, keys.PUSH_BIAS_MM), keys.key(self.obj, keys.LAST_PUSH)
+        known = tuple(self.blackboard.get(bias_key)) if self.blackboard.exists(bias_key) else (0.0, 0.0)
+        last = self.blackboard.get(last_key) if self.blackboard.exists(last_key) else None
+        bias, axis, distance_mm = self.plan_learned(offset_xy_mm, (known[0], known[1]), last, min_push_mm)
+        self.write(bias_key, bias)
+        index = 0 if axis == "x" else 1
+        # Where this push aims the cube, relative to the target along its axis: the bias short of it.
+        aim_mm = -bias[index] if abs(distance_mm) >= min_push_mm else None
+        self.write(last_key, (axis, aim_mm))
+        return axis, distance_mm / 1000
+
+    @staticmethod
+    def plan_learned(
+        offset_xy_mm: tuple[float, float],
+        bias_mm: tuple[float, float],
+        last_push: tuple[str, float | None] | None,
+        min_push_mm: float,
+    ) -> tuple[tuple[float, float], str, float]:
+        """The learned strategy's arithmetic: (new bias, axis, signed push distance in mm).
+
+        The cube's position relative to the target is minus the offset. After a push along ``axis``
+        aimed at ``aim`` (relative to the target), the push landed ``position - aim`` beyond its aim:
+        that is the axis' new bias (a push that fell short of the cube underestimates it, and the
+        next push reaches further). The next push goes along the axis of the larger offset and
+        aims at ``-bias``: it pushes ``offset - bias``.
+        """
+        bias = [float(bias_mm[0]), float(bias_mm[1])]
+        if last_push is not None and last_push[1] is not None:
+            index = 0 if last_push[0] == "x" else 1
+            bias[index] = -offset_xy_mm[index] - last_push[1]
+        # The axis whose corrected push is longer; below a push, the other one.
+        wanted = [offset_xy_mm[0] - bias[0], offset_xy_mm[1] - bias[1]]
+        axis = "x" if abs(wanted[0]) >= abs(wanted[1]) else "y"
+        if abs(wanted[0 if axis == "x" else 1]) < min_push_mm:
+            axis = "x" if abs(offset_xy_mm[0]) >= abs(offset_xy_mm[1]) else "y"
+        return (bias[0], bias[1]), axis, wanted[0 if axis == "x" else 1]
+
+    @staticmethod
+    def choose_side(
+        preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float, towards: tuple[str, ...]
+    ) -> str | Blocked:
+        """The axis to push along (as ``choose_axis``) among the free directions, or what blocks it.
+
+        An axis whose offset needs a push towards a direction not in ``towards`` is skipped; when
+        every axis with an offset of a push or more is so, the answer is ``Blocked``.
+        """
+        along = {"x": offset_xy_mm[0], "y": offset_xy_mm[1]}
+
+        def needs(axis: str) -> str:
+            return ("+" if along[axis] >= 0 else "-") + axis
+
+        axis = Push.choose_axis(preferred, offset_xy_mm, min_push_mm)
+        other = "y" if axis == "x" else "x"
+        if abs(along[axis]) < min_push_mm or needs(axis) in towards:
+            return axis
+        if abs(along[other]) >= min_push_mm and needs(other) in towards:
+            return other
+        return Blocked(needs(axis), along[axis])
+
+    @staticmethod
+    def across_push_mm(offset_xy_mm: tuple[float, float], axis: str, distance_mm: float, min_push_mm: float) -> float:
+        """Strategy "diagonal": how far (mm, signed) the push along ``axis`` also moves the cube across it.
+
+        The other axis' offset, at most ``DIAGONAL_ACROSS_RATIO`` times the push's length (the rest
+        is left to a later push); none below the shortest push, or when there is no push.
+        """
+        if abs(distance_mm) < min_push_mm:
+            return 0.0
+        wanted = offset_xy_mm[1] if axis == "x" else offset_xy_mm[0]
+        if abs(wanted) < min_push_mm:
+            return 0.0
+        limit = DIAGONAL_ACROSS_RATIO * abs(distance_mm)
+        return max(-limit, min(limit, float(wanted)))
+
+    @staticmethod
+    def choose_axis(preferred: str, offset_xy_mm: tuple[float, float], min_push_mm: float) -> str:
+        """The preferred (alternated) axis, unless its offset is below a push and the other's is not."""
+        other = "y" if preferred == "x" else "x"
+        along = {"x": abs(offset_xy_mm[0]), "y": abs(offset_xy_mm[1])}
+        if along[preferred] < min_push_mm <= along[other]:
+            return other
+        return preferred
+
+    def success_message(self) -> str:
+        """Feedback with the push made."""
+        assert self.pushed is not None
+        axis, distance_m = self.pushed
+        if self.squaring:
+            return f"squared the part with a push of {distance_m * 1000:+.2f} mm along {axis}"
+        if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
+            return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
+        if self.across_m:
+            other = "y" if axis == "x" else "x"
+            return f"pushed {distance_m * 1000:+.2f} mm along {axis}, {self.across_m * 1000:+.2f} mm along {other}"
+        return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
+
+
+@dataclass(frozen=True)
+class Blocked:
+    """A correction Push cannot make: the part must move ``towards`` (target frame) by ``offset_mm``."""
+
+    towards: str
+    offset_mm: float
+
+    def reason(self, obj: str) -> str:
+        """The feedback: which side, and what happens next."""
+        side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
+        return (
+            f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
+            "where a neighbour leaves the pads no room: pick it up and release it again "
+            "on the side it can be pushed from"
+        )
