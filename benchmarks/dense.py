@@ -18,7 +18,6 @@ from pathlib import Path
 
 from bt_arrange import treefile
 from bt_arrange.layout import Rect, gap_m
-from bt_arrange.settings import CUBE_EDGE_M
 from bt_arrange_sim.runs import SimulatedRun
 
 
@@ -36,9 +35,10 @@ def run_once(path: Path, seed: int, inject: str | None, inject_seed: int) -> dic
         report = run.run()
         names = [t.obj for t in root.targets]
         rects = {}
-        for name in names:
-            x, y, yaw = run.cell.cube_planar_truth(name)
-            rects[name] = Rect(x, y, yaw, CUBE_EDGE_M / 2, CUBE_EDGE_M / 2)
+        for target in root.targets:
+            x, y, yaw = run.cell.cube_planar_truth(target.obj)
+            half_x_m, half_y_m = (v / 2 for v in target.object_type.shape.extent_m)
+            rects[target.obj] = Rect(x, y, yaw, half_x_m, half_y_m)
     gaps = [gap_m(rects[a], rects[b]) for i, a in enumerate(names) for b in names[i + 1 :]]
     objects = report.to_dict()["objects"]
     return {

@@ -26,7 +26,7 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector
 from bt_arrange.plancheck import CameraView
-from bt_arrange_sim import CUBE_COLOURS_RGB, CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
+from bt_arrange_sim import PAINT_RGB, CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
 
 #: Cube centres: fully inside the image at 70 cm (the view spans about x 0.24..0.76 m and
 #: y -0.45..0.45 m at the height of the top faces) and within the UR5's reach.
@@ -41,9 +41,9 @@ def random_scene(
     rng: np.random.Generator, kind: ObjectType = CUBE, view: CameraView | None = None
 ) -> list[tuple[str, float, float, float]]:
     """One to four parts of different colours: (colour, x_m, y_m, yaw_rad), whole in ``view`` at any yaw."""
-    spacing_m = max(MIN_SPACING_M, 2 * kind.half_diagonal_m + 0.005)
-    count = int(rng.integers(1, len(CUBE_COLOURS_RGB) + 1))
-    colours = rng.permutation(sorted(CUBE_COLOURS_RGB))[:count]
+    spacing_m = max(MIN_SPACING_M, 2 * kind.shape.sweep_radius_m + 0.005)
+    count = int(rng.integers(1, len(PAINT_RGB) + 1))
+    colours = rng.permutation(sorted(PAINT_RGB))[:count]
     placed: list[tuple[str, float, float, float]] = []
     for colour in colours:
         while True:
@@ -52,8 +52,8 @@ def random_scene(
                 continue
             if (
                 view is not None
-                and kind != CUBE
-                and not view.sees_disc(x, y, kind.half_diagonal_m + 0.005, kind.height_m)
+                and kind.name != CUBE.name
+                and not view.sees_disc(x, y, kind.shape.sweep_radius_m + 0.005, kind.shape.height_m)
             ):
                 continue
             if all(math.hypot(x - px, y - py) >= spacing_m for _, px, py, _ in placed):
@@ -87,7 +87,7 @@ def measure_scene(
             assert detection.pose_world is not None
             pose = detection.pose_world
             cube["xy_error_mm"] = math.hypot(pose.x_m - true_x, pose.y_m - true_y) * 1000
-            cube["yaw_error_deg"] = abs(math.degrees(fold_yaw(pose.yaw_rad - true_yaw, kind.symmetry_rad)))
+            cube["yaw_error_deg"] = abs(math.degrees(fold_yaw(pose.yaw_rad - true_yaw, kind.shape.symmetry_rad)))
             if detection.pnp_pose_world is not None:
                 pnp = detection.pnp_pose_world
                 cube["pnp_xy_error_mm"] = math.hypot(pnp.x_m - true_x, pnp.y_m - true_y) * 1000

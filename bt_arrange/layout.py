@@ -25,8 +25,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from bt_arrange.errors import PlanError
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
+
+if TYPE_CHECKING:
+    from bt_arrange.settings import ManipulationSettings
 
 #: Directions a part can be pushed towards, in its target's frame.
 DIRECTIONS: dict[str, tuple[float, float]] = {"+x": (1.0, 0.0), "-x": (-1.0, 0.0), "+y": (0.0, 1.0), "-y": (0.0, -1.0)}
@@ -140,21 +145,17 @@ class Part:
 
 @dataclass(frozen=True)
 class Pads:
-    """What the pads and the placing need, in metres (the 2F-85: pads 22 mm wide, 8 mm thick)."""
+    """What the pads and the placing need among neighbours, in metres.
 
-    width_m: float = 0.022
-    thickness_m: float = 0.008
-    #: Widest opening: the stroke.
-    max_opening_m: float = 0.085
+    The gripper's own figures (pad size, finger depth, stroke, the clearance to a neighbour) are
+    its :class:`~bt_arrange.shapes.Gripper`'s; the rest is how the layout places and pushes.
+    """
+
+    gripper: Gripper = ROBOTIQ_2F85
+    #: Widest opening: the settings' open width (the stroke).
+    max_opening_m: float = ROBOTIQ_2F85.stroke_m
     #: Each pad opens this far from the face it released.
     release_gap_m: float = 0.003
-    #: How far a finger reaches out from the face its pad touches, at a resting part's height: the
-    #: pad is 8 mm thick, but the finger above it (which comes down to the top of a 5 cm cube at
-    #: grasp height) stands 3 mm further out (the URDF's finger box).
-    finger_depth_m: float = 0.011
-    #: A finger keeps this far from a neighbour's face (the arm's error and pybullet's 1 mm
-    #: collision margins; 1 mm was measured to shove a neighbour 1.6 mm).
-    pad_clearance_m: float = 0.002
     #: A part is lowered with this much room to a neighbour (the placing error).
     place_clearance_m: float = 0.0015
     #: The pads start this far behind a face they push.
@@ -165,20 +166,37 @@ class Pads:
     staging_steps_m: tuple[float, ...] = tuple(0.002 * k for k in range(2, 16))
 
     @classmethod
-    def from_settings(cls, settings: object) -> Pads:
-        """From ``ManipulationSettings`` (pad size, stroke, push clearance)."""
+    def from_settings(cls, settings: ManipulationSettings) -> Pads:
+        """From ``ManipulationSettings`` (the gripper, the open width, the push clearance)."""
         return cls(
-            width_m=float(getattr(settings, "pad_width_m", cls.width_m)),
-            thickness_m=float(getattr(settings, "pad_thickness_m", cls.thickness_m)),
-            finger_depth_m=float(getattr(settings, "pad_thickness_m", cls.thickness_m)) + 0.003,
-            max_opening_m=float(getattr(settings, "open_width_m", cls.max_opening_m)),
-            push_clearance_m=float(getattr(settings, "push_clearance_m", cls.push_clearance_m)),
+            gripper=settings.gripper,
+            max_opening_m=settings.open_width_m,
+            push_clearance_m=settings.push_clearance_m,
         )
 
-    def push_opening_m(self, part: Part, along: str) -> float:
-        """The opening for a push along ``along`` among neighbours: both fingers within the face's width."""
-        across = part.half("y" if along == "x" else "x")
-        return max(0.0, 2 * (across - self.finger_depth_m - self.pad_clearance_m))
+    @property
+    def width_m(self) -> float:
+        """A pad's width along the face it touches."""
+        return self.gripper.pad_width_m
+
+    @property
+    def thickness_m(self) -> float:
+        """A pad's thickness out from the face it touches."""
+        return self.gripper.pad_thickness_m
+
+    @property
+    def finger_depth_m(self) -> float:
+        """How far a finger reaches out from the face its pad touches (``Gripper.finger_depth_m``)."""
+        return self.gripper.finger_depth_m
+
+    @property
+    def pad_clearance_m(self) -> float:
+        """How far a finger keeps from a neighbour's face (``Gripper.neighbour_clearance_m``)."""
+        return self.gripper.neighbour_clearance_m
+
+    def neighbour_push_opening_m(self, part: Part, along: str) -> float:
+        """The opening for a push along ``along`` among neighbours (``Gripper.neighbour_push_opening_m``)."""
+        return self.gripper.neighbour_push_opening_m(2 * part.half("y" if along == "x" else "x"))
 
     def release_opening_m(self, part: Part, axis: str) -> float:
         """How far the pads open to release a part held across ``axis``."""
@@ -198,14 +216,14 @@ def release_pads(part: Part, at: Rect, axis: str, pads: Pads) -> list[Rect]:
 def push_pads(part: Part, at: Rect, towards: str, distance_m: float, pads: Pads) -> Rect:
     """The rectangle the pads sweep pushing ``part`` (at ``at``) ``distance_m`` towards ``towards``, then backing off.
 
-    The pads stand side by side along the face behind it (opened to ``Pads.push_opening_m``, so
+    The pads stand side by side along the face behind it (opened to ``Pads.neighbour_push_opening_m``, so
     the fingers stay within the face's width), start ``push_clearance_m`` behind it, are a pad's
     width deep, and travel with the face.
     """
     ux, uy = DIRECTIONS[towards]
     along = "x" if ux else "y"
     half_along = part.half(along)
-    half_across = pads.push_opening_m(part, along) / 2 + pads.finger_depth_m
+    half_across = pads.neighbour_push_opening_m(part, along) / 2 + pads.finger_depth_m
     sign = ux + uy
     # Behind the face, from the face's final place back to the start of the pads.
     near = half_along - distance_m

@@ -1,19 +1,13 @@
-"""Object types: what a user brings to the table, and the size-aware geometry every layer shares.
+"""Object types: what a user brings to the table, a named shape with the simulator's physics.
 
-An :class:`ObjectType` is a name and a size (x, y, z in metres, the cuboid's edges along its own
-axes; z is its height on the table). The paper's 5 cm cube is the built-in default, :data:`CUBE`.
-Mass and friction are settings of the simulator (``mass_kg``, ``lateral_friction``); the
-framework never reads them.
+An :class:`ObjectType` is a name and a :class:`~bt_arrange.shapes.Shape` (today a
+:class:`~bt_arrange.shapes.Cuboid` of ``size_m = (x, y, z)`` metres; z is its height on the
+table). The paper's 5 cm cube is the built-in default, :data:`CUBE`. Mass and friction are
+settings of the simulator (``mass_kg``, ``lateral_friction``); the framework never reads them.
 
-The geometry here is the one place that knows how big a part is:
-
-- its top face, footprint and symmetry (90 degrees for a square top, 180 otherwise);
-- how the 2F-85 grasps it (across the narrowest horizontal side that fits the stroke, at a height
-  through the centre of mass where the pads allow) and pushes it (the opening and reach of the
-  face pushed);
-- where a part starts in a scene (:class:`ObjectStart`).
-
-No pybullet, no OpenCV: perception, behaviours, plan checks and the cell all call this module.
+The geometry (top face, footprint, symmetry, grasps, pushed faces) is the shape's
+(``bt_arrange.shapes``): this module only names types and says where a part starts in a scene
+(:class:`ObjectStart`).
 """
 
 from __future__ import annotations
@@ -21,162 +15,73 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from bt_arrange.errors import PlanError
-from bt_arrange.geometry import FloatArray, fold_yaw, rotation_z
-
-#: The 2F-85's stroke: the widest opening, metres.
-GRIPPER_STROKE_M = 0.085
-#: A side the fingers close across must leave this much of the stroke free (each side of the part
-#: together): room for the part's measured position to be off a little as the pads come down.
-GRASP_CLEARANCE_M = 0.005
-#: The pads' half height (TCP at mid-pad) and the room kept between a pad's bottom and the
-#: table when grasping or pushing (more than the 3 mm the kinematics demand of any pose).
-PAD_HALF_HEIGHT_M = 0.01875
-PAD_TABLE_CLEARANCE_M = 0.004
-#: The thinnest part the camera and the pads handle (each edge), and the tallest (its height).
-MIN_EDGE_M = 0.015
-MAX_HEIGHT_M = 0.10
+from bt_arrange.shapes import ROBOTIQ_2F85, Cuboid, Shape
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ObjectType:
-    """A cuboid of ``size_m = (x, y, z)`` metres: ``x`` and ``y`` across its top face, ``z`` its height.
+    """A named part type: its ``shape``, and the simulator's ``mass_kg`` and ``lateral_friction`` (None: the cell's).
 
-    ``mass_kg`` and ``lateral_friction`` are simulator settings (None: the cell's defaults).
-    A type's checks (positive size, one side the gripper spans) run when it is made, so a bad type
-    is a ``PlanError`` naming it.
+    ``ObjectType(name, size_m)`` is a cuboid of ``size_m = (x, y, z)`` metres; ``shape=`` takes
+    any :class:`~bt_arrange.shapes.Shape`. A type's checks (positive size, one grasp the 2F-85 can
+    take) run when it is made, so a bad type is a ``PlanError`` naming it.
     """
 
     name: str
-    size_m: tuple[float, float, float]
+    shape: Shape
     mass_kg: float | None = None
     lateral_friction: float | None = None
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise PlanError(f"an object type needs a name, got {self.name!r}")
-        size = self.size_m
-        if (
-            not isinstance(size, (tuple, list))
-            or len(size) != 3
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in size)
-        ):
-            raise PlanError(f"object type {self.name!r}: size must be three numbers (x, y, z in metres), got {size!r}")
-        object.__setattr__(self, "size_m", tuple(float(v) for v in size))
-        if min(self.size_m) <= 0:
-            raise PlanError(f"object type {self.name!r}: size {self.size_text} has an edge that is not positive")
-        if min(self.size_m) < MIN_EDGE_M:
-            raise PlanError(
-                f"object type {self.name!r}: size {self.size_text} has an edge under {MIN_EDGE_M * 1000:.0f} mm, "
-                "too thin for the pads and the camera"
-            )
-        if self.size_m[2] > MAX_HEIGHT_M:
-            raise PlanError(
-                f"object type {self.name!r}: {self.size_m[2] * 1000:g} mm tall, "
-                f"taller than {MAX_HEIGHT_M * 1000:.0f} mm"
-            )
-        if min(self.size_m[0], self.size_m[1]) > max_grasp_width_m():
-            raise PlanError(
-                f"object type {self.name!r}: size {self.size_text} has no horizontal side the gripper can span "
-                f"(the 2F-85 closes across at most {max_grasp_width_m() * 1000:.0f} mm: its "
-                f"{GRIPPER_STROKE_M * 1000:.0f} mm stroke less {GRASP_CLEARANCE_M * 1000:.0f} mm of clearance)"
-            )
-        for label, value in (("mass_kg", self.mass_kg), ("lateral_friction", self.lateral_friction)):
+    def __init__(
+        self,
+        name: str,
+        size_m: tuple[float, float, float] | None = None,
+        mass_kg: float | None = None,
+        lateral_friction: float | None = None,
+        *,
+        shape: Shape | None = None,
+    ) -> None:
+        if not isinstance(name, str) or not name:
+            raise PlanError(f"an object type needs a name, got {name!r}")
+        if shape is None:
+            if (
+                not isinstance(size_m, (tuple, list))
+                or len(size_m) != 3
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in size_m)
+            ):
+                raise PlanError(f"object type {name!r}: size must be three numbers (x, y, z in metres), got {size_m!r}")
+            shape = Cuboid((float(size_m[0]), float(size_m[1]), float(size_m[2])))
+        elif size_m is not None:
+            raise PlanError(f"object type {name!r}: give a size or a shape, not both")
+        problems = shape.problems(ROBOTIQ_2F85)
+        if problems:
+            raise PlanError(f"object type {name!r}: {problems[0]}")
+        for label, value in (("mass_kg", mass_kg), ("lateral_friction", lateral_friction)):
             if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise PlanError(f"object type {self.name!r}: {label} must be a positive number, got {value!r}")
+                raise PlanError(f"object type {name!r}: {label} must be a positive number, got {value!r}")
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "shape", shape)
+        object.__setattr__(self, "mass_kg", mass_kg)
+        object.__setattr__(self, "lateral_friction", lateral_friction)
 
-    # -- shape -----------------------------------------------------------------------------
+    @property
+    def size_m(self) -> tuple[float, float, float]:
+        """The part's bounding box (x, y along its frame, z its height): a cuboid's edges."""
+        x_m, y_m = self.shape.extent_m
+        return (float(x_m), float(y_m), float(self.shape.height_m))
 
     @property
     def size_text(self) -> str:
-        """The size in millimetres, e.g. ``80 x 40 x 40 mm``."""
-        return " x ".join(f"{v * 1000:g}" for v in self.size_m) + " mm"
+        """The shape in millimetres, e.g. ``80 x 40 x 40 mm``."""
+        return self.shape.describe()
 
-    @property
-    def height_m(self) -> float:
-        """The height of the top face above the table."""
-        return self.size_m[2]
-
-    @property
-    def top_size_m(self) -> tuple[float, float]:
-        """The top face's edges (x, y)."""
-        return self.size_m[0], self.size_m[1]
-
-    @property
-    def square_top(self) -> bool:
-        """True when the top face is a square (within 0.5 mm)."""
-        return abs(self.size_m[0] - self.size_m[1]) < 0.0005
-
-    @property
-    def symmetry_rad(self) -> float:
-        """The turn that shows the same top face: 90 degrees for a square top, 180 otherwise."""
-        return math.pi / 2 if self.square_top else math.pi
-
-    @property
-    def half_diagonal_m(self) -> float:
-        """Half the top face's diagonal: the radius of the circle the part sweeps as it turns."""
-        return 0.5 * math.hypot(self.size_m[0], self.size_m[1])
-
-    @property
-    def is_cube(self) -> bool:
-        """True for a cube (all three edges equal within 0.5 mm)."""
-        return self.square_top and abs(self.size_m[0] - self.size_m[2]) < 0.0005
-
-    def fold_yaw(self, yaw_rad: float) -> float:
-        """A yaw folded to the shape's symmetry: ``[-45, 45)`` degrees for a square top, ``[-90, 90)`` otherwise."""
-        return fold_yaw(yaw_rad, self.symmetry_rad)
-
-    def yaw_error_rad(self, measured_yaw_rad: float, target_yaw_rad: float) -> float:
-        """Measured minus target yaw, folded to the symmetry (signed)."""
-        return fold_yaw(measured_yaw_rad - target_yaw_rad, self.symmetry_rad)
-
-    def footprint_m(self, x_m: float, y_m: float, yaw_rad: float) -> FloatArray:
-        """The four corners (4 x 2, counter-clockwise) of the part's footprint at (x, y, yaw) on the table."""
-        hx, hy = self.size_m[0] / 2, self.size_m[1] / 2
-        local = np.array([[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]])
-        return (rotation_z(yaw_rad) @ local.T).T[:, :2] + np.array([x_m, y_m])
-
-    # -- grasp -----------------------------------------------------------------------------
-
-    @property
-    def grasp_axis(self) -> str:
-        """The object axis ("x" or "y") the fingers close along: across the narrower side that fits."""
-        return "x" if self.size_m[0] <= self.size_m[1] else "y"
-
-    @property
-    def grasp_width_m(self) -> float:
-        """The side the pads close on."""
-        return min(self.size_m[0], self.size_m[1])
-
-    @property
-    def grasp_yaw_offset_rad(self) -> float:
-        """Gripper yaw minus object yaw for a grasp (the closing axis lies along the gripper's yaw)."""
-        return 0.0 if self.grasp_axis == "x" else math.pi / 2
-
-    @property
-    def grasp_height_m(self) -> float:
-        """TCP height (mid-pad) that holds the part through its centre of mass, or as low as the pads allow."""
-        return max(self.size_m[2] / 2, PAD_HALF_HEIGHT_M + PAD_TABLE_CLEARANCE_M)
-
-    def approach_height_m(self, cube_approach_height_m: float) -> float:
-        """The height of moves above the table: the cube's, raised by however much taller the part is."""
-        return cube_approach_height_m + max(0.0, self.size_m[2] - CUBE.size_m[2])
-
-    # -- push ------------------------------------------------------------------------------
-
-    def pushed_face(self, push_direction_rad: float, object_yaw_rad: float) -> tuple[float, float]:
-        """(width, depth) of the face pushed along ``push_direction_rad``: across the push, and the part along it."""
-        relative = fold_yaw(push_direction_rad - object_yaw_rad, math.pi)
-        along_x = abs(math.cos(relative)) >= abs(math.sin(relative))
-        # Pushing along the object's x axis meets the face that spans its y edge.
-        return (self.size_m[1], self.size_m[0]) if along_x else (self.size_m[0], self.size_m[1])
-
-
-def max_grasp_width_m() -> float:
-    """The widest side the fingers close across (the stroke less the clearance)."""
-    return GRIPPER_STROKE_M - GRASP_CLEARANCE_M
+    def resized(self, grown_m: float) -> ObjectType:
+        """The same type with every edge ``grown_m`` longer (a real cell's machining error); cuboids only."""
+        if not isinstance(self.shape, Cuboid):
+            return self
+        grown = Cuboid(tuple(v + grown_m for v in self.shape.size_m))  # type: ignore[arg-type]
+        return ObjectType(self.name, None, self.mass_kg, self.lateral_friction, shape=grown)
 
 
 #: The paper's 5 cm cube of hard wood (the default type).
@@ -226,11 +131,6 @@ def object_type_of(thing: object) -> ObjectType:
     """The type of a target or a start (anything with ``object_type``), the cube when it has none."""
     value = getattr(thing, "object_type", None)
     return value if isinstance(value, ObjectType) else CUBE
-
-
-def min_centre_distance_m(first: ObjectType, second: ObjectType) -> float:
-    """Centres of two parts closer than this may overlap at some yaw (the sum of their half diagonals)."""
-    return first.half_diagonal_m + second.half_diagonal_m
 
 
 def kind_of(thing: object) -> tuple[ObjectType, str]:

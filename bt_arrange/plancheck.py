@@ -32,14 +32,15 @@ import numpy as np
 
 from bt_arrange.checks import finite_number
 from bt_arrange.errors import PlanError, UnreachableError
-from bt_arrange.geometry import Pose, rotation_z
+from bt_arrange.geometry import Pose
 from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.objects import CUBE, ObjectType, min_centre_distance_m, object_type_of
+from bt_arrange.objects import ObjectType, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Cuboid, folded_yaw, footprint_m, grown, min_centre_distance_m
 from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
@@ -59,40 +60,25 @@ class CameraView:
     camera_pose_world: Pose
     margin_m: float = VIEW_MARGIN_M
 
-    def face_pixels(self, x_m: float, y_m: float, yaw_rad: float, half_side_m: float, z_m: float) -> np.ndarray:
-        """Pixels (4x2) of the corners of a level square of half-side ``half_side_m`` at (x, y, z, yaw)."""
-        square = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]) * half_side_m
-        corners = (rotation_z(yaw_rad) @ square.T).T + np.array([x_m, y_m, z_m])
-        return project_world(self.intrinsics, self.camera_pose_world, corners)
-
-    def sees_face(self, x_m: float, y_m: float, yaw_rad: float, cube_edge_m: float) -> bool:
-        """True when the top face of a cube at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
-        depth = (
-            np.array([x_m, y_m, cube_edge_m]) - self.camera_pose_world.position_m
-        ) @ self.camera_pose_world.rotation
-        if depth[2] <= 0:
-            return False
-        pixels = self.face_pixels(x_m, y_m, yaw_rad, cube_edge_m / 2 + self.margin_m, cube_edge_m)
-        width, height = self.intrinsics.width_px, self.intrinsics.height_px
-        return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
-
-    def sees_part(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
-        """True when the top face of a part at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
-        if object_type == CUBE:
-            return self.sees_face(x_m, y_m, yaw_rad, object_type.size_m[0])
-        return self._sees_box(x_m, y_m, yaw_rad, object_type)
-
-    def _sees_box(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
-        hx, hy = (v / 2 + self.margin_m for v in object_type.top_size_m)
-        z_m = object_type.height_m
-        box = np.array([[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]])
-        corners = (rotation_z(yaw_rad) @ box.T).T + np.array([x_m, y_m, z_m])
+    def sees_outline(self, corners_m: np.ndarray, z_m: float) -> bool:
+        """True when a level polygon (N x 2 corners, metres) at height ``z_m`` lies inside the image."""
+        corners = np.column_stack([corners_m, np.full(len(corners_m), z_m)])
         depth = (corners - self.camera_pose_world.position_m) @ self.camera_pose_world.rotation
         if np.any(depth[:, 2] <= 0):
             return False
         pixels = project_world(self.intrinsics, self.camera_pose_world, corners)
         width, height = self.intrinsics.width_px, self.intrinsics.height_px
         return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
+
+    def sees_face(self, x_m: float, y_m: float, yaw_rad: float, edge_m: float) -> bool:
+        """True when the top face of a cube of ``edge_m`` at (x, y, yaw), grown by ``margin_m``, is in the image."""
+        return self.sees_part(x_m, y_m, yaw_rad, ObjectType("cube", (edge_m, edge_m, edge_m)))
+
+    def sees_part(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
+        """True when the top face of a part at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
+        shape = object_type.shape
+        corners = footprint_m(grown(shape, self.margin_m), x_m, y_m, yaw_rad)
+        return self.sees_outline(corners, shape.height_m)
 
     def sees_disc(self, x_m: float, y_m: float, radius_m: float, z_m: float, samples: int = 32) -> bool:
         """True when a level disc (``samples`` points of its rim) at height ``z_m`` lies inside the image.
@@ -108,15 +94,10 @@ class CameraView:
         width, height = self.intrinsics.width_px, self.intrinsics.height_px
         return bool(np.all(pixels >= 0) and np.all(pixels[:, 0] <= width - 1) and np.all(pixels[:, 1] <= height - 1))
 
-    def sees_face_at_any_yaw(self, x_m: float, y_m: float, cube_edge_m: float) -> bool:
-        """True when a cube at (x, y) passes ``sees_face`` whatever its yaw (1 mm spare for the rim's sampling)."""
-        radius_m = (cube_edge_m / 2 + self.margin_m) * math.sqrt(2.0) + 0.001
-        return self.sees_disc(x_m, y_m, radius_m, cube_edge_m)
+    def table_extent_m(self, top_z_m: float) -> tuple[float, float, float, float]:
+        """What the image covers (x_min, x_max, y_min, y_max) on the plane of top faces at ``top_z_m``.
 
-    def table_extent_m(self, cube_edge_m: float) -> tuple[float, float, float, float]:
-        """Where a square cube's centre can be (x_min, x_max, y_min, y_max): the view at the top face's height.
-
-        An outer box of the image's corners on that plane, for messages; ``sees_face`` decides.
+        An outer box of the image's corners on that plane, for messages; ``sees_part`` decides.
         """
         corners_px = np.array(
             [
@@ -126,7 +107,7 @@ class CameraView:
                 [0.0, self.intrinsics.height_px - 1.0],
             ]
         )
-        points = [pixel_on_plane(self.intrinsics, self.camera_pose_world, p, cube_edge_m) for p in corners_px]
+        points = [pixel_on_plane(self.intrinsics, self.camera_pose_world, p, top_z_m) for p in corners_px]
         xy = np.array([p[:2] for p in points if p is not None])
         if len(xy) == 0:
             return (math.nan, math.nan, math.nan, math.nan)
@@ -186,18 +167,20 @@ def check_scene(
         kind = object_type_of(start)
         where = f"cube {_start_name(start)} starts at ({start.x_m:.3f}, {start.y_m:.3f}) m"
         if view is not None and not view.sees_part(start.x_m, start.y_m, start.yaw_rad, kind):
-            raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.height_m)}")
-        grasp_m = settings.grasp_height_m + (kind.grasp_height_m - CUBE.grasp_height_m)
-        pick = gripper_down_pose(start.x_m, start.y_m, grasp_m, kind.fold_yaw(start.yaw_rad))
+            raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.shape.height_m)}")
+        grasp_m, _, _ = settings.tcp_heights_m(kind.shape)
+        pick = gripper_down_pose(start.x_m, start.y_m, grasp_m, folded_yaw(kind.shape, start.yaw_rad))
         try:
             kinematics.check_reachable(pick)
         except UnreachableError as error:
             raise PlanError(f"{where}, out of the arm's reach: {error}") from error
         for other in scene[index:]:
             distance_m = math.hypot(start.x_m - other.x_m, start.y_m - other.y_m)
-            least_m = min_centre_distance_m(kind, object_type_of(other))
+            other_shape = object_type_of(other).shape
+            least_m = min_centre_distance_m(kind.shape, other_shape)
             if distance_m < least_m:
-                what = "a cube's diagonal" if kind == CUBE and object_type_of(other) == CUBE else "their half diagonals"
+                cubes = kind.shape == other_shape and isinstance(other_shape, Cuboid) and other_shape.is_cube
+                what = "a cube's diagonal" if cubes else "their half diagonals"
                 raise PlanError(
                     f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
                     f"closer than {what} ({least_m * 1000:.0f} mm), they would overlap"
@@ -205,8 +188,8 @@ def check_scene(
     return scene
 
 
-def _view_text(view: CameraView, edge_m: float) -> str:
-    x0, x1, y0, y1 = view.table_extent_m(edge_m)
+def _view_text(view: CameraView, top_z_m: float) -> str:
+    x0, x1, y0, y1 = view.table_extent_m(top_z_m)
     if not all(math.isfinite(v) for v in (x0, x1, y0, y1)):
         return ""
     return (
@@ -238,7 +221,7 @@ def check_plan(
     if view is not None:
         for target in plan:
             if not view.sees_part(target.x_m, target.y_m, target.yaw_rad, target.object_type):
-                height_m = target.object_type.height_m
+                height_m = target.object_type.shape.height_m
                 raise PlanError(
                     f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is outside the camera's view"
                     f"{_view_text(view, height_m)}: the cube could be placed there but never inspected"
@@ -267,11 +250,8 @@ def check_plan(
             if _start_name(start) == part.name:
                 continue
             start_kind = object_type_of(start)
-            # The start's own size (a cube's from the settings' edge): the circle it sweeps as it turns.
-            half_diagonal_m = (
-                settings.cube_edge_m * math.sqrt(2) / 2 if start_kind == CUBE else start_kind.half_diagonal_m
-            )
-            need_m = start_clearance_m(half_diagonal_m, pads)
+            # The circle the start's top face sweeps as it turns.
+            need_m = start_clearance_m(start_kind.shape.sweep_radius_m, pads)
             gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
             if gap < need_m:
                 raise PlanError(

@@ -15,13 +15,14 @@ from numpy.typing import NDArray
 
 from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 
-#: Robotiq 2F-85 stroke: the opening between the finger pads, in metres.
-GRIPPER_MAX_WIDTH_M = 0.085
+#: Robotiq 2F-85 stroke: the opening between the finger pads, in metres (``ROBOTIQ_2F85``).
+GRIPPER_MAX_WIDTH_M = ROBOTIQ_2F85.stroke_m
 #: Robotiq 2F-85 grip force range, in newtons.
-GRIPPER_FORCE_RANGE_N = (20.0, 235.0)
+GRIPPER_FORCE_RANGE_N = ROBOTIQ_2F85.force_range_n
 #: Robotiq 2F-85 closing speed range, in metres per second.
-GRIPPER_SPEED_RANGE_M_S = (0.020, 0.150)
+GRIPPER_SPEED_RANGE_M_S = ROBOTIQ_2F85.speed_range_m_s
 
 
 @runtime_checkable

@@ -53,10 +53,11 @@ from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Pads, Part, Release, Step, free_push_directions, plan_layout, restage_releases
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
-from bt_arrange.objects import CUBE, ObjectType, PartOnTable, kind_of
+from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
-from bt_arrange.perception.depth_grasp import DepthGraspEstimator
+from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Gripper
 
 CORRECT_MODES = ("each", "after_all")
 #: The yaw error (degrees) the correction loop leaves by default.
@@ -130,8 +131,7 @@ def validate_targets(
     checked = [target for target in plan if isinstance(target, Target)]
     kinematics = kinematics or ArmKinematics()
     for target in checked:
-        grasp_m = settings.grasp_height_m + (target.object_type.grasp_height_m - CUBE.grasp_height_m)
-        approach_m = target.object_type.approach_height_m(settings.approach_height_m)
+        grasp_m, approach_m, _ = settings.tcp_heights_m(target.object_type.shape)
         for height_m in (grasp_m, approach_m):
             try:
                 kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
@@ -159,29 +159,24 @@ def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
     }
 
 
-def footprint_m(target: Target, settings: ManipulationSettings | None = None) -> tuple[float, float]:
-    """The part's size on the table (x, y in its own frame, metres): its type's top face.
-
-    The cube's is the settings' edge (``cube_edge_m``, 50 mm unless a test changes it).
-    """
-    kind = getattr(target, "object_type", CUBE)
-    if kind == CUBE:
-        edge = (settings or ManipulationSettings()).cube_edge_m
-        return edge, edge
-    return float(kind.top_size_m[0]), float(kind.top_size_m[1])
+def footprint_m(target: Target) -> tuple[float, float]:
+    """The part's size on the table (x, y in its own frame, metres): its shape's top face."""
+    x_m, y_m = object_type_of(target).shape.extent_m
+    return float(x_m), float(y_m)
 
 
 def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
-    """The plan's targets as footprints for ``bt_arrange.layout``, each held only across a side the stroke spans."""
+    """The plan's targets as footprints for ``bt_arrange.layout``, each held only by the grasps its shape offers."""
+    gripper = (settings or ManipulationSettings()).gripper
     return [
-        Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t, settings), grasp_axes=_grasp_axes(t.object_type))
+        Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t), grasp_axes=_grasp_axes(t.object_type, gripper))
         for t in targets
     ]
 
 
-def _grasp_axes(kind: ObjectType) -> tuple[str, ...]:
-    """The axes of the part's frame the pads may close across: its grasp axis, and the other too on a square top."""
-    return ("x", "y") if kind.square_top else (kind.grasp_axis,)
+def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
+    """The axes of the part's frame the pads may close across: those of its shape's grasps."""
+    return tuple(grasp.axis for grasp in kind.shape.grasps(gripper))
 
 
 def plan_steps(
@@ -240,9 +235,10 @@ def by_depth(
     ``seed`` seeds the depth noise (each attempt draws afresh), ``near_xy_m`` is the optional
     colour-blind hint; see :class:`~bt_arrange.behaviours.EstimateGraspFromDepth`.
     """
+    known = (estimator.config if estimator is not None else DepthGraspConfig()).part
 
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
-        if target.object_type != CUBE:
+        if target.object_type != known:
             raise PlanError(
                 f"target {target.obj}: the depth-only grasp estimator knows the paper's 5 cm cube only, "
                 f"not a {target.object_type.name} ({target.object_type.size_text})"
@@ -423,6 +419,7 @@ def arrange_one(
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
     kind_of_neighbour: Mapping[str, Sequence[PlanarPose]] | None = None,
+    settings: ManipulationSettings | None = None,
 ) -> py_trees.behaviour.Behaviour:
     """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds.
 
@@ -431,8 +428,10 @@ def arrange_one(
     each with the directions it may be pushed and its restaging once this one is down: each is
     looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
     ``kind_targets`` (identical parts) are the targets of its kind; ``kind_of_neighbour`` gives
-    a neighbour's.
+    a neighbour's. ``settings`` are the run's (the pads' figures among neighbours).
     """
+    settings = settings or ManipulationSettings()
+    pads = Pads.from_settings(settings)
     obj = target.obj
     dense = step is not None and _is_dense(step)
     release = step.release if dense and step is not None else None
@@ -451,7 +450,7 @@ def arrange_one(
             kind_targets=kind_targets,
             towards=towards,
             restage=restage,
-            push_opening_m=_opening(step, dense),
+            push_opening_m=_opening(step, dense, pads),
         ),
     ]
     for neighbour, sides, again in neighbours:
@@ -479,7 +478,7 @@ def arrange_one(
                         kind_targets=neighbour_kind,
                         towards=sides,
                         restage=again,
-                        push_opening_m=_DENSE_PADS.push_opening_m(parts_of([neighbour])[0], "x"),
+                        push_opening_m=pads.neighbour_push_opening_m(parts_of([neighbour], settings)[0], "x"),
                         count=False,
                         label=label,
                     ),
@@ -489,12 +488,9 @@ def arrange_one(
     return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
 
 
-_DENSE_PADS = Pads.from_settings(ManipulationSettings())
-
-
-def _opening(step: Step | None, dense: bool) -> float | None:
+def _opening(step: Step | None, dense: bool, pads: Pads) -> float | None:
     """The push opening among neighbours (along x; Push keeps it within the pushed face's own width), None when free."""
-    return _DENSE_PADS.push_opening_m(step.part, "x") if dense and step is not None else None
+    return pads.neighbour_push_opening_m(step.part, "x") if dense and step is not None else None
 
 
 def _dense_release(step: Step) -> Release | None:
@@ -523,6 +519,7 @@ class Arrangement(py_trees.composites.Sequence):
         place_all: py_trees.behaviour.Behaviour | None = None,
         yaw_threshold_deg: float | None = None,
         colours: ColourTable | None = None,
+        settings: ManipulationSettings | None = None,
     ) -> None:
         super().__init__(name=name, memory=True, children=list(children))
         self.targets = targets
@@ -532,6 +529,8 @@ class Arrangement(py_trees.composites.Sequence):
         self.yaw_threshold_deg = yaw_threshold_deg
         #: The colour table the plan's colours come from: the cell paints with it, the camera reads it.
         self.colours = colours if colours is not None else DEFAULT_COLOUR_TABLE
+        #: The handling settings the plan was checked and built with: the run's context uses them too.
+        self.settings = settings if settings is not None else ManipulationSettings()
 
 
 def arrangement(
@@ -547,6 +546,7 @@ def arrangement(
     strategy: str = "paper",
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     colours: ColourTable | Mapping[str, object] | None = None,
+    settings: ManipulationSettings | None = None,
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -565,24 +565,27 @@ def arrangement(
     ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
     position only). ``colours`` is the colour table of the plan (default the cell's four; a
     user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
+    ``settings`` (default ``ManipulationSettings()``) are the handling settings the plan is checked
+    and built with; the tree keeps them (``Arrangement.settings``) and a run hands them to the context.
     """
+    settings = settings or ManipulationSettings()
     check_strategy(strategy)
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
-    check_threshold(threshold_mm)
+    check_threshold(threshold_mm, settings)
     whole_number("max_pushes", max_pushes)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
     if colours is not None and not isinstance(colours, ColourTable):
         raise PlanError(f"colours must be a ColourTable (bt_arrange.perception), got {type(colours).__name__}")
     table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
-    plan = validate_targets(targets, colours=table.names)
+    plan = validate_targets(targets, colours=table.names, settings=settings)
     siblings = kinds(plan)
-    steps = plan_steps(plan, order=order)
+    steps = plan_steps(plan, settings, order=order)
     steps_by_obj = {st.part.name: st for st in steps}
     by_obj = {t.obj: t for t in plan}
     ordered = [by_obj[st.part.name] for st in steps]
-    pads = Pads.from_settings(ManipulationSettings())
+    pads = Pads.from_settings(settings)
 
     def carry_on(subtree: py_trees.behaviour.Behaviour, obj: str) -> py_trees.behaviour.Behaviour:
         if not keep_going:
@@ -614,6 +617,7 @@ def arrangement(
                 yaw_threshold_deg=yaw_threshold_deg,
                 kind_targets=siblings.get(target.obj, ()),
                 kind_of_neighbour=siblings,
+                settings=settings,
             )
             children.append(carry_on(subtree, target.obj))
     else:
@@ -688,4 +692,5 @@ def arrangement(
         place_all=children[0] if correct == "after_all" else None,
         yaw_threshold_deg=None if yaw_threshold_deg is None else float(yaw_threshold_deg),
         colours=table,
+        settings=settings,
     )

@@ -6,12 +6,11 @@ It implements the robot interfaces of ``bt_arrange.robot`` for a simulated UR5 w
 
 from bt_arrange_sim.cell import HOME_Q, CameraConfig, CellConfig, PhysicsConfig, WorkCell
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
-from bt_arrange_sim.objects import CUBE_COLOURS_RGB, CUBE_EDGE_M, Contact
+from bt_arrange_sim.objects import PAINT_RGB, Contact
 
 __all__ = [
-    "CUBE_COLOURS_RGB",
-    "CUBE_EDGE_M",
     "HOME_Q",
+    "PAINT_RGB",
     "CameraConfig",
     "CameraNoise",
     "CameraNoiseConfig",

@@ -378,12 +378,8 @@ class WorkCell:
         objects = self.config.errors.objects
         # A real cell's parts: each edge off by its tolerance (the perception assumes the nominal size).
         edge_error_m = float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
-        built = (
-            dataclasses.replace(object_type, size_m=tuple(v + edge_error_m for v in object_type.size_m))
-            if edge_error_m
-            else object_type
-        )
-        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=built.height_m / 2)
+        built = object_type.resized(edge_error_m) if edge_error_m else object_type
+        pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=built.shape.height_m / 2)
         self.cubes[name] = create_object(
             self.client,
             built,
@@ -411,7 +407,7 @@ class WorkCell:
     def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
         """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry (90 degrees for a square top, else 180)."""
         pose = self.cube_pose_truth(name)
-        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).symmetry_rad)
+        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).shape.symmetry_rad)
 
     def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.

@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.settings import CUBE_COLOURS_RGB, CUBE_EDGE_M, CUBE_SIDE_RGB
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, PAINT_RGB, SIDE_RGB, ColourRange, ColourTable
+from bt_arrange.shapes import Cuboid
 
-__all__ = ["CUBE_COLOURS_RGB", "CUBE_EDGE_M", "Contact", "create_cube", "create_object"]
+__all__ = ["PAINT_RGB", "Contact", "create_cube", "create_object"]
 
 TABLE_RGB = (0.45, 0.45, 0.47)
 
@@ -77,9 +77,9 @@ def create_object(  # noqa: PLR0913
     contact: Contact,
     colours: ColourTable = DEFAULT_COLOUR_TABLE,
 ) -> int:
-    """Add a cuboid of the type's size with a top face painted ``colour``; returns its body id.
+    """Add a part of the type's shape with a top face painted ``colour``; returns its body id.
 
-    The collision shape is one primitive box (no mesh margin); the visual is a near-white
+    A cuboid's collision shape is one primitive box (no mesh margin); the visual is a near-white
     box with a thin coloured plate on top, so only the top face reads as the part's colour. The
     paint comes from the colour table perception reads (``ColourRange.paint_rgb``). The type's
     ``lateral_friction`` replaces the contact's when given.
@@ -89,7 +89,10 @@ def create_object(  # noqa: PLR0913
     import pybullet
 
     rgb = paint_of(colour, colours)
-    hx, hy, hz = (v / 2 for v in object_type.size_m)
+    shape = object_type.shape
+    if not isinstance(shape, Cuboid):
+        raise PlanError(f"object type {object_type.name!r}: the pybullet cell builds cuboids only, not {shape!r}")
+    hx, hy, hz = (v / 2 for v in shape.size_m)
     collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[hx, hy, hz])
     visual = client.createVisualShapeArray(
         shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_BOX],
@@ -104,7 +107,7 @@ def create_object(  # noqa: PLR0913
         baseOrientation=list(orientation_xyzw),
     )
     # A visual shape array takes one colour per body in createMultiBody; colour each part after.
-    client.changeVisualShape(body, -1, shapeIndex=0, rgbaColor=[*CUBE_SIDE_RGB, 1.0])
+    client.changeVisualShape(body, -1, shapeIndex=0, rgbaColor=[*SIDE_RGB, 1.0])
     client.changeVisualShape(body, -1, shapeIndex=1, rgbaColor=[*rgb, 1.0])
     if object_type.lateral_friction is not None:
         contact = dataclasses.replace(contact, lateral_friction=object_type.lateral_friction)

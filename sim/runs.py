@@ -38,6 +38,7 @@ from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetecto
 from bt_arrange.plancheck import check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
+from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
 from bt_arrange_sim.scenes import CubeStart
@@ -361,7 +362,7 @@ class SimulatedRun:
 
     def _truth_yaw_error_deg(self, target: Target) -> float:
         _, _, yaw = self.cell.cube_planar_truth(self.part_of(target))
-        return math.degrees(target.object_type.yaw_error_rad(yaw, target.yaw_rad))
+        return math.degrees(yaw_error_rad(target.object_type.shape, yaw, target.yaw_rad))
 
 
 def check_colours_apart(targets: Iterable[Target], colours: ColourTable) -> None:

@@ -25,12 +25,12 @@ MAX_RADIUS_M = 0.74
 #: 8 mm pads) must come down beside a cube without touching a neighbour.
 CLEARANCE_M = 0.12
 #: Beyond two parts' half diagonals, the room kept between them (the cubes' 120 mm less two 35 mm).
-CLEARANCE_GAP_M = CLEARANCE_M - 2 * CUBE.half_diagonal_m
+CLEARANCE_GAP_M = CLEARANCE_M - 2 * CUBE.shape.sweep_radius_m
 
 
 def clearance_m(first: ObjectType, second: ObjectType) -> float:
     """Centre distance kept between two parts (120 mm for cubes)."""
-    return max(CLEARANCE_M, first.half_diagonal_m + second.half_diagonal_m + CLEARANCE_GAP_M)
+    return max(CLEARANCE_M, first.shape.sweep_radius_m + second.shape.sweep_radius_m + CLEARANCE_GAP_M)
 
 
 def scatter(
@@ -63,17 +63,18 @@ def scatter(
     starts: list[CubeStart] = []
     for colour, kind, label in zip(colours, kinds, labels, strict=True):
         # The top face grown by the view's margin, at any yaw (1 mm spare for the rim's sampling).
-        radius_m = 0.5 * math.hypot(kind.size_m[0] + 2 * view.margin_m, kind.size_m[1] + 2 * view.margin_m) + 0.001
+        x_m, y_m = kind.shape.extent_m
+        radius_m = 0.5 * math.hypot(x_m + 2 * view.margin_m, y_m + 2 * view.margin_m) + 0.001
         for _ in range(max_tries):
             x, y = rng.uniform(*X_RANGE_M), rng.uniform(*Y_RANGE_M)
             if (
                 math.hypot(x, y) <= MAX_RADIUS_M
                 and all(math.hypot(x - u, y - v) >= clearance_m(kind, other) for u, v, other in taken)
-                and view.sees_disc(x, y, radius_m, kind.height_m)
+                and view.sees_disc(x, y, radius_m, kind.shape.height_m)
             ):
                 break
         else:
-            what = "cube" if kind == CUBE else kind.name
+            what = kind.name
             raise PlanError(f"no room left on the table for a {colour} {what} after {max_tries} tries")
         taken.append((x, y, kind))
         starts.append(CubeStart(colour, x, y, float(rng.uniform(-math.pi, math.pi)), label, kind))

@@ -18,8 +18,9 @@ from bt_arrange.behaviours import Context, MoveStage, Pick, Place, Push, StagedB
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.motion import CartesianLimits, JointLimits
+from bt_arrange.objects import CUBE
 from bt_arrange.runner import Runner
-from bt_arrange.settings import CUBE_EDGE_M, ManipulationSettings
+from bt_arrange.settings import ManipulationSettings
 from bt_arrange_sim.cell import WorkCell
 
 #: The blackboard namespace of the cube the script handles.
@@ -69,7 +70,7 @@ class ScriptedPickPlace:
 
     def pick(self, x_m: float, y_m: float, yaw_rad: float) -> PickPlaceResult:
         """Grasp a cube resting at (x, y, yaw) and lift it (``Pick``)."""
-        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE_EDGE_M / 2))
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE.shape.height_m / 2))
         pick = Pick("pick", OBJ)
         status, seconds = self._run(pick)
         width = pick.grip_width_m if pick.grip_width_m is not None else self.cell.gripper.width()
@@ -85,7 +86,7 @@ class ScriptedPickPlace:
         if axis not in ("x", "y"):
             raise ValueError(f"push axis must be 'x' or 'y', got {axis!r}")
         dx_m, dy_m = (distance_m, 0.0) if axis == "x" else (0.0, distance_m)
-        self._write(keys.POSE, Pose.from_planar(x_m, y_m, 0.0, z_m=CUBE_EDGE_M / 2))
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, 0.0, z_m=CUBE.shape.height_m / 2))
         self._write(keys.TARGET, PlanarPose(x_m + dx_m, y_m + dy_m, 0.0))
         self._write(keys.OFFSET_XY_MM, (dx_m * 1000, dy_m * 1000))
         self._write(keys.PUSH_AXIS, axis)

@@ -16,7 +16,8 @@ from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.layout import Part, gap_m
 from bt_arrange.objects import ObjectType
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
-from bt_arrange.settings import CUBE_COLOURS_RGB, ManipulationSettings
+from bt_arrange.perception.colours import PAINT_RGB
+from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
 from bt_arrange_sim.cell import CameraConfig
 from bt_arrange_sim.scenes import CubeStart, scatter
@@ -71,7 +72,7 @@ def test_the_view_margin_counts_the_cube_s_turn() -> None:
 
 def test_every_scattered_start_passes_the_check_at_its_own_yaw() -> None:
     for seed in range(40):
-        check_scene(scatter(list(CUBE_COLOURS_RGB), seed), view=VIEW)
+        check_scene(scatter(list(PAINT_RGB), seed), view=VIEW)
 
 
 @pytest.mark.parametrize("threshold_mm", [0.1, 0.2, 0.25])
@@ -125,7 +126,7 @@ def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:
 
 # -- property-based: every generated plan is accepted and valid, or refused with a named problem ---
 
-colours = st.sampled_from([*CUBE_COLOURS_RGB, "purple", ""])
+colours = st.sampled_from([*PAINT_RGB, "purple", ""])
 numbers = st.one_of(
     st.floats(min_value=-1.0, max_value=1.5, allow_nan=False),
     st.sampled_from([math.nan, math.inf, -math.inf, 0, True]),

@@ -15,6 +15,7 @@ from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
 from bt_arrange.robot import PixelWindow
+from bt_arrange.shapes import yaw_error_rad
 
 #: A part counts as "at a target" (placed already) when its centre lies within this fraction of
 #: its shorter top edge from a target of its kind: a placed part lies within millimetres of its
@@ -89,7 +90,7 @@ def identical_roi_half_m(object_type: ObjectType) -> float:
     than that, so it is not taken for the part; the part itself lies within millimetres of where
     it is looked for (its target, or where the search view located it).
     """
-    return 0.5 * min(object_type.top_size_m)
+    return 0.5 * min(object_type.shape.extent_m)
 
 
 def look(
@@ -150,7 +151,7 @@ def look(
 
 def at_a_target(xy_m: tuple[float, float], kind_targets: Sequence[PlanarPose], object_type: ObjectType) -> bool:
     """True when a part at ``xy_m`` lies at one of ``kind_targets`` (see ``AT_TARGET_FRACTION``)."""
-    radius_m = AT_TARGET_FRACTION * min(object_type.top_size_m)
+    radius_m = AT_TARGET_FRACTION * min(object_type.shape.extent_m)
     return any(math.hypot(xy_m[0] - t.x_m, xy_m[1] - t.y_m) < radius_m for t in kind_targets)
 
 
@@ -305,7 +306,7 @@ class Inspect(Detect):
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         dx_mm, dy_mm = offset_in_target_frame_mm(target, pose)
         self.offset_mm = math.hypot(dx_mm, dy_mm)
-        self.yaw_error_deg = math.degrees(self.object_type.yaw_error_rad(pose.yaw_rad, target.yaw_rad))
+        self.yaw_error_deg = math.degrees(yaw_error_rad(self.object_type.shape, pose.yaw_rad, target.yaw_rad))
         self.write(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm)
         self.write(keys.key(self.obj, keys.OFFSET_XY_MM), (dx_mm, dy_mm))
         self.write(keys.key(self.obj, keys.YAW_ERROR_DEG), self.yaw_error_deg)

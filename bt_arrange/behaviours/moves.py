@@ -13,6 +13,7 @@ from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import Motion, gripper_down_pose
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Grasp, preferred_grasp
 
 
 def to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
@@ -52,6 +53,11 @@ def holding(context: Context, object_type: ObjectType | None = None) -> bool:
     return context.robot.gripper.width() > min_held_width_m(context.settings, object_type or CUBE)
 
 
+def grasp_of(settings: ManipulationSettings, object_type: ObjectType) -> Grasp:
+    """The grasp the pads take on a part: its shape's preferred one for the settings' gripper."""
+    return preferred_grasp(object_type.shape, settings.gripper)
+
+
 def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
     """Fingers closed narrower than this hold nothing: the side grasped, less the tolerance."""
     return grasp_width_m(settings, object_type) - settings.grasp_width_tolerance_m
@@ -59,26 +65,17 @@ def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) ->
 
 def grasp_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
     """The width of the side the pads close on (m)."""
-    return settings.cube_edge_m if object_type == CUBE else object_type.grasp_width_m
+    return grasp_of(settings, object_type).width_m
 
 
 def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
-    """A grip wider than this holds the part turned (the cube's margin over its edge, for any side)."""
-    return grasp_width_m(settings, object_type) + (settings.max_grip_width_m - settings.cube_edge_m)
+    """A grip wider than this holds the part turned (the settings' margin over the grasped side)."""
+    return grasp_width_m(settings, object_type) + settings.turned_grip_margin_m
 
 
 def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[float, float, float]:
-    """(grasp, approach, push) TCP heights for a part: the settings' for the cube, moved by the part's height.
-
-    The grasp holds the part through its centre of mass where the pads allow
-    (``ObjectType.grasp_height_m``); moves above the table rise with a taller part.
-    """
-    shift_m = object_type.grasp_height_m - CUBE.grasp_height_m
-    return (
-        settings.grasp_height_m + shift_m,
-        object_type.approach_height_m(settings.approach_height_m),
-        settings.push_height_m + shift_m,
-    )
+    """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``)."""
+    return settings.tcp_heights_m(object_type.shape)
 
 
 def open_stage(name: str, opening_m: float) -> GripperStage:

@@ -13,6 +13,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
     close_stage,
+    grasp_of,
     grasp_width_m,
     heights_m,
     line_to,
@@ -68,7 +69,7 @@ class Pick(StagedBehaviour):
     ) -> None:
         super().__init__(name)
         self.obj = obj
-        #: The part's type: the pads close across its narrower side (``ObjectType.grasp_axis``).
+        #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
         self.object_type = object_type or CUBE
         self.grasp = grasp
         self.reads(keys.key(obj, keys.POSE))
@@ -92,7 +93,7 @@ class Pick(StagedBehaviour):
         opening_m = s.open_width_m
         if self.grasp is None:
             yaw = nearest_symmetric_yaw(
-                pose.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+                pose.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
             )
         else:
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
@@ -100,7 +101,7 @@ class Pick(StagedBehaviour):
             offset_rad = axis_yaw_offset_rad(self.grasp.axis)
             across = target.yaw_rad + offset_rad
             yaw = nearest_symmetric_yaw(
-                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.symmetry_rad),
+                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.shape.symmetry_rad),
                 wrist_yaw_rad(context),
                 GRIPPER_SYMMETRY_RAD,
             )
@@ -231,7 +232,8 @@ class Pick(StagedBehaviour):
         kind = self.object_type
         low, high = min_held_width_m(s, kind), max_grip_width_m(s, kind)
         side_mm = grasp_width_m(s, kind) * 1000
-        what = f"{side_mm:.0f} mm cube" if kind.square_top else f"{kind.name} ({side_mm:.0f} mm across)"
+        square = kind.shape.symmetry_rad == math.pi / 2
+        what = f"{side_mm:.0f} mm cube" if square else f"{kind.name} ({side_mm:.0f} mm across)"
         self.bad_grasp = None
         if width < low:
             self.bad_grasp = (

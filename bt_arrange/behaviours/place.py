@@ -10,6 +10,7 @@ from bt_arrange.behaviours.base import GripperStage, MoveStage, Stage, StagedBeh
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
+    grasp_of,
     heights_m,
     line_to,
     to_pose,
@@ -66,13 +67,13 @@ class Place(StagedBehaviour):
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
             x, y = picked.x_m, picked.y_m
             yaw = nearest_symmetric_yaw(
-                picked.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+                picked.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
             )
         elif self.release is None:
             # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
             # will do (any quarter turn for a square top, a half turn otherwise).
             yaw = nearest_symmetric_yaw(
-                target.yaw_rad + kind.grasp_yaw_offset_rad, wrist_yaw_rad(context), kind.symmetry_rad
+                target.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
             )
         else:
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])

@@ -18,7 +18,7 @@ from bt_arrange.behaviours.moves import (
     wrist_yaw_rad,
 )
 from bt_arrange.errors import BtArrangeError
-from bt_arrange.geometry import PlanarPose, Pose, fold_yaw, rotation_z
+from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
@@ -188,7 +188,7 @@ class Push(StagedBehaviour):
 
         Both pads meet the face near its edges (the face's width less a pad's thickness, at most
         the open width); the TCP stops half the part's depth along the push plus half a pad from
-        its centre when the pads touch. The settings' figures for the cube.
+        its centre when the pads touch: the shape's face, the gripper's pads.
 
         A part turned by ``phi`` from square to the push (``object_yaw_rad``, measured) leads with
         a corner ``width / 2 cos phi - depth / 2 sin phi`` beside the push's line: the pads close
@@ -198,15 +198,11 @@ class Push(StagedBehaviour):
         squares the part nor pushes it home (a cube turned 9.4 deg, with the paper's opening,
         stopped 4.2 mm short, turned 12.8 deg, and later pushes to the same line did not move it).
         """
-        if self.object_type == CUBE:
-            width_m = depth_m = s.cube_edge_m
-            opening_m, reach_m = s.push_opening_m, s.push_reach_m
-        else:
-            width_m, depth_m = self.object_type.pushed_face(heading_rad, object_yaw_rad)
-            opening_m, reach_m = min(width_m - s.pad_thickness_m, s.open_width_m), depth_m / 2 + s.pad_width_m / 2
-        turn_rad = abs(fold_yaw(heading_rad - object_yaw_rad, math.pi / 2))
-        corner_m = width_m * math.cos(turn_rad) - depth_m * math.sin(turn_rad)
-        return max(0.0, min(opening_m, corner_m - s.pad_thickness_m)), reach_m
+        face = self.object_type.shape.pushed_face(heading_rad, object_yaw_rad)
+        gripper = s.gripper
+        opening_m = min(gripper.free_push_opening_m(face.width_m), s.open_width_m)
+        reach_m = face.depth_m / 2 + gripper.pad_width_m / 2
+        return max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m)), reach_m
 
     def _turned(self) -> bool:
         """True when the measured yaw error is at or above ``yaw_threshold_deg``."""

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from bt_arrange.errors import GeometryError, MotionError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import FloatArray, Pose, wrap_angle
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 
 # UR5 (CB3) DH parameters, which the bundled URDF's joint origins reproduce (tests/test_kinematics.py
 # checks it). They give the cheap reach checks below their exact shape.
@@ -34,7 +35,7 @@ UR5_D5_M = 0.09465
 UR5_D6_M = 0.0823
 
 #: The finger pads are 37.5 mm tall and the TCP sits at mid-pad height: the pad bottoms hang this far below it.
-PAD_HALF_HEIGHT_M = 0.01875
+PAD_HALF_HEIGHT_M = ROBOTIQ_2F85.pad_half_height_m
 #: Default gap kept between the pad bottoms and the table: pybullet's 1 mm collision margin plus
 #: about 1 mm of tracking error, plus 1 mm to spare, so a grasp never scrapes the table.
 DEFAULT_TABLE_CLEARANCE_M = 0.003

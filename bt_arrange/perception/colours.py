@@ -224,3 +224,11 @@ DEFAULT_COLOUR_TABLE = ColourTable(
         ColourRange.around("blue", 228.0, 28.0, rgb=(0.10, 0.25, 0.85)),
     ]
 )
+
+#: The paint of each built-in colour (RGB 0..1), read from the table (each range's ``rgb``): for
+#: callers that want the paint by name; a new colour goes into the table (a plan's ``[colours.NAME]``).
+PAINT_RGB: dict[str, tuple[float, float, float]] = {
+    name: colour.paint_rgb for name, colour in DEFAULT_COLOUR_TABLE.items()
+}
+#: A part's sides: near-white, so the top camera sees only its top face in colour.
+SIDE_RGB = (0.85, 0.85, 0.82)

@@ -58,8 +58,10 @@ from numpy.typing import NDArray
 
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose, fold_yaw
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.detection import Detection, DetectionStatus
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.shapes import Cuboid
 
 #: Every outcome's reason starts with this label: the estimator is a stand-in, not the paper's.
 SOURCE = "depth-only grasp estimator (substitute for Berscheid et al.)"
@@ -70,7 +72,9 @@ L515_DEPTH_WIDTH_PX = 1024
 
 @dataclass(frozen=True)
 class DepthGraspConfig:
-    """What the estimator assumes about the sensor, the table and the cubes (metres, pixels).
+    """What the estimator assumes about the sensor, the table and the parts (metres, pixels).
+
+    ``part`` is the one type it knows (the paper's 5 cm cube): a cuboid with a square top.
 
     Sensor model: the depth image is resampled (area averaging) to ``depth_width_px`` columns,
     keeping the frame's aspect ratio and field of view (a 1920 x 1080 frame becomes
@@ -79,7 +83,7 @@ class DepthGraspConfig:
     ``depth_unit_m``. ``noise_sigma_m = 0`` and ``depth_unit_m = 0`` give the clean resampled depth.
     """
 
-    cube_edge_m: float = 0.05
+    part: ObjectType = CUBE
     #: World z of the table top.
     table_z_m: float = 0.0
     #: Columns of the sensor's depth image (the L515's 1024); frames narrower are not upsampled.
@@ -112,8 +116,18 @@ class DepthGraspConfig:
         for name in ("noise_sigma_m", "depth_unit_m"):
             if not getattr(self, name) >= 0.0:
                 raise PerceptionError(f"{name}={getattr(self, name)!r} must be 0 or more")
+        shape = self.part.shape
+        if not (isinstance(shape, Cuboid) and shape.is_cube):
+            raise PerceptionError(
+                f"the depth-only estimator knows cubes only, not {self.part.name} ({shape.describe()})"
+            )
         if not 0.0 < self.min_height_m < self.cube_edge_m:
             raise PerceptionError(f"min_height_m={self.min_height_m} must lie between 0 and the cube's edge")
+
+    @property
+    def cube_edge_m(self) -> float:
+        """The edge of the cube it knows."""
+        return self.part.shape.height_m
 
     @property
     def noisy(self) -> bool:

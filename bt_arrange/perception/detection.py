@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.perception.corners import (
     CornerRefinement,
@@ -52,6 +53,7 @@ from bt_arrange.perception.segmentation import (
     to_hsv,
 )
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange.shapes import Cuboid
 
 
 class DetectionStatus(str, enum.Enum):
@@ -92,18 +94,17 @@ class WorldRegion:
 
 @dataclass(frozen=True)
 class DetectorConfig:
-    """Everything the detector assumes about the cubes and how strict it is.
+    """Everything the detector assumes about the parts and how strict it is.
 
     Areas are fractions of the expected image area of one top face, derived per blob from the
-    intrinsics, the camera pose and the height of the top faces (``table_z_m + cube_edge_m``).
+    intrinsics, the camera pose and the height of the top faces (``table_z_m`` + the part's height).
     """
 
-    cube_edge_m: float = 0.05
-    #: World z of the table top; the top faces lie one edge above it.
+    #: The part looked for: a cuboid, whose top face (x by y) stands its height above the table
+    #: (``CubeDetector.for_object`` sets it; the paper's cube by default).
+    part: ObjectType = CUBE
+    #: World z of the table top; the top faces lie the part's height above it.
     table_z_m: float = 0.0
-    #: A cuboid's size (x, y, z in metres) instead of the cube's edge: its top face is x by y,
-    #: ``z`` above the table (``CubeDetector.for_object`` sets it from an ``ObjectType``).
-    object_size_m: tuple[float, float, float] | None = None
     #: The paper's 7x7 closing and opening, applied at full resolution.
     kernel_px: int = PAPER_KERNEL_PX
     #: Blobs smaller than this are specks, not cubes, and are ignored.
@@ -128,23 +129,27 @@ class DetectorConfig:
     #: The blob search runs on the image downscaled so that a face is about this wide.
     coarse_face_edge_px: float = 24.0
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.part.shape, Cuboid):
+            raise PerceptionError(
+                f"the detector finds cuboids' top faces, not {self.part.name} ({self.part.shape.describe()})"
+            )
+
     @property
     def size_m(self) -> tuple[float, float, float]:
-        """The part's size (x, y, z): ``object_size_m``, or the cube's edge three times."""
-        if self.object_size_m is not None:
-            return self.object_size_m
-        return (self.cube_edge_m, self.cube_edge_m, self.cube_edge_m)
+        """The part's size (x, y, z)."""
+        return self.part.size_m
 
     @property
     def square_top(self) -> bool:
         """True when the top face is a square (within 0.5 mm)."""
-        x, y, _ = self.size_m
-        return abs(x - y) < 0.0005
+        shape = self.part.shape
+        return isinstance(shape, Cuboid) and shape.square_top
 
     @property
     def symmetry_rad(self) -> float:
-        """90 degrees for a square top, 180 for a rectangle: the turns that show the same face."""
-        return math.pi / 2 if self.square_top else math.pi
+        """The turns that show the same face: 90 degrees for a square, 180 for a rectangle."""
+        return self.part.shape.symmetry_rad
 
     @property
     def face_text(self) -> str:
@@ -240,12 +245,10 @@ class CubeDetector:
         self.config = config or DetectorConfig()
 
     def for_object(self, object_type: object | None) -> CubeDetector:
-        """A detector like this one for parts of ``object_type`` (an ``ObjectType``; None or the cube: itself)."""
-        size = getattr(object_type, "size_m", None)
-        if size is None or tuple(size) == self.config.size_m:
+        """A detector like this one for parts of ``object_type`` (an ``ObjectType``; None or the same shape: itself)."""
+        if not isinstance(object_type, ObjectType) or object_type.shape == self.config.part.shape:
             return self
-        x_m, y_m, z_m = (float(v) for v in size)
-        return CubeDetector(self.colours, replace(self.config, object_size_m=(x_m, y_m, z_m)))
+        return CubeDetector(self.colours, replace(self.config, part=object_type))
 
     def detect(self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None) -> Detection:
         """Look for the cube of ``colour``; raises PerceptionError for a colour not in the table."""

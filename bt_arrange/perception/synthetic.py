@@ -19,12 +19,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bt_arrange.geometry import FloatArray, Pose, rotation_z
+from bt_arrange.objects import CUBE
+from bt_arrange.perception.colours import PAINT_RGB, SIDE_RGB
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
-from bt_arrange.settings import CUBE_COLOURS_RGB, CUBE_EDGE_M, CUBE_SIDE_RGB
 
 #: The simulated cell's top-face colours (RGB 0..1, fully lit) and cube sides.
-SIM_CUBE_COLOURS_RGB = CUBE_COLOURS_RGB
-SIM_SIDE_RGB = CUBE_SIDE_RGB
+SIM_CUBE_COLOURS_RGB = PAINT_RGB
+SIM_SIDE_RGB = SIDE_RGB
+#: The synthetic cube's edge: the paper's cube (``bt_arrange.objects.CUBE``).
+CUBE_EDGE_M = CUBE.size_m[0]
 SIM_TABLE_RGB = (0.45, 0.45, 0.47)
 SIM_CAMERA_HEIGHT_M = 0.70
 SIM_HORIZONTAL_FOV_DEG = 70.0

@@ -25,6 +25,7 @@ from bt_arrange.geometry import Pose
 from bt_arrange.motion import nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.runner import Transition
+from bt_arrange.shapes import preferred_grasp
 
 if TYPE_CHECKING:
     from bt_arrange_sim.runs import SimulatedRun
@@ -204,24 +205,25 @@ class Injector(ABC):
         """
         context = self.run.context
         wrist = context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
-        kind = self.object_type
-        return nearest_symmetric_yaw(cube_yaw_rad + kind.grasp_yaw_offset_rad, wrist, kind.symmetry_rad)
+        shape = self.object_type.shape
+        grasp = preferred_grasp(shape, context.settings.gripper)
+        return nearest_symmetric_yaw(cube_yaw_rad + grasp.yaw_offset_rad, wrist, shape.symmetry_rad)
 
     def _fits(self, x_m: float, y_m: float, yaw_rad: float, reference: tuple[float, float, float]) -> bool:
         """True when a part at (x, y, yaw) can still be grasped by pads closing around ``reference``."""
         settings = self.run.context.settings
-        kind = self.object_type
-        if kind == CUBE:
-            return grasp_fits(x_m, y_m, yaw_rad, reference, settings.cube_edge_m, settings.open_width_m)
+        shape = self.object_type.shape
+        grasp = preferred_grasp(shape, settings.gripper)
+        x_extent_m, y_extent_m = shape.extent_m
         return grasp_fits(
             x_m,
             y_m,
-            yaw_rad + kind.grasp_yaw_offset_rad,
+            yaw_rad + grasp.yaw_offset_rad,
             reference,
-            kind.grasp_width_m,
+            grasp.width_m,
             settings.open_width_m,
-            along_pads_m=max(kind.top_size_m),
-            symmetry_rad=kind.symmetry_rad,
+            along_pads_m=y_extent_m if grasp.axis == "x" else x_extent_m,
+            symmetry_rad=shape.symmetry_rad,
         )
 
 

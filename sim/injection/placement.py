@@ -11,8 +11,10 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Pick, Place
+from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, quaternion_to_matrix
 from bt_arrange.runner import Transition
+from bt_arrange.shapes import Cuboid
 from bt_arrange_sim.injection.framework import (
     LIFT_STAGE,
     RELEASE_STAGE,
@@ -214,14 +216,20 @@ class ReleaseTilt(Injector):
         axis = np.array([math.cos(axis_rad), math.sin(axis_rad), 0.0])
         return _axis_angle(axis, tilt_rad) @ quaternion_to_matrix(truth.quaternion_xyzw), truth.position_m.copy()
 
+    def _box(self) -> Cuboid:
+        """The tilted part's shape: a box (the tilt row's parts are cuboids)."""
+        shape = self.object_type.shape
+        if not isinstance(shape, Cuboid):
+            raise PlanError(f"the tilt error tilts cuboids only, not a {self.object_type.name}")
+        return shape
+
     def _pads_clear(self) -> bool:
         cell = self.run.cell
         rotation, position = self._tilted()
         tcp = cell.arm.tcp_pose()
         closing = tcp.rotation[:, 0]
-        half_edge_m = self.run.context.settings.cube_edge_m / 2
         centre_off_m = abs(float((position - tcp.position_m) @ closing))
-        reach = half_edge_m * float(np.sum(np.abs(rotation.T @ closing))) + centre_off_m
+        reach = self._box().support_m(rotation.T @ closing) + centre_off_m
         pads = [cell.finger_opening_m(f) for f in cell.finger_joint_indices]
         return min(pads) >= reach + self.PAD_GAP_M
 
@@ -229,7 +237,7 @@ class ReleaseTilt(Injector):
         assert self._draw is not None
         cell = self.run.cell
         rotation, position = self._tilted()
-        lowest_m = self.run.context.settings.cube_edge_m / 2 * float(np.sum(np.abs(rotation[2, :])))
+        lowest_m = self._box().support_m(rotation[2, :])
         z = max(float(position[2]), lowest_m + 1e-4)
         moved = Pose.from_rotation([position[0], position[1], z], rotation)
         cell.place_cube_truth(self.cube, moved)
