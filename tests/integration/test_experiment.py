@@ -187,7 +187,7 @@ def test_cells_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
     with pytest.raises(PlanError, match="--cell lab: unknown cell 'lab'"):
         experiment.parse_cells("ideal,lab")
 
-    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    monkeypatch.setattr(experiment.campaign, "run_trial", _quick_trial)
     summary = run_experiment(["system"], trials=2, seed=1, threshold_mm=1.0, out_dir=tmp_path, cell="ideal,real")
     assert [(r["cell"], r["folder"], r["trials"]) for r in summary] == [
         ("ideal", "threshold-1mm", 2),
@@ -223,7 +223,7 @@ def test_the_executor_option_opens_dask_through_the_executors_module(tmp_path, m
         opened.append((kind, workers, scheduler))
         yield InProcess()
 
-    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    monkeypatch.setattr(experiment.campaign, "run_trial", _quick_trial)
     monkeypatch.setattr(executors, "open_executor", fake_open)
     run_experiment(
         ["system"], 1, 2, 1.0, tmp_path, executor="dask", workers=3, scheduler="tcp://10.0.0.5:8786", thresholds="1,2"
@@ -269,7 +269,7 @@ def test_types_are_one_more_list_of_the_campaign_product(tmp_path, monkeypatch):
     assert combos[1].spec("system", 0, 7).object_name == "bar"
     assert experiment.parse_objects(" cube, bar ,cube") == ["cube", "bar"]
 
-    monkeypatch.setattr(experiment, "run_trial", _quick_trial)
+    monkeypatch.setattr(experiment.campaign, "run_trial", _quick_trial)
     summary = run_experiment(["system"], trials=2, seed=1, threshold_mm=1.0, out_dir=tmp_path, object_name="cube,bar")
     assert [(r["object"], r["folder"], r["trials"]) for r in summary] == [
         ("cube", "threshold-1mm", 2),

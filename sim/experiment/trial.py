@@ -1,0 +1,114 @@
+"""One trial: a seeded single-part arrangement in a fresh cell, with its row's errors; its JSON-able record.
+
+A trial is a pure function of its ``TrialSpec``: the start, the target, the injected errors and a
+real cell's per-run errors are all drawn from the experiment's seed, the row and the trial number.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+
+from bt_arrange.behaviours.pick import SQUARED_FEEDBACK
+from bt_arrange_sim.experiment.options import TrialSpec, parse_object
+from bt_arrange_sim.experiment.rows import ROWS, row_injectors
+
+#: Targets of the trials: inside the camera's view and the arm's comfortable reach.
+TARGET_X_RANGE_M = (0.38, 0.62)
+
+
+TARGET_Y_RANGE_M = (-0.25, 0.25)
+
+
+#: One trial at a time per process: py_trees' blackboard is process-wide, so two trials in two
+#: threads of one worker (a Dask worker with several threads) would read each other's keys.
+_TRIAL_LOCK = threading.Lock()
+
+
+def run_trial(spec: TrialSpec) -> dict:
+    """Run one trial in a fresh cell and return its record (a JSON-able dict); one per process at a time."""
+    with _TRIAL_LOCK:
+        return _run_trial(spec)
+
+
+def _run_trial(spec: TrialSpec) -> dict:
+    from bt_arrange.trees import Target, arrangement
+    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.scenes import scatter
+
+    wall_start = time.perf_counter()
+    rng = np.random.default_rng([spec.seed, ROWS.index(spec.row), spec.index])
+    kind = parse_object(spec.object_name)
+    target = Target(
+        "red",
+        float(rng.uniform(*TARGET_X_RANGE_M)),
+        float(rng.uniform(*TARGET_Y_RANGE_M)),
+        float(rng.uniform(-math.pi / 4, math.pi / 4)),
+        object_type=kind,
+    )
+    starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target], object_types=[kind])
+    if spec.row == "grasp-estimator":
+        root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)), spec.strategy)
+    else:
+        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
+    injectors = row_injectors(spec.row)
+    injection_seed = int(rng.integers(2**31))
+    with SimulatedRun(root, starts, cell_config=_cell_config(spec)) as run:
+        if injectors:
+            from bt_arrange_sim.injection import attach_all
+
+            attach_all(run, "red", injectors, injection_seed)
+        report = run.run()
+    (outcome,) = report.objects
+    bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
+    squarings = [
+        t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and SQUARED_FEEDBACK in t.feedback
+    ]
+    return {
+        "row": spec.row,
+        "trial": spec.index,
+        "seed": spec.seed,
+        "threshold_mm": spec.threshold_mm,
+        "cell": spec.cell,
+        "strategy": spec.strategy,
+        "object": spec.object_name,
+        "target": [round(v, 6) for v in outcome.target],
+        "placed_mm": outcome.placed_offset_mm,
+        "pushed_mm": outcome.final_offset_mm,
+        "placed_truth_mm": outcome.placed_offset_truth_mm,
+        "pushed_truth_mm": outcome.final_offset_truth_mm,
+        "pushes": outcome.pushes,
+        "regrasps": len(bad_grasps),
+        "regrasp_reasons": bad_grasps,
+        # Picks that squared a cube pinched across its corners instead of letting go (Pick's "squaring").
+        "squarings": len(squarings),
+        "status": outcome.status,
+        "reason": outcome.reason,
+        "injected": {injector.name: injector.record() for injector in injectors},
+        "sim_seconds": round(report.sim_seconds, 3),
+        "wall_seconds": round(time.perf_counter() - wall_start, 3),
+    }
+
+
+def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazily: pybullet)
+    """The trial's cell; a real cell's per-run errors are seeded from the trial, apart from its draws."""
+    from bt_arrange_sim.cell import CellConfig
+    from bt_arrange_sim.realcell import parse_cell
+
+    errors = parse_cell(spec.cell)
+    if not errors.enabled:
+        return CellConfig()
+    run_seed = int(np.random.default_rng([spec.seed, ROWS.index(spec.row), spec.index, 12]).integers(2**31))
+    return CellConfig(errors=errors.with_run_seed(run_seed))
+
+
+def _depth_grasp_tree(target, threshold_mm: float, seed: int, strategy: str = "paper"):  # noqa: ANN001, ANN202
+    """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
+    from bt_arrange.behaviours import MoveHome
+    from bt_arrange.trees import Arrangement, arrange_one, by_depth
+
+    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed), strategy=strategy)
+    return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)

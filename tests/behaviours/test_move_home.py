@@ -1,0 +1,36 @@
+"""MoveHome: parks the arm out of the camera's view."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from behaviour_helpers import AWAY_Q, SETTINGS, assert_never_blocks, set_up
+from fakes import fake_arm, make_context, tick_until_done
+from py_trees.common import Status
+
+from bt_arrange.behaviours import Context, MoveHome, stages
+
+# -- MoveHome ------------------------------------------------------------------------------------
+
+
+def test_move_home_when_parked_succeeds_at_once_without_moving(context: Context) -> None:
+    run = tick_until_done(set_up(MoveHome("park"), context), context)
+    assert [t.status for t in run.ticks] == [Status.SUCCESS]
+    assert run.feedback == "at home, out of the camera's view"
+    assert fake_arm(context).commands == []
+
+
+def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    run = tick_until_done(set_up(MoveHome("park"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "at home, out of the camera's view"
+    assert {t.feedback for t in run.running} == {stages.MOVE_HOME}
+    assert_never_blocks(run)
+    arm = fake_arm(context)
+    assert len(arm.commands) > 50, "a joint motion of a second or more, one setpoint per control period"
+    np.testing.assert_allclose(arm.joint_positions(), context.home_q, atol=1e-9)
+    # Then the arm settles: the last ticks wait settle_s without sending anything.
+    settle_ticks = [t for t in run.running if t.time_s > arm.commands[-1].time_s]
+    assert len(settle_ticks) == pytest.approx(SETTINGS.settle_s / arm.control_period_s, abs=1)
+    assert all(t.arm_commands == 0 for t in settle_ticks)

@@ -1,0 +1,143 @@
+"""Pick: grasp at the measured pose and lift, or let go and say why (squaring: test_pick_squaring.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from behaviour_helpers import (
+    AWAY_Q,
+    FAR_X_M,
+    SETTINGS,
+    assert_never_blocks,
+    bar_pose,
+    command_at,
+    cube_pose,
+    set_up,
+    write,
+)
+from fakes import fake_arm, fake_gripper, make_context, tick_until_done
+from py_trees.common import Status
+
+from bt_arrange.behaviours import Context, Pick, Place, stages
+from bt_arrange.errors import UnreachableError
+from bt_arrange.geometry import PlanarPose, fold_yaw
+from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.objects import BAR
+
+# -- Pick ----------------------------------------------------------------------------------------
+
+
+def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=SETTINGS.cube_edge_m)
+    yaw = math.radians(17.0)
+    write({"/red/pose": cube_pose(0.5, 0.1, yaw)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "holding red, fingers 50.0 mm apart"
+    assert_never_blocks(run)
+    seen = list(dict.fromkeys(t.feedback for t in run.running))
+    assert seen == [
+        stages.MOVE_ABOVE_CUBE,
+        stages.WAIT_FOR_OPEN_FINGERS,
+        stages.DESCEND_TO_CUBE,
+        stages.CLOSE_ON_CUBE,
+        stages.LIFT_CUBE,
+    ]
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", SETTINGS.open_width_m),
+        ("close", SETTINGS.grip_force_n),
+    ]
+    grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, SETTINGS.grasp_height_m], atol=1e-6)
+    assert fold_yaw(grasp.yaw_rad - yaw) == pytest.approx(0.0, abs=1e-4), "pads square to the cube's faces"
+    np.testing.assert_allclose(arm.tcp_pose().position_m, [0.5, 0.1, SETTINGS.approach_height_m], atol=1e-6)
+
+
+def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
+    context = make_context(clock, object_width_m=None)
+    write({"/red/pose": cube_pose(0.45, -0.05)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback == (
+        "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
+    )
+    feedback = [t.feedback for t in run.ticks]
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.approach_height_m, abs=1e-6), "lifted clear"
+    assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
+
+
+def test_pick_that_still_holds_a_turned_cube_by_its_corners_after_squaring_lets_go_and_fails(clock) -> None:
+    # A cube turned ~30 degrees under the pads is gripped across two vertical edges, 68 mm apart,
+    # and (in this fake) the squaring closes leave it so.
+    context = make_context(clock, object_width_m=0.068)
+    write({"/red/pose": cube_pose(0.45, -0.05)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback == (
+        "the pads hold the cube across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
+        "held nearly square (it is turned) after squaring a 68.0 mm grip"
+    )
+    feedback = [t.feedback for t in run.ticks]
+    assert feedback.index(stages.CLOSE_ON_SQUARED_CUBE) < feedback.index(stages.LET_GO_OF_BAD_GRASP)
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
+
+
+@pytest.mark.parametrize("make", [Pick, Place], ids=["Pick", "Place"])
+def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, make) -> None:
+    write({"/red/pose": cube_pose(FAR_X_M, 0.0), "/red/target": PlanarPose(FAR_X_M, 0.0)})
+    with pytest.raises(UnreachableError) as unreachable:
+        ArmKinematics().check_reachable(gripper_down_pose(FAR_X_M, 0.0, SETTINGS.approach_height_m))
+    run = tick_until_done(set_up(make(f"{make.__name__} red", "red"), context), context)
+    assert [t.status for t in run.ticks] == [Status.FAILURE], "fails on its first tick"
+    first_move = stages.MOVE_ABOVE_CUBE if make is Pick else stages.CARRY_ABOVE_TARGET
+    assert run.feedback.startswith(f"{first_move}: ")
+    assert str(unreachable.value).split(" is out of reach")[1] in run.feedback
+    assert fake_arm(context).commands == []
+
+
+def test_fingers_that_never_stop_fail_after_the_gripper_timeout(clock) -> None:
+    context = make_context(clock, stuck_gripper=True)
+    write({"/red/pose": cube_pose(0.5, 0.0)})
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert run.feedback.startswith(f"{stages.WAIT_FOR_OPEN_FINGERS}: fingers still moving after 2.0 s (limit 2.0 s)")
+    waiting = [t for t in run.ticks if t.feedback == stages.WAIT_FOR_OPEN_FINGERS]
+    waited_s = run.ticks[-1].time_s - waiting[0].time_s
+    assert SETTINGS.gripper_timeout_s < waited_s <= SETTINGS.gripper_timeout_s + 2 * fake_arm(context).control_period_s
+    assert all(t.arm_commands == 0 for t in waiting)
+
+
+def test_pick_without_a_pose_on_the_blackboard_fails_naming_the_key(context: Context) -> None:
+    run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert "/red/pose" in run.feedback
+
+
+# -- a bar: grasp, push and squaring from the type's size (issue 14) ---------------------------
+
+
+def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(clock) -> None:
+    assert BAR.size_m == (0.08, 0.04, 0.04)
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.04)
+    yaw = math.radians(17.0)
+    write({"/bar/pose": bar_pose(0.5, 0.1, yaw)})
+    run = tick_until_done(set_up(Pick("pick bar", "bar", object_type=BAR), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "holding bar, fingers 40.0 mm apart"
+    assert_never_blocks(run)
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", SETTINGS.open_width_m),
+        ("close", SETTINGS.grip_force_n),
+    ]
+    grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
+    # Mid-pad at the bar's centre of mass where the pads allow: 22.75 mm, the pads 4 mm off the table.
+    assert BAR.grasp_height_m == pytest.approx(0.02275)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, BAR.grasp_height_m], atol=1e-6)
+    # The closing axis (the gripper's yaw) lies along the bar's y axis, across its 40 mm side.
+    assert fold_yaw(grasp.yaw_rad - (yaw + math.pi / 2), math.pi) == pytest.approx(0.0, abs=1e-4)
