@@ -18,12 +18,17 @@ from py_trees.common import Access
 
 from bt_arrange.behaviours import Context
 from bt_arrange.geometry import Pose
-from bt_arrange.objects import BAR
+from bt_arrange.objects import BAR, CUBE
 from bt_arrange.settings import ManipulationSettings
 
 SETTINGS = ManipulationSettings()
+#: The paper's cube: its edge, the TCP height that grasps and pushes it, and the TCP's distance
+#: from its centre when the pads touch a face (half an edge and half a pad).
+CUBE_EDGE_M = CUBE.size_m[0]
+CUBE_GRASP_HEIGHT_M = SETTINGS.tcp_heights_m(CUBE.shape)[0]
+CUBE_PUSH_REACH_M = CUBE_EDGE_M / 2 + SETTINGS.gripper.pad_width_m / 2
 #: Narrowest opening that still counts as holding a cube: 47 mm.
-HELD_MIN_WIDTH_M = SETTINGS.cube_edge_m - SETTINGS.grasp_width_tolerance_m
+HELD_MIN_WIDTH_M = CUBE_EDGE_M - SETTINGS.grasp_width_tolerance_m
 #: Somewhere away from home, reachable, arm bent the usual way.
 AWAY_Q = [0.3, -1.8, 1.6, -1.4, -1.57, 0.3]
 #: Out of the UR5's 0.92 m reach.
@@ -95,8 +100,8 @@ def assert_comes_to_rest(braking: list[ArmCommand]) -> None:
 
 
 def cube_pose(x_m: float, y_m: float, yaw_rad: float = 0.0) -> Pose:
-    return Pose.from_planar(x_m, y_m, yaw_rad, SETTINGS.cube_edge_m / 2)
+    return Pose.from_planar(x_m, y_m, yaw_rad, CUBE_EDGE_M / 2)
 
 
 def bar_pose(x_m: float, y_m: float, yaw_rad: float = 0.0) -> Pose:
-    return Pose.from_planar(x_m, y_m, yaw_rad, BAR.height_m / 2)
+    return Pose.from_planar(x_m, y_m, yaw_rad, BAR.shape.height_m / 2)

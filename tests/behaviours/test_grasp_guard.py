@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from behaviour_helpers import (
+    CUBE_EDGE_M,
     HELD_MIN_WIDTH_M,
     SETTINGS,
     after,
@@ -32,7 +33,7 @@ def guarded_place(context: Context) -> tuple[GraspGuard, Place]:
 
 
 def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
-    context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
+    context = make_context(clock, object_width_m=CUBE_EDGE_M)
     guard, place = guarded_place(context)
     run = tick_until_done(guard, context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -43,7 +44,7 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
 
 
 def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
-    context = make_context(clock, object_width_m=SETTINGS.cube_edge_m)
+    context = make_context(clock, object_width_m=CUBE_EDGE_M)
     guard, place = guarded_place(context)
     run = tick_until_done(guard, context, until=after(f"holding; {stages.CARRY_ABOVE_TARGET}", 50))
     assert guard.status == Status.RUNNING and place.status == Status.RUNNING

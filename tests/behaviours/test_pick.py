@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from behaviour_helpers import (
     AWAY_Q,
+    CUBE_EDGE_M,
+    CUBE_GRASP_HEIGHT_M,
     FAR_X_M,
     SETTINGS,
     assert_never_blocks,
@@ -25,12 +27,16 @@ from bt_arrange.errors import UnreachableError
 from bt_arrange.geometry import PlanarPose, fold_yaw
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.objects import BAR
+from bt_arrange.shapes import ROBOTIQ_2F85, preferred_grasp
 
 # -- Pick ----------------------------------------------------------------------------------------
 
 
+BAR_GRASP_HEIGHT_M = preferred_grasp(BAR.shape, ROBOTIQ_2F85).height_m
+
+
 def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=SETTINGS.cube_edge_m)
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=CUBE_EDGE_M)
     yaw = math.radians(17.0)
     write({"/red/pose": cube_pose(0.5, 0.1, yaw)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
@@ -51,7 +57,7 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
         ("close", SETTINGS.grip_force_n),
     ]
     grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
-    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, SETTINGS.grasp_height_m], atol=1e-6)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, CUBE_GRASP_HEIGHT_M], atol=1e-6)
     assert fold_yaw(grasp.yaw_rad - yaw) == pytest.approx(0.0, abs=1e-4), "pads square to the cube's faces"
     np.testing.assert_allclose(arm.tcp_pose().position_m, [0.5, 0.1, SETTINGS.approach_height_m], atol=1e-6)
 
@@ -137,7 +143,7 @@ def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(cl
     ]
     grasp = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[1].time_s).positions_rad)
     # Mid-pad at the bar's centre of mass where the pads allow: 22.75 mm, the pads 4 mm off the table.
-    assert BAR.grasp_height_m == pytest.approx(0.02275)
-    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, BAR.grasp_height_m], atol=1e-6)
+    assert BAR_GRASP_HEIGHT_M == pytest.approx(0.02275)
+    np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, BAR_GRASP_HEIGHT_M], atol=1e-6)
     # The closing axis (the gripper's yaw) lies along the bar's y axis, across its 40 mm side.
     assert fold_yaw(grasp.yaw_rad - (yaw + math.pi / 2), math.pi) == pytest.approx(0.0, abs=1e-4)

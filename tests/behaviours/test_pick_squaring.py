@@ -6,7 +6,17 @@ import math
 
 import numpy as np
 import pytest
-from behaviour_helpers import AWAY_Q, SETTINGS, assert_never_blocks, command_at, cube_pose, set_up, write
+from behaviour_helpers import (
+    AWAY_Q,
+    CUBE_EDGE_M,
+    CUBE_GRASP_HEIGHT_M,
+    SETTINGS,
+    assert_never_blocks,
+    command_at,
+    cube_pose,
+    set_up,
+    write,
+)
 from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
@@ -61,7 +71,7 @@ def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> N
     shift = squaring.position_m[:2] - first.position_m[:2]
     assert float(np.linalg.norm(shift)) == pytest.approx(SETTINGS.squaring_shift_m, abs=1e-5)
     assert float(shift @ closing) == pytest.approx(0.0, abs=1e-5)
-    np.testing.assert_allclose(final.position_m, [0.5, 0.1, SETTINGS.grasp_height_m], atol=1e-6)
+    np.testing.assert_allclose(final.position_m, [0.5, 0.1, CUBE_GRASP_HEIGHT_M], atol=1e-6)
     np.testing.assert_allclose(arm.tcp_pose().position_m, [0.5, 0.1, SETTINGS.approach_height_m], atol=1e-6)
 
 
@@ -215,7 +225,7 @@ def test_pick_squaring_by_a_turn_that_leaves_it_pinched_both_ways_lets_go_and_fa
 
 
 def test_pick_squaring_by_a_turn_leaves_a_square_grasp_alone(clock) -> None:
-    context = make_context(clock, object_width_m=SETTINGS.cube_edge_m, settings=TURN)
+    context = make_context(clock, object_width_m=CUBE_EDGE_M, settings=TURN)
     write({"/red/pose": cube_pose(0.45, -0.05, 0.3)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback

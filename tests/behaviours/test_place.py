@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from behaviour_helpers import SETTINGS, assert_never_blocks, command_at, set_up, write
+from behaviour_helpers import CUBE_EDGE_M, CUBE_GRASP_HEIGHT_M, SETTINGS, assert_never_blocks, command_at, set_up, write
 from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
@@ -17,7 +17,7 @@ from bt_arrange.geometry import PlanarPose, fold_yaw
 
 
 def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
-    context = make_context(clock, gripper_width_m=SETTINGS.cube_edge_m, object_width_m=SETTINGS.cube_edge_m)
+    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     target = PlanarPose(0.45, -0.1, math.radians(30.0))
     write({"/red/target": target})
     run = tick_until_done(set_up(Place("place red", "red"), context), context)
@@ -33,7 +33,7 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [("open", SETTINGS.open_width_m)]
     release = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[0].time_s).positions_rad)
-    expected_z_m = SETTINGS.grasp_height_m + SETTINGS.release_clearance_m
+    expected_z_m = CUBE_GRASP_HEIGHT_M + SETTINGS.release_clearance_m
     np.testing.assert_allclose(release.position_m, [0.45, -0.1, expected_z_m], atol=1e-6)
     assert fold_yaw(release.yaw_rad - target.yaw_rad) == pytest.approx(0.0, abs=1e-4)
     np.testing.assert_allclose(arm.tcp_pose().position_m, [0.45, -0.1, SETTINGS.approach_height_m], atol=1e-6)

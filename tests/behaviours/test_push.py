@@ -6,7 +6,19 @@ import math
 
 import numpy as np
 import pytest
-from behaviour_helpers import SETTINGS, after, assert_never_blocks, bar_pose, cube_pose, read, set_up, write
+from behaviour_helpers import (
+    CUBE_EDGE_M,
+    CUBE_GRASP_HEIGHT_M,
+    CUBE_PUSH_REACH_M,
+    SETTINGS,
+    after,
+    assert_never_blocks,
+    bar_pose,
+    cube_pose,
+    read,
+    set_up,
+    write,
+)
 from fakes import Run, fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
@@ -14,8 +26,11 @@ from bt_arrange.behaviours import Context, Push, stages
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import LinearMotion
 from bt_arrange.objects import BAR, CUBE, ObjectType
+from bt_arrange.shapes import ROBOTIQ_2F85, footprint_m, preferred_grasp
 
 # -- Push ----------------------------------------------------------------------------------------
+
+BAR_GRASP_HEIGHT_M = preferred_grasp(BAR.shape, ROBOTIQ_2F85).height_m
 
 
 @pytest.mark.parametrize(
@@ -109,7 +124,7 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     behind = arm.tcp_pose()
     # The first waypoint: above the cube's far side from the target, clear of its face.
     from_centre = behind.position_m[:2] - centre
-    assert from_centre @ towards == pytest.approx(-(s.push_reach_m + s.push_clearance_m), abs=1e-6)
+    assert from_centre @ towards == pytest.approx(-(CUBE_PUSH_REACH_M + s.push_clearance_m), abs=1e-6)
     assert from_centre @ across == pytest.approx(0.0, abs=1e-6)
     assert behind.z_m == pytest.approx(s.approach_height_m, abs=1e-6)
     # Fingers side by side along the pushed face: the closing axis lies across the push.
@@ -117,9 +132,9 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     gripper = fake_gripper(context)
     # The cube (yaw 0.1 rad) is turned from the push: its leading corner on the middle of a pad.
     turn_rad = abs(fold_yaw(math.atan2(towards[1], towards[0]) - 0.1, math.pi / 2))
-    corner_m = s.cube_edge_m * (math.cos(turn_rad) - math.sin(turn_rad))
+    corner_m = CUBE_EDGE_M * (math.cos(turn_rad) - math.sin(turn_rad))
     assert [(c.kind, c.value) for c in gripper.commands] == [
-        ("open", pytest.approx(max(0.0, corner_m - s.pad_thickness_m)))
+        ("open", pytest.approx(max(0.0, corner_m - s.gripper.pad_thickness_m)))
     ]
 
     before = len(arm.commands)
@@ -129,8 +144,8 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands[before:]])
     along = (tcp[:, :2] - centre) @ towards
     deepest = int(np.argmax(along))
-    assert along[deepest] == pytest.approx(-s.push_reach_m + distance_mm / 1000, abs=1e-6)
-    assert tcp[deepest, 2] == pytest.approx(s.push_height_m, abs=1e-6)
+    assert along[deepest] == pytest.approx(-CUBE_PUSH_REACH_M + distance_mm / 1000, abs=1e-6)
+    assert tcp[deepest, 2] == pytest.approx(CUBE_GRASP_HEIGHT_M, abs=1e-6)
     np.testing.assert_allclose((tcp[:, :2] - centre) @ across, 0.0, atol=1e-6)
     assert along[-1] == pytest.approx(along[deepest] - s.push_clearance_m, abs=1e-6), "backed off"
     assert tcp[-1, 2] == pytest.approx(s.approach_height_m, abs=1e-6), "lifted"
@@ -140,7 +155,7 @@ def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
 
 def leading_corner_across_mm(pose: Pose, kind: ObjectType, towards: np.ndarray, line_xy: np.ndarray) -> float:
     """How far (mm) beside the pushing TCP's line the footprint's corner furthest along ``towards`` lies."""
-    corners = kind.footprint_m(pose.x_m, pose.y_m, pose.yaw_rad)
+    corners = footprint_m(kind.shape, pose.x_m, pose.y_m, pose.yaw_rad)
     leading = corners[int(np.argmax(corners @ towards))]
     across = np.array([-towards[1], towards[0]])
     return abs(float((leading - line_xy) @ across)) * 1000
@@ -169,7 +184,7 @@ def test_the_leading_corner_of_a_turned_part_meets_a_pad_not_the_gap_between_the
     low = tcp[tcp[:, 2] < SETTINGS.approach_height_m - 0.001, :2]  # lowered beside the part
     line_xy = low[int(np.argmax(low @ towards))]
     corner_mm = leading_corner_across_mm(pose, kind, towards, line_xy)
-    inner_mm, outer_mm = opening * 500, opening * 500 + SETTINGS.pad_thickness_m * 1000
+    inner_mm, outer_mm = opening * 500, opening * 500 + SETTINGS.gripper.pad_thickness_m * 1000
     assert inner_mm - 1e-6 <= corner_mm <= outer_mm + 1e-6, (
         f"the leading corner {corner_mm:.1f} mm beside the push's line misses the pads "
         f"({inner_mm:.1f} to {outer_mm:.1f} mm)"
@@ -205,10 +220,10 @@ def test_push_of_a_bar_along_its_long_axis_uses_the_end_faces_opening_and_reach(
     s = SETTINGS
     # Along x the pads meet an end face: 40 mm wide, the bar 80 mm deep along the push.
     opening_m, reach_m = push.face_geometry(s, 0.0, 0.0)
-    assert opening_m == pytest.approx(0.04 - s.pad_thickness_m)
-    assert reach_m == pytest.approx(0.04 + s.pad_width_m / 2)
+    assert opening_m == pytest.approx(0.04 - s.gripper.pad_thickness_m)
+    assert reach_m == pytest.approx(0.04 + s.gripper.pad_width_m / 2)
     assert push.face_geometry(s, math.pi / 2, 0.0) == pytest.approx(
-        (0.08 - s.pad_thickness_m, 0.02 + s.pad_width_m / 2)
+        (0.08 - s.gripper.pad_thickness_m, 0.02 + s.gripper.pad_width_m / 2)
     )
     run, tcp = pushed_path(context, push)
     assert run.status == Status.SUCCESS, run.feedback
@@ -216,7 +231,7 @@ def test_push_of_a_bar_along_its_long_axis_uses_the_end_faces_opening_and_reach(
     assert [(c.kind, c.value) for c in fake_gripper(context).commands] == [("open", pytest.approx(opening_m))]
     deepest = int(np.argmax(tcp[:, 0]))
     assert tcp[deepest, 0] == pytest.approx(-reach_m + 0.003, abs=1e-6)
-    assert tcp[deepest, 2] == pytest.approx(BAR.grasp_height_m, abs=1e-6), "pads 4 mm above the table"
+    assert tcp[deepest, 2] == pytest.approx(BAR_GRASP_HEIGHT_M, abs=1e-6), "pads 4 mm above the table"
     low = tcp[:, 2] < SETTINGS.approach_height_m - 0.001
     np.testing.assert_allclose(tcp[low, 1], 0.0, atol=1e-6)  # lowered and pushed on the long axis
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from behaviour_helpers import SETTINGS, cube_pose, read, set_up, write
+from behaviour_helpers import CUBE_GRASP_HEIGHT_M, CUBE_PUSH_REACH_M, SETTINGS, cube_pose, read, set_up, write
 from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
@@ -79,12 +79,12 @@ def test_a_diagonal_push_goes_sideways_while_the_pads_touch_and_says_so(clock) -
     assert run.feedback == "pushed +3.00 mm along x, +1.00 mm along y"
     assert read("/red/last_push") == ("x", -0.0), "the push along x is learned as the learned strategy's"
     tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands]) - [*centre, 0.0]
-    low = tcp[np.abs(tcp[:, 2] - s.push_height_m) < 1e-6]
+    low = tcp[np.abs(tcp[:, 2] - CUBE_GRASP_HEIGHT_M) < 1e-6]
     deepest = low[int(np.argmax(low[:, 0]))]
-    assert deepest[0] == pytest.approx(-s.push_reach_m + 0.003, abs=1e-6)
+    assert deepest[0] == pytest.approx(-CUBE_PUSH_REACH_M + 0.003, abs=1e-6)
     assert deepest[1] == pytest.approx(0.001, abs=1e-6), "1 mm along y by the end of the push"
     # Where the pads meet the face (reach from the centre), the line has not gone sideways yet.
-    meet = low[int(np.argmin(np.abs(low[:, 0] + s.push_reach_m)))]
+    meet = low[int(np.argmin(np.abs(low[:, 0] + CUBE_PUSH_REACH_M)))]
     assert meet[1] == pytest.approx(0.0, abs=5e-5)
     assert low[0][1] == pytest.approx(-0.001 * s.push_clearance_m / 0.003, abs=1e-6), "started that far the other way"
 

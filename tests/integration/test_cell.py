@@ -6,8 +6,11 @@ import pybullet
 import pytest
 
 from bt_arrange.errors import BtArrangeError, OutOfRangeError
+from bt_arrange.objects import CUBE
 from bt_arrange.robot import Arm, Camera, Clock, Gripper
-from bt_arrange_sim import CUBE_EDGE_M, CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
+from bt_arrange_sim import CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
+
+CUBE_EDGE_M = CUBE.size_m[0]
 
 
 @pytest.fixture

@@ -5,14 +5,15 @@ from __future__ import annotations
 import pytest
 
 from bt_arrange.layout import Rect, gap_m
+from bt_arrange.objects import CUBE
 from bt_arrange.perception import CubeDetector
 from bt_arrange.perception.detection import WorldRegion
-from bt_arrange.settings import CUBE_EDGE_M
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.cell import CellConfig, WorkCell
 from bt_arrange_sim.runs import SimulatedRun
 from bt_arrange_sim.scenes import scatter
 
+CUBE_EDGE_M = CUBE.size_m[0]
 PITCH_M = CUBE_EDGE_M + 0.002
 
 

@@ -4,8 +4,11 @@ import math
 
 import pytest
 
-from bt_arrange_sim import CUBE_EDGE_M, WorkCell
+from bt_arrange.objects import CUBE
+from bt_arrange_sim import WorkCell
 from bt_arrange_sim.scripted import ScriptedPickPlace
+
+CUBE_EDGE_M = CUBE.size_m[0]
 
 
 @pytest.fixture
