@@ -189,6 +189,14 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         self._index = 0
         self._started = False
         self._failure: str | None = None
+        #: The stage running now (a name of ``bt_arrange.behaviours.stages``), None between runs and
+        #: while the arm brakes: what injectors and tests look for, the feedback being for people.
+        self.stage: str | None = None
+
+    @property
+    def facts(self) -> dict[str, Any]:
+        """What this behaviour's last run established, as data (copied onto each ``Transition``)."""
+        return {}
 
     def setup(self, **kwargs: Any) -> None:
         """Receive the ``context`` keyword that ``BehaviourTree.setup(context=...)`` hands out."""
@@ -245,6 +253,7 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         """Advance the current stage by one control period; move on when it ends."""
         context = self._require_context()
+        self.stage = None
         if self._failure is not None:
             self.feedback_message = self._failure
             return Status.FAILURE
@@ -262,7 +271,7 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
                 self.feedback_message = self._abandon(stage, context, error)
                 return Status.FAILURE
             if status == Status.RUNNING:
-                self.feedback_message = stage.name
+                self.feedback_message = self.stage = stage.name
                 return Status.RUNNING
             if status == Status.FAILURE:
                 self.feedback_message = stage.reason or f"{stage.name} failed"
@@ -278,6 +287,7 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
             if self._started:
                 self._stages[self._index].interrupt(self.context)
             self.feedback_message = stage_names.INTERRUPTED
+        self.stage = None
 
     def _abandon(self, stage: Stage, context: Context, error: BtArrangeError) -> str:
         """A stage raised mid-run: hand its motion to the brake and say why the behaviour fails."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -246,6 +247,15 @@ class Pick(StagedBehaviour):
                 f"{high * 1000:.1f} mm of a {what} held nearly square (it is turned)"
             )
         return None
+
+    @property
+    def facts(self) -> dict[str, Any]:
+        """The grip: its width (mm), whether it was squared from a pinch, and why it was bad (None: good)."""
+        return {
+            "grip_width_mm": None if self.grip_width_m is None else round(self.grip_width_m * 1000, 3),
+            "squared": self.squared_from_width_m is not None,
+            "bad_grasp": self.bad_grasp,
+        }
 
     def success_message(self) -> str:
         """Feedback with the grip width."""

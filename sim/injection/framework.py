@@ -169,7 +169,7 @@ class Injector(ABC):
             if state["done"]:
                 return
             node = finder(root)
-            if node is not None and node.status == Status.RUNNING and node.feedback_message == stage_name:
+            if node is not None and node.status == Status.RUNNING and getattr(node, "stage", None) == stage_name:
                 state["done"] = action(node)
 
         self.run.tick_hooks.append(hook)
