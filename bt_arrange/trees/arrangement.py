@@ -1,0 +1,349 @@
+"""Builders of arrangement trees: the paper's Algorithm 1 as py_trees subtrees.
+
+One object (``arrange_one``)::
+
+    Sequence "arrange red"
+    ├── SetBlackboardVariable "red target"        /red/target
+    ├── Retry "pick and place red"                 (a lost grasp starts over)
+    │   └── Sequence "transfer red"
+    │       ├── Detect "detect red"               camera -> /red/pose (``locate``: how the object is found)
+    │       ├── Pick "pick red"
+    │       └── GraspGuard "while holding red"    fails within a tick when the cube slips out
+    │           └── Place "place red"
+    ├── Inspect "inspect red after placing"        -> /red/offset_mm, /red/placed_offset_mm
+    └── RepeatUntilWithin "correct red"            while /red/offset_mm >= threshold
+        └── Sequence "push and inspect red"
+            ├── Push "push red"                    along x, then y, then x ...
+            └── Inspect "inspect red"
+
+``arrangement(targets)`` checks the plan before anything moves, then chains these per object
+(``correct="each"``) or places every object before correcting them all (``"after_all"``, the
+paper's Fig. 5), and ends by moving the arm out of the camera's view.
+
+``locate`` says how an object is found before it is picked: ``by_camera()`` (the default, the
+top camera's colour detection, ``Detect``) or ``by_depth(seed)`` (the depth-only grasp
+estimator of Table 1's row 4, ``EstimateGraspFromDepth``); any ``Callable[[Target], Behaviour]``
+that writes ``/<obj>/pose`` will do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+
+import py_trees
+
+from bt_arrange.behaviours import (
+    MoveHome,
+    Recheck,
+    keys,
+)
+from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.errors import PlanError
+from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import DIRECTIONS, Pads, Release, Step, free_push_directions, restage_releases
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
+from bt_arrange.settings import ManipulationSettings
+from bt_arrange.trees.steps import Locate, check_strategy, correction, inspect, set_target, transfer
+from bt_arrange.trees.targets import (
+    CORRECT_MODES,
+    DEFAULT_YAW_THRESHOLD_DEG,
+    Target,
+    check_threshold,
+    kinds,
+    parts_of,
+    plan_steps,
+    validate_targets,
+)
+
+
+def arrange_one(
+    target: Target,
+    threshold_mm: float = 1.0,
+    max_pushes: int = 10,
+    max_regrasps: int = 3,
+    *,
+    locate: Locate | None = None,
+    step: Step | None = None,
+    neighbours: Sequence[tuple[Target, tuple[str, ...], dict[str, Release]]] = (),
+    strategy: str = "paper",
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
+    kind_of_neighbour: Mapping[str, Sequence[PlanarPose]] | None = None,
+    settings: ManipulationSettings | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds.
+
+    ``step`` (from ``plan_steps``) places it among neighbours: its release, the sides it may be
+    pushed from and how to release it again. ``neighbours`` are the parts placed before it nearby,
+    each with the directions it may be pushed and its restaging once this one is down: each is
+    looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
+    ``kind_targets`` (identical parts) are the targets of its kind; ``kind_of_neighbour`` gives
+    a neighbour's. ``settings`` are the run's (the pads' figures among neighbours).
+    """
+    settings = settings or ManipulationSettings()
+    pads = Pads.from_settings(settings)
+    obj = target.obj
+    dense = step is not None and _is_dense(step)
+    release = step.release if dense and step is not None else None
+    towards = step.push_towards if dense and step is not None else None
+    restage = step.restage if dense and step is not None else None
+    children: list[py_trees.behaviour.Behaviour] = [
+        set_target(target),
+        transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
+        inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
+        correction(
+            target,
+            threshold_mm,
+            max_pushes,
+            strategy,
+            yaw_threshold_deg=yaw_threshold_deg,
+            kind_targets=kind_targets,
+            towards=towards,
+            restage=restage,
+            push_opening_m=_opening(step, dense, pads),
+            settings=settings,
+        ),
+    ]
+    for neighbour, sides, again in neighbours:
+        label = f" after {obj}"
+        neighbour_kind = (kind_of_neighbour or {}).get(neighbour.obj, ())
+        children.append(
+            py_trees.composites.Sequence(
+                name=f"look again at {neighbour.obj}{label}",
+                memory=True,
+                children=[
+                    Recheck(
+                        f"look at {neighbour.obj}{label}",
+                        neighbour.obj,
+                        neighbour.colour,
+                        after=obj,
+                        object_type=neighbour.object_type,
+                        kind_targets=neighbour_kind,
+                    ),
+                    correction(
+                        neighbour,
+                        threshold_mm,
+                        max_pushes,
+                        strategy,
+                        yaw_threshold_deg=yaw_threshold_deg,
+                        kind_targets=neighbour_kind,
+                        towards=sides,
+                        restage=again,
+                        push_opening_m=pads.neighbour_push_opening_m(parts_of([neighbour], settings)[0], "x"),
+                        count=False,
+                        label=label,
+                        settings=settings,
+                    ),
+                ],
+            )
+        )
+    return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
+
+
+def _opening(step: Step | None, dense: bool, pads: Pads) -> float | None:
+    """The push opening among neighbours (along x; Push keeps it within the pushed face's own width), None when free."""
+    return pads.neighbour_push_opening_m(step.part, "x") if dense and step is not None else None
+
+
+def _dense_release(step: Step) -> Release | None:
+    return step.release if _is_dense(step) else None
+
+
+def _is_dense(step: Step) -> bool:
+    """A step among neighbours: released away from its target, near placed parts, or with a blocked side."""
+    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
+
+
+class Arrangement(py_trees.composites.Sequence):
+    """The root of an arrangement tree; remembers its plan so a runner can report per object.
+
+    ``place_all`` is the subtree that places every object before any is corrected (the paper's
+    Fig. 5, ``correct="after_all"``), None otherwise: a recorder saves its "after placing" picture then.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        children: Sequence[py_trees.behaviour.Behaviour],
+        targets: list[Target],
+        threshold_mm: float,
+        *,
+        place_all: py_trees.behaviour.Behaviour | None = None,
+        yaw_threshold_deg: float | None = None,
+        colours: ColourTable | None = None,
+        settings: ManipulationSettings | None = None,
+    ) -> None:
+        super().__init__(name=name, memory=True, children=list(children))
+        self.targets = targets
+        self.threshold_mm = threshold_mm
+        self.place_all = place_all
+        #: The yaw error (degrees) the correction loop leaves; None: position only.
+        self.yaw_threshold_deg = yaw_threshold_deg
+        #: The colour table the plan's colours come from: the cell paints with it, the camera reads it.
+        self.colours = colours if colours is not None else DEFAULT_COLOUR_TABLE
+        #: The handling settings the plan was checked and built with: the run's context uses them too.
+        self.settings = settings if settings is not None else ManipulationSettings()
+
+
+def arrangement(
+    targets: Iterable[Target],
+    threshold_mm: float = 1.0,
+    max_pushes: int = 10,
+    correct: str = "each",
+    *,
+    max_regrasps: int = 3,
+    keep_going: bool = True,
+    locate: Locate | None = None,
+    order: Sequence[str] | None = None,
+    strategy: str = "paper",
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    colours: ColourTable | Mapping[str, object] | None = None,
+    settings: ManipulationSettings | None = None,
+) -> Arrangement:
+    """An arrangement of several objects, checked before anything moves.
+
+    ``correct="each"`` corrects every object right after placing it (Algorithm 1);
+    ``"after_all"`` places all of them first and corrects them afterwards (the paper's Fig. 5).
+    With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
+    its subtree's failure is kept in the log and in the report, and the next object is handled.
+    ``locate`` says how each object is found before it is picked (default ``by_camera()``).
+    ``order`` (object names) is the placing order; by default the layout chooses one
+    (``bt_arrange.layout.plan_layout``: the plan's own order where it can be built). Among
+    neighbours each part is released where the pads fit, pushed only from free sides, and the
+    parts near it are looked at again once it is down.
+    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's), ``"learned"``
+    (``Push``: the larger axis first, each push's landing error learned) or ``"diagonal"`` (learned,
+    and the same push corrects the other axis too).
+    ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
+    position only). ``colours`` is the colour table of the plan (default the cell's four; a
+    user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
+    ``settings`` (default ``ManipulationSettings()``) are the handling settings the plan is checked
+    and built with; the tree keeps them (``Arrangement.settings``) and a run hands them to the context.
+    """
+    settings = settings or ManipulationSettings()
+    check_strategy(strategy)
+    if correct not in CORRECT_MODES:
+        raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
+    check_threshold(threshold_mm, settings)
+    whole_number("max_pushes", max_pushes)
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    if colours is not None and not isinstance(colours, ColourTable):
+        raise PlanError(f"colours must be a ColourTable (bt_arrange.perception), got {type(colours).__name__}")
+    table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
+    plan = validate_targets(targets, colours=table.names, settings=settings)
+    siblings = kinds(plan)
+    steps = plan_steps(plan, settings, order=order)
+    steps_by_obj = {st.part.name: st for st in steps}
+    by_obj = {t.obj: t for t in plan}
+    ordered = [by_obj[st.part.name] for st in steps]
+    pads = Pads.from_settings(settings)
+
+    def carry_on(subtree: py_trees.behaviour.Behaviour, obj: str) -> py_trees.behaviour.Behaviour:
+        if not keep_going:
+            return subtree
+        return py_trees.decorators.FailureIsSuccess(name=f"then the next ({obj})", child=subtree)
+
+    if correct == "each":
+        children = []
+        for index, step in enumerate(steps):
+            placed = [(st.part.name, st.part.footprint) for st in steps[: index + 1]]
+            neighbours = [
+                (
+                    by_obj[name],
+                    free_push_directions(steps_by_obj[name].part, placed, pads),
+                    restage_releases(steps_by_obj[name].part, placed, pads),
+                )
+                for name in step.neighbours
+            ]
+            target = by_obj[step.part.name]
+            subtree = arrange_one(
+                target,
+                threshold_mm,
+                max_pushes,
+                max_regrasps,
+                locate=locate,
+                strategy=strategy,
+                step=step,
+                neighbours=neighbours,
+                yaw_threshold_deg=yaw_threshold_deg,
+                kind_targets=siblings.get(target.obj, ()),
+                kind_of_neighbour=siblings,
+                settings=settings,
+            )
+            children.append(carry_on(subtree, target.obj))
+    else:
+        everything = [(st.part.name, st.part.footprint) for st in steps]
+        place_all = py_trees.composites.Sequence(
+            name="place all",
+            memory=True,
+            children=[
+                carry_on(
+                    py_trees.composites.Sequence(
+                        name=f"place {t.obj} first",
+                        memory=True,
+                        children=[
+                            set_target(t),
+                            transfer(
+                                t,
+                                max_regrasps,
+                                locate=locate,
+                                kind_targets=siblings.get(t.obj, ()),
+                                release=_dense_release(steps_by_obj[t.obj]),
+                            ),
+                            inspect(
+                                t,
+                                f"inspect {t.obj} after placing",
+                                after_placing=True,
+                                kind_targets=siblings.get(t.obj, ()),
+                            ),
+                        ],
+                    ),
+                    t.obj,
+                )
+                for t in ordered
+            ],
+        )
+        correct_all = py_trees.composites.Sequence(
+            name="correct all",
+            memory=True,
+            children=[
+                carry_on(
+                    py_trees.composites.Sequence(
+                        name=f"correct {t.obj} after all",
+                        memory=True,
+                        children=[
+                            # An object whose transfer failed was never placed: nothing to correct.
+                            py_trees.behaviours.CheckBlackboardVariableExists(
+                                name=f"{t.obj} was placed", variable_name=keys.key(t.obj, keys.PLACED_OFFSET_MM)
+                            ),
+                            inspect(t, f"inspect {t.obj} before correcting", kind_targets=siblings.get(t.obj, ())),
+                            correction(
+                                t,
+                                threshold_mm,
+                                max_pushes,
+                                strategy,
+                                yaw_threshold_deg=yaw_threshold_deg,
+                                kind_targets=siblings.get(t.obj, ()),
+                                towards=free_push_directions(steps_by_obj[t.obj].part, everything, pads),
+                                restage=restage_releases(steps_by_obj[t.obj].part, everything, pads),
+                                settings=settings,
+                            ),
+                        ],
+                    ),
+                    t.obj,
+                )
+                for t in ordered
+            ],
+        )
+        children = [place_all, correct_all]
+    return Arrangement(
+        name="arrangement",
+        children=[*children, MoveHome("park the arm")],
+        targets=plan,
+        threshold_mm=float(threshold_mm),
+        place_all=children[0] if correct == "after_all" else None,
+        yaw_threshold_deg=None if yaw_threshold_deg is None else float(yaw_threshold_deg),
+        colours=table,
+        settings=settings,
+    )

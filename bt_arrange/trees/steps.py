@@ -1,0 +1,238 @@
+"""The subtrees of one part in the paper's Algorithm 1: set its target, find it, transfer it, look, correct.
+
+``locate`` says how a part is found before it is picked: ``by_camera()`` (the default, the top
+camera's colour detection, ``Detect``) or ``by_depth(seed)`` (the depth-only grasp estimator of
+Table 1's row 4, ``EstimateGraspFromDepth``); any ``Callable[[Target], Behaviour]`` that writes
+``/<obj>/pose`` will do.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable, Sequence
+
+import py_trees
+
+from bt_arrange.behaviours import (
+    Detect,
+    EstimateGraspFromDepth,
+    GraspGuard,
+    Inspect,
+    Pick,
+    Place,
+    Push,
+    keys,
+)
+from bt_arrange.behaviours.push import PUSH_STRATEGIES
+from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.errors import PlanError
+from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import Release
+from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
+from bt_arrange.settings import ManipulationSettings
+from bt_arrange.trees.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
+
+
+def set_target(target: Target) -> py_trees.behaviour.Behaviour:
+    """Write the object's target to ``/<obj>/target``."""
+    return py_trees.behaviours.SetBlackboardVariable(
+        name=f"{target.obj} target",
+        variable_name=keys.key(target.obj, keys.TARGET),
+        variable_value=target.planar,
+        overwrite=True,
+    )
+
+
+#: How an object is found before it is picked: a behaviour that writes ``/<obj>/pose``.
+Locate = Callable[["Target"], py_trees.behaviour.Behaviour]
+
+
+def by_camera() -> Locate:
+    """Find the object with the top camera's colour detection: ``Detect "detect <obj>"`` (the default)."""
+
+    def locate(target: Target) -> py_trees.behaviour.Behaviour:
+        return Detect(f"detect {target.obj}", target.obj, target.colour, target.object_type)
+
+    return locate
+
+
+def by_depth(
+    seed: int = 0, *, estimator: DepthGraspEstimator | None = None, near_xy_m: tuple[float, float] | None = None
+) -> Locate:
+    """Estimate the grasp from the depth image alone: ``EstimateGraspFromDepth`` (Table 1, row 4).
+
+    ``seed`` seeds the depth noise (each attempt draws afresh), ``near_xy_m`` is the optional
+    colour-blind hint; see :class:`~bt_arrange.behaviours.EstimateGraspFromDepth`.
+    """
+    known = (estimator.config if estimator is not None else DepthGraspConfig()).part
+
+    def locate(target: Target) -> py_trees.behaviour.Behaviour:
+        if target.object_type != known:
+            raise PlanError(
+                f"target {target.obj}: the depth-only grasp estimator knows the paper's 5 cm cube only, "
+                f"not a {target.object_type.name} ({target.object_type.size_text})"
+            )
+        return EstimateGraspFromDepth(
+            f"estimate {target.obj} grasp from depth",
+            target.obj,
+            target.colour,
+            estimator=estimator,
+            near_xy_m=near_xy_m,
+            seed=seed,
+        )
+
+    return locate
+
+
+def transfer(
+    target: Target,
+    max_regrasps: int = 3,
+    *,
+    locate: Locate | None = None,
+    kind_targets: Sequence[PlanarPose] = (),
+    release: Release | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Locate, pick and place one object; a part lost on the way is located and picked again.
+
+    ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
+    ``kind_targets`` (identical parts: the targets of the kind) let a Detect choose a part that
+    is not at one of them. ``release`` says where the pads go among neighbours
+    (``bt_arrange.layout``; default: anywhere).
+    """
+    obj = target.obj
+    kind = target.object_type
+
+    def find() -> py_trees.behaviour.Behaviour:
+        finder = (locate or by_camera())(target)
+        if kind_targets and isinstance(finder, Detect):
+            finder.among(kind_targets)
+        return finder
+
+    look_again: list[py_trees.behaviour.Behaviour] = []
+    if release is not None:
+        # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
+        # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
+        # at it again, and pick it centred.
+        look_again = [
+            GraspGuard(
+                f"while setting {obj} down",
+                Place(f"set {obj} down to look again", obj, kind, where="pick"),
+            ),
+            find(),
+            Pick(f"pick {obj} centred", obj, kind),
+        ]
+    carry = py_trees.composites.Sequence(
+        name=f"transfer {obj}",
+        memory=True,
+        children=[
+            find(),
+            Pick(f"pick {obj}", obj, kind),
+            *look_again,
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, kind, release=release)),
+        ],
+    )
+    whole_number("max_regrasps", max_regrasps)
+    # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
+    return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
+
+
+def inspect(
+    target: Target, name: str, *, after_placing: bool = False, kind_targets: Sequence[PlanarPose] = ()
+) -> Inspect:
+    """The Inspect of one object (its type, colour and, for identical parts, the targets of its kind)."""
+    return Inspect(
+        name, target.obj, target.colour, after_placing, object_type=target.object_type, kind_targets=kind_targets
+    )
+
+
+def check_strategy(strategy: object) -> str:
+    """The push strategy's name, or a ``PlanError`` listing the strategies."""
+    if strategy not in PUSH_STRATEGIES:
+        raise PlanError(f"strategy={strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
+    return str(strategy)
+
+
+def correction(
+    target: Target,
+    threshold_mm: float = 1.0,
+    max_pushes: int = 10,
+    strategy: str = "paper",
+    *,
+    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
+    kind_targets: Sequence[PlanarPose] = (),
+    towards: tuple[str, ...] | None = None,
+    restage: dict[str, Release] | None = None,
+    push_opening_m: float | None = None,
+    count: bool = True,
+    label: str = "",
+    settings: ManipulationSettings | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
+
+    ``towards``: the directions (target frame) it may be pushed, the sides a neighbour blocks left
+    out (default all four). ``restage``: per blocked direction, a release on the other side; when
+    a correction needs a blocked side, Push fails and the part is picked up and released there,
+    from where a push is free. ``count``: the loop's pushes are the object's ``corrections``.
+    ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, ``"learned"``
+    or ``"diagonal"``.
+    ``yaw_threshold_deg=None`` corrects the position only. ``settings`` are the run's (the
+    threshold's floor).
+    """
+    check_threshold(threshold_mm, settings)
+    check_strategy(strategy)
+    if yaw_threshold_deg is not None:
+        positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+    obj = target.obj
+    push: py_trees.behaviour.Behaviour = Push(
+        f"push {obj}{label}",
+        obj,
+        strategy,
+        target.object_type,
+        yaw_threshold_deg,
+        towards=towards,
+        opening_m=push_opening_m,
+    )
+    if restage:
+        push = py_trees.composites.Selector(
+            name=f"push {obj} from a free side{label}",
+            memory=True,
+            children=[push, *(_restage(target, d, release, label) for d, release in restage.items())],
+        )
+    push_and_look = py_trees.composites.Sequence(
+        name=f"push and inspect {obj}{label}",
+        memory=True,
+        children=[push, inspect(target, f"inspect {obj}{label}", kind_targets=kind_targets)],
+    )
+    return RepeatUntilWithin(
+        name=f"correct {obj} to {threshold_mm:g} mm{label}",
+        child=push_and_look,
+        offset_key=keys.key(obj, keys.OFFSET_MM),
+        threshold_mm=threshold_mm,
+        max_attempts=max_pushes,
+        corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
+        obj=obj,
+        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+        yaw_threshold_deg=yaw_threshold_deg,
+    )
+
+
+def _restage(target: Target, towards: str, release: Release, label: str) -> py_trees.behaviour.Behaviour:
+    """When Push needed ``towards`` from a blocked side: pick the part up, release it past the target on that side."""
+    obj = target.obj
+    dx, dy = release.offset_m
+    return py_trees.composites.Sequence(
+        name=f"release {obj} again {dx * 1000:+.0f}, {dy * 1000:+.0f} mm to push it {towards}{label}",
+        memory=True,
+        children=[
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj} needs a push {towards}{label}",
+                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
+            ),
+            Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release),
+            GraspGuard(
+                f"while holding {obj} again{label}",
+                Place(f"place {obj} again{label}", obj, target.object_type, release=release),
+            ),
+        ],
+    )

@@ -1,0 +1,164 @@
+"""A plan's targets and their checks: where each part should end, and whether the plan can be built.
+
+``Target`` is one part's goal; ``validate_targets`` checks a plan before anything moves (fields,
+colours, names, reach, and the layout of ``plan_steps``); ``check_threshold`` the threshold.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from bt_arrange.checks import finite_number, positive_number
+from bt_arrange.errors import PlanError, UnreachableError
+from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import Pads, Part, Step, plan_layout
+from bt_arrange.motion import ArmKinematics, gripper_down_pose
+from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE
+from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Gripper
+
+CORRECT_MODES = ("each", "after_all")
+#: The yaw error (degrees) the correction loop leaves by default.
+DEFAULT_YAW_THRESHOLD_DEG = 1.0
+
+
+@dataclass(frozen=True)
+class Target(PartOnTable):
+    """Where one part should end up: ``colour`` (of its top face), ``x_m``, ``y_m`` and ``yaw_rad`` on the table.
+
+    ``name`` is the object's blackboard namespace (``/<name>/pose``); it defaults to the colour.
+    ``object_type`` is its size (default the paper's cube, ``bt_arrange.objects.CUBE``). Several
+    targets may share a type and a colour (identical parts): each needs its own name.
+    """
+
+    @property
+    def planar(self) -> PlanarPose:
+        """The target as a planar pose."""
+        return PlanarPose(self.x_m, self.y_m, self.yaw_rad)
+
+
+def validate_targets(
+    targets: Iterable[object],
+    *,
+    colours: Iterable[str] | None = None,
+    kinematics: ArmKinematics | None = None,
+    settings: ManipulationSettings | None = None,
+) -> list[Target]:
+    """Check a plan before anything moves; a ``PlanError`` names the first problem.
+
+    Malformed entries, unknown colours, two targets for one object, one colour on two types, a
+    target out of the arm's reach, and a plan no order and approach can build (``plan_steps``:
+    targets that overlap or lie closer than 2 mm, a part the pads find no room beside, each part's
+    footprint its type's size) are each a clear error. Targets of one type and colour are
+    identical parts (each with its own name).
+    """
+    if isinstance(targets, (str, bytes)) or not isinstance(targets, Iterable):
+        raise PlanError(f"targets must be a list of Target(colour, x_m, y_m, yaw_rad), got {targets!r}")
+    plan = list(targets)
+    if not plan:
+        raise PlanError("no targets: an arrangement needs at least one Target(colour, x_m, y_m, yaw_rad)")
+    known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
+    settings = settings or ManipulationSettings()
+    names: dict[str, int] = {}
+    type_of_colour: dict[str, tuple[ObjectType, int]] = {}
+    for index, target in enumerate(plan, start=1):
+        if not isinstance(target, Target):
+            raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
+        for field_name in ("x_m", "y_m", "yaw_rad"):
+            finite_number(field_name, getattr(target, field_name), where=f"target {index} ({target.colour}): ")
+        if not isinstance(target.object_type, ObjectType):
+            raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
+        if target.colour not in known:
+            raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
+        if target.obj in names:
+            first_index = names[target.obj]
+            hint = (
+                f" (identical parts need a name each, e.g. name='{target.colour} 1' and name='{target.colour} 2')"
+                if target.name is None
+                else ""
+            )
+            raise PlanError(f"targets {first_index} and {index} are both named {target.obj!r}{hint}")
+        names[target.obj] = index
+        seen = type_of_colour.get(target.colour)
+        if seen is not None and seen[0] != target.object_type:
+            raise PlanError(
+                f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
+                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type"
+            )
+        type_of_colour.setdefault(target.colour, (target.object_type, index))
+    checked = [target for target in plan if isinstance(target, Target)]
+    kinematics = kinematics or ArmKinematics()
+    for target in checked:
+        grasp_m, approach_m, _ = settings.tcp_heights_m(target.object_type.shape)
+        for height_m in (grasp_m, approach_m):
+            try:
+                kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
+            except UnreachableError as error:
+                raise PlanError(
+                    f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is out of reach: {error}"
+                ) from error
+    plan_steps(checked, settings)
+    return checked
+
+
+def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
+    """For each target's object, the targets of every part of its kind (type and colour), its own among them.
+
+    Only kinds of several parts (identical parts) are listed; an object alone in its kind is left out.
+    """
+    plan = list(targets)
+    by_kind: dict[tuple[ObjectType, str], list[Target]] = {}
+    for target in plan:
+        by_kind.setdefault(kind_of(target), []).append(target)
+    return {
+        target.obj: tuple(t.planar for t in by_kind[kind_of(target)])
+        for target in plan
+        if len(by_kind[kind_of(target)]) > 1
+    }
+
+
+def footprint_m(target: Target) -> tuple[float, float]:
+    """The part's size on the table (x, y in its own frame, metres): its shape's top face."""
+    x_m, y_m = object_type_of(target).shape.extent_m
+    return float(x_m), float(y_m)
+
+
+def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
+    """The plan's targets as footprints for ``bt_arrange.layout``, each held only by the grasps its shape offers."""
+    gripper = (settings or ManipulationSettings()).gripper
+    return [
+        Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t), grasp_axes=_grasp_axes(t.object_type, gripper))
+        for t in targets
+    ]
+
+
+def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
+    """The axes of the part's frame the pads may close across: those of its shape's grasps."""
+    return tuple(grasp.axis for grasp in kind.shape.grasps(gripper))
+
+
+def plan_steps(
+    targets: Sequence[Target], settings: ManipulationSettings | None = None, order: Sequence[str] | None = None
+) -> list[Step]:
+    """The layout's steps (``bt_arrange.layout.plan_layout``): the placing order and each part's approach."""
+    settings = settings or ManipulationSettings()
+    return plan_layout(parts_of(targets, settings), Pads.from_settings(settings), order)
+
+
+def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
+    """The threshold in millimetres, or a ``PlanError``: it must be a number a push can correct.
+
+    The floor is ``settings.min_threshold_mm`` (0.28 mm with the default ``min_push_m`` of 0.2 mm):
+    below it a correction loop could "push" without moving the arm.
+    """
+    value_mm = positive_number("threshold_mm", threshold_mm, "mm")
+    settings = settings or ManipulationSettings()
+    floor_mm = settings.min_threshold_mm
+    if value_mm < floor_mm:
+        raise PlanError(
+            f"threshold {threshold_mm:g} mm is below {floor_mm:.2f} mm, the smallest offset a push can correct "
+            f"(pushes shorter than min_push_m = {settings.min_push_m * 1000:.1f} mm along an axis are not made)"
+        )
+    return value_mm
