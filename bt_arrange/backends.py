@@ -65,6 +65,8 @@ class RunReport(Protocol):
     sim_seconds: float
     wall_seconds: float
     timed_out: bool
+    #: False when the world had no ground truth: the report is camera only (read with a default of True).
+    ground_truth: bool
 
     @property
     def all_within_threshold(self) -> bool:

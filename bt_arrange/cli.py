@@ -124,9 +124,9 @@ def _run(args: argparse.Namespace) -> int:
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
     seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
-    starts = treefile.scene(module, seed)
-
     backend = backends.load(args.backend)
+    # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
+    starts = treefile.scene(module, seed, backend=backend)
     with backend.open_run(
         root,
         starts,
@@ -159,7 +159,10 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     def deg(value: float | None) -> str:
         return "-" if value is None else f"{value:+.2f}"
 
-    rows = [
+    # A world without ground truth (a real cell) reports what the camera measured, and only that.
+    has_truth = getattr(report, "ground_truth", True)
+    truth_columns = (4, 6) if not has_truth else ()
+    rows: list[tuple[str, ...]] = [
         ("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
     ]
     for o in report.objects:
@@ -178,16 +181,21 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
                 status,
             )
         )
+    rows = [tuple(cell for i, cell in enumerate(row) if i not in truth_columns) for row in rows]
     if report.objects:
         widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]
         for row in rows:
             print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False)) + "  " + row[-1])
         yaw_threshold = getattr(report, "yaw_threshold_deg", None)
         yaw_text = f", yaw {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        truth_text = (
+            "truth = the simulator's ground truth (evaluation only)"
+            if has_truth
+            else "camera only: this world has no ground truth"
+        )
         print(
             f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
-            f"yaw errors in deg (after pushing); truth = the simulator's ground truth (evaluation only); "
-            f"threshold {report.threshold_mm:g} mm{yaw_text}"
+            f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
     if args.record:
         print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")

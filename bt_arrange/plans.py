@@ -39,11 +39,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+
+if TYPE_CHECKING:
+    from bt_arrange.backends import Backend
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -63,8 +66,9 @@ class Plan:
     """A loaded plan file: its targets, colour table and options, and where the parts start.
 
     ``create_root(...)`` builds the arrangement tree (``bt_arrange.trees.arrangement``) and
-    ``create_scene(seed)`` says where the parts start in a simulator: the plan's own starts, or
-    parts scattered by the backend from ``seed`` (default the plan's ``[scene] seed``, else 0).
+    ``create_scene(seed, backend)`` says where the parts start in a simulator: the plan's own
+    starts, or parts scattered from ``seed`` (default the plan's ``[scene] seed``, else 0) by the
+    backend the run uses (``--backend``; without one, the default backend).
     """
 
     path: Path
@@ -101,14 +105,18 @@ class Plan:
         except BtArrangeError as error:
             raise PlanError(f"{self.path}: {error}") from error
 
-    def create_scene(self, seed: int | None = None) -> list[ObjectStart]:
-        """Where the parts start: the file's ``[[scene.starts]]``, or scattered from ``seed`` by the default backend."""
+    def create_scene(self, seed: int | None = None, backend: Backend | None = None) -> list[ObjectStart]:
+        """Where the parts start: the file's ``[[scene.starts]]``, or scattered from ``seed`` by ``backend``.
+
+        ``backend`` is the one the run uses; without one, the default backend (loaded only then).
+        """
         if self.starts is not None:
             return list(self.starts)
-        from bt_arrange import backends
-
         chosen = self.seed if seed is None else seed
-        backend = backends.load()
+        if backend is None:
+            from bt_arrange import backends
+
+            backend = backends.load()
         try:
             return list(
                 backend.scatter(

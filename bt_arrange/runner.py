@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 import py_trees
 import py_trees.visitors
@@ -31,6 +31,10 @@ class Transition:
     programs select by ``node_id`` (the py_trees ``Behaviour.id``, as text), which
     ``TransitionLog.node(transition)`` and ``Runner.node(transition)`` turn back into the node,
     and by ``obj``, the object the node handles (``None`` for a node of no single object).
+
+    ``facts`` are what the node states as data at that moment, for reports and error injectors
+    (copied from the node's ``facts`` mapping, when it has one; empty otherwise): read them here,
+    never out of ``feedback``, which is text for people. Keys are the node's own, values JSON-able.
     """
 
     time_s: float
@@ -41,10 +45,20 @@ class Transition:
     feedback: str
     node_id: str = ""
     obj: str | None = None
+    facts: dict[str, Any] = field(default_factory=dict, hash=False)
 
     def to_json(self) -> str:
-        """One line of the transition log."""
-        return json.dumps(asdict(self))
+        """One line of the transition log (``facts`` only when there are some)."""
+        data = asdict(self)
+        if not self.facts:
+            del data["facts"]
+        return json.dumps(data, default=str)
+
+
+def facts_of(node: py_trees.behaviour.Behaviour) -> dict[str, Any]:
+    """A copy of the facts a behaviour states (its ``facts`` mapping, if it has one), else an empty dict."""
+    facts = getattr(node, "facts", None)
+    return dict(facts) if isinstance(facts, Mapping) and facts else {}
 
 
 def object_of(node: py_trees.behaviour.Behaviour) -> str | None:
@@ -152,6 +166,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             feedback=node.feedback_message,
             node_id=node_id,
             obj=object_of(node),
+            facts=facts_of(node),
         )
 
     def _write(self, changes: list[Transition]) -> None:

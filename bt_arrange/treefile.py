@@ -17,11 +17,14 @@ import inspect
 import sys
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, TreeFileError
+
+if TYPE_CHECKING:
+    from bt_arrange.backends import Backend
 
 
 def load(path: str | Path) -> ModuleType:
@@ -92,17 +95,33 @@ def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behavio
     return root
 
 
-def scene(module: ModuleType, seed: int) -> list[Any]:
-    """The file's ``create_scene(seed)``: where the cubes start in the simulator."""
+def scene(module: ModuleType, seed: int, backend: Backend | None = None) -> list[Any]:
+    """The file's ``create_scene(seed)``: where the cubes start in the simulator.
+
+    A ``create_scene`` that takes a ``backend`` (plan and XML files: they scatter their parts
+    through it) is handed the run's; without one, such a file asks the default backend.
+    """
     create_scene = getattr(module, "create_scene", None)
     where = getattr(module, "__file__", module.__name__)
     if not callable(create_scene):
         raise TreeFileError(
             f"tree file {where} defines no create_scene(seed): the simulator needs to know where the cubes start"
         )
+    options: dict[str, Any] = {}
+    if backend is not None and _takes(create_scene, "backend"):
+        options["backend"] = backend
     try:
-        return list(create_scene(seed))
+        return list(create_scene(seed, **options))
     except BtArrangeError:
         raise
     except Exception as error:
         raise TreeFileError(f"create_scene() in {where} failed: {type(error).__name__}: {error}") from error
+
+
+def _takes(function: Any, name: str) -> bool:
+    """True when ``function`` accepts a keyword argument ``name``."""
+    try:
+        parameters = inspect.signature(function).parameters
+    except (TypeError, ValueError):
+        return False
+    return name in parameters or any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())

@@ -42,7 +42,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 from xml.sax.saxutils import escape, quoteattr
 
 import py_trees
@@ -57,6 +57,9 @@ from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.trees import Arrangement, Target, validate_targets
+
+if TYPE_CHECKING:
+    from bt_arrange.backends import Backend
 
 FORMAT_VERSION = "4"
 
@@ -1013,6 +1016,7 @@ def load_module(path: str | Path) -> ModuleType:
     The file is read and checked once, here; every ``create_root()`` builds a fresh tree. The scene
     is the one every file of ``trees/`` uses: the plan's cubes scattered by ``seed``, clear of the
     targets, so the XML root must be an ``<Arrangement>`` (its ``targets`` say what to scatter).
+    ``create_scene(seed, backend)`` asks the run's backend to scatter them (default: the default backend).
     """
     path = Path(path)
     text_root = load_xml(path)  # fails here, before anything runs, on any error of the file
@@ -1028,16 +1032,18 @@ def load_module(path: str | Path) -> ModuleType:
             )
         return from_xml(source, source=str(path))
 
-    def create_scene(seed: int = 0) -> list[Any]:
+    def create_scene(seed: int = 0, backend: Backend | None = None) -> list[Any]:
         if not isinstance(text_root, Arrangement):
             raise XmlTreeError(
                 f"{path}: the simulator places cubes from the plan of an <Arrangement> root; "
                 f"this tree's root is <{model_of(text_root).tag}>"
             )
-        from bt_arrange import backends  # the default backend's convention, loaded only to run
+        if backend is None:
+            from bt_arrange import backends  # the default backend, loaded only to run
 
+            backend = backends.load()
         targets = text_root.targets
-        return backends.load().scatter(
+        return backend.scatter(
             [t.colour for t in targets],
             seed,
             avoid=targets,

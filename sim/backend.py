@@ -14,7 +14,7 @@ import py_trees
 
 
 class SimBackend:
-    """Runs trees in a fresh headless pybullet cell (``bt_arrange_sim.runs.SimulatedRun``)."""
+    """Runs trees in a fresh headless pybullet cell: a ``bt_arrange.session.Session`` on a ``SimWorld``."""
 
     name = "sim"
 
@@ -30,7 +30,7 @@ class SimBackend:
         cell: str = "ideal",
         run_seed: int = 0,
     ) -> Any:
-        """A ``SimulatedRun``: the plan and scene checked, the cell built, not yet ticked.
+        """A ``SimulatedRun`` (a session on a ``SimWorld``): the plan and scene checked, the cell built, not yet ticked.
 
         ``cell`` is ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell``; a bad one is a
         one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors.
@@ -73,8 +73,8 @@ class SimBackend:
             yield f"headless work cell: ok (TCP at {cell.arm.tcp_pose()})"
 
     def prepare_out(self, path: Path) -> Path:
-        """``bt_arrange_sim.runs.prepare_record_dir``."""
-        from bt_arrange_sim.runs import prepare_record_dir
+        """``bt_arrange.session.prepare_record_dir``."""
+        from bt_arrange.session import prepare_record_dir
 
         return prepare_record_dir(path)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import py_trees
 import pytest
 from fakes import FakeClock, cube, make_context
 from py_trees.common import Status
@@ -80,3 +81,36 @@ def test_the_json_lines_keep_the_old_fields_and_add_the_node(tmp_path) -> None:
         assert log.nodes[line["node_id"]].name == line["behaviour"]
     detect = next(line for line in lines if line["behaviour"] == "detect red")
     assert (detect["kind"], detect["obj"]) == ("Detect", "red")
+
+
+class _Counting(py_trees.behaviour.Behaviour):
+    """Succeeds on its second tick and states, as data, how many ticks it took."""
+
+    def __init__(self) -> None:
+        super().__init__("count")
+        self.facts: dict[str, object] = {}
+        self.ticks = 0
+
+    def update(self) -> Status:
+        self.ticks += 1
+        self.facts = {"ticks": self.ticks, "pushed_mm": 1.25}
+        return Status.SUCCESS if self.ticks >= 2 else Status.RUNNING
+
+
+def test_a_transition_carries_the_facts_its_node_states(tmp_path) -> None:  # issue 19, item 3
+    counting, silent = _Counting(), py_trees.behaviours.Success("silent")
+    root = py_trees.composites.Sequence("both", memory=True, children=[counting, silent])
+    log = TransitionLog(tmp_path / "log.jsonl")
+    for time_s in (0.0, 0.1):
+        root.tick_once()
+        log.observe(root, time_s)
+    log.close()
+    by_node = {(t.behaviour, t.new): t for t in log.transitions}
+    assert by_node[("count", "RUNNING")].facts == {"ticks": 1, "pushed_mm": 1.25}
+    assert by_node[("count", "SUCCESS")].facts == {"ticks": 2, "pushed_mm": 1.25}  # a copy at each change
+    assert by_node[("silent", "SUCCESS")].facts == {} and by_node[("both", "SUCCESS")].facts == {}
+    lines = {(line["behaviour"], line["new"]): line for line in map(json.loads, (tmp_path / "log.jsonl").open())}
+    assert lines[("count", "SUCCESS")]["facts"] == {"ticks": 2, "pushed_mm": 1.25}
+    # A node that states nothing logs the same line as before facts existed.
+    assert "facts" not in lines[("silent", "SUCCESS")] and "facts" not in lines[("both", "SUCCESS")]
+    assert isinstance(hash(by_node[("count", "SUCCESS")]), int)  # still a hashable, frozen value

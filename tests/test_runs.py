@@ -1,7 +1,8 @@
-"""SimulatedRun checks everything before it builds a world, and reports by the behaviours' own flags.
+"""SimulatedRun, the session on a pybullet cell, checks everything before it builds the cell.
 
 A ``FakeCell`` (fake devices, synthetic camera) stands in for the pybullet cell, so these run in
-milliseconds and can tell whether a world was ever built.
+milliseconds and can tell whether a world was ever built. What every session does, whatever its
+world, is tested in ``tests/test_session.py``.
 """
 
 from __future__ import annotations
@@ -12,10 +13,10 @@ import py_trees
 import pytest
 from fakes import FakeClock, cube, make_context
 
-from bt_arrange.behaviours import Inspect
+from bt_arrange import session
 from bt_arrange.errors import PlanError
-from bt_arrange.runner import Transition
-from bt_arrange.trees import Arrangement, Target, arrangement, set_target, transfer
+from bt_arrange.session import Session, SessionReport, World
+from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim import runs
 from bt_arrange_sim.scenes import CubeStart
 
@@ -34,6 +35,7 @@ class FakeCell:
         self.robot = self.context.robot
         self.camera = self.robot.camera
         self.starts: dict[str, CubeStart] = {}
+        self.cubes = self.starts  # the names of the parts, as the cell's body ids by name
         FakeCell.built.append(self)
 
     def add_cubes(self, starts) -> None:
@@ -62,41 +64,21 @@ def fake_cell(monkeypatch: pytest.MonkeyPatch) -> type[FakeCell]:
     return FakeCell
 
 
-def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(fake_cell, tmp_path) -> None:  # item 7
-    inspect = Inspect("look at red once it is down", "red", after_placing=True)
-    root = Arrangement("mine", [set_target(RED), transfer(RED), inspect], [RED], 1.0)
-    run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(
-        Transition(
-            1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm from the target", str(inspect.id), "red"
-        )
-    )
-    assert run._placed_truth_mm["red"] == pytest.approx(223.607, abs=1e-3)  # the fake cube still at its start
-    assert (tmp_path / "after_placing_red.png").is_file()
-
-
-def test_an_inspect_that_does_not_record_placing_is_not_taken_for_one(fake_cell, tmp_path) -> None:
-    inspect = Inspect("inspect red after placing", "red")  # the name says so, the flag does not
-    root = Arrangement("mine", [set_target(RED), inspect], [RED], 1.0)
-    run = runs.SimulatedRun(root, [RED_START], record_dir=tmp_path)
-    run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "", str(inspect.id), "red"))
-    assert run._placed_truth_mm == {}
-
-
-def test_an_object_stopped_by_the_time_limit_says_so(fake_cell) -> None:  # item 5
-    with runs.SimulatedRun(arrangement([RED]), [RED_START], time_limit_s=0.02) as run:
-        report = run.run()
-    (red,) = report.objects
-    assert report.timed_out
-    assert red.status == "failed"
-    assert red.reason == "stopped after 0.02 s of world time"
-    assert not report.all_within_threshold
-
-
 def test_the_run_counts_world_time_from_the_start_of_the_tree(fake_cell) -> None:  # item 9: live view vs report
     run = runs.SimulatedRun(arrangement([RED]), [RED_START])
     assert run.cell.clock.now() == pytest.approx(runs.SETTLE_S)
     assert run.elapsed_s() == pytest.approx(0.0)
+
+
+def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:  # issue 19, item 2
+    with runs.SimulatedRun(arrangement([RED]), [RED_START], time_limit_s=0.02) as run:
+        assert isinstance(run, Session) and isinstance(run.world, runs.SimWorld) and isinstance(run.world, World)
+        assert run.cell is fake_cell.built[0] and run.world.truth is run.world
+        assert run.world.part_names() == ["red"] and run.part_of(RED) == "red"
+        report = run.run()
+    (red,) = report.objects
+    assert report.ground_truth and red.final_offset_truth_mm == pytest.approx(223.607, abs=1e-3)
+    assert runs.SimulationReport is SessionReport and runs.REASON_TYPES is session.REASON_TYPES
 
 
 @pytest.mark.parametrize(
@@ -119,16 +101,6 @@ def test_a_bad_run_is_refused_before_a_world_is_built(fake_cell, kwargs, message
 def test_a_custom_root_still_has_its_scene_checked(fake_cell) -> None:
     with pytest.raises(PlanError, match="unknown colour 'purple'"):
         runs.SimulatedRun(py_trees.behaviours.Success("done"), [CubeStart("purple", 0.5, 0.0, 0.0)])
-    assert fake_cell.built == []
-
-
-def test_recording_into_a_file_or_an_impossible_folder_is_refused_first(fake_cell, tmp_path) -> None:  # item 4
-    a_file = tmp_path / "report.txt"
-    a_file.write_text("x")
-    with pytest.raises(PlanError, match=r"^cannot record into .*report\.txt: it is a file, not a folder$"):
-        runs.SimulatedRun(arrangement([RED]), [RED_START], record_dir=a_file)
-    with pytest.raises(PlanError, match=r"^cannot record into .*report\.txt/inside: "):
-        runs.SimulatedRun(arrangement([RED]), [RED_START], record_dir=a_file / "inside")
     assert fake_cell.built == []
 
 

@@ -12,7 +12,6 @@ import time
 
 import numpy as np
 
-from bt_arrange.behaviours.pick import SQUARED_FEEDBACK
 from bt_arrange_sim.experiment.options import TrialSpec, parse_object
 from bt_arrange_sim.experiment.rows import ROWS, row_injectors
 
@@ -64,9 +63,8 @@ def _run_trial(spec: TrialSpec) -> dict:
         report = run.run()
     (outcome,) = report.objects
     bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
-    squarings = [
-        t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and SQUARED_FEEDBACK in t.feedback
-    ]
+    # Pick states what its grip was as facts (``Pick.facts``), not only in its feedback text.
+    squarings = [t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and t.facts.get("squared")]
     return {
         "row": spec.row,
         "trial": spec.index,

@@ -1,0 +1,524 @@
+"""Run an arrangement tree against a world and report per object: the same for every backend.
+
+A backend supplies a ``World`` (the robot interfaces, a clock it steps, the parts placed where
+they start, a camera frame for recorded images and, for evaluation only, ground truth where it
+has one); a ``Session`` does the rest:
+
+- the plan check (``check_plan`` / ``check_scene`` / ``check_colours_apart``), the time limit,
+  the recording folder, all before the world is built (``open_world`` is called only then);
+- the ``Runner`` on the world's clock, with the transition log (``transitions.jsonl``), the
+  paper's Fig. 5 images and the replay page (``replay.html``) when recording;
+- the report, per object (``ObjectOutcome``): what the camera measured beside the world's ground
+  truth, labelled as such; a world without ground truth gives a camera-only report (every
+  ``*_truth_*`` field None, ``SessionReport.ground_truth`` False).
+
+``bt_arrange`` never imports a simulator: ``bt_arrange_sim.runs.SimWorld`` is the pybullet cell as
+a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import py_trees
+from py_trees.common import Access, Status
+
+from bt_arrange.behaviours import (
+    Context,
+    Detect,
+    EstimateGraspFromDepth,
+    GraspGuard,
+    Inspect,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    keys,
+)
+from bt_arrange.checks import positive_number
+from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.errors import PlanError
+from bt_arrange.geometry import PlanarPose
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
+from bt_arrange.plancheck import CameraView, check_plan, check_scene
+from bt_arrange.replay import ReplayRecorder
+from bt_arrange.robot import CameraFrame, Clock, Robot
+from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
+from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import yaw_error_rad
+from bt_arrange.trees import Arrangement, Target
+
+#: World time the scene settles for before the tree starts (parts dropped onto the table come to rest), seconds.
+SETTLE_S = 0.3
+
+#: Behaviours whose failure explains why an object was not finished (each knows its ``obj``).
+REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
+    Detect,  # and Inspect, a Detect
+    EstimateGraspFromDepth,
+    Pick,
+    Place,
+    Push,
+    RepeatUntilWithin,
+    GraspGuard,
+)
+
+
+# ----------------------------------------------------------------------------------------------
+# The world a session runs against
+# ----------------------------------------------------------------------------------------------
+
+
+@runtime_checkable
+class GroundTruth(Protocol):
+    """What a world knows of its parts beyond its sensors: for evaluation only, never for the tree."""
+
+    def part_names(self) -> Sequence[str]:
+        """The names of the parts present in the world."""
+        ...
+
+    def planar_pose(self, name: str) -> tuple[float, float, float]:
+        """The true planar pose of part ``name``: ``(x_m, y_m, yaw_rad)`` in the world frame."""
+        ...
+
+
+@runtime_checkable
+class World(Protocol):
+    """One work cell a tree runs in: simulated, or real.
+
+    The session calls ``place`` and ``settle`` once, before the tree starts, then ``step`` between
+    ticks; ``capture_image`` only when recording; ``close`` at the end.
+    """
+
+    @property
+    def robot(self) -> Robot:
+        """The arm, gripper, camera and clock the behaviours use (``Context.create``)."""
+        ...
+
+    @property
+    def clock(self) -> Clock:
+        """World time, in seconds (the robot's clock)."""
+        ...
+
+    @property
+    def truth(self) -> GroundTruth | None:
+        """Ground truth for the report (evaluation only), or None: the report is then camera only."""
+        ...
+
+    def place(self, starts: Sequence[Any], colours: ColourTable) -> None:
+        """Put the parts where they start, painted with ``colours`` (a real cell: check that they are there).
+
+        A start is ``ObjectStart``-like: colour, x_m, y_m, yaw_rad, name and optionally object_type.
+        """
+        ...
+
+    def settle(self, seconds: float) -> None:
+        """Let ``seconds`` of world time pass with the robot still (parts come to rest)."""
+        ...
+
+    def step(self) -> None:
+        """Advance the world by one control period of the arm."""
+        ...
+
+    def capture_image(self) -> CameraFrame:
+        """A frame of the top camera for the recorded images (its ``rgb`` is saved)."""
+        ...
+
+    def close(self) -> None:
+        """Release the world (disconnect the simulator, stop the robot)."""
+        ...
+
+
+# ----------------------------------------------------------------------------------------------
+# The report
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass
+class ObjectOutcome:
+    """How one object ended. Offsets in millimetres; ``*_truth_*`` is the world's ground truth (None without)."""
+
+    name: str
+    target: tuple[float, float, float]
+    placed_offset_mm: float | None
+    final_offset_mm: float | None
+    final_offset_truth_mm: float | None
+    placed_offset_truth_mm: float | None
+    pushes: int
+    status: str
+    reason: str = ""
+    #: Measured minus target yaw, folded to the part's symmetry (degrees): camera, then ground truth.
+    placed_yaw_error_deg: float | None = None
+    final_yaw_error_deg: float | None = None
+    final_yaw_error_truth_deg: float | None = None
+    #: The part's type and its size (mm), for the report.
+    object_type: str = "cube"
+    size_mm: tuple[float, float, float] = (50.0, 50.0, 50.0)
+    #: The most later steps (a neighbour's release and pushes) moved it between two looks at it:
+    #: by the camera (``Recheck``), and by ground truth at the same moments; None when never looked at again.
+    moved_by_later_mm: float | None = None
+    moved_by_later_truth_mm: float | None = None
+
+
+@dataclass
+class SessionReport:
+    """A run's outcome: per object, and for the whole tree."""
+
+    objects: list[ObjectOutcome]
+    tree_status: str
+    threshold_mm: float | None
+    sim_seconds: float
+    wall_seconds: float
+    timed_out: bool
+    transitions: list[Transition] = field(default_factory=list, repr=False)
+    yaw_threshold_deg: float | None = None
+    #: False when the world had no ground truth: the ``*_truth_*`` figures are None, the report camera only.
+    ground_truth: bool = True
+
+    @property
+    def all_within_threshold(self) -> bool:
+        """True when every object ended within the threshold, as measured by the camera."""
+        if not self.objects:
+            return self.tree_status == Status.SUCCESS.value
+        return all(o.status == "within" for o in self.objects)
+
+    def to_dict(self) -> dict:
+        """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
+        data = {
+            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
+            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            "objects_within": sum(o.status == "within" for o in self.objects),
+            "threshold_mm": self.threshold_mm,
+            "yaw_threshold_deg": self.yaw_threshold_deg,
+            "tree_status": self.tree_status,
+            "timed_out": self.timed_out,
+            "sim_seconds": round(self.sim_seconds, 3),
+            "wall_seconds": round(self.wall_seconds, 3),
+        }
+        if not self.ground_truth:
+            data["ground_truth"] = False
+        return data
+
+
+# ----------------------------------------------------------------------------------------------
+# The session
+# ----------------------------------------------------------------------------------------------
+
+
+class Session:
+    """One tree in one world, built by ``open_world()`` once everything a user can get wrong is checked.
+
+    ``view`` is the top camera's view for the plan check (known without a world: from the backend's
+    configuration or a calibration); without one the view is not checked. ``transition_hooks`` are
+    called with every status change (e.g. to inject an error at the moment the paper names),
+    ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick.
+    """
+
+    def __init__(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        starts: Iterable[Any],
+        open_world: Callable[[], World],
+        *,
+        view: CameraView | None = None,
+        record_dir: Path | None = None,
+        time_limit_s: float = 1800.0,
+        title: str | None = None,
+        settle_s: float = SETTLE_S,
+        settings: ManipulationSettings | None = None,
+    ) -> None:
+        if not isinstance(root, py_trees.behaviour.Behaviour):
+            raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
+        positive_number("time limit", time_limit_s, "s", style="unit")
+        # One settings value for the plan check and the context: the tree's own (an arrangement
+        # keeps what it was checked and built with), unless the caller hands one in.
+        if settings is None:
+            settings = root.settings if isinstance(root, Arrangement) else ManipulationSettings()
+        #: The handling settings of the run.
+        self.settings = settings
+        # Everything a user can get wrong is checked here, before the world is built.
+        scene = list(starts)
+        #: The colour table of the plan: the world paints with it and the camera's detector reads it.
+        self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
+        if isinstance(root, Arrangement):
+            check_plan(
+                root.targets,
+                threshold_mm=root.threshold_mm,
+                starts=scene,
+                view=view,
+                colours=self.colours,
+                settings=settings,
+            )
+            check_colours_apart(root.targets, self.colours)
+        else:
+            check_scene(scene, view=view, colours=self.colours, settings=settings)
+        self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
+        self.root = root
+        #: Every node of the tree by its id (as text): transitions name their node by it.
+        self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
+        self.world: World = open_world()
+        self.world.place(scene, self.colours)
+        self.world.settle(settle_s)
+        #: Ground truth of the world (evaluation only), or None: the report is then camera only.
+        self.truth: GroundTruth | None = self.world.truth
+        #: World time when the tree starts: the report and the live view count from here.
+        self.start_s = self.world.clock.now()
+        self.context = Context.create(self.world.robot, detector=CubeDetector(self.colours), settings=settings)
+        self.time_limit_s = time_limit_s
+        self.transition_hooks: list[Callable[[Transition], None]] = []
+        self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
+        #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
+        self.runner_hooks: list[Callable[[Runner], None]] = []
+        self._placed_truth_mm: dict[str, float] = {}
+        #: Ground truth (evaluation only) of each object when last looked at, and the most it moved between looks.
+        self._looked_truth_xy: dict[str, tuple[float, float]] = {}
+        self._moved_truth_mm: dict[str, float] = {}
+        #: A tree that looks at placed parts again (a dense one): only then is the truth tracked per look.
+        self._rechecks = any(isinstance(node, Recheck) for node in root.iterate())
+        #: What the replay page shows (recorded runs only), and its heading.
+        self.replay: ReplayRecorder | None = None
+        self.title = title or root.name
+
+    def elapsed_s(self) -> float:
+        """World time since the tree started (the settling of the scene excluded), as the report counts it."""
+        return self.world.clock.now() - self.start_s
+
+    def run(self) -> SessionReport:
+        """Tick the tree to the end; returns the report. The world stays open for inspection."""
+        py_trees.blackboard.Blackboard.clear()
+        log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
+        if self.record_dir is not None:
+            self.replay = ReplayRecorder(self.root)
+            self._save_image("before_picking")
+        runner = Runner(
+            self.root,
+            self.context,
+            self.world.step,
+            time_limit_s=self.time_limit_s,
+            log=log,
+            on_transition=self._on_transition,
+            on_tick=self._on_tick,
+        )
+        for hook in self.runner_hooks:
+            hook(runner)
+        result = runner.run()
+        if self.record_dir is not None:
+            self._save_image("after_pushing")
+            assert self.replay is not None
+            self.replay.observe(self.world.clock.now())  # a stop at the time limit comes after the last tick
+        report = SessionReport(
+            objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
+            tree_status=result.status.value,
+            threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
+            yaw_threshold_deg=self.root.yaw_threshold_deg if isinstance(self.root, Arrangement) else None,
+            sim_seconds=result.sim_seconds,
+            wall_seconds=result.wall_seconds,
+            timed_out=result.timed_out,
+            transitions=result.transitions,
+            ground_truth=self.truth is not None,
+        )
+        if self.record_dir is not None:
+            (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+            assert self.replay is not None
+            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
+        return report
+
+    def close(self) -> None:
+        """Close the world."""
+        self.world.close()
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour of the tree a transition is about (by its ``node_id``), or None."""
+        return self.nodes.get(transition.node_id)
+
+    def part_of(self, target: Target) -> str:
+        """The part of the world that is ``target``'s (ground truth; without it, the target's name).
+
+        The one of its name, or, for identical parts, the one of its kind nearest the target.
+        """
+        assert isinstance(self.root, Arrangement)
+        siblings = [t for t in self.root.targets if t.colour == target.colour and t.object_type == target.object_type]
+        if len(siblings) <= 1 or self.truth is None:
+            return target.obj
+        truth = self.truth
+        names = {t.obj for t in siblings}
+        candidates = [name for name in truth.part_names() if name in names]
+
+        def distance(name: str) -> float:
+            x, y, _ = truth.planar_pose(name)
+            return math.hypot(x - target.x_m, y - target.y_m)
+
+        return min(candidates, key=distance) if candidates else target.obj
+
+    # -- while the tree runs -------------------------------------------------------------------
+
+    def _on_transition(self, transition: Transition) -> None:
+        for hook in self.transition_hooks:
+            hook(transition)
+        if transition.new != Status.SUCCESS.value:
+            return
+        node = self.node(transition)
+        if self._rechecks and isinstance(node, Inspect):
+            self._track_truth(node)
+        # The Inspects that record the after-placing figures, by their own flag rather than their names.
+        obj = node.obj if isinstance(node, Inspect) and node.after_placing else None
+        if obj is not None and isinstance(self.root, Arrangement):
+            for target in self.root.targets:
+                offset_mm = self._truth_offset_mm(target) if target.obj == obj else None
+                if offset_mm is not None:
+                    self._placed_truth_mm[obj] = offset_mm
+        if self.record_dir is None:
+            return
+        if obj is not None:
+            self._save_image(f"after_placing_{obj}")
+        elif isinstance(self.root, Arrangement) and node is not None and node is self.root.place_all:
+            self._save_image("after_placing")
+
+    def _track_truth(self, node: Inspect) -> None:
+        """Ground truth at each look at an object; at a ``Recheck``, how far it moved since the last look.
+
+        With identical parts the part looked at is the one of its kind nearest its target (``part_of``).
+        """
+        if self.truth is None:
+            return
+        targets = self.root.targets if isinstance(self.root, Arrangement) else []
+        target = next((t for t in targets if t.obj == node.obj), None)
+        x, y, _ = self.truth.planar_pose(self.part_of(target) if target is not None else node.obj)
+        before = self._looked_truth_xy.get(node.obj)
+        if isinstance(node, Recheck) and before is not None:
+            moved = math.hypot(x - before[0], y - before[1]) * 1000
+            self._moved_truth_mm[node.obj] = max(self._moved_truth_mm.get(node.obj, 0.0), moved)
+        self._looked_truth_xy[node.obj] = (x, y)
+
+    def _on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
+        if self.replay is not None:
+            self.replay.observe(self.world.clock.now())
+        for hook in self.tick_hooks:
+            hook(root)
+
+    def _save_image(self, stem: str) -> None:
+        import cv2
+
+        assert self.record_dir is not None
+        frame = self.world.capture_image()
+        path = self.record_dir / f"{stem}.png"
+        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        if self.replay is not None:
+            self.replay.add_image(self.world.clock.now(), stem.replace("_", " "), path)
+
+    # -- the report ----------------------------------------------------------------------------
+
+    def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
+        if not isinstance(self.root, Arrangement):
+            return []
+        report = py_trees.blackboard.Client(name="report")
+        outcomes = []
+        for target in self.root.targets:
+            placed = _get(report, keys.key(target.obj, keys.PLACED_OFFSET_MM))
+            final = _get(report, keys.key(target.obj, keys.OFFSET_MM))
+            final_yaw = _get(report, keys.key(target.obj, keys.YAW_ERROR_DEG))
+            status = self._status(final, final_yaw)
+            outcomes.append(
+                ObjectOutcome(
+                    name=target.obj,
+                    target=(target.x_m, target.y_m, target.yaw_rad),
+                    placed_offset_mm=_rounded(placed),
+                    final_offset_mm=_rounded(final),
+                    final_offset_truth_mm=_rounded(self._truth_offset_mm(target)),
+                    placed_offset_truth_mm=_rounded(self._placed_truth_mm.get(target.obj)),
+                    pushes=int(_get(report, keys.key(target.obj, keys.CORRECTIONS)) or 0),
+                    status=status,
+                    reason="" if status == "within" else (self._last_failure(transitions, target.obj) or stopped),
+                    placed_yaw_error_deg=_rounded(_get(report, keys.key(target.obj, keys.PLACED_YAW_ERROR_DEG))),
+                    final_yaw_error_deg=_rounded(final_yaw),
+                    final_yaw_error_truth_deg=_rounded(self._truth_yaw_error_deg(target)),
+                    object_type=target.object_type.name,
+                    size_mm=tuple(round(v * 1000, 3) for v in target.object_type.size_m),  # type: ignore[arg-type]
+                    moved_by_later_mm=_rounded(_get(report, keys.key(target.obj, keys.MAX_MOVED_MM))),
+                    moved_by_later_truth_mm=_rounded(self._moved_truth_mm.get(target.obj)),
+                )
+            )
+        return outcomes
+
+    def _last_failure(self, transitions: list[Transition], obj: str) -> str:
+        """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
+        for transition in reversed(transitions):
+            if transition.new != Status.FAILURE.value:
+                continue
+            node = self.node(transition)
+            if isinstance(node, REASON_TYPES) and object_of(node) == obj:
+                return transition.feedback
+        return ""
+
+    def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
+        """Within only when the offset and (with a yaw threshold) the yaw error are under their thresholds."""
+        assert isinstance(self.root, Arrangement)
+        if final_offset_mm is None:
+            return "failed"
+        yaw_threshold = self.root.yaw_threshold_deg
+        yaw_within = yaw_threshold is None or final_yaw_error_deg is None or abs(final_yaw_error_deg) < yaw_threshold
+        return "within" if final_offset_mm < self.root.threshold_mm and yaw_within else "outside"
+
+    def _truth_offset_mm(self, target: Target) -> float | None:
+        if self.truth is None:
+            return None
+        x, y, _ = self.truth.planar_pose(self.part_of(target))
+        return PlanarPose(x, y).distance_to(target.planar) * 1000
+
+    def _truth_yaw_error_deg(self, target: Target) -> float | None:
+        if self.truth is None:
+            return None
+        _, _, yaw = self.truth.planar_pose(self.part_of(target))
+        return math.degrees(yaw_error_rad(target.object_type.shape, yaw, target.yaw_rad))
+
+
+# ----------------------------------------------------------------------------------------------
+# Checks made before a world is built
+# ----------------------------------------------------------------------------------------------
+
+
+def check_colours_apart(targets: Iterable[Target], colours: ColourTable) -> None:
+    """A ``PlanError`` when one colour of the plan would be read as another (one's range holds the other's paint)."""
+    used = sorted({t.colour for t in targets}, key=list(colours.names).index)
+    for name in used:
+        for other in used:
+            if other != name and colours[name].contains_rgb(colours[other].paint_rgb):
+                raise PlanError(
+                    f"colours {name!r} and {other!r} of the plan overlap: {name}'s range holds {other}'s paint "
+                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart"
+                )
+
+
+def prepare_record_dir(path: Path | str) -> Path:
+    """Make the folder ``--record`` writes to, or a ``PlanError`` saying why it cannot be used."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise PlanError(f"cannot record into {folder}: it is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise PlanError(f"cannot record into {folder}: {error.strerror or error}") from error
+    if not os.access(folder, os.W_OK):
+        raise PlanError(f"cannot record into {folder}: the folder is not writable")
+    return folder
+
+
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(float(value), 4)
+
+
+def _get(client: py_trees.blackboard.Client, key: str) -> Any:
+    """A value through a report's client (registered to read ``key``), or None when nothing wrote it."""
+    client.register_key(key, access=Access.READ)
+    return client.get(key) if client.exists(key) else None
