@@ -51,7 +51,7 @@ from py_trees.common import ParallelPolicy
 from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push
 from bt_arrange.behaviours.looking import Recheck
 from bt_arrange.decorators import RepeatUntilWithin
-from bt_arrange.errors import BtArrangeError, TreeFileError
+from bt_arrange.errors import BtArrangeError, XmlTreeError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import CUBE, ObjectType
@@ -66,10 +66,6 @@ METADATA_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath", "_autorema
 SCRIPT_ATTRIBUTES = frozenset(
     {"_skipIf", "_successIf", "_failureIf", "_while", "_onSuccess", "_onFailure", "_onHalted", "_post"}
 )
-
-
-class XmlTreeError(TreeFileError):
-    """An XML tree cannot be read or written: malformed, an unregistered node, a bad port value."""
 
 
 # ----------------------------------------------------------------------------------------------
