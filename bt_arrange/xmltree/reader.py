@@ -178,10 +178,10 @@ class _Reader:
             try:
                 values[attribute] = port.type.parse(text)
             except PortValueError as error:  # every codec error is one (bt_arrange.ports.PortType.parse)
-                self.fail(
-                    element,
-                    f"<{element.tag} name={name!r}> {attribute}={text!r} is not a {port.type.name}: {error.reason}",
-                )
+                raise XmlTreeError(
+                    f"{self.source} line {element.line}: <{element.tag} name={name!r}> {attribute}={text!r} "
+                    f"is not a {port.type.name}: {error.reason}"
+                ) from error
         for port in model.ports:
             if port.name not in values:
                 if port.required:
