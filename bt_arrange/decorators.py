@@ -19,6 +19,7 @@ from py_trees.common import Access, Status
 
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, OFF_STRING, STRING, Port
 
 
 class RepeatUntilWithin(py_trees.decorators.Decorator):
@@ -35,6 +36,21 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
     With ``yaw_key`` and ``yaw_threshold_deg`` the object is within only when the absolute yaw error
     there (degrees) is under ``yaw_threshold_deg`` too: the loop also corrects yaw.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "re-run the child until the offset is under the threshold"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The offset's key and threshold, the attempts, the counter's key, the yaw's (``providedPorts``)."""
+        return (
+            Port("offset_key", STRING, description="blackboard key of the offset [mm]"),
+            Port("threshold_mm", DOUBLE, description="succeed once the offset is under this [mm]"),
+            Port("max_attempts", INT, 10, "corrections before giving up"),
+            Port("corrections_key", OFF_STRING, None, "blackboard key counting the corrections (empty: none)"),
+            Port("yaw_key", OFF_STRING, None, "blackboard key of the yaw error [deg] (empty: position only)"),
+            Port("yaw_threshold_deg", OFF_DOUBLE, None, "succeed once the yaw error is under this too [deg] (0: off)"),
+        )
 
     def __init__(
         self,

@@ -7,7 +7,7 @@ the text: ``error.field``, ``error.value``, ``error.limit``, ``error.unit``; ``U
 also ``error.pose``, ``error.joint`` and ``error.bound`` (the ``(lower, upper)`` range).
 
 The errors of a bad value also inherit ``ValueError`` (``PlanError``, ``OutOfRangeError``,
-``GeometryError``), so callers that caught ``ValueError`` keep working.
+``GeometryError``, ``PortValueError``), so callers that caught ``ValueError`` keep working.
 """
 
 from __future__ import annotations
@@ -82,8 +82,23 @@ class PerceptionError(BtArrangeError):
     """The camera pipeline was misconfigured (an unknown colour, bad intrinsics)."""
 
 
+class PortValueError(BtArrangeError, ValueError):
+    """A node port's text is not a value of its type (``bt_arrange.ports``): ``field`` is the type, ``value`` the text.
+
+    ``reason`` says why, without the type and the text (the XML reader adds the node, the port and the line).
+    """
+
+    def __init__(self, message: str = "", *, reason: str = "", field: str | None = None, value: Any = None) -> None:
+        super().__init__(message, field=field, value=value)
+        self.reason = reason or message
+
+
 class TreeFileError(BtArrangeError):
     """A tree file cannot be loaded, or does not provide what the command needs."""
+
+
+class XmlTreeError(TreeFileError):
+    """An XML tree cannot be read or written: malformed, an unregistered node, a bad port value."""
 
 
 class DisplayError(BtArrangeError):

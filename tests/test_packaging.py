@@ -35,6 +35,8 @@ def test_the_wheel_ships_the_cell_under_the_projects_name_with_its_robot(tmp_pat
     assert "bt_arrange_sim/experiment/campaign.py" in names, "the experiment package (pyproject's packages)"
     assert "bt_arrange/descriptions/ur5_2f85.urdf" in names
     assert "bt_arrange/py.typed" in names
+    sources = {path.relative_to(ROOT).as_posix() for path in (ROOT / "bt_arrange").rglob("*.py")}
+    assert sources <= names, f"modules left out of the wheel (pyproject's packages): {sorted(sources - names)}"
     assert not any(name.startswith("sim/") for name in names), "no generic top-level 'sim' package"
 
 
@@ -50,3 +52,13 @@ def test_cli_without_a_command_is_a_usage_error(capsys):
         cli.main([])
     assert exit_info.value.code == 2
     assert "required" in capsys.readouterr().err
+
+
+def test_every_package_of_the_framework_is_listed_in_pyproject():
+    """A package left out of ``packages`` is missing from the wheel (a stale build/ hides that from the test above)."""
+    tomllib = pytest.importorskip("tomllib" if sys.version_info >= (3, 11) else "tomli")
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {
+        ".".join(init.parent.relative_to(ROOT).parts) for init in (ROOT / "bt_arrange").rglob("__init__.py")
+    }
+    assert found <= listed, f"add to pyproject's packages: {sorted(found - listed)}"

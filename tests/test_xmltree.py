@@ -8,6 +8,7 @@ import py_trees
 import pytest
 
 from bt_arrange import cli, treefile, xmltree
+from bt_arrange.behaviours import Place, Push
 from bt_arrange.display import blackboard_access
 from bt_arrange.xmltree import XmlTreeError
 
@@ -203,7 +204,7 @@ def test_a_dense_tree_keeps_where_the_pads_go_through_xml():
     for original, copy in zip(dense.iterate(), reloaded.iterate(), strict=True):
         for attribute in ("grasp", "release", "where", "towards", "opening_m", "after"):
             assert getattr(copy, attribute, None) == getattr(original, attribute, None), (original.name, attribute)
-    releases = [n.release for n in reloaded.iterate() if isinstance(n, xmltree.Place) and n.release is not None]
+    releases = [n.release for n in reloaded.iterate() if isinstance(n, Place) and n.release is not None]
     assert any(r.staged for r in releases) and any(not r.staged for r in releases)
 
 
@@ -231,7 +232,7 @@ def test_a_bad_dense_port_value_is_a_one_line_error_naming_tag_port_and_line(tag
     with pytest.raises(XmlTreeError) as caught:
         xmltree.from_xml(text, source="bad.xml")
     message = str(caught.value)
-    assert message.startswith("bad.xml line 3: ") and f"<{tag}> {port}=" in message and "\n" not in message
+    assert message.startswith("bad.xml line 3: ") and f"<{tag} name='n'> {port}=" in message and "\n" not in message
 
 
 def test_a_place_with_an_unknown_where_is_refused_with_its_line():
@@ -248,6 +249,6 @@ def test_a_push_strategy_survives_xml_and_an_unknown_one_is_refused_with_its_lin
     root = arrangement([Target("red", x_m=0.45, y_m=0.05)], strategy="diagonal")
     text = xmltree.to_xml(root, tree_id="t")
     reloaded = xmltree.from_xml(text)
-    assert [n.strategy for n in reloaded.iterate() if isinstance(n, xmltree.Push)] == ["diagonal"]
+    assert [n.strategy for n in reloaded.iterate() if isinstance(n, Push)] == ["diagonal"]
     with pytest.raises(XmlTreeError, match=r"line \d+: <Push name='push red'>: push strategy 'sideways'"):
         xmltree.from_xml(text.replace('strategy="diagonal"', 'strategy="sideways"'))

@@ -12,6 +12,7 @@ from bt_arrange.behaviours.moves import (
 )
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.ports import Port
 
 
 class GraspGuard(py_trees.decorators.EternalGuard):
@@ -21,6 +22,14 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     the child is interrupted at once and the guard fails, so a retry above can detect and pick
     the cube again instead of placing air.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "fails within a tick when the held cube slips out"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """None: the object held is its child's (BehaviorTree.CPP's ``providedPorts``)."""
+        return ()
 
     def __init__(self, name: str, child: py_trees.behaviour.Behaviour, obj: str | None = None) -> None:
         super().__init__(name=name, child=child, condition=self._holding)

@@ -10,10 +10,12 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
+from bt_arrange.ports import BOOL, STRING, Port
 from bt_arrange.robot import PixelWindow
 from bt_arrange.shapes import yaw_error_rad
 
@@ -158,6 +160,14 @@ def at_a_target(xy_m: tuple[float, float], kind_targets: Sequence[PlanarPose], o
 class MoveHome(StagedBehaviour):
     """Move the arm home, out of the top camera's view."""
 
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "park the arm"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """None: it only parks the arm (BehaviorTree.CPP's ``providedPorts``)."""
+        return ()
+
     def stages(self, context: Context) -> list[Stage]:
         """One joint motion, or none when parked."""
         return [] if is_parked(context) else [park_stage(stage.MOVE_HOME)]
@@ -181,6 +191,14 @@ class Detect(StagedBehaviour):
     target" within half its shorter top edge, ``AT_TARGET_FRACTION``), the one nearest the
     object's own target (``/<obj>/target``, when set), so parts already placed stay put.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "camera -> /<obj>/pose"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The object, its colour and type, the targets of its kind (BehaviorTree.CPP's ``providedPorts``)."""
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS)
 
     def __init__(
         self,
@@ -273,6 +291,15 @@ class Inspect(Detect):
     as ``/<obj>/placed_yaw_error_deg`` (the paper's "after placing" figures).
     """
 
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "camera -> /<obj>/pose, /<obj>/offset_mm, /<obj>/yaw_error_deg"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """Detect's ports and ``after_placing`` (BehaviorTree.CPP's ``providedPorts``)."""
+        after_placing = Port("after_placing", BOOL, False, "also write /<obj>/placed_offset_mm")
+        return (OBJ, COLOUR, after_placing, OBJECT_TYPE_PORT, KIND_TARGETS)
+
     def __init__(
         self,
         name: str,
@@ -328,6 +355,15 @@ class Recheck(Inspect):
     since it was last looked at, ``/<obj>/moved_mm`` (camera), and the most any later step moved
     it, ``/<obj>/max_moved_mm``. ``after`` names the step whose effect is checked.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "camera -> /<obj>/pose, /<obj>/offset_mm, /<obj>/moved_mm: did a neighbour's step move it"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """Detect's ports and ``after``, the step checked (BehaviorTree.CPP's ``providedPorts``)."""
+        after = Port("after", STRING, "", "the step whose effect is checked")
+        return (OBJ, COLOUR, after, OBJECT_TYPE_PORT, KIND_TARGETS)
 
     def __init__(
         self,

@@ -10,6 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -28,6 +29,7 @@ from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.ports import RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
 
 #: Pick's success feedback holds this when it squared a cube it had pinched across its corners.
@@ -64,6 +66,22 @@ class Pick(StagedBehaviour):
     close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
     come down in the free room beside two faces and nowhere else.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "grasp at /<obj>/pose"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The object, its type and the grasp among neighbours (BehaviorTree.CPP's ``providedPorts``)."""
+        grasp = Port(
+            "grasp",
+            RELEASE,
+            None,
+            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], pads across that axis of the target's frame "
+            "(empty: the free grasp)",
+            optional=True,
+        )
+        return (OBJ, OBJECT_TYPE_PORT, grasp)
 
     def __init__(
         self, name: str, obj: str, object_type: ObjectType | None = None, grasp: Release | None = None

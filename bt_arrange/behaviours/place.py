@@ -7,6 +7,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -21,6 +22,7 @@ from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.ports import RELEASE, STRING, Port
 
 
 class Place(StagedBehaviour):
@@ -35,6 +37,23 @@ class Place(StagedBehaviour):
     about to go among neighbours is set down and looked at once more, so the next grasp is
     centred on it and its offset in the pads (unknown while held) does not carry into a neighbour.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "release at /<obj>/target"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The object, its type, the release among neighbours and where (BehaviorTree.CPP's ``providedPorts``)."""
+        release = Port(
+            "release",
+            RELEASE,
+            None,
+            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], released that far from the target "
+            "(empty: at the target, fully open)",
+            optional=True,
+        )
+        where = Port("where", STRING, "target", "target, or pick: set down where it was picked", optional=True)
+        return (OBJ, OBJECT_TYPE_PORT, release, where)
 
     def __init__(
         self,

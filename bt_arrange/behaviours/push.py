@@ -10,6 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     heights_m,
@@ -22,6 +23,7 @@ from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
@@ -62,6 +64,33 @@ class Push(StagedBehaviour):
     error does not enter it and it is not learned. It moves sideways only towards a free side
     (``towards``): a neighbour across the push is never shoved.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "one push"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The object, its type, yaw squaring, free directions, opening, strategy (``providedPorts``)."""
+        return (
+            OBJ,
+            OBJECT_TYPE_PORT,
+            Port("yaw_threshold_deg", OFF_DOUBLE, None, "square the part at this yaw error [deg] (0: never)"),
+            Port(
+                "towards",
+                DIRECTIONS_TYPE,
+                tuple(DIRECTIONS),
+                "the directions it may be pushed, +x,-y ... of the target's frame (default all four)",
+                optional=True,
+            ),
+            Port(
+                "opening_m",
+                OFF_DOUBLE,
+                None,
+                "the finger opening for pushing among neighbours [m] (0: default)",
+                optional=True,
+            ),
+            Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
+        )
 
     def __init__(
         self,

@@ -5,7 +5,7 @@ transfer, inspect, correct), ``arrangement`` the tree of one part (``arrange_one
 plan (``arrangement``, ``Arrangement``). See ``bt_arrange.trees.arrangement`` for the tree's shape.
 """
 
-from bt_arrange.trees.arrangement import Arrangement, arrange_one, arrangement
+from bt_arrange.trees.arrangement import TARGETS, Arrangement, arrange_one, arrangement
 from bt_arrange.trees.steps import (
     Locate,
     by_camera,
@@ -31,6 +31,7 @@ from bt_arrange.trees.targets import (
 __all__ = [
     "CORRECT_MODES",
     "DEFAULT_YAW_THRESHOLD_DEG",
+    "TARGETS",
     "Arrangement",
     "Locate",
     "Target",

@@ -29,6 +29,7 @@ that writes ``/<obj>/pose`` will do.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 import py_trees
 
@@ -42,6 +43,7 @@ from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Pads, Release, Step, free_push_directions, restage_releases
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
+from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees.steps import Locate, check_strategy, correction, inspect, set_target, transfer
 from bt_arrange.trees.targets import (
@@ -154,12 +156,44 @@ def _is_dense(step: Step) -> bool:
     return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
 
 
+#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]`` per target, read into ``Target``s.
+TARGETS = targets_type(Target)
+
+
 class Arrangement(py_trees.composites.Sequence):
     """The root of an arrangement tree; remembers its plan so a runner can report per object.
 
     ``place_all`` is the subtree that places every object before any is corrected (the paper's
     Fig. 5, ``correct="after_all"``), None otherwise: a recorder saves its "after placing" picture then.
     """
+
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "a sequence with memory that knows its plan (the report and the scene come from it)"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The plan, its thresholds and its colours (BehaviorTree.CPP's ``providedPorts``)."""
+        return (
+            Port("targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name] per object, separated by ;"),
+            Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
+            Port("yaw_threshold_deg", OFF_DOUBLE, None, "the yaw threshold the report checks [deg] (0: position only)"),
+            Port("colours", COLOURS, DEFAULT_COLOUR_TABLE, "the plan's own colours: name:rgb:r,g,b;... (empty: none)"),
+        )
+
+    @classmethod
+    def from_ports(
+        cls, name: str, values: Mapping[str, Any], children: Sequence[py_trees.behaviour.Behaviour]
+    ) -> Arrangement:
+        """The node of an XML tree: its plan is checked (``validate_targets``) against its colours first."""
+        colours: ColourTable = values["colours"]
+        return cls(
+            name,
+            children,
+            validate_targets(values["targets"], colours=colours.names),
+            values["threshold_mm"],
+            yaw_threshold_deg=values["yaw_threshold_deg"],
+            colours=colours,
+        )
 
     def __init__(
         self,

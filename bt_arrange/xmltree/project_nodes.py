@@ -1,0 +1,18 @@
+"""The project's nodes in XML trees: each class declares its ports, and this is its one registration.
+
+A new behaviour is its class (with ``provided_ports()``, and ``node_description``) and one line
+here. The tag is the class name, except where a file format already fixed another.
+"""
+
+from __future__ import annotations
+
+from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Recheck
+from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.trees import Arrangement
+from bt_arrange.xmltree.registry import register_node
+
+for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard):
+    register_node(_node)
+# The tag keeps the decorator's former name: XML files written with it stay readable.
+register_node(RepeatUntilWithin, "RetryUntilThreshold")
+register_node(Arrangement)

@@ -1,0 +1,203 @@
+"""The XML reader: builds a tree from a BehaviorTree.CPP v4 document, from registered nodes only.
+
+Nothing the file names is imported or evaluated: a tag is looked up in ``REGISTRY`` and each
+port's text converted by the port's declared type. Any other tag, a script attribute
+(``_skipIf`` ...), a blackboard reference, an ``<Include>`` or a ``<!DOCTYPE>`` is refused with a
+one-line ``XmlTreeError`` naming the line, the node and, for a bad value, the port and the text.
+"""
+
+from __future__ import annotations
+
+import re
+import xml.parsers.expat
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn
+
+import py_trees
+
+from bt_arrange.errors import BtArrangeError, PortValueError, XmlTreeError
+from bt_arrange.xmltree.registry import REGISTRY, NodeModel
+from bt_arrange.xmltree.writer import FORMAT_VERSION
+
+#: Attributes BehaviorTree.CPP and Groot2 keep on any node as metadata (never code): ignored.
+METADATA_ATTRIBUTES = frozenset({"_description", "_uid", "_fullpath", "_autoremap"})
+#: BehaviorTree.CPP attributes whose values are scripts: code, so refused.
+SCRIPT_ATTRIBUTES = frozenset(
+    {"_skipIf", "_successIf", "_failureIf", "_while", "_onSuccess", "_onFailure", "_onHalted", "_post"}
+)
+
+
+@dataclass
+class Element:
+    """One XML element with the line it starts on (``xml.etree`` keeps no line numbers)."""
+
+    tag: str
+    attributes: dict[str, str]
+    line: int
+    children: list[Element] = field(default_factory=list)
+
+
+def parse_elements(text: str, source: str = "<string>") -> Element:
+    """Parse XML into ``Element``s with line numbers; a ``<!DOCTYPE>`` (entities) is refused."""
+    parser = xml.parsers.expat.ParserCreate()
+    stack: list[Element] = []
+    top: list[Element] = []
+
+    def start(tag: str, attributes: dict[str, str]) -> None:
+        element = Element(tag, dict(attributes), parser.CurrentLineNumber)
+        (stack[-1].children if stack else top).append(element)
+        stack.append(element)
+
+    def end(tag: str) -> None:
+        stack.pop()
+
+    def doctype(name: str, *args: object) -> None:
+        raise XmlTreeError(f"{source} line {parser.CurrentLineNumber}: <!DOCTYPE {name}> is not allowed in an XML tree")
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.StartDoctypeDeclHandler = doctype
+    try:
+        parser.Parse(text, True)
+    except xml.parsers.expat.ExpatError as error:
+        raise XmlTreeError(f"{source} line {error.lineno}: not well-formed XML: {_expat_message(error)}") from error
+    return top[0]
+
+
+def _expat_message(error: xml.parsers.expat.ExpatError) -> str:
+    return xml.parsers.expat.ErrorString(error.code) if error.code is not None else str(error)
+
+
+def load_xml(path: str | Path, tree_id: str | None = None) -> py_trees.behaviour.Behaviour:
+    """Build the tree of a BehaviorTree.CPP v4 file from registered nodes only."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise XmlTreeError(f"cannot read XML tree {path}: {error.strerror}") from error
+    except UnicodeDecodeError as error:
+        raise XmlTreeError(f"XML tree {path} is not UTF-8 text") from error
+    return from_xml(text, source=str(path), tree_id=tree_id)
+
+
+def from_xml(text: str, source: str = "<string>", tree_id: str | None = None) -> py_trees.behaviour.Behaviour:
+    """Build a tree from BehaviorTree.CPP v4 XML text (see ``load_xml``)."""
+    return _Reader(parse_elements(text, source), source).build(tree_id)
+
+
+class _Reader:
+    def __init__(self, document: Element, source: str) -> None:
+        self.source = source
+        if document.tag != "root":
+            self.fail(document, f'the document element is <{document.tag}>, not <root BTCPP_format="4">')
+        version = document.attributes.get("BTCPP_format")
+        if version != FORMAT_VERSION:
+            self.fail(document, f'<root> needs BTCPP_format="4" (BehaviorTree.CPP v4), got {version!r}')
+        self.document = document
+        self.trees: dict[str, Element] = {}
+        for child in document.children:
+            if child.tag == "BehaviorTree":
+                tree_id = child.attributes.get("ID")
+                if not tree_id:
+                    self.fail(child, "<BehaviorTree> needs an ID")
+                if tree_id in self.trees:
+                    self.fail(child, f"a second <BehaviorTree ID={tree_id!r}>")
+                self.trees[tree_id] = child
+            elif child.tag == "TreeNodesModel":
+                continue  # the editor's description of the nodes; the registry decides what they are
+            elif child.tag in ("Include", "Import"):
+                self.fail(child, f"<{child.tag}> is not supported: an XML tree is one self-contained file")
+            else:
+                self.fail(child, f"<{child.tag}> is not allowed under <root> (BehaviorTree and TreeNodesModel are)")
+        if not self.trees:
+            self.fail(document, "no <BehaviorTree ID=...> in the file")
+
+    def fail(self, element: Element, message: str) -> NoReturn:
+        raise XmlTreeError(f"{self.source} line {element.line}: {message}")
+
+    def build(self, tree_id: str | None) -> py_trees.behaviour.Behaviour:
+        main = tree_id or self.document.attributes.get("main_tree_to_execute")
+        if main is None:
+            if len(self.trees) > 1:
+                self.fail(self.document, "several <BehaviorTree>s and no main_tree_to_execute to choose one")
+            main = next(iter(self.trees))
+        if main not in self.trees:
+            self.fail(
+                self.document, f"main tree {main!r} is not one of the <BehaviorTree> IDs: {', '.join(self.trees)}"
+            )
+        return self._tree(self.trees[main], ())
+
+    def _tree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
+        if len(element.children) != 1:
+            self.fail(element, f"<BehaviorTree ID={element.attributes['ID']!r}> must hold exactly one root node")
+        return self._node(element.children[0], entered + (element.attributes["ID"],))
+
+    def _node(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
+        if element.tag == "SubTree":
+            return self._subtree(element, entered)
+        model = REGISTRY.get(element.tag)
+        if model is None:
+            self.fail(element, f"<{element.tag}> is not a registered node (known: {', '.join(sorted(REGISTRY))})")
+        assert model is not None
+        name = element.attributes.get("name") or element.tag
+        values = self._values(element, model, name)
+        if model.children == "none" and element.children:
+            self.fail(element, f"<{element.tag} name={name!r}> is a leaf and cannot hold children")
+        if model.children == "one" and len(element.children) != 1:
+            self.fail(
+                element, f"<{element.tag} name={name!r}> decorates exactly one child, got {len(element.children)}"
+            )
+        if model.children == "many" and not element.children:
+            self.fail(element, f"<{element.tag} name={name!r}> holds no children")
+        children = [self._node(child, entered) for child in element.children]
+        try:
+            return model.build(name, values, children)
+        except BtArrangeError as error:
+            raise XmlTreeError(f"{self.source} line {element.line}: <{element.tag} name={name!r}>: {error}") from error
+        except (ValueError, TypeError, KeyError) as error:
+            raise XmlTreeError(f"{self.source} line {element.line}: <{element.tag} name={name!r}>: {error}") from error
+
+    def _values(self, element: Element, model: NodeModel, name: str) -> dict[str, Any]:
+        ports = {port.name: port for port in model.ports}
+        values: dict[str, Any] = {}
+        for attribute, text in element.attributes.items():
+            if attribute == "name" or attribute in METADATA_ATTRIBUTES:
+                continue
+            if attribute in SCRIPT_ATTRIBUTES:
+                self.fail(element, f"<{element.tag}> {attribute}: BehaviorTree.CPP scripts are code and are not run")
+            port = ports.get(attribute)
+            if port is None:
+                known = ", ".join(ports) or "none"
+                self.fail(element, f"<{element.tag}> has no port {attribute!r} (its ports: {known})")
+            assert port is not None
+            if re.fullmatch(r"\s*\{.*\}\s*", text):
+                self.fail(
+                    element, f"<{element.tag}> {attribute}={text!r}: ports take values, not blackboard references"
+                )
+            try:
+                values[attribute] = port.type.parse(text)
+            except PortValueError as error:  # every codec error is one (bt_arrange.ports.PortType.parse)
+                raise XmlTreeError(
+                    f"{self.source} line {element.line}: <{element.tag} name={name!r}> {attribute}={text!r} "
+                    f"is not a {port.type.name}: {error.reason}"
+                ) from error
+        for port in model.ports:
+            if port.name not in values:
+                if port.required:
+                    self.fail(element, f"<{element.tag}> needs port {port.name!r} ({port.type.name})")
+                values[port.name] = port.default
+        return values
+
+    def _subtree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
+        subtree_id = element.attributes.get("ID", "")
+        if subtree_id not in self.trees:
+            self.fail(element, f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file")
+        if subtree_id in entered:
+            self.fail(element, f"<SubTree ID={subtree_id!r}> includes itself")
+        extra = set(element.attributes) - {"ID", "name"} - METADATA_ATTRIBUTES
+        if extra:
+            self.fail(
+                element, f"<SubTree ID={subtree_id!r}>: port remapping ({', '.join(sorted(extra))}) is not supported"
+            )
+        return self._tree(self.trees[subtree_id], entered)

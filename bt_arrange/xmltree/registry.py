@@ -1,0 +1,163 @@
+"""The nodes an XML tree may use: one ``NodeModel`` per tag, filled by the classes' own declarations.
+
+A node of the project declares its ports on its class (``provided_ports()``, as BehaviorTree.CPP's
+``providedPorts``) and is registered with one call, as BehaviorTree.CPP's
+``factory.registerNodeType<T>(ID)``::
+
+    register_node(Pick)                                      # tag "Pick", category from the base class
+    register_node(RepeatUntilWithin, "RetryUntilThreshold")  # another tag
+
+The model is read from the class:
+
+- the tag is the class name unless given; the category (``Action``, ``Condition``, ``Control``,
+  ``Decorator``) is ``node_category`` when the class sets it, else a py_trees decorator is a
+  ``Decorator``, a composite a ``Control``, anything else an ``Action``; ``node_description`` is
+  the ``TreeNodesModel``'s description;
+- build (the reader): ``cls.from_ports(name, values, children)`` when the class has it, else
+  ``cls(name=name, **values)``, with ``child=`` (a decorator) or ``children=`` (a control node);
+- read back (the writer): ``node.port_values()`` when the class has it, else
+  ``getattr(node, port.name)`` for every port.
+
+py_trees' own nodes, which are not the project's classes, are registered with adapters in
+``builtin_nodes``.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+import py_trees
+
+from bt_arrange.errors import XmlTreeError
+from bt_arrange.ports import Port
+
+Children = list[py_trees.behaviour.Behaviour]
+Builder = Callable[[str, dict[str, Any], Children], py_trees.behaviour.Behaviour]
+
+CATEGORIES = ("Action", "Condition", "Control", "Decorator")
+
+
+@dataclass(frozen=True)
+class NodeModel:
+    """How one XML tag maps to one py_trees class.
+
+    ``build(name, values, children)`` makes the behaviour from its port values; ``ports_of(node)``
+    reads them back from a behaviour (the writer); ``matches(node)`` picks between models of one
+    class (``Sequence`` with or without memory). ``builtin`` models are BehaviorTree.CPP's own,
+    which Groot2 knows, so they are left out of the ``TreeNodesModel``.
+    """
+
+    tag: str
+    category: str  # Action, Condition, Control or Decorator, as in the TreeNodesModel
+    cls: type
+    ports: tuple[Port, ...]
+    build: Builder
+    ports_of: Callable[[Any], dict[str, Any]] = lambda node: {}
+    matches: Callable[[Any], bool] = lambda node: True
+    builtin: bool = False
+    description: str = ""
+
+    @property
+    def children(self) -> str:
+        """How many children the node takes: ``none``, ``one`` or ``many``."""
+        return {"Action": "none", "Condition": "none", "Decorator": "one"}.get(self.category, "many")
+
+
+REGISTRY: dict[str, NodeModel] = {}
+
+
+def register(model: NodeModel) -> NodeModel:
+    """Make a node available to XML trees from its model (``register_node`` makes the model from a class)."""
+    if model.category not in CATEGORIES:
+        raise XmlTreeError(f"node model {model.tag}: category {model.category!r} is not a BehaviorTree.CPP one")
+    names = [port.name for port in model.ports]
+    for port_name in names:
+        if port_name == "name" or not port_name.isidentifier() or names.count(port_name) > 1:
+            raise XmlTreeError(f"node model {model.tag}: port {port_name!r} is reserved, not a name, or twice")
+    REGISTRY[model.tag] = model
+    return model
+
+
+NodeClass = TypeVar("NodeClass", bound=type)
+
+
+def register_node(cls: NodeClass, tag: str | None = None) -> NodeClass:
+    """Register a class that declares its ports (``provided_ports()``) under ``tag`` (default its name).
+
+    Returns the class, so it also serves as a class decorator. A port the constructor does not
+    take (and no ``from_ports`` on the class) is refused here, not when a file is read.
+    """
+    tag = tag or cls.__name__
+    declare = getattr(cls, "provided_ports", None)
+    if not callable(declare):
+        raise XmlTreeError(f"node {tag}: {cls.__qualname__} declares no provided_ports()")
+    ports = tuple(declare())
+    category = getattr(cls, "node_category", None) or category_of(cls)
+    if not hasattr(cls, "from_ports"):
+        accepted = inspect.signature(cls).parameters
+        takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
+        missing = [port.name for port in ports if port.name not in accepted and not takes_any]
+        if missing:
+            raise XmlTreeError(
+                f"node {tag}: {cls.__qualname__}() takes no {', '.join(missing)} (give the class a from_ports)"
+            )
+    register(
+        NodeModel(
+            tag,
+            category,
+            cls,
+            ports,
+            lambda name, values, children: build_node(cls, category, name, values, children),
+            lambda node: port_values(node, ports),
+            description=getattr(cls, "node_description", ""),
+        )
+    )
+    return cls
+
+
+def category_of(cls: type) -> str:
+    """A class's category in BehaviorTree.CPP's terms, from its py_trees base class."""
+    if issubclass(cls, py_trees.decorators.Decorator):
+        return "Decorator"
+    if issubclass(cls, py_trees.composites.Composite):
+        return "Control"
+    return "Action"
+
+
+def build_node(
+    cls: type, category: str, name: str, values: Mapping[str, Any], children: Children
+) -> py_trees.behaviour.Behaviour:
+    """The generic build: the class's ``from_ports``, else its constructor with the port values as keywords."""
+    from_ports = getattr(cls, "from_ports", None)
+    if from_ports is not None:
+        node: py_trees.behaviour.Behaviour = from_ports(name, dict(values), list(children))
+    elif category == "Decorator":
+        node = cls(name=name, child=children[0], **values)
+    elif category == "Control":
+        node = cls(name=name, children=list(children), **values)
+    else:
+        node = cls(name=name, **values)
+    return node
+
+
+def port_values(node: Any, ports: tuple[Port, ...]) -> dict[str, Any]:
+    """The generic read-back: the node's ``port_values()``, else its attribute of each port's name."""
+    own = getattr(node, "port_values", None)
+    if own is not None:
+        values: dict[str, Any] = own()
+        return values
+    return {port.name: getattr(node, port.name) for port in ports}
+
+
+def model_of(node: py_trees.behaviour.Behaviour) -> NodeModel:
+    """The registered model that writes ``node`` (its exact class: a subclass is not the same node)."""
+    for model in REGISTRY.values():
+        if type(node) is model.cls and model.matches(node):
+            return model
+    raise XmlTreeError(
+        f"cannot write {node.name!r} as XML: {type(node).__module__}.{type(node).__qualname__} is not a registered "
+        "node (bt_arrange.xmltree.register_node adds one)"
+    )

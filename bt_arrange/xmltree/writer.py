@@ -1,0 +1,92 @@
+"""The XML writer: a tree as a BehaviorTree.CPP v4 document with the ``TreeNodesModel`` Groot2 needs.
+
+Every node is written from its registered model (``registry.model_of``): its tag, its ``name``
+and each port's text. An ``optional`` port whose text is its default's is left out (files
+written before it existed stay as they were). The ``TreeNodesModel`` lists the ports, types,
+defaults and descriptions of the non-builtin nodes the tree uses, sorted by tag.
+"""
+
+from __future__ import annotations
+
+from xml.sax.saxutils import escape, quoteattr
+
+import py_trees
+
+from bt_arrange.errors import PortValueError, XmlTreeError
+from bt_arrange.ports import Port
+from bt_arrange.xmltree.registry import NodeModel, model_of
+
+FORMAT_VERSION = "4"
+
+
+def to_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree", *, comment: str | None = None) -> str:
+    """The tree as a BehaviorTree.CPP v4 document, with the ``TreeNodesModel`` of the non-builtin nodes it uses."""
+    used: dict[str, NodeModel] = {}
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>']
+    if comment:
+        lines.append(f"<!-- {comment.replace('--', '- -')} -->")
+    lines.append(f'<root BTCPP_format="{FORMAT_VERSION}" main_tree_to_execute={quoteattr(tree_id)}>')
+    lines.append(f"  <BehaviorTree ID={quoteattr(tree_id)}>")
+    _write_node(root, lines, depth=2, used=used)
+    lines.append("  </BehaviorTree>")
+    lines.append("  <TreeNodesModel>")
+    for tag in sorted(used):
+        model = used[tag]
+        if model.builtin:
+            continue
+        lines.append(f"    <{model.category} ID={quoteattr(model.tag)}>")
+        for port in model.ports:
+            default = "" if port.required else f" default={quoteattr(port.type.format(port.default))}"
+            lines.append(
+                f"      <input_port name={quoteattr(port.name)} type={quoteattr(port.type.name)}{default}>"
+                f"{escape(port.description)}</input_port>"
+            )
+        if model.description:
+            lines.append(
+                f"      <MetadataFields><Metadata description={quoteattr(model.description)}/></MetadataFields>"
+            )
+        lines.append(f"    </{model.category}>")
+    lines.append("  </TreeNodesModel>")
+    lines.append("</root>")
+    return "\n".join(lines) + "\n"
+
+
+def _write_node(node: py_trees.behaviour.Behaviour, lines: list[str], depth: int, used: dict[str, NodeModel]) -> None:
+    model = model_of(node)
+    used[model.tag] = model
+    attributes = [f"name={quoteattr(node.name)}"]
+    for port, text in _port_texts(node, model):
+        if port.optional and text == port.type.format(port.default):
+            continue
+        attributes.append(f"{port.name}={quoteattr(text)}")
+    indent = "  " * depth
+    opening = f"{indent}<{model.tag} {' '.join(attributes)}"
+    if not node.children:
+        lines.append(opening + "/>")
+        return
+    lines.append(opening + ">")
+    for child in node.children:
+        _write_node(child, lines, depth + 1, used)
+    lines.append(f"{indent}</{model.tag}>")
+
+
+def _port_texts(node: py_trees.behaviour.Behaviour, model: NodeModel) -> list[tuple[Port, str]]:
+    """Each port of ``node`` with its value's text; a value its type cannot write names the node and the port."""
+    try:
+        values = model.ports_of(node)
+    except AttributeError as error:
+        raise XmlTreeError(
+            f"cannot write {node.name!r} as XML: <{model.tag}> has no attribute for a port: {error}"
+        ) from error
+    texts = []
+    for port in model.ports:
+        if port.name not in values:
+            raise XmlTreeError(f"cannot write {node.name!r} as XML: <{model.tag}> gave no value for port {port.name!r}")
+        try:
+            texts.append((port, port.type.format(values[port.name])))
+        except PortValueError as error:
+            raise XmlTreeError(
+                f"cannot write {node.name!r} as XML: <{model.tag}> {port.name}={values[port.name]!r} "
+                f"is not a {port.type.name}: {error.reason}"
+            ) from error
+    return texts
