@@ -8,8 +8,9 @@ sides, is released 10 mm away where the pads fit and pushed home from a free sid
 its placed neighbours are looked at again and corrected if it moved them beyond the threshold.
 """
 
+from bt_arrange import backends
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, Target, arrangement
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 #: Gap between neighbouring faces, metres.
 GAP_M = 0.003
@@ -28,6 +29,6 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
     return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
     """Where the cubes start: scattered, clear of each other and of the block."""
-    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)
+    return (backend or backends.load()).scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)

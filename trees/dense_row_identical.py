@@ -9,8 +9,9 @@ free y faces (a pad never enters a 2 mm gap), pushed only from free sides, and t
 is looked at again once it is down.
 """
 
+from bt_arrange import backends
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, Target, arrangement
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 #: Gap between neighbouring faces, metres.
 GAP_M = 0.002
@@ -25,6 +26,8 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
     return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
     """Where the cubes start: scattered, clear of each other and of the row."""
-    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS, names=[t.obj for t in TARGETS])
+    return (backend or backends.load()).scatter(
+        [t.colour for t in TARGETS], seed, avoid=TARGETS, names=[t.obj for t in TARGETS]
+    )

@@ -3,8 +3,9 @@
 bt-arrange run trees/four_cubes.py
 """
 
+from bt_arrange import backends
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, Target, arrangement
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 TARGETS = [
     Target("red", x_m=0.45, y_m=0.05),
@@ -19,6 +20,6 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
     return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
-    """Where the cubes start in the simulator: scattered, clear of each other and of the pattern."""
-    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
+    """Where the cubes start: scattered by the run's backend, clear of each other and of the pattern."""
+    return (backend or backends.load()).scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)

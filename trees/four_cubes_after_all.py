@@ -5,8 +5,9 @@ bt-arrange run trees/four_cubes_after_all.py --record runs/fig5
 
 from four_cubes import TARGETS  # the same pattern  # noqa: I001
 
+from bt_arrange import backends
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, arrangement
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 
 def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
@@ -14,6 +15,6 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
     return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="after_all")
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
     """Where the cubes start in the simulator."""
-    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)
+    return (backend or backends.load()).scatter([t.colour for t in TARGETS], seed, avoid=TARGETS)

@@ -8,9 +8,10 @@ The worked example of docs/trees.md: it uses the subtree builders of ``bt_arrang
 
 import py_trees
 
+from bt_arrange import backends
 from bt_arrange.behaviours import Inspect, MoveHome
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, Target, correction, set_target, transfer, validate_targets
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 ROW = [Target("green", 0.50, 0.10), Target("red", 0.50, 0.0), Target("blue", 0.50, -0.10)]
 
@@ -50,6 +51,6 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 8) -> Arrangement:
     return Arrangement("row of three", [place, correct, MoveHome("park the arm")], plan, threshold_mm)
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
     """Where the cubes start in the simulator."""
-    return scatter([t.colour for t in ROW], seed, avoid=ROW)
+    return (backend or backends.load()).scatter([t.colour for t in ROW], seed, avoid=ROW)

@@ -6,8 +6,9 @@ The camera tells the nine apart by where they lie (Detect picks one not at a tar
 Inspect follows the one nearest its target); the layout chooses the order and where the pads go.
 """
 
+from bt_arrange import backends
+from bt_arrange.objects import ObjectStart
 from bt_arrange.trees import Arrangement, Target, arrangement
-from bt_arrange_sim.scenes import CubeStart, scatter
 
 #: No XML twin: the XML node models do not hold where the pads go among neighbours yet.
 XML_TWIN = False
@@ -27,6 +28,8 @@ def create_root(threshold_mm: float = 1.0, max_pushes: int = 10) -> Arrangement:
     return arrangement(TARGETS, threshold_mm=threshold_mm, max_pushes=max_pushes, correct="each")
 
 
-def create_scene(seed: int = 0) -> list[CubeStart]:
+def create_scene(seed: int = 0, backend: backends.Backend | None = None) -> list[ObjectStart]:
     """Where the cubes start: scattered, clear of each other and of the grid."""
-    return scatter([t.colour for t in TARGETS], seed, avoid=TARGETS, names=[t.obj for t in TARGETS])
+    return (backend or backends.load()).scatter(
+        [t.colour for t in TARGETS], seed, avoid=TARGETS, names=[t.obj for t in TARGETS]
+    )
