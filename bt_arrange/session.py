@@ -18,6 +18,7 @@ a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -41,6 +42,8 @@ from bt_arrange.behaviours import (
     Recheck,
     keys,
 )
+from bt_arrange.calibration.camera import CalibratedCamera
+from bt_arrange.calibration.file import CameraCalibration
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
@@ -214,7 +217,10 @@ class Session:
     """One tree in one world, built by ``open_world()`` once everything a user can get wrong is checked.
 
     ``view`` is the top camera's view for the plan check (known without a world: from the backend's
-    configuration or a calibration); without one the view is not checked. ``transition_hooks`` are
+    configuration or a calibration); without one the view is not checked. ``calibration`` (a
+    ``bt_arrange.calibration.CameraCalibration``, e.g. ``read_calibration("camera.toml")``) makes the
+    camera report its intrinsics, distortion and pose, so the detector uses them (and the plan check
+    its view); without it, the world's camera as it reports itself. ``transition_hooks`` are
     called with every status change (e.g. to inject an error at the moment the paper names),
     ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick.
     """
@@ -231,6 +237,7 @@ class Session:
         title: str | None = None,
         settle_s: float = SETTLE_S,
         settings: ManipulationSettings | None = None,
+        calibration: CameraCalibration | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
@@ -243,6 +250,10 @@ class Session:
         self.settings = settings
         # Everything a user can get wrong is checked here, before the world is built.
         scene = list(starts)
+        #: The camera calibration the run uses, or None (the camera as it reports itself).
+        self.calibration = calibration
+        if calibration is not None:
+            view = calibration.view()
         #: The colour table of the plan: the world paints with it and the camera's detector reads it.
         self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
         if isinstance(root, Arrangement):
@@ -268,7 +279,10 @@ class Session:
         self.truth: GroundTruth | None = self.world.truth
         #: World time when the tree starts: the report and the live view count from here.
         self.start_s = self.world.clock.now()
-        self.context = Context.create(self.world.robot, detector=CubeDetector(self.colours), settings=settings)
+        robot = self.world.robot
+        if calibration is not None:
+            robot = dataclasses.replace(robot, camera=CalibratedCamera(robot.camera, calibration))
+        self.context = Context.create(robot, detector=CubeDetector(self.colours), settings=settings)
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []

@@ -29,11 +29,13 @@ class SimBackend:
         title: str | None = None,
         cell: str = "ideal",
         run_seed: int = 0,
+        calibration: str | Path | None = None,
     ) -> Any:
         """A ``SimulatedRun`` (a session on a ``SimWorld``): the plan and scene checked, the cell built, not yet ticked.
 
         ``cell`` is ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell``; a bad one is a
-        one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors.
+        one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors;
+        ``calibration`` is a ``camera.toml`` (``bt-arrange calibrate``) whose camera the detector uses.
         """
         from bt_arrange.errors import PlanError
         from bt_arrange_sim.cell import CellConfig
@@ -46,7 +48,57 @@ class SimBackend:
             raise PlanError(f"--cell {cell}: {error}") from error
         config = CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
         return SimulatedRun(
-            root, starts, cell_config=config, gui=gui, record_dir=record_dir, time_limit_s=time_limit_s, title=title
+            root,
+            starts,
+            cell_config=config,
+            gui=gui,
+            record_dir=record_dir,
+            time_limit_s=time_limit_s,
+            title=title,
+            calibration=_read_calibration(calibration),
+        )
+
+    def open_calibration(
+        self,
+        *,
+        views: int = 20,
+        cell: str = "ideal",
+        run_seed: int = 0,
+        gui: bool = False,
+        record_dir: Path | None = None,
+        time_limit_s: float = 1800.0,
+    ) -> Any:
+        """A ``SimCalibrationRun``: the ChArUco procedure in a cell with the board on the flange, not yet ticked.
+
+        ``views`` poses (``bt_arrange.calibration.board_poses`` over the camera's nominal view);
+        ``cell`` as for ``open_run``.
+        """
+        import dataclasses
+
+        from bt_arrange.calibration import CharucoBoard, board_poses
+        from bt_arrange.errors import PlanError
+        from bt_arrange_sim.calibration import SimCalibrationRun
+        from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
+        from bt_arrange_sim.realcell import parse_cell
+        from bt_arrange_sim.runs import SimWorld
+
+        try:
+            errors = parse_cell(cell)
+        except PlanError as error:
+            raise PlanError(f"--cell {cell}: {error}") from error
+        board = CharucoBoard()
+        config = CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
+        config = dataclasses.replace(config, board=board)
+        # The poses are planned on the camera the cell's software knows: the nominal one.
+        poses = board_poses(config.camera.view(), board, config.board_mount, count=views)
+
+        def open_world() -> SimWorld:
+            if gui:
+                require_display()
+            return SimWorld(WorkCell(config, gui=gui))
+
+        return SimCalibrationRun(
+            open_world, poses, board=board, cell=cell, record_dir=record_dir, time_limit_s=time_limit_s
         )
 
     def scatter(
@@ -84,3 +136,16 @@ class SimBackend:
         from bt_arrange_sim import experiment
 
         return experiment
+
+
+def _read_calibration(path: str | Path | None) -> Any:
+    """``read_calibration(path)``, its error prefixed by the option; None without a path."""
+    if path is None:
+        return None
+    from bt_arrange.calibration import read_calibration
+    from bt_arrange.errors import PlanError
+
+    try:
+        return read_calibration(path)
+    except PlanError as error:
+        raise PlanError(f"--calibration {path}: {error}") from error

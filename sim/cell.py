@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bt_arrange.calibration import BoardMount, CharucoBoard
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, fold_yaw, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
@@ -134,6 +135,9 @@ class CellConfig:
     table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
     #: A real cell's errors (``bt_arrange_sim.realcell``); all off by default: the ideal cell.
     errors: RealCellErrors = field(default_factory=RealCellErrors)
+    #: The calibration board bolted to the flange (``bt_arrange_sim.calibration``), or None (a run's cell).
+    board: CharucoBoard | None = None
+    board_mount: BoardMount = field(default_factory=BoardMount)
 
     @classmethod
     def ideal(cls) -> CellConfig:
@@ -255,8 +259,14 @@ class WorkCell:
         if self.urdf_path is not None and errors.kinematics.enabled and errors.kinematics.hand_eye_absorbs_mean:
             translation, base_yaw = _cached_hand_eye(self.urdf_path)
             base_position = (float(translation[0]), float(translation[1]), float(translation[2]))
+        robot_urdf = self.urdf_path or default_urdf_path()
+        if self.config.board is not None:
+            from bt_arrange_sim.calibration import write_urdf_with_board
+
+            # The calibration board is a link of the robot (bolted to the flange), never a constraint.
+            robot_urdf = write_urdf_with_board(robot_urdf, self.config.board, self.config.board_mount)
         self.robot_id = self.client.loadURDF(
-            str(self.urdf_path or default_urdf_path()),
+            str(robot_urdf),
             basePosition=list(base_position),
             baseOrientation=list(self.client.getQuaternionFromEuler((0.0, 0.0, base_yaw))),
             useFixedBase=True,
@@ -281,6 +291,10 @@ class WorkCell:
         )
         self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
         self.tcp_link_index = self._link_index[TCP_FRAME]
+        if self.config.board is not None:
+            from bt_arrange_sim.calibration import BOARD_LINK, texture_board
+
+            texture_board(self.client, self.robot_id, self._link_index[BOARD_LINK], self.config.board)
         self._configure_gripper()
         noise = self.config.camera_noise
         if errors.imaging.enabled:

@@ -199,40 +199,59 @@ class SimGripper:
 
 
 class SimCamera:
-    """The top RGB-D camera, rendered with pybullet's TinyRenderer (CPU, no display needed)."""
+    """The top RGB-D camera, rendered with pybullet's TinyRenderer (CPU, no display needed).
+
+    The ideal cell's camera is its nominal pinhole, and its frames say so (``calibrated_intrinsics``,
+    which holds TinyRenderer's half-pixel shift). A real cell's (``realcell.CameraCalibrationError``)
+    is the *true* camera: the true pinhole seen from the true pose, warped by the true lens
+    distortion; its frames report the *nominal* camera (datasheet field of view, centred principal
+    point, no distortion, the drawing's pose), which only a calibration corrects.
+    """
 
     def __init__(self, cell: WorkCell) -> None:
         self._cell = cell
         config = cell.config.camera
         self._intrinsics = config.calibrated_intrinsics()
         self._pose_world = config.pose_world()
-        # A real cell's camera (realcell.CameraCalibrationError): images come from the true camera,
-        # frames report the calibrated one. In the ideal cell the two are the same.
         errors = cell.config.errors
         self._true = errors.camera_draw() if errors.camera.enabled else None
         self._imaging = errors.imaging if errors.imaging.enabled else None
         self._light_rng = errors.rng("imaging", per_run=True)
-        self._distortion_maps: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._warp_maps: dict[tuple, tuple[tuple[float, float], PixelWindow, np.ndarray, np.ndarray]] = {}
+        # Uncalibrated pinhole: windows shift it by the renderer's half pixel in their own pixels.
+        self._nominal = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
         self._true_pose_world = self._pose_world
+        #: The true camera's intrinsics and lens (pixel-centre convention): evaluation only.
+        self.true_intrinsics = self._intrinsics
         if self._true is not None:
             t = self._true
             turn = _small_rotation(t["rx"], t["ry"], t["rz"])
             self._true_pose_world = Pose.from_rotation(
                 self._pose_world.position_m + np.array([t["dx"], t["dy"], t["dz"]]), self._pose_world.rotation @ turn
             )
+            n = self._nominal
+            self.true_intrinsics = CameraIntrinsics(
+                n.width_px, n.height_px, n.fx_px * (1.0 + t["dfx"]), n.fy_px * (1.0 + t["dfy"]),
+                n.cx_px + t["dcx"], n.cy_px + t["dcy"], (t["k1"], t["k2"], t["p1"], t["p2"], 0.0),
+            )  # fmt: skip
+            # A new cell's software knows only the datasheet camera: that is what frames report.
+            self._intrinsics = self._nominal
         # OpenGL looks down its -z with y up; the OpenCV optical frame looks down +z with y down.
         flip = np.diag([1.0, -1.0, -1.0, 1.0])
         self._view_matrix = list(np.linalg.inv(self._true_pose_world.matrix @ flip).flatten(order="F"))
         # Error injection only (``set_render_offset``): the view actually rendered, normally the calibrated one.
         self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self._render_view_matrix = self._view_matrix
-        # Uncalibrated pinhole: windows shift it by the renderer's half pixel in their own pixels.
-        self._nominal = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
         self._full_window = PixelWindow.full(self._intrinsics)
         vertical_fov_deg = math.degrees(2.0 * math.atan((config.height_px / 2.0) / self._intrinsics.fy_px))
         self._projection_matrix = cell.client.computeProjectionMatrixFOV(
             vertical_fov_deg, config.width_px / config.height_px, config.near_m, config.far_m
         )
+
+    @property
+    def true_pose_world(self) -> Pose:
+        """The true camera pose ``T_W_C`` (evaluation only: never hand it to the robot's software)."""
+        return self._true_pose_world
 
     @property
     def render_offset(self) -> tuple[float, float, float]:
@@ -266,16 +285,16 @@ class SimCamera:
 
     @property
     def intrinsics(self) -> CameraIntrinsics:
-        """Pinhole intrinsics of the rendered image."""
+        """Pinhole intrinsics the camera reports (a real cell's: the nominal ones)."""
         return self._intrinsics
 
     @property
     def pose_world(self) -> Pose:
-        """``T_W_C``, optical frame (x right, y down, z forward)."""
+        """``T_W_C``, optical frame (x right, y down, z forward), as the camera reports it."""
         return self._pose_world
 
     def projection_matrix(self, window: PixelWindow) -> list[float]:
-        """OpenGL projection (column-major, as pybullet takes it) of the frustum through ``window``.
+        """OpenGL projection (column-major, as pybullet takes it) of the nominal frustum through ``window``.
 
         The full image's frustum is symmetric about the optical axis; a window's is the part of
         it through the window's pixels (an off-axis frustum, like ``glFrustum``), so each pixel
@@ -283,10 +302,8 @@ class SimCamera:
         many pixels the frustum is rendered into.
         """
         config = self._cell.config.camera
-        near, far = config.near_m, config.far_m
+        near = config.near_m
         width, height = config.width_px, config.height_px
-        if self._true is not None:
-            return self._true_projection_matrix(window)
         # Half extents of the full frustum on the near plane (the nominal pinhole is centred).
         half_w = near * (width / 2.0) / self._nominal.fx_px
         half_h = near * (height / 2.0) / self._nominal.fy_px
@@ -295,61 +312,52 @@ class SimCamera:
         right = half_w * (2.0 * (window.x_px + window.width_px) / width - 1.0)
         top = half_h * (1.0 - 2.0 * window.y_px / height)
         bottom = half_h * (1.0 - 2.0 * (window.y_px + window.height_px) / height)
-        matrix = np.array(
-            [
-                [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
-                [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
-                [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
-                [0.0, 0.0, -1.0, 0.0],
-            ]
-        )
-        return [float(v) for v in matrix.flatten(order="F")]
+        return _frustum(left, right, bottom, top, near, config.far_m)
 
-    def _true_projection_matrix(self, window: PixelWindow) -> list[float]:
-        """The frustum through ``window`` of the true pinhole (a real cell's intrinsics error)."""
-        assert self._true is not None
+    def _warp(self, window: PixelWindow) -> tuple[tuple[float, float], PixelWindow, np.ndarray, np.ndarray]:
+        """The true pinhole's pixels to render for ``window`` and the maps that warp them by the lens.
+
+        Each output pixel's centre (full-resolution coordinates of the distorted image) is taken
+        through the inverse of the true distortion (``cv2.undistortPoints``) to the true pinhole's
+        pixel that sees the same ray; the render covers those pixels (a frustum that may reach past
+        the image, binned as the window is), and the maps say where in it each output pixel lies,
+        TinyRenderer's half-pixel shift of its own output taken out. Returns the region's first
+        pixel edges (u, v; full-resolution), its size, and the maps.
+        """
+        key = (window.x_px, window.y_px, window.width_px, window.height_px, window.binning)
+        if key not in self._warp_maps:
+            import cv2
+
+            k, b = self.true_intrinsics, window.binning
+            i = np.arange(window.out_width_px, dtype=np.float64)
+            j = np.arange(window.out_height_px, dtype=np.float64)
+            u = window.x_px + (i + 0.5) * b - 0.5
+            v = window.y_px + (j + 0.5) * b - 0.5
+            grid = np.stack(np.meshgrid(u, v), axis=-1).reshape(-1, 1, 2)
+            pinhole = cv2.undistortPoints(grid, k.matrix, np.asarray(k.distortion), P=k.matrix).reshape(
+                window.out_height_px, window.out_width_px, 2
+            )
+            # Pixel edges (centre + 0.5) of the region to render, with room for the bilinear samples.
+            e0 = np.floor(pinhole.reshape(-1, 2).min(axis=0) + 0.5) - 2 * b
+            e1 = np.ceil(pinhole.reshape(-1, 2).max(axis=0) + 0.5) + 2 * b
+            size = np.ceil((e1 - e0) / b).astype(int) * b
+            region = PixelWindow(0, 0, int(size[0]), int(size[1]), b)  # its offset is e0 (may be negative)
+            map_u = ((pinhole[..., 0] + 0.5 - e0[0]) / b).astype(np.float32)
+            map_v = ((pinhole[..., 1] + 0.5 - e0[1]) / b - 1.0).astype(np.float32)
+            if len(self._warp_maps) >= 64:  # windows move with the parts: keep the latest few
+                self._warp_maps.pop(next(iter(self._warp_maps)))
+            self._warp_maps[key] = ((float(e0[0]), float(e0[1])), region, map_u, map_v)
+        return self._warp_maps[key]
+
+    def _true_frustum(self, e0: tuple[float, float], region: PixelWindow) -> list[float]:
+        """The true pinhole's frustum through the pixel edges ``e0`` to ``e0 + region size``."""
         config = self._cell.config.camera
-        near, far = config.near_m, config.far_m
-        fx = self._nominal.fx_px * (1.0 + self._true["dfx"])
-        fy = self._nominal.fy_px * (1.0 + self._true["dfy"])
-        cx = self._nominal.cx_px + self._true["dcx"]
-        cy = self._nominal.cy_px + self._true["dcy"]
-        left = near * (window.x_px - cx) / fx
-        right = near * (window.x_px + window.width_px - cx) / fx
-        top = near * (cy - window.y_px) / fy
-        bottom = near * (cy - (window.y_px + window.height_px)) / fy
-        matrix = np.array(
-            [
-                [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
-                [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
-                [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
-                [0.0, 0.0, -1.0, 0.0],
-            ]
-        )
-        return [float(v) for v in matrix.flatten(order="F")]
-
-    def _distort(self, rgb: np.ndarray, intrinsics: CameraIntrinsics) -> np.ndarray:
-        """Resample a pinhole render as the true lens (radial ``k1`` left by the calibration) sees it."""
-        assert self._true is not None
-        k1 = self._true["k1"]
-        if k1 == 0.0:
-            return rgb
-        import cv2
-
-        height, width = rgb.shape[:2]
-        # Normalised coordinates relative to the full image's optical axis, in this frame's pixels.
-        key = (width, height, intrinsics.fx_px, intrinsics.fy_px, intrinsics.cx_px, intrinsics.cy_px)
-        if key not in self._distortion_maps:
-            u, v = np.meshgrid(np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64))
-            xd = (u - intrinsics.cx_px) / intrinsics.fx_px
-            yd = (v - intrinsics.cy_px) / intrinsics.fy_px
-            # Each distorted pixel shows the pinhole ray at x_u = x_d / (1 + k1 r^2) (first order).
-            scale = 1.0 / (1.0 + k1 * (xd * xd + yd * yd))
-            map_u = (xd * scale * intrinsics.fx_px + intrinsics.cx_px).astype(np.float32)
-            map_v = (yd * scale * intrinsics.fy_px + intrinsics.cy_px).astype(np.float32)
-            self._distortion_maps[key] = (map_u, map_v)
-        map_u, map_v = self._distortion_maps[key]
-        return cv2.remap(rgb, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        near, k = config.near_m, self.true_intrinsics
+        left = near * (e0[0] - (k.cx_px + 0.5)) / k.fx_px
+        right = near * (e0[0] + region.width_px - (k.cx_px + 0.5)) / k.fx_px
+        top = near * ((k.cy_px + 0.5) - e0[1]) / k.fy_px
+        bottom = near * ((k.cy_px + 0.5) - (e0[1] + region.height_px)) / k.fy_px
+        return _frustum(left, right, bottom, top, near, config.far_m)
 
     def _light_direction(self) -> list[float]:
         """The light's direction, turned by up to ``light_jitter_deg`` per frame in a real cell."""
@@ -361,32 +369,25 @@ class SimCamera:
         return [float(v) for v in turn @ direction]
 
     def window_intrinsics(self, window: PixelWindow) -> CameraIntrinsics:
-        """Intrinsics of the frame rendered through ``window``.
+        """Intrinsics the camera reports for the frame rendered through ``window``.
 
-        The calibration above (TinyRenderer samples a pixel at its corner) is half a pixel of the
-        *rendered* image, so a binned render is not the area-binned full frame: its principal
-        point is the nominal one of the window's frustum, moved by half a rendered pixel.
+        The ideal cell's calibration above (TinyRenderer samples a pixel at its corner) is half a
+        pixel of the *rendered* image, so a binned render is not the area-binned full frame: its
+        principal point is the nominal one of the window's frustum, moved by half a rendered
+        pixel. A real cell reports its nominal camera, windowed.
         """
         nominal = self._nominal.windowed(window)
+        if self._true is not None:
+            return nominal
         return dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
 
-    def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
-        """Render one frame of the world as it is now: the full image, or only ``window``."""
+    def _render(
+        self, width: int, height: int, projection: list[float], with_depth: bool
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         import pybullet
 
         config = self._cell.config.camera
-        client = self._cell.client
-        if (window is None or window == self._full_window) and self._true is None:
-            projection, intrinsics = self._projection_matrix, self._intrinsics
-            width, height = config.width_px, config.height_px
-        elif window is None or window == self._full_window:
-            projection, intrinsics = self.projection_matrix(self._full_window), self._intrinsics
-            width, height = config.width_px, config.height_px
-        else:
-            intrinsics = self.window_intrinsics(window)
-            projection = self.projection_matrix(window)
-            width, height = window.out_width_px, window.out_height_px
-        _, _, rgba, zbuffer, _ = client.getCameraImage(
+        _, _, rgba, zbuffer, _ = self._cell.client.getCameraImage(
             width,
             height,
             viewMatrix=self._render_view_matrix,
@@ -402,10 +403,51 @@ class SimCamera:
             z = np.asarray(zbuffer, dtype=np.float64).reshape(height, width)
             near, far = config.near_m, config.far_m
             depth = (far * near / (far - (far - near) * z)).astype(np.float32)
+        return rgb, depth
+
+    def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
+        """Render one frame of the world as it is now: the full image, or only ``window``."""
+        config = self._cell.config.camera
+        full = window is None or window == self._full_window
         if self._true is not None:
-            rgb = self._distort(rgb, intrinsics)
+            window = self._full_window if window is None else window
+            intrinsics = self._intrinsics if full else self.window_intrinsics(window)
+            origin, region, map_u, map_v = self._warp(window)
+            projection = self._true_frustum(origin, region)
+            pinhole, pinhole_depth = self._render(region.out_width_px, region.out_height_px, projection, with_depth)
+            import cv2
+
+            rgb = cv2.remap(pinhole, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            depth = (
+                None
+                if pinhole_depth is None
+                else cv2.remap(pinhole_depth, map_u, map_v, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE)
+            )
+        else:
+            if full:
+                projection, intrinsics = self._projection_matrix, self._intrinsics
+                width, height = config.width_px, config.height_px
+            else:
+                assert window is not None
+                intrinsics = self.window_intrinsics(window)
+                projection = self.projection_matrix(window)
+                width, height = window.out_width_px, window.out_height_px
+            rgb, depth = self._render(width, height, projection, with_depth)
         rgb = self._cell.camera_noise.apply(rgb)
         return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
+
+
+def _frustum(left: float, right: float, bottom: float, top: float, near: float, far: float) -> list[float]:
+    """``glFrustum``'s matrix, column-major as pybullet takes it."""
+    matrix = np.array(
+        [
+            [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
+            [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
+            [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
+            [0.0, 0.0, -1.0, 0.0],
+        ]
+    )
+    return [float(v) for v in matrix.flatten(order="F")]
 
 
 def _small_rotation(rx_rad: float, ry_rad: float, rz_rad: float) -> np.ndarray:

@@ -80,27 +80,40 @@ class JointRepeatability:
 
 @dataclass(frozen=True)
 class CameraCalibrationError:
-    """Camera intrinsics error, lens-distortion residual and camera-to-world error.
+    """The true camera: its lens, and where it really sits; what a calibration must find.
 
-    The image is rendered from the *true* camera; frames report the calibrated (nominal) one.
+    The image is rendered from the *true* camera (``SimCamera``): the pinhole of the true focal
+    lengths and principal point, then warped by the true lens distortion (OpenCV's model,
+    ``k1 k2 p1 p2``), seen from the true pose. Frames report the *nominal* camera (the datasheet's
+    field of view, the centred principal point, no distortion, the drawing's pose), as a new cell's
+    software would have it before calibration; ``bt-arrange calibrate`` finds the true one, and a run
+    with ``--calibration`` uses what it found. No residual is assumed: the camera error a run sees is
+    what the calibration left (docs/calibration.md).
 
-    - ``focal_sigma_percent``: true fx, fy off by this (0.1 %, about 1.4 px of 1371: what a good
-      checkerboard calibration leaves; estimate);
-    - ``principal_point_sigma_px``: true cx, cy off by this (0.5 px; an intrinsic calibration is
-      considered good below 0.5 px reprojection error, FACTS.md);
-    - ``distortion_k1``: radial distortion the calibration did not remove (0.0005 in normalised
-      coordinates: about 0.3 px in the image corners, under 0.05 px where the cubes are; estimate);
-    - ``position_sigma_mm``, ``rotation_sigma_mrad``: camera-to-world (hand-eye) residual of 0.5 mm
-      and 0.5 mrad (sub-millimetre for a small arm, Zivid's hand-eye documentation; 1 mrad moves a
-      point 0.7 m below by about 0.7 mm).
+    - ``focal_sigma_percent``: the true fx, fy off the nominal by a draw of this (1 %: a lens's focal
+      length tolerance and the sensor's pixel pitch; estimate);
+    - ``principal_point_sigma_px``: the true cx, cy off the image centre by this (8 px: the lens
+      centred on the sensor within about 25 um; estimate);
+    - ``k1``, ``k2``, ``p1``, ``p2``: the lens's distortion, fixed (not drawn): k1 = -0.12 lies in the
+      -0.1 to -0.3 that FACTS.md gives for a 6-8 mm machine-vision lens, k2 = +0.06 the usual
+      partial compensation, tangential 8e-4 and -5e-4 a slightly decentred element (estimates). On
+      this 70-degree camera that is 4 px of displacement where the cubes lie (0.25 of the image
+      radius) and about 65 px in the image corners (FACTS.md's "a few pixels" cannot hold at this
+      field of view with that k1);
+    - ``position_sigma_mm``, ``rotation_sigma_deg``: the camera's true pose off the drawing's by a
+      draw of 15 mm per axis and 1 degree per axis (a bracket set by hand; estimate), so an
+      uncalibrated camera puts a cube centimetres off.
     """
 
     enabled: bool = False
     focal_sigma_percent: float = 0.0
     principal_point_sigma_px: float = 0.0
-    distortion_k1: float = 0.0
+    k1: float = 0.0
+    k2: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
     position_sigma_mm: float = 0.0
-    rotation_sigma_mrad: float = 0.0
+    rotation_sigma_deg: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -181,6 +194,9 @@ class FrictionField:
     wavelength_m: float = 0.3
 
 
+#: Fields that may be negative (the lens's distortion coefficients).
+_SIGNED = {"k1", "k2", "p1", "p2"}
+
 _TERMS: dict[str, type] = {
     "kinematics": KinematicError,
     "joints": JointRepeatability,
@@ -252,18 +268,23 @@ class RealCellErrors:
         return float(self.rng("objects", per_run=True).normal(0.0, o.edge_sigma_mm / 1000))
 
     def camera_draw(self) -> dict[str, float]:
-        """The true camera's deviation from its calibration; fixed for the cell."""
+        """The true camera's deviation from the nominal one and its lens; fixed for the cell.
+
+        ``dfx``, ``dfy`` relative focal errors, ``dcx``, ``dcy`` principal point (px), ``k1 k2 p1 p2``
+        the lens, ``dx dy dz`` (m) and ``rx ry rz`` (rad, about the optical frame's axes) the pose.
+        """
         c = self.camera
         if not c.enabled:
-            return {"dfx": 0.0, "dfy": 0.0, "dcx": 0.0, "dcy": 0.0, "k1": 0.0, "dx": 0.0, "dy": 0.0, "dz": 0.0,
-                    "rx": 0.0, "ry": 0.0, "rz": 0.0}  # fmt: skip
+            return {"dfx": 0.0, "dfy": 0.0, "dcx": 0.0, "dcy": 0.0, "k1": 0.0, "k2": 0.0, "p1": 0.0, "p2": 0.0,
+                    "dx": 0.0, "dy": 0.0, "dz": 0.0, "rx": 0.0, "ry": 0.0, "rz": 0.0}  # fmt: skip
         rng = self.rng("camera", per_run=False)
         f = rng.normal(0.0, c.focal_sigma_percent / 100, 2)
         pp = rng.normal(0.0, c.principal_point_sigma_px, 2)
         pos = rng.normal(0.0, c.position_sigma_mm / 1000, 3)
-        rot = rng.normal(0.0, c.rotation_sigma_mrad / 1000, 3)
+        rot = rng.normal(0.0, math.radians(c.rotation_sigma_deg), 3)
         return {"dfx": float(f[0]), "dfy": float(f[1]), "dcx": float(pp[0]), "dcy": float(pp[1]),
-                "k1": float(c.distortion_k1), "dx": float(pos[0]), "dy": float(pos[1]), "dz": float(pos[2]),
+                "k1": float(c.k1), "k2": float(c.k2), "p1": float(c.p1), "p2": float(c.p2),
+                "dx": float(pos[0]), "dy": float(pos[1]), "dz": float(pos[2]),
                 "rx": float(rot[0]), "ry": float(rot[1]), "rz": float(rot[2])}  # fmt: skip
 
     def friction_phases(self) -> tuple[float, float]:
@@ -298,20 +319,26 @@ def real(cell_seed: int = 0) -> RealCellErrors:
         cell_seed=cell_seed,
         kinematics=KinematicError(True, link_length_sigma_mm=1.0, joint_offset_sigma_mrad=1.0),
         joints=JointRepeatability(True, joint_sigma_mrad=0.04),
-        camera=CameraCalibrationError(
-            True,
-            focal_sigma_percent=0.1,
-            principal_point_sigma_px=0.5,
-            distortion_k1=0.0005,
-            position_sigma_mm=0.5,
-            rotation_sigma_mrad=0.5,
-        ),
+        camera=REAL_CAMERA,
         imaging=ImagingError(True, sensor_sigma=2.0, exposure_jitter=0.05, blur_sigma_px=0.5, light_jitter_deg=10.0),
         gripper=REAL_GRIPPER,
         objects=ObjectTolerance(True, edge_sigma_mm=0.1),
         friction=FrictionField(True, spread=0.2, wavelength_m=0.3),
     )
 
+
+#: The real cell's true camera (``CameraCalibrationError``): a lens and a pose that only a calibration finds.
+REAL_CAMERA = CameraCalibrationError(
+    True,
+    focal_sigma_percent=1.0,
+    principal_point_sigma_px=8.0,
+    k1=-0.12,
+    k2=0.06,
+    p1=8e-4,
+    p2=-5e-4,
+    position_sigma_mm=15.0,
+    rotation_sigma_deg=1.0,
+)
 
 #: The real cell's gripper; ``grasp_offset_sigma_mm`` is the fitted figure (docs/experiments.md).
 REAL_GRIPPER = GripperError(
@@ -378,7 +405,7 @@ def from_mapping(data: Mapping[str, Any], where: str = "cell file") -> RealCellE
             else:
                 if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                     raise PlanError(f"{where}: {term}.{key} = {value!r} must be a finite number")
-                if value < 0 and key != "distortion_k1":
+                if value < 0 and key not in _SIGNED:
                     raise PlanError(f"{where}: {term}.{key} = {value!r} must not be negative")
                 value = float(value)
             values[key] = value

@@ -18,6 +18,7 @@ from typing import Any
 
 import py_trees
 
+from bt_arrange.calibration import CameraCalibration
 from bt_arrange.perception import ColourTable
 from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.session import (
@@ -107,7 +108,8 @@ class SimulatedRun(Session):
 
     ``transition_hooks`` are called with every status change (e.g. to inject an error through
     the cell's ground-truth access at the moment the paper names); ``tick_hooks`` after every tick.
-    The plan, the scene and the options are checked before the cell is built.
+    The plan, the scene and the options are checked before the cell is built. ``calibration``
+    (``bt_arrange.calibration.read_calibration``) makes the detector use a calibration file's camera.
     """
 
     world: SimWorld
@@ -122,6 +124,7 @@ class SimulatedRun(Session):
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
         title: str | None = None,
+        calibration: CameraCalibration | None = None,
     ) -> None:
         config = cell_config or CellConfig()
 
@@ -138,6 +141,7 @@ class SimulatedRun(Session):
             record_dir=record_dir,
             time_limit_s=time_limit_s,
             title=title,
+            calibration=calibration,
         )
 
     @property

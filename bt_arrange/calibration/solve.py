@@ -1,0 +1,249 @@
+"""Solving a calibration from board views: intrinsics and distortion, then camera to base (eye-to-hand).
+
+1. **Intrinsics** (``solve_intrinsics``): ``cv2.calibrateCamera`` on the ChArUco corners of every
+   view (Zhang's method, then Levenberg-Marquardt over the pinhole, the distortion and one board
+   pose per view). ``k3`` is held at 0 (``CALIB_FIX_K3``), as OpenCV advises for lenses that are not
+   wide-angle: k1, k2, p1 and p2 describe a 6-8 mm lens, and a free k3 trades off against k1 and k2
+   in few views.
+2. **Camera to base** (``solve_eye_to_hand``): the board is fixed to the flange and the camera to the
+   cell, so for every view ``i`` the arm's TCP pose ``A_i = T_B_T`` (from the controller) and the
+   camera's board pose ``B_i = T_C_P`` (from the image) satisfy ``A_i X = Y B_i`` with the two
+   unknown constant transforms ``X = T_T_P`` (board on the tool) and ``Y = T_B_C`` (camera in the base).
+   A linear least squares on the rotations (the null space of the stacked
+   ``R_Ai R_X - R_Y R_Bi = 0``, Shah 2013) and then on the translations gives a start; a
+   Levenberg-Marquardt refinement of X and Y on the reprojection error of every corner through
+   ``inv(Y) A_i X`` (intrinsics held) finishes it. OpenCV 5's Python build has no
+   ``calibrateRobotWorldHandEye``, so this module solves AX = YB itself, with numpy only; it works the
+   same on OpenCV 4.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from bt_arrange.calibration.board import BoardObservation
+from bt_arrange.errors import PlanError
+from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.robot import CameraIntrinsics
+
+#: The fewest views a calibration accepts: fewer leave the distortion and the hand-eye solve weak.
+MIN_VIEWS = 6
+
+
+@dataclass(frozen=True)
+class BoardView:
+    """One view of the procedure: what the camera saw and where the arm's controller says the TCP was."""
+
+    observation: BoardObservation
+    #: ``T_B_T``: the TCP in the base frame, from the arm's own kinematics and its joint readings.
+    tcp_pose: Pose
+
+
+@dataclass(frozen=True)
+class IntrinsicsSolution:
+    """``solve_intrinsics``'s answer: the intrinsics, the RMS reprojection error, each view's board pose."""
+
+    intrinsics: CameraIntrinsics
+    reprojection_error_px: float
+    #: ``T_C_P`` of each view, in the order given.
+    board_poses: tuple[Pose, ...]
+
+
+@dataclass(frozen=True)
+class HandEyeSolution:
+    """``solve_eye_to_hand``'s answer."""
+
+    #: ``T_B_C``, the camera in the base frame.
+    camera_to_base: Pose
+    #: ``T_T_P``, the board on the tool.
+    board_to_tool: Pose
+    #: RMS reprojection error (px) of every corner through the arm's poses: ``inv(Y) A_i X``.
+    reprojection_error_px: float
+    #: RMS distance (mm) between each view's board corners as the arm puts them and as the camera does.
+    residual_mm: float
+
+
+def _pose(rvec: FloatArray, tvec: FloatArray) -> Pose:
+    rotation, _ = cv2.Rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3, 1))
+    return Pose.from_rotation(np.asarray(tvec, dtype=np.float64).reshape(3), rotation)
+
+
+def _rvec(rotation: FloatArray) -> FloatArray:
+    vector, _ = cv2.Rodrigues(np.asarray(rotation, dtype=np.float64))
+    return np.asarray(vector, dtype=np.float64).reshape(3)
+
+
+def check_view_count(count: int, minimum: int = MIN_VIEWS, skipped: int = 0) -> None:
+    """A ``PlanError`` when fewer than ``minimum`` views are usable (one clear line)."""
+    if count < minimum:
+        raise PlanError(
+            f"too few views to calibrate: {count} usable of {count + skipped} poses "
+            f"({skipped} skipped: unreachable or the board not seen); at least {minimum} are needed",
+            field="views",
+            value=count,
+            limit=minimum,
+        )
+
+
+def solve_intrinsics(
+    observations: Sequence[BoardObservation], width_px: int, height_px: int, initial: CameraIntrinsics | None = None
+) -> IntrinsicsSolution:
+    """The pinhole and distortion from the board corners of every view (``cv2.calibrateCamera``)."""
+    check_view_count(len(observations))
+    object_points = [o.board_points_m.astype(np.float32).reshape(-1, 1, 3) for o in observations]
+    image_points = [o.image_points_px.astype(np.float32).reshape(-1, 1, 2) for o in observations]
+    flags = cv2.CALIB_FIX_K3
+    camera_matrix = None
+    if initial is not None:
+        camera_matrix = initial.matrix.copy()
+        flags |= cv2.CALIB_USE_INTRINSIC_GUESS
+    criteria = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+    rms, matrix, distortion, rvecs, tvecs = cv2.calibrateCamera(
+        object_points, image_points, (width_px, height_px), camera_matrix, None, flags=flags, criteria=criteria
+    )
+    coefficients = tuple(float(v) for v in np.asarray(distortion).reshape(-1)[:5])
+    intrinsics = CameraIntrinsics(
+        width_px, height_px, float(matrix[0, 0]), float(matrix[1, 1]), float(matrix[0, 2]), float(matrix[1, 2]),
+        coefficients,
+    )  # fmt: skip
+    poses = tuple(_pose(r, t) for r, t in zip(rvecs, tvecs, strict=True))
+    return IntrinsicsSolution(intrinsics, float(rms), poses)
+
+
+def _nearest_rotation(m: FloatArray) -> FloatArray:
+    u, _, vt = np.linalg.svd(m)
+    r = u @ vt
+    if np.linalg.det(r) < 0:
+        u[:, -1] *= -1
+        r = u @ vt
+    return np.asarray(r)
+
+
+def linear_ax_yb(a: Sequence[Pose], b: Sequence[Pose]) -> tuple[Pose, Pose]:
+    """X and Y with ``A_i X = Y B_i`` by linear least squares (rotations, then translations)."""
+    if len(a) != len(b) or len(a) < 3:
+        raise PlanError(f"AX = YB needs at least 3 pose pairs, got {min(len(a), len(b))}")
+    rows = []
+    for ai, bi in zip(a, b, strict=True):
+        # R_A R_X - R_Y R_B = 0, with vec() column-major: vec(R_A R_X) = (I kron R_A) vec(R_X),
+        # vec(R_Y R_B) = (R_B^T kron I) vec(R_Y).
+        rows.append(np.hstack([np.kron(np.eye(3), ai.rotation), -np.kron(bi.rotation.T, np.eye(3))]))
+    _, _, vt = np.linalg.svd(np.vstack(rows))
+    solution = vt[-1]
+    rx = solution[:9].reshape(3, 3, order="F")
+    ry = solution[9:].reshape(3, 3, order="F")
+    scale = np.cbrt(np.linalg.det(rx))
+    rx, ry = _nearest_rotation(rx / scale), _nearest_rotation(ry / scale)
+    # R_A t_X + t_A = R_Y t_B + t_Y  ->  [R_A, -I] [t_X; t_Y] = R_Y t_B - t_A
+    lhs = np.vstack([np.hstack([ai.rotation, -np.eye(3)]) for ai in a])
+    rhs = np.concatenate([ry @ bi.position_m - ai.position_m for ai, bi in zip(a, b, strict=True)])
+    t, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
+    return Pose.from_rotation(t[:3], rx), Pose.from_rotation(t[3:], ry)
+
+
+def _project(intrinsics: CameraIntrinsics, T_C_P: Pose, points_m: FloatArray) -> FloatArray:
+    pixels, _ = cv2.projectPoints(
+        np.asarray(points_m, dtype=np.float64).reshape(-1, 1, 3),
+        _rvec(T_C_P.rotation),
+        T_C_P.position_m.reshape(3, 1),
+        intrinsics.matrix,
+        np.asarray(intrinsics.distortion, dtype=np.float64),
+    )
+    return np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+
+
+def _unpack(p: FloatArray) -> tuple[Pose, Pose]:
+    return _pose(p[0:3], p[3:6]), _pose(p[6:9], p[9:12])
+
+
+def _residuals(p: FloatArray, views: Sequence[BoardView], intrinsics: CameraIntrinsics) -> FloatArray:
+    x, y = _unpack(p)
+    y_inv = y.inverse()
+    out = []
+    for view in views:
+        predicted = _project(intrinsics, y_inv @ view.tcp_pose @ x, view.observation.board_points_m)
+        out.append((predicted - view.observation.image_points_px).reshape(-1))
+    return np.concatenate(out)
+
+
+def _levenberg_marquardt(
+    p: FloatArray, views: Sequence[BoardView], intrinsics: CameraIntrinsics, iterations: int = 50
+) -> FloatArray:
+    """Minimise the reprojection residuals over the 12 parameters (numerical Jacobian, Marquardt damping)."""
+    residual = _residuals(p, views, intrinsics)
+    cost = float(residual @ residual)
+    damping = 1e-3
+    steps = np.array([1e-7] * 3 + [1e-7] * 3 + [1e-7] * 3 + [1e-7] * 3)
+    for _ in range(iterations):
+        jacobian = np.empty((len(residual), len(p)))
+        for k in range(len(p)):
+            shifted = p.copy()
+            shifted[k] += steps[k]
+            jacobian[:, k] = (_residuals(shifted, views, intrinsics) - residual) / steps[k]
+        normal = jacobian.T @ jacobian
+        gradient = jacobian.T @ residual
+        improved = False
+        for _ in range(10):
+            delta = np.linalg.solve(normal + damping * np.diag(np.diag(normal)), -gradient)
+            candidate = p + delta
+            candidate_residual = _residuals(candidate, views, intrinsics)
+            candidate_cost = float(candidate_residual @ candidate_residual)
+            if candidate_cost < cost:
+                p, residual, improved = candidate, candidate_residual, True
+                relative = (cost - candidate_cost) / max(cost, 1e-30)
+                cost = candidate_cost
+                damping = max(damping / 10, 1e-12)
+                break
+            damping *= 10
+        if not improved or relative < 1e-12:
+            break
+    return p
+
+
+def solve_eye_to_hand(views: Sequence[BoardView], intrinsics: CameraIntrinsics) -> HandEyeSolution:
+    """Camera to base (and board to tool) from the views, with ``intrinsics`` held.
+
+    Each view's board pose comes from its corners (``solvePnP`` with the intrinsics); the linear
+    AX = YB solve starts the refinement on the reprojection error of every corner.
+    """
+    check_view_count(len(views))
+    matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=np.float64)
+    board_poses = []
+    for view in views:
+        ok, rvec, tvec = cv2.solvePnP(
+            view.observation.board_points_m.reshape(-1, 1, 3),
+            view.observation.image_points_px.reshape(-1, 1, 2),
+            matrix,
+            distortion,
+            flags=cv2.SOLVEPNP_IPPE,
+        )
+        if not ok:
+            raise PlanError("a board view gives no pose (solvePnP failed)")
+        rvec, tvec = cv2.solvePnPRefineLM(
+            view.observation.board_points_m.reshape(-1, 1, 3),
+            view.observation.image_points_px.reshape(-1, 1, 2),
+            matrix,
+            distortion,
+            rvec,
+            tvec,
+        )
+        board_poses.append(_pose(rvec, tvec))
+    x0, y0 = linear_ax_yb([v.tcp_pose for v in views], board_poses)
+    start = np.concatenate([_rvec(x0.rotation), x0.position_m, _rvec(y0.rotation), y0.position_m])
+    x, y = _unpack(_levenberg_marquardt(start, views, intrinsics))
+    residual = _residuals(np.concatenate([_rvec(x.rotation), x.position_m, _rvec(y.rotation), y.position_m]),
+                          views, intrinsics)  # fmt: skip
+    rms_px = float(math.sqrt(np.mean(residual.reshape(-1, 2) ** 2) * 2))
+    distances = []
+    for view, T_C_P in zip(views, board_poses, strict=True):
+        by_arm = (view.tcp_pose @ x).matrix
+        by_camera = (y @ T_C_P).matrix
+        points = np.c_[view.observation.board_points_m, np.ones(view.observation.count)].T
+        distances.append(np.linalg.norm((by_arm @ points - by_camera @ points)[:3], axis=0))
+    residual_mm = float(math.sqrt(np.mean(np.concatenate(distances) ** 2)) * 1000)
+    return HandEyeSolution(y, x, rms_px, residual_mm)
