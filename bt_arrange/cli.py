@@ -234,6 +234,7 @@ EXPERIMENT_OPTIONS = (
     ("object_name", "cube"),
     ("executor", "local"),
     ("scheduler", None),
+    ("calibration", None),
 )
 
 
@@ -619,6 +620,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="cube",
         help="the part's type: cube (the paper's 50 mm cube; default) or bar (80 x 40 x 40 mm); "
         "several, comma-separated (cube,bar), one folder each",
+    )
+    experiment.add_argument(
+        "--calibration",
+        type=Path,
+        metavar="FILE",
+        help="a camera.toml from bt-arrange calibrate for every trial's detector (default: the nominal camera)",
     )
     experiment.set_defaults(handler=_experiment)
 

@@ -9,10 +9,11 @@ Two seeds: ``cell_seed`` is which robot, camera and table this is (the arm's lin
 camera's calibration error, the table's friction: fixed for the cell, the same in every trial);
 ``run_seed`` is what changes from run to run (joint noise, image noise, the cube's tolerance).
 
-The simulated world is built from the *true* values (a perturbed URDF, the true camera), while the
-robot's software keeps the *nominal* ones: the planner loads the nominal URDF, and each camera
-frame reports the calibrated intrinsics and pose, so the perception pipeline uses the nominal
-calibration, as on a real cell.
+The simulated world is built from the *true* values (a perturbed URDF, the true camera with its
+lens and pose), while the robot's software keeps the *nominal* ones: the planner loads the nominal
+URDF, and each camera frame reports the nominal intrinsics and pose, as a new real cell's software
+has them. ``bt-arrange calibrate`` measures the camera (docs/calibration.md), and a run with
+``--calibration`` sees it through what was measured: no camera residual is assumed.
 """
 
 from __future__ import annotations

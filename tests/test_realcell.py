@@ -67,11 +67,11 @@ def test_a_zero_perturbation_leaves_the_urdf_kinematics_alone() -> None:
 
 def test_the_users_toml_starts_from_a_preset_and_changes_only_what_it_names(tmp_path: Path) -> None:
     mine = tmp_path / "mine.toml"
-    mine.write_text('preset = "real"\ncell_seed = 4\n[friction]\nenabled = false\n[camera]\nrotation_sigma_mrad = 2\n')
+    mine.write_text('preset = "real"\ncell_seed = 4\n[friction]\nenabled = false\n[camera]\nrotation_sigma_deg = 2\n')
     errors = realcell.load_toml(mine)
     assert errors.cell_seed == 4
     assert not errors.friction.enabled
-    assert errors.camera.rotation_sigma_mrad == 2.0
+    assert errors.camera.rotation_sigma_deg == 2.0
     assert errors.gripper == realcell.real().gripper
     assert CellConfig.from_toml(mine).errors == errors
     assert CellConfig.named(str(mine)).errors == errors

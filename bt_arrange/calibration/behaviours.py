@@ -4,7 +4,7 @@ Blackboard keys (the calibration's own namespace):
 
 | key | type | written by | read by |
 |---|---|---|---|
-| ``/calibration/views`` | ``list[BoardView]``, each view's corners and the controller's TCP pose | CaptureBoard | SolveCalibration |
+| ``/calibration/views`` | ``list[BoardView]``: corners, the controller's TCP pose | CaptureBoard | SolveCalibration |
 | ``/calibration/result`` | ``CameraCalibration`` | SolveCalibration | the command line |
 """
 

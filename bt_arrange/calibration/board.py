@@ -114,6 +114,4 @@ class CharucoBoard:
         if corners is None or ids is None or len(ids) < MIN_CORNERS:
             return None
         ids = np.asarray(ids, dtype=np.int32).reshape(-1)
-        return BoardObservation(
-            np.asarray(corners, dtype=np.float64).reshape(-1, 2), ids, self.corners_m()[ids].copy()
-        )
+        return BoardObservation(np.asarray(corners, dtype=np.float64).reshape(-1, 2), ids, self.corners_m()[ids].copy())

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import py_trees
+from numpy.typing import ArrayLike
 
 from bt_arrange.behaviours.looking import MoveHome
 from bt_arrange.calibration.behaviours import CaptureBoard, MoveBoard, SolveCalibration
@@ -51,8 +52,9 @@ class BoardMount:
         return Pose.from_rotation(centre - board.centre_m, np.eye(3))
 
 
-def _rotation_about(axis: FloatArray, angle_rad: float) -> FloatArray:
-    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+def _rotation_about(axis_xyz: ArrayLike, angle_rad: float) -> FloatArray:
+    axis = np.asarray(axis_xyz, dtype=float)
+    axis = axis / np.linalg.norm(axis)
     k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
     return np.eye(3) + math.sin(angle_rad) * k + (1 - math.cos(angle_rad)) * (k @ k)
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike
 
 from bt_arrange.calibration.board import BoardObservation
 from bt_arrange.errors import PlanError
@@ -66,9 +67,11 @@ class HandEyeSolution:
     reprojection_error_px: float
     #: RMS distance (mm) between each view's board corners as the arm puts them and as the camera does.
     residual_mm: float
+    #: The intrinsics the solve ended with (those given, unless ``refine_intrinsics``).
+    intrinsics: CameraIntrinsics | None = None
 
 
-def _pose(rvec: FloatArray, tvec: FloatArray) -> Pose:
+def _pose(rvec: ArrayLike, tvec: ArrayLike) -> Pose:
     rotation, _ = cv2.Rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3, 1))
     return Pose.from_rotation(np.asarray(tvec, dtype=np.float64).reshape(3), rotation)
 
@@ -161,7 +164,16 @@ def _unpack(p: FloatArray) -> tuple[Pose, Pose]:
     return _pose(p[0:3], p[3:6]), _pose(p[6:9], p[9:12])
 
 
+def _with_intrinsics(p: FloatArray, intrinsics: CameraIntrinsics) -> CameraIntrinsics:
+    """``intrinsics`` with fx, fy, cx, cy, k1, k2, p1, p2 from ``p[12:20]`` when the parameters hold them."""
+    if len(p) == 12:
+        return intrinsics
+    fx, fy, cx, cy, k1, k2, p1, p2 = (float(v) for v in p[12:20])
+    return CameraIntrinsics(intrinsics.width_px, intrinsics.height_px, fx, fy, cx, cy, (k1, k2, p1, p2, 0.0))
+
+
 def _residuals(p: FloatArray, views: Sequence[BoardView], intrinsics: CameraIntrinsics) -> FloatArray:
+    intrinsics = _with_intrinsics(p, intrinsics)
     x, y = _unpack(p)
     y_inv = y.inverse()
     out = []
@@ -178,7 +190,7 @@ def _levenberg_marquardt(
     residual = _residuals(p, views, intrinsics)
     cost = float(residual @ residual)
     damping = 1e-3
-    steps = np.array([1e-7] * 3 + [1e-7] * 3 + [1e-7] * 3 + [1e-7] * 3)
+    steps = np.array([1e-7] * 12 + [1e-4] * 4 + [1e-7] * 4)[: len(p)]
     for _ in range(iterations):
         jacobian = np.empty((len(residual), len(p)))
         for k in range(len(p)):
@@ -205,11 +217,15 @@ def _levenberg_marquardt(
     return p
 
 
-def solve_eye_to_hand(views: Sequence[BoardView], intrinsics: CameraIntrinsics) -> HandEyeSolution:
+def solve_eye_to_hand(
+    views: Sequence[BoardView], intrinsics: CameraIntrinsics, refine_intrinsics: bool = False
+) -> HandEyeSolution:
     """Camera to base (and board to tool) from the views, with ``intrinsics`` held.
 
     Each view's board pose comes from its corners (``solvePnP`` with the intrinsics); the linear
     AX = YB solve starts the refinement on the reprojection error of every corner.
+    ``refine_intrinsics`` also frees the pinhole and the distortion in the last refinement (the board
+    poses then follow the arm's: fewer unknowns, but the arm's kinematic error enters the intrinsics).
     """
     check_view_count(len(views))
     matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=np.float64)
@@ -235,7 +251,12 @@ def solve_eye_to_hand(views: Sequence[BoardView], intrinsics: CameraIntrinsics) 
         board_poses.append(_pose(rvec, tvec))
     x0, y0 = linear_ax_yb([v.tcp_pose for v in views], board_poses)
     start = np.concatenate([_rvec(x0.rotation), x0.position_m, _rvec(y0.rotation), y0.position_m])
-    x, y = _unpack(_levenberg_marquardt(start, views, intrinsics))
+    if refine_intrinsics:
+        k = intrinsics
+        start = np.concatenate([start, [k.fx_px, k.fy_px, k.cx_px, k.cy_px, *k.distortion[:4]]])
+    solved = _levenberg_marquardt(start, views, intrinsics)
+    intrinsics = _with_intrinsics(solved, intrinsics)
+    x, y = _unpack(solved)
     residual = _residuals(np.concatenate([_rvec(x.rotation), x.position_m, _rvec(y.rotation), y.position_m]),
                           views, intrinsics)  # fmt: skip
     rms_px = float(math.sqrt(np.mean(residual.reshape(-1, 2) ** 2) * 2))
@@ -246,4 +267,4 @@ def solve_eye_to_hand(views: Sequence[BoardView], intrinsics: CameraIntrinsics) 
         points = np.c_[view.observation.board_points_m, np.ones(view.observation.count)].T
         distances.append(np.linalg.norm((by_arm @ points - by_camera @ points)[:3], axis=0))
     residual_mm = float(math.sqrt(np.mean(np.concatenate(distances) ** 2)) * 1000)
-    return HandEyeSolution(y, x, rms_px, residual_mm)
+    return HandEyeSolution(y, x, rms_px, residual_mm, intrinsics)

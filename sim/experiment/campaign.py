@@ -7,6 +7,7 @@ are written; a rerun runs only the missing trials, and trials that did not come 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
@@ -16,7 +17,7 @@ from pathlib import Path
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.trees import check_threshold
-from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_object_rows
+from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_calibration, check_object_rows
 from bt_arrange_sim.experiment.summaries import campaign_rows, plot_fig4, summarise, write_campaign, write_summary
 from bt_arrange_sim.experiment.trial import run_trial
 
@@ -69,6 +70,7 @@ def run_experiment(
     thresholds: str | Sequence[float] | None = None,
     scheduler: str | None = None,
     object_name: str | Sequence[str] = "cube",
+    calibration: str | Path | None = None,
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
@@ -95,6 +97,9 @@ def run_experiment(
     except PlanError as error:
         raise PlanError(f"--threshold-mm {threshold_mm!r}: {error}") from error
     combos, flat = _plan(threshold_mm, cell, strategy, thresholds, executor, workers, scheduler, object_name)
+    calibration_file = check_calibration(calibration)
+    if calibration_file is not None:
+        combos = [dataclasses.replace(c, calibration=calibration_file) for c in combos]
     rows = list(rows)
     check_object_rows(object_name, rows)
     if executor == "dask":

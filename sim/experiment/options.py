@@ -33,6 +33,8 @@ class TrialSpec:
     strategy: str = "paper"
     #: The part's type: a name of ``bt_arrange.objects.BUILT_IN_TYPES`` (``cube``, ``bar``).
     object_name: str = "cube"
+    #: A camera calibration file (``bt-arrange calibrate``) the detector uses; None: the cell's nominal camera.
+    calibration: str | None = None
 
 
 @dataclass(frozen=True)
@@ -48,6 +50,8 @@ class Combination:
     cell: str = "ideal"
     strategy: str = "paper"
     object_name: str = "cube"
+    #: The campaign's camera calibration file, or None (``--calibration``).
+    calibration: str | None = None
 
     @property
     def folder(self) -> str:
@@ -60,7 +64,9 @@ class Combination:
 
     def spec(self, row: str, index: int, seed: int) -> TrialSpec:
         """The trial ``index`` of ``row`` under this combination."""
-        return TrialSpec(row, index, seed, self.threshold_mm, self.cell, self.strategy, self.object_name)
+        return TrialSpec(
+            row, index, seed, self.threshold_mm, self.cell, self.strategy, self.object_name, self.calibration
+        )
 
     def owns(self, record: dict) -> bool:
         """True when ``record`` is a trial of this combination (records before ``cell`` were the ideal cell's)."""
@@ -69,6 +75,7 @@ class Combination:
             and record.get("cell", "ideal") == self.cell
             and record.get("strategy", "paper") == self.strategy
             and record.get("object", "cube") == self.object_name
+            and record.get("calibration") == self.calibration
         )
 
 
@@ -171,6 +178,7 @@ def check_options(
     scheduler: str | None = None,
     object_name: str | Sequence[str] = "cube",
     rows: Iterable[str] = (),
+    calibration: str | Path | None = None,
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
@@ -179,6 +187,20 @@ def check_options(
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)
+    check_calibration(calibration)
+
+
+def check_calibration(calibration: str | Path | None) -> str | None:
+    """The ``--calibration`` file checked (``read_calibration``), as a string for the trials; None without one."""
+    if calibration is None:
+        return None
+    from bt_arrange.calibration import read_calibration
+
+    try:
+        read_calibration(calibration)
+    except PlanError as error:
+        raise PlanError(f"--calibration {calibration}: {error}") from error
+    return str(calibration)
 
 
 def check_object_rows(object_name: str | Sequence[str], rows: Iterable[str]) -> None:

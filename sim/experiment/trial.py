@@ -55,7 +55,12 @@ def _run_trial(spec: TrialSpec) -> dict:
         root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
     injectors = row_injectors(spec.row)
     injection_seed = int(rng.integers(2**31))
-    with SimulatedRun(root, starts, cell_config=_cell_config(spec)) as run:
+    calibration = None
+    if spec.calibration is not None:
+        from bt_arrange.calibration import read_calibration
+
+        calibration = read_calibration(spec.calibration)
+    with SimulatedRun(root, starts, cell_config=_cell_config(spec), calibration=calibration) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
@@ -73,6 +78,7 @@ def _run_trial(spec: TrialSpec) -> dict:
         "cell": spec.cell,
         "strategy": spec.strategy,
         "object": spec.object_name,
+        **({"calibration": spec.calibration} if spec.calibration is not None else {}),
         "target": [round(v, 6) for v in outcome.target],
         "placed_mm": outcome.placed_offset_mm,
         "pushed_mm": outcome.final_offset_mm,

@@ -18,3 +18,13 @@ def four_cubes_xml_record(tmp_path_factory):
     assert code == 0
     transitions = [json.loads(line) for line in (folder / "transitions.jsonl").read_text().splitlines()]
     return {"dir": folder, "report": json.loads((folder / "report.json").read_text()), "transitions": transitions}
+
+
+@pytest.fixture(scope="session")
+def real_cell_calibration(tmp_path_factory):
+    """``bt-arrange calibrate --cell real --views 12 --json``: a short calibration of the real cell, its file."""
+    folder = tmp_path_factory.mktemp("calibration")
+    out = folder / "camera.toml"
+    code = cli.main(["calibrate", "--cell", "real", "--views", "12", "--out", str(out), "--record", str(folder)])
+    assert code == 0
+    return out
