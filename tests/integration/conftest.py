@@ -22,9 +22,9 @@ def four_cubes_xml_record(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def real_cell_calibration(tmp_path_factory):
-    """``bt-arrange calibrate --cell real --views 12 --json``: a short calibration of the real cell, its file."""
+    """``bt-arrange calibrate --cell real --views 16``: a short calibration of the real cell (16 views), its file."""
     folder = tmp_path_factory.mktemp("calibration")
     out = folder / "camera.toml"
-    code = cli.main(["calibrate", "--cell", "real", "--views", "12", "--out", str(out), "--record", str(folder)])
+    code = cli.main(["calibrate", "--cell", "real", "--views", "16", "--out", str(out), "--record", str(folder)])
     assert code == 0
     return out

