@@ -70,15 +70,6 @@ READ_ONLY = (
 )
 
 
-def status_code(status: str, before: str) -> int:
-    """The status-buffer byte of a node now at ``status`` (a py_trees status value) that was at ``before``."""
-    code = CODES[status]
-    if code == IDLE:
-        previous = CODES[before]
-        return IDLE_FROM_OFFSET + previous if previous != IDLE else IDLE
-    return code
-
-
 def pack_header(request_type: int, request_id: int, protocol: int = PROTOCOL_ID) -> bytes:
     """A request header: protocol id, type, request id (6 bytes)."""
     return HEADER.pack(protocol & 0xFF, request_type & 0xFF, request_id & 0xFFFFFFFF)

@@ -10,6 +10,12 @@ answers requests on its own thread. The tree's thread only writes status bytes i
   with the changes the ``TransitionLog`` visitor sees, so the publisher never walks the tree;
 - ``refresh(root)``: a walk over every node, for a tree ticked without a session.
 
+Statuses are shown as BehaviorTree.CPP's publisher shows its own tree's: when a control node or a
+decorator finishes, its children are reset (``IDLE``, remembering what they were: 10 + status),
+a decorator resets its child as soon as the child finishes, and the root is reset when it
+finishes. py_trees keeps those nodes' last status until their parent starts them again; the code
+"idle, was SUCCESS" keeps what they ended with.
+
 A client can neither slow nor stop the tree: the server thread never holds the buffer's lock
 while it talks, replies are sent with a timeout, and a client that vanishes mid-request leaves
 its reply to ZeroMQ to drop. Requests that would change the tree (hooks, breakpoints, status
@@ -56,7 +62,7 @@ def check_port(port: object) -> int:
         raise GrootError(f"Groot2 port {port!r} is not a whole number")
     if not 1 <= port <= 65534:
         raise GrootError(
-            f"Groot2 port {port} is out of range: it must be 1 to 65534 (the publisher also takes port {port} + 1)"
+            f"Groot2 port {port} is out of range: it must be 1 to 65534 (the next port is the publisher socket)"
         )
     return port
 
@@ -135,6 +141,21 @@ class Groot2Publisher:
         self.xml = xmltree.to_xml(root, tree_id=self.tree_id, uids=self.uids, generic=True)
         self._xml_bytes = self.xml.encode("utf-8")
         self._index = {str(node.id): index for index, node in enumerate(self.nodes)}
+        position = {node: index for index, node in enumerate(self.nodes)}
+        # Pre-order: the descendants of node i are i+1 .. end[i]-1.
+        self._end = [0] * len(self.nodes)
+        for node in root.iterate():  # children before their parent
+            index = position[node]
+            self._end[index] = self._end[position[node.children[-1]]] if node.children else index + 1
+        #: Who BehaviorTree.CPP resets when a node finishes: below it (a control node or decorator: from i+1),
+        #: the node too (under a decorator, or the root: from i), or nobody (a leaf elsewhere: None).
+        self._reset_from: list[int | None] = [None] * len(self.nodes)
+        for index, node in enumerate(self.nodes):
+            parent = node.parent
+            if index == 0 or isinstance(parent, py_trees.decorators.Decorator):
+                self._reset_from[index] = index
+            elif node.children:
+                self._reset_from[index] = index + 1
         self._status = bytearray()
         for uid in range(1, len(self.nodes) + 1):
             self._status += uid.to_bytes(2, "little") + bytes((protocol.IDLE,))
@@ -196,29 +217,41 @@ class Groot2Publisher:
     def on_transition(self, transition: Any) -> None:
         """Note one status change (a ``bt_arrange.runner.Transition``): the session's transition hook."""
         index = self._index.get(transition.node_id)
-        if index is None:
-            return
-        code = protocol.status_code(transition.new, transition.old)
-        self._set(index, code, protocol.CODES[transition.new])
+        if index is not None:
+            self._set(index, protocol.CODES[transition.new])
 
     def refresh(self, root: py_trees.behaviour.Behaviour | None = None) -> None:
-        """Read every node's status (for a tree ticked without a session's transition hooks)."""
-        for index, node in enumerate(self.nodes):
-            now = protocol.CODES[node.status.value]
-            last = self._last[index]
-            if now == protocol.IDLE:
-                if last in (protocol.RUNNING, protocol.SUCCESS, protocol.FAILURE):
-                    self._set(index, protocol.IDLE_FROM_OFFSET + last, now)
-            elif now != last:
-                self._set(index, now, now)
+        """Read every node's status (for a tree ticked without a session's transition hooks), after a tick."""
+        codes = protocol.CODES
+        position = {node: index for index, node in enumerate(self.nodes)}
+        for node in self.root.iterate():  # children before their parent, as a tick reports them
+            index = position[node]
+            now = codes[node.status.value]
+            if now != self._last[index]:
+                self._set(index, now)
 
-    def _set(self, index: int, code: int, raw: int) -> None:
+    def _set(self, index: int, now: int) -> None:
         with self._lock:
-            self._status[3 * index + 2] = code
-            self._last[index] = raw
+            before, self._last[index] = self._last[index], now
+            buffer = self._status
+            if now == protocol.IDLE:
+                # Stopped or reset: "idle, was ..." unless it is shown so already.
+                shown = buffer[3 * index + 2]
+                if protocol.RUNNING <= shown <= protocol.FAILURE:
+                    buffer[3 * index + 2] = protocol.IDLE_FROM_OFFSET + shown
+                elif shown == protocol.IDLE and before != protocol.IDLE:
+                    buffer[3 * index + 2] = protocol.IDLE_FROM_OFFSET + before
+            else:
+                buffer[3 * index + 2] = now
             if self._recording:
                 stamp_us = int((time.monotonic() - self._record_start_s) * 1e6)
-                self._transitions.append(protocol.pack_transition(stamp_us, index + 1, raw))
+                self._transitions.append(protocol.pack_transition(stamp_us, index + 1, now))
+            start = self._reset_from[index]
+            if start is not None and now in (protocol.SUCCESS, protocol.FAILURE):
+                for other in range(start, self._end[index]):
+                    shown = buffer[3 * other + 2]
+                    if protocol.RUNNING <= shown <= protocol.FAILURE:
+                        buffer[3 * other + 2] = protocol.IDLE_FROM_OFFSET + shown
 
     def status_buffer(self) -> bytes:
         """The status buffer as a ``STATUS`` reply carries it (3 bytes a node)."""
