@@ -170,6 +170,8 @@ class Groot2Publisher:
         #: Requests answered, and error replies among them (for tests and the docs' figures).
         self.requests = 0
         self.errors = 0
+        #: CPU time [s] the server thread used (known once closed).
+        self.server_cpu_s = 0.0
         self._stop = threading.Event()
         self._context = zmq.Context()
         self._server = self._socket(zmq.REP, self.port, "request/reply")
@@ -265,6 +267,12 @@ class Groot2Publisher:
     # -- the server's side ---------------------------------------------------------------------
 
     def _serve(self) -> None:
+        try:
+            self._serve_requests()
+        finally:
+            self.server_cpu_s = time.thread_time()
+
+    def _serve_requests(self) -> None:
         zmq = self._zmq
         poller = zmq.Poller()
         poller.register(self._server, zmq.POLLIN)
