@@ -295,6 +295,19 @@ def test_a_port_in_use_or_out_of_range_is_one_clear_error():
         Groot2Publisher(small_tree(), free_port_pair(), bind="no.such.address")
 
 
+def test_waiting_for_a_client_ends_when_one_fetches_the_tree(publisher):
+    assert publisher.wait_for_client(0.0) is False
+    assert publisher.wait_for_client(0.05) is False  # nobody came
+    fetcher = Client(publisher.port)
+    try:
+        fetcher.ask("S")
+        assert publisher.wait_for_client(0.0) is False  # statuses are not the tree
+        fetcher.ask("T")
+        assert publisher.wait_for_client(5.0) is True
+    finally:
+        fetcher.close()
+
+
 def test_uids_are_bt_cpps_preorder():
     root = small_tree()
     assert [n.name for n in preorder(root)] == ["s", "a", "i", "c", "fs", "s2", "d", "e", "f", "b", "w"]
