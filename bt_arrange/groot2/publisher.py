@@ -210,7 +210,8 @@ class Groot2Publisher:
             if error.errno == zmq.EADDRINUSE:
                 reason = f"port {port} is in use (another publisher, or another run with --groot?)"
             else:
-                reason = f"{error.strerror} (--groot-bind takes an address of this machine, e.g. 127.0.0.1 or 0.0.0.0)"
+                what = zmq.strerror(error.errno) if error.errno else str(error)
+                reason = f"{what} (--groot-bind takes an address of this machine, e.g. 127.0.0.1 or 0.0.0.0)"
             raise GrootError(f"cannot serve Groot2 on {endpoint} ({role} socket): {reason}") from None
         return sock
 
