@@ -2,6 +2,7 @@
 
     bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--gui] [--live] [--record DIR] [--json]
+                   [--groot [PORT]] [--groot-wait-s S] [--groot-bind ADDR] [--pace F]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
@@ -18,6 +19,7 @@ the reader of the output went away (``| head``), 143 when terminated (SIGTERM).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -81,6 +83,44 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _groot_port(text: str) -> int:
+    """An argparse type: the Groot2 server port (the next one is its publisher socket)."""
+    from bt_arrange.groot2 import check_port
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a port number (put the tree file before --groot, or give the port)"
+        ) from None
+    try:
+        return check_port(value)
+    except BtArrangeError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _seconds_or_zero(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"{text} must be 0 or more seconds")
+    return value
+
+
+def _pace(text: str) -> float:
+    """An argparse type: a positive, finite multiple of real time."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (1 is real time)") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive multiple of real time (1 is real time)")
+    return value
+
+
 def _millimetres(text: str) -> float:
     """An argparse type: a number (the plan check decides whether a push can correct it)."""
     try:
@@ -120,6 +160,7 @@ def _info(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
+    _check_groot_options(args)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
@@ -127,21 +168,32 @@ def _run(args: argparse.Namespace) -> int:
     backend = backends.load(args.backend)
     # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
     starts = treefile.scene(module, seed, backend=backend)
-    with backend.open_run(
-        root,
-        starts,
-        gui=args.gui,
-        record_dir=args.record,
-        time_limit_s=args.time_limit_s,
-        title=Path(args.tree_file).name,
-        # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
-        **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
-    ) as run:
+    # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
+    with (
+        _groot_publisher(root, args) as groot,
+        backend.open_run(
+            root,
+            starts,
+            gui=args.gui,
+            record_dir=args.record,
+            time_limit_s=args.time_limit_s,
+            title=Path(args.tree_file).name,
+            # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+            **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
+        ) as run,
+    ):
+        if groot is not None:
+            run.transition_hooks.append(groot.on_transition)
+            run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
         if args.live:
             from bt_arrange.display import LiveView
 
             view = LiveView(sys.stderr if args.json else sys.stdout)
             run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.elapsed_s()))
+        if args.pace is not None:
+            from bt_arrange.pacing import Pacer
+
+            run.tick_hooks.append(Pacer(args.pace, run.elapsed_s).tick)
         report = run.run()
         if args.live:
             view.close()
@@ -150,6 +202,38 @@ def _run(args: argparse.Namespace) -> int:
     else:
         _print_report(report, args)
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _check_groot_options(args: argparse.Namespace) -> None:
+    if args.groot is None:
+        for option, value in (("--groot-wait-s", args.groot_wait_s), ("--groot-bind", args.groot_bind)):
+            if value is not None:
+                raise BtArrangeError(f"{option} serves a run to Groot2 only with --groot [PORT]")
+
+
+def _groot_publisher(root: Any, args: argparse.Namespace) -> Any:
+    """A context manager: the tree's Groot2 publisher (``--groot``), else None."""
+    if args.groot is None:
+        return contextlib.nullcontext(None)
+    from bt_arrange.groot2 import Groot2Publisher
+
+    publisher = Groot2Publisher(
+        root, args.groot, bind=args.groot_bind or "127.0.0.1", tree_id=Path(args.tree_file).stem
+    )
+    print(
+        f"bt-arrange: serving the tree to Groot2 on {publisher.address} "
+        f"({len(publisher.nodes)} nodes; btview snapshot -p {publisher.port})",
+        file=sys.stderr,
+    )
+    return publisher
+
+
+def _wait_for_groot(publisher: Any, wait_s: float | None) -> None:
+    if not wait_s:
+        return
+    print(f"bt-arrange: waiting up to {wait_s:g} s for a Groot2 client to fetch the tree", file=sys.stderr)
+    if not publisher.wait_for_client(wait_s):
+        print(f"bt-arrange: no Groot2 client after {wait_s:g} s; running", file=sys.stderr)
 
 
 def _print_report(report: RunReport, args: argparse.Namespace) -> None:
@@ -432,6 +516,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_backend(run)
     run.add_argument("--cell", default="ideal", help=CELL_HELP)
+    run.add_argument(
+        "--groot",
+        type=_groot_port,
+        nargs="?",
+        const=1667,
+        default=None,
+        metavar="PORT",
+        help="serve the running tree to Groot2 (BehaviorTree.CPP 4's protocol) on PORT and PORT+1 "
+        "(default 1667), read-only; docs/groot2.md",
+    )
+    run.add_argument(
+        "--groot-wait-s",
+        type=_seconds_or_zero,
+        default=None,
+        metavar="S",
+        help="with --groot: wait up to S seconds of wall time for a client to fetch the tree before the first tick",
+    )
+    run.add_argument(
+        "--groot-bind",
+        default=None,
+        metavar="ADDR",
+        help="with --groot: the address to serve on (default 127.0.0.1, this machine only; 0.0.0.0 for all)",
+    )
+    run.add_argument(
+        "--pace",
+        type=_pace,
+        default=None,
+        metavar="F",
+        help="run the world at F times real time (default: as fast as it goes), e.g. 1 to watch it",
+    )
     run.set_defaults(handler=_run)
 
     show = add_command(

@@ -19,6 +19,7 @@ from py_trees.common import Access, Status
 
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.numbers import fixed
 from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, OFF_STRING, STRING, Port
 
 
@@ -129,7 +130,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             return Status.FAILURE
         yaw = self._yaw_error()
         yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
-        yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {yaw:+.2f} deg"
+        yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
         if offset < self.threshold_mm and yaw_within:
             self.feedback_message = (
                 f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm{yaw_text} after {self.attempts} correction(s)"

@@ -29,6 +29,8 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.errors import BtArrangeError
+from bt_arrange.numbers import fixed
+from bt_arrange.xmltree.registry import type_label
 
 #: Names under which Debian, Ubuntu and Google ship a Chromium-based browser.
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
@@ -55,7 +57,7 @@ def format_value(value: Any) -> str:
     if isinstance(value, bool) or value is None:
         return str(value)
     if isinstance(value, float):
-        return f"{value:.4f}"
+        return fixed(value, 4)
     if isinstance(value, (tuple, list)):
         inner = ", ".join(format_value(v) for v in value)
         return f"({inner})" if isinstance(value, tuple) else f"[{inner}]"
@@ -81,7 +83,7 @@ class ReplayRecorder:
         order = list(_preorder(self.root))
         self._behaviours = [node for node, _, _ in order]
         self.nodes = [
-            {"name": node.name, "kind": type(node).__name__, "depth": depth, "parent": parent}
+            {"name": node.name, "kind": type_label(node), "depth": depth, "parent": parent}
             for node, depth, parent in order
         ]
         self._status = [Status.INVALID] * len(order)

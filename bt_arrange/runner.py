@@ -27,7 +27,8 @@ from bt_arrange.robot import Clock
 class Transition:
     """One behaviour changing status, at a moment of world time.
 
-    ``behaviour`` is the node's name and ``kind`` its class name, for people reading the log;
+    ``behaviour`` is the node's name and ``kind`` its BehaviorTree.CPP type as the XML names it
+    (``ForceSuccess`` for a ``FailureIsSuccess``, ``Pick`` for a ``Pick``), for people reading the log;
     programs select by ``node_id`` (the py_trees ``Behaviour.id``, as text), which
     ``TransitionLog.node(transition)`` and ``Runner.node(transition)`` turn back into the node,
     and by ``obj``, the object the node handles (``None`` for a node of no single object).
@@ -91,6 +92,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         self._last: dict[py_trees.behaviour.Behaviour, Status] = {}
         self._visited: list[py_trees.behaviour.Behaviour] = []
         self._file: IO[str] | None = None
+        self._kinds: dict[py_trees.behaviour.Behaviour, str] = {}
 
     # -- the visitor ---------------------------------------------------------------------------
 
@@ -160,7 +162,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         return Transition(
             time_s=round(time_s, 4),
             behaviour=node.name,
-            kind=type(node).__name__,
+            kind=self._kind(node),
             old=before.value,
             new=node.status.value,
             feedback=node.feedback_message,
@@ -168,6 +170,14 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             obj=object_of(node),
             facts=facts_of(node),
         )
+
+    def _kind(self, node: py_trees.behaviour.Behaviour) -> str:
+        kind = self._kinds.get(node)
+        if kind is None:
+            from bt_arrange.xmltree import tag_of  # the XML's vocabulary (imported late: xmltree imports the trees)
+
+            kind = self._kinds[node] = tag_of(node)
+        return kind
 
     def _write(self, changes: list[Transition]) -> None:
         if self.path is None:

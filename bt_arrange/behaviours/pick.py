@@ -28,6 +28,7 @@ from bt_arrange.behaviours.moves import (
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, nearest_symmetric_yaw
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
@@ -278,7 +279,11 @@ class Pick(StagedBehaviour):
         assert self.grip_width_m is not None
         message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
         if self.squared_from_width_m is not None:
-            turned = f", the wrist turned {math.degrees(self.wrist_turn_rad):+.1f} deg" if self.wrist_turn_rad else ""
+            turned = (
+                f", the wrist turned {fixed(math.degrees(self.wrist_turn_rad), 1, sign=True)} deg"
+                if self.wrist_turn_rad
+                else ""
+            )
             message += (
                 f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners{turned})"
             )

@@ -21,6 +21,7 @@ from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import RELEASE, STRING, Port
 
@@ -109,5 +110,8 @@ class Place(StagedBehaviour):
             return f"{self.obj} set down where it was picked, to be looked at and picked again"
         if self.release is not None and self.release.staged:
             dx, dy = self.release.offset_m
-            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target, to push home"
+            return (
+                f"{self.obj} released {fixed(dx * 1000, 0, sign=True)}, {fixed(dy * 1000, 0, sign=True)} mm "
+                "from its target, to push home"
+            )
         return f"{self.obj} released at its target"
