@@ -19,6 +19,7 @@ a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
@@ -332,11 +333,18 @@ class Session:
         )
         if self.record_dir is not None:
             self._finish_log(log, result.transitions)
-            with self.faults.guard(self.record_dir / "report.json"):
-                files.write_json(self.record_dir / "report.json", report.to_dict())
-            assert self.replay is not None
-            with self.faults.guard(self.record_dir / "replay.html"):
-                self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
+            replay = self.replay
+            assert replay is not None
+            ends: dict[str, Callable[[Path], object]] = {
+                "report.json": lambda path: files.write_json(path, report.to_dict()),
+                "replay.html": lambda path: replay.write(path, title=self.title, summary=report.to_dict()),
+            }
+            for name, write in ends.items():
+                path = self.record_dir / name
+                with self.faults.guard(path):
+                    if not self.record_dir.is_dir():  # removed while running: not made again behind the user's back
+                        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+                    write(path)
         if self.faults:
             raise RecordError(
                 f"{self.faults.message()}; the run finished, its record did not",
