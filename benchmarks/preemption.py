@@ -60,6 +60,7 @@ def _run(command: list[str], kill_after_s: float | None, sig: signal.Signals) ->
     except subprocess.TimeoutExpired:
         os.killpg(process.pid, sig)
         process.wait()
+    took = time.perf_counter() - start
     # No pool worker may outlive the kill (it would write into the folder the next run resumes).
     deadline = time.monotonic() + 10
     while time.monotonic() < deadline:
@@ -70,7 +71,7 @@ def _run(command: list[str], kill_after_s: float | None, sig: signal.Signals) ->
         time.sleep(0.05)
     else:
         os.killpg(process.pid, signal.SIGKILL)
-    return process.returncode, time.perf_counter() - start
+    return process.returncode, took
 
 
 def main() -> int:
