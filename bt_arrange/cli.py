@@ -12,8 +12,10 @@
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
-tree-file or plan error (a one-line message, never a traceback), 130 when interrupted, 141 when
-the reader of the output went away (``| head``), 143 when terminated (SIGTERM).
+tree-file or plan error (a one-line message, never a traceback), 3 when the run finished but its
+record did not (a file of ``--record``/``--out`` could not be written: one line naming it, the results
+printed as usual), 130 when interrupted, 141 when the reader of the output went away (``| head``),
+143 when terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -32,14 +34,19 @@ from typing import Any, NoReturn
 
 from bt_arrange import backends, treefile
 from bt_arrange.backends import Backend, Experiment, RunReport
-from bt_arrange.errors import BackendError, BtArrangeError
+from bt_arrange.errors import BackendError, BtArrangeError, RecordError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
 EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, EXIT_TERMINATED = 0, 1, 2, 130, 141, 143
+#: The run finished, its record did not (a contract): a recorded file could not be written.
+EXIT_RECORD = 3
 EXIT_CODES_HELP = """exit status:
   0    every object ended within the threshold (measured by the camera)
   1    an object did not (outside, failed, or the time limit stopped the run)
   2    a usage, tree-file or plan error: one line on stderr, before anything moves
+  3    the run finished, its record did not: a file of --record/--out could not be written
+       (disk full, folder removed or read-only); one line names it, the results are printed,
+       and every file is whole or absent
   130  interrupted (Ctrl-C); what was logged so far is kept
   141  the reader of the output went away (e.g. | head)
   143  terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"""
@@ -194,13 +201,20 @@ def _run(args: argparse.Namespace) -> int:
             from bt_arrange.pacing import Pacer
 
             run.tick_hooks.append(Pacer(args.pace, run.elapsed_s).tick)
-        report = run.run()
+        fault: RecordError | None = None
+        try:
+            report = run.run()
+        except RecordError as error:
+            # The run finished, its record did not: the report is printed all the same, then the one line.
+            fault, report = error, error.result
         if args.live:
             view.close()
     if args.json:
         print(json.dumps(report.to_dict()))
     else:
-        _print_report(report, args)
+        _print_report(report, args, recorded=fault is None)
+    if fault is not None:
+        raise fault
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
 
 
@@ -236,7 +250,7 @@ def _wait_for_groot(publisher: Any, wait_s: float | None) -> None:
         print(f"bt-arrange: no Groot2 client after {wait_s:g} s; running", file=sys.stderr)
 
 
-def _print_report(report: RunReport, args: argparse.Namespace) -> None:
+def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool = True) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
@@ -282,7 +296,10 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
     if args.record:
-        print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+        if recorded:
+            print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+        else:
+            print(f"the record in {args.record} is incomplete (the line on stderr says which file and why)")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
     if report.objects:
@@ -313,6 +330,7 @@ EXPERIMENT_OPTIONS = (
     ("object_name", "cube"),
     ("executor", "local"),
     ("scheduler", None),
+    ("resume", False),
 )
 
 
@@ -339,9 +357,13 @@ def _experiment_options(
     return options
 
 
-def _print_experiment(experiment: Experiment, summary: list[dict[str, Any]], out: Path) -> None:
+def _print_experiment(
+    experiment: Experiment, summary: list[dict[str, Any]], out: Path, *, recorded: bool = True
+) -> None:
     print(experiment.markdown_table(summary), end="")
-    if any("folder" in row for row in summary):
+    if not recorded:
+        print(f"the record in {out} is incomplete (the line on stderr says which file and why)")
+    elif any("folder" in row for row in summary):
         print(
             f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
             f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
@@ -389,11 +411,11 @@ def _experiment(args: argparse.Namespace) -> int:
             **options,
         )
     except BtArrangeError as error:
-        # Trials lost (a worker died): what did finish is written and printed, then the one-line error.
-        finished = getattr(error, "summary", None)
+        # Trials that errored, or files that could not be written: the summary is printed, then the one line.
+        finished = error.result if isinstance(error, RecordError) else getattr(error, "summary", None)
         if finished:
             bar.close()
-            _print_experiment(experiment, finished, args.out)
+            _print_experiment(experiment, finished, args.out, recorded=not isinstance(error, RecordError))
         raise
     finally:
         bar.close()
@@ -569,7 +591,9 @@ def build_parser() -> argparse.ArgumentParser:
         "experiment",
         "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
         f"rows (--rows):\n{rows_help}\n\n"
-        "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
+        "exit status: 0 done, 2 a usage error or trials that errored (named; --resume reruns them),\n"
+        "3 the campaign finished, its record did not (a file of --out could not be written: named),\n"
+        "130 interrupted or 143 terminated (finished trials are kept; --resume continues)",
     )
     experiment.add_argument(
         "--rows",
@@ -596,6 +620,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the campaign in --out (after Ctrl-C, SIGTERM or a kill): its recorded trials are kept, "
+        "the missing and errored ones run; refused if --out holds another specification",
     )
     add_backend(experiment)
     experiment.add_argument(
@@ -665,6 +695,9 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except RecordError as error:
+        print(f"bt-arrange: error: {error}", file=sys.stderr)
+        return EXIT_RECORD
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE

@@ -107,3 +107,18 @@ class DisplayError(BtArrangeError):
 
 class BackendError(BtArrangeError):
     """No backend of that name is installed, or it does not offer what the command needs."""
+
+
+class RecordError(BtArrangeError):
+    """The run finished, its record did not: a file could not be written (a full disk, a folder gone or read-only).
+
+    Raised after the work is done, so nothing measured is lost: ``result`` is what the call would
+    have returned (a run's report, a campaign's summary rows), ``faults`` the ``WriteFault``s
+    (``bt_arrange.files``: each a path and its cause). The command prints the result as usual,
+    then this one line, and exits 3. The files named are absent or as they were before, never cut short.
+    """
+
+    def __init__(self, message: str, *, faults: Any = (), result: Any = None) -> None:
+        super().__init__(message)
+        self.faults = list(faults)
+        self.result = result

@@ -28,6 +28,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
+from bt_arrange import files
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.numbers import fixed
 from bt_arrange.xmltree.registry import type_label
@@ -109,9 +110,13 @@ class ReplayRecorder:
                 self.blackboard.append({"t": time_s, "key": key, "value": text})
             self._values[key] = (value, text)
 
-    def add_image(self, time_s: float, label: str, path: Path | str) -> None:
-        """A camera image saved at ``time_s`` of world time (embedded when the page is written)."""
-        self.images.append({"t": round(time_s, 4), "label": label, "path": str(path)})
+    def add_image(self, time_s: float, label: str, path: Path | str, data: bytes | None = None) -> None:
+        """A camera image saved at ``time_s`` of world time (embedded when the page is written).
+
+        ``data`` is the PNG itself, when the caller has it: the page then does not read ``path``
+        (which a full disk may have kept from being written).
+        """
+        self.images.append({"t": round(time_s, 4), "label": label, "path": str(path), "data": data})
 
     def moments(self) -> list[float]:
         """The world times the slider stops at: every time something the page shows changed."""
@@ -125,7 +130,8 @@ class ReplayRecorder:
         path = Path(path)
         images = []
         for image in self.images:
-            data = base64.b64encode(Path(image["path"]).read_bytes()).decode("ascii")
+            png = image.get("data")
+            data = base64.b64encode(png if png is not None else Path(image["path"]).read_bytes()).decode("ascii")
             images.append({"t": image["t"], "label": image["label"], "src": f"data:image/png;base64,{data}"})
         payload = {
             "title": title,
@@ -140,8 +146,7 @@ class ReplayRecorder:
         data = json.dumps(payload, allow_nan=False).replace("</", "<\\/")
         page = _PAGE.replace("__TITLE__", _html_escape(title)).replace("__DATA__", data)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(page, encoding="utf-8")
-        return path
+        return files.write_text(path, page)  # whole or not at all: never a page cut short
 
 
 def _html_escape(text: str) -> str:

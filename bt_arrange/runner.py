@@ -13,13 +13,14 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import py_trees
 import py_trees.visitors
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context
+from bt_arrange.files import LineLog
 from bt_arrange.robot import Clock
 
 
@@ -91,7 +92,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         # the log looks at a few nodes every tick.
         self._last: dict[py_trees.behaviour.Behaviour, Status] = {}
         self._visited: list[py_trees.behaviour.Behaviour] = []
-        self._file: IO[str] | None = None
+        self._file: LineLog | None = None
         self._kinds: dict[py_trees.behaviour.Behaviour, str] = {}
 
     # -- the visitor ---------------------------------------------------------------------------
@@ -184,16 +185,19 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             return
         if self._file is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = self.path.open("w")
-        for change in changes:
-            self._file.write(change.to_json() + "\n")
-        self._file.flush()
+            self._file = LineLog(self.path)
+        # Whole lines only; a full disk stops the file at its last whole line (``fault``), the run goes on.
+        self._file.write(change.to_json() for change in changes)
+
+    @property
+    def fault(self) -> OSError | None:
+        """The error that stopped the file (a full disk, a folder gone), or None."""
+        return self._file.fault if self._file is not None else None
 
     def close(self) -> None:
         """Close the file, if one was written."""
         if self._file is not None:
             self._file.close()
-            self._file = None
 
 
 @dataclass

@@ -18,7 +18,8 @@ a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
 
 from __future__ import annotations
 
-import json
+import contextlib
+import errno
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
@@ -29,6 +30,7 @@ from typing import Any, Protocol, runtime_checkable
 import py_trees
 from py_trees.common import Access, Status
 
+from bt_arrange import files
 from bt_arrange.behaviours import (
     Context,
     Detect,
@@ -43,7 +45,7 @@ from bt_arrange.behaviours import (
 )
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
-from bt_arrange.errors import PlanError
+from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
@@ -283,13 +285,20 @@ class Session:
         #: What the replay page shows (recorded runs only), and its heading.
         self.replay: ReplayRecorder | None = None
         self.title = title or root.name
+        #: The recorded files that could not be written (a full disk, the folder gone); the run goes on.
+        self.faults = files.Faults()
 
     def elapsed_s(self) -> float:
         """World time since the tree started (the settling of the scene excluded), as the report counts it."""
         return self.world.clock.now() - self.start_s
 
     def run(self) -> SessionReport:
-        """Tick the tree to the end; returns the report. The world stays open for inspection."""
+        """Tick the tree to the end; returns the report. The world stays open for inspection.
+
+        A recorded file that cannot be written (a full disk, the folder removed or read-only) does
+        not stop the run: each file is whole or absent, and at the end a ``RecordError`` carries the
+        report (``result``) and names the file and the cause ("the run finished, its record did not").
+        """
         py_trees.blackboard.Blackboard.clear()
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
@@ -323,10 +332,37 @@ class Session:
             ground_truth=self.truth is not None,
         )
         if self.record_dir is not None:
-            (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
-            assert self.replay is not None
-            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
+            self._finish_log(log, result.transitions)
+            replay = self.replay
+            assert replay is not None
+            ends: dict[str, Callable[[Path], object]] = {
+                "report.json": lambda path: files.write_json(path, report.to_dict()),
+                "replay.html": lambda path: replay.write(path, title=self.title, summary=report.to_dict()),
+            }
+            for name, write in ends.items():
+                path = self.record_dir / name
+                with self.faults.guard(path):
+                    if not self.record_dir.is_dir():  # removed while running: not made again behind the user's back
+                        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+                    write(path)
+        if self.faults:
+            raise RecordError(
+                f"{self.faults.message()}; the run finished, its record did not",
+                faults=self.faults.faults,
+                result=report,
+            )
         return report
+
+    def _finish_log(self, log: TransitionLog, transitions: list[Transition]) -> None:
+        """A transition log a fault stopped is written again whole; if that fails too, it is removed."""
+        if log.fault is None or log.path is None:
+            return
+        try:
+            files.write_text(log.path, "".join(t.to_json() + "\n" for t in transitions))
+        except OSError as error:
+            self.faults.add(log.path, error)
+            with contextlib.suppress(OSError):
+                log.path.unlink()  # complete or absent: never a log that ends where the disk filled
 
     def close(self) -> None:
         """Close the world."""
@@ -413,9 +449,13 @@ class Session:
         assert self.record_dir is not None
         frame = self.world.capture_image()
         path = self.record_dir / f"{stem}.png"
-        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
-        if self.replay is not None:
-            self.replay.add_image(self.world.clock.now(), stem.replace("_", " "), path)
+        encoded, png = cv2.imencode(".png", cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        data = png.tobytes() if encoded else None
+        if data is not None:
+            with self.faults.guard(path):
+                files.write_bytes(path, data)
+        if self.replay is not None and data is not None:
+            self.replay.add_image(self.world.clock.now(), stem.replace("_", " "), path, data)
 
     # -- the report ----------------------------------------------------------------------------
 

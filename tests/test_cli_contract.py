@@ -28,8 +28,11 @@ TREES = Path(__file__).resolve().parents[1] / "trees"
 SINGLE = str(TREES / "single_cube.py")
 
 
-class Simulated(Exception):
-    """Raised by the spies: the command got as far as building a world or running a trial."""
+class Simulated(BaseException):
+    """Raised by the spies: the command got as far as building a world or running a trial.
+
+    A ``BaseException``: a campaign records a trial's ``Exception`` as an errored trial and goes on.
+    """
 
 
 def spy(*_: object, **__: object) -> None:

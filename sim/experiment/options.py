@@ -171,11 +171,13 @@ def check_options(
     scheduler: str | None = None,
     object_name: str | Sequence[str] = "cube",
     rows: Iterable[str] = (),
+    resume: bool = False,
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
     ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
-    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``.
+    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``. ``resume``
+    needs nothing checked here: ``run_experiment`` compares the folder's specification.
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)
