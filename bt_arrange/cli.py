@@ -163,7 +163,7 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     has_truth = getattr(report, "ground_truth", True)
     truth_columns = (4, 6) if not has_truth else ()
     rows: list[tuple[str, ...]] = [
-        ("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+        ("object", "target x, y (mm), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
     ]
     for o in report.objects:
         x, y, yaw = o.target
@@ -171,7 +171,7 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
         rows.append(
             (
                 o.name,
-                f"{x:.3f}, {y:.3f}, {math.degrees(yaw):.1f}",
+                f"{x * 1000:.1f}, {y * 1000:.1f}, {math.degrees(yaw):.1f}",
                 mm(o.placed_offset_mm),
                 mm(o.final_offset_mm),
                 mm(o.final_offset_truth_mm),
@@ -203,7 +203,9 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
     if report.objects:
         within = sum(o.status == "within" for o in report.objects)
-        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm; "
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f" and {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm{yaw_text}; "
     else:
         verdict = ""
     # The last line is the verdict, and the exit status agrees with it (0 only when all are within).

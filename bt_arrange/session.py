@@ -191,8 +191,16 @@ class SessionReport:
     def to_dict(self) -> dict:
         """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
         data = {
-            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
-            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            # target is [x_m, y_m, yaw_rad]; target_mm and target_yaw_deg repeat it in a plan's units (mm, degrees),
+            # as the table shows it.
+            "objects": [
+                {
+                    **asdict(o),
+                    "target_mm": [round(o.target[0] * 1000, 3), round(o.target[1] * 1000, 3)],
+                    "target_yaw_deg": round(math.degrees(o.target[2]), 3),
+                }
+                for o in self.objects
+            ],
             "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "yaw_threshold_deg": self.yaw_threshold_deg,
