@@ -26,8 +26,8 @@ def required_reads(node: py_trees.behaviour.Behaviour) -> Mapping[str, str]:
         return {}
     remapped: dict[str, str] = {}
     for client in node.blackboards:
-        remapped.update(client.remappings)
-    return {remapped.get(key, key): str(writer) for key, writer in declared.items()}
+        remapped.update({str(k): str(v) for k, v in client.remappings.items()})
+    return {remapped.get(str(key), str(key)): str(writer) for key, writer in declared.items()}
 
 
 def written_keys(node: py_trees.behaviour.Behaviour) -> set[str]:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 from bt_arrange.errors import PlanError
 from bt_arrange.shapes import ROBOTIQ_2F85, Cuboid, Shape
+from bt_arrange.suggest import did_you_mean
 
 
 @dataclass(frozen=True, init=False)
@@ -98,7 +99,9 @@ def built_in_type(name: str) -> ObjectType:
         return BUILT_IN_TYPES[name]
     except KeyError:
         known = ", ".join(sorted(BUILT_IN_TYPES))
-        raise PlanError(f"unknown object type {name!r}: the built-in types are {known}") from None
+        raise PlanError(
+            f"unknown object type {name!r}{did_you_mean(name, BUILT_IN_TYPES)}: the built-in types are {known}"
+        ) from None
 
 
 @dataclass(frozen=True)

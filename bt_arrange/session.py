@@ -473,13 +473,12 @@ class Session:
         Among the behaviours of ``obj`` (``REASON_TYPES``), the first failure after the last success:
         a Place that found no target, not the Detect that then looked for a part still in the pads.
         """
-        ended = [
-            transition
-            for transition in transitions
-            if transition.new in (Status.SUCCESS.value, Status.FAILURE.value)
-            and isinstance(self.node(transition), REASON_TYPES)
-            and object_of(self.node(transition)) == obj
-        ]
+        ended = []
+        for transition in transitions:
+            node = self.node(transition)
+            if transition.new in (Status.SUCCESS.value, Status.FAILURE.value) and isinstance(node, REASON_TYPES):
+                if object_of(node) == obj:
+                    ended.append(transition)
         last_success = max((i for i, t in enumerate(ended) if t.new == Status.SUCCESS.value), default=-1)
         failures = [t for t in ended[last_success + 1 :] if t.new == Status.FAILURE.value]
         if failures:

@@ -2,7 +2,7 @@
 
 One function the messages share (tree files and examples, object types, colours, experiment
 rows, cells, XML nodes): ``nearest(name, known)`` is the closest known names by ``difflib``'s
-ratio, case folded, and ``did_you_mean`` the text to put after the problem.
+ratio, case folded, and ``did_you_mean`` the text to put after the unknown name.
 """
 
 from __future__ import annotations
@@ -32,6 +32,6 @@ def nearest(name: object, known: Iterable[str], count: int = 1) -> list[str]:
 
 
 def did_you_mean(name: object, known: Iterable[str]) -> str:
-    """``"; did you mean 'x'?"`` for the nearest known name, or ``""`` when none is near."""
+    """``" (did you mean 'x'?)"`` for the nearest known name, or ``""`` when none is near."""
     found = nearest(name, known)
-    return f"; did you mean {found[0]!r}?" if found else ""
+    return f" (did you mean {found[0]!r}?)" if found else ""

@@ -22,6 +22,11 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, TreeFileError
+from bt_arrange.suggest import nearest
+
+#: What a tree file may be; and how many files of its folder are looked at for a suggestion.
+TREE_SUFFIXES = (".py", ".xml", ".toml")
+MAX_LISTED = 1000
 
 if TYPE_CHECKING:
     from bt_arrange.backends import Backend
@@ -35,7 +40,7 @@ def load(path: str | Path) -> ModuleType:
 
         example = examples.path_of(str(path)) if path.name == str(path) and not path.suffix else None
         if example is None:
-            raise TreeFileError(f"tree file {path} not found")
+            raise TreeFileError(f"tree file {path} not found{_nearest_file(path)}")
         path = example
     if path.suffix == ".xml":
         from bt_arrange import xmltree
@@ -67,6 +72,28 @@ def load(path: str | Path) -> ModuleType:
     finally:
         sys.path.remove(folder)
     return module
+
+
+def _nearest_file(path: Path) -> str:
+    """``; did you mean ...?`` for a missing tree file: the nearest file beside it, or the nearest example."""
+    from bt_arrange import examples
+
+    folder = path.parent
+    near = ""
+    if folder.is_dir():
+        try:
+            files = [p.name for p in sorted(folder.iterdir())[:MAX_LISTED] if p.suffix in TREE_SUFFIXES]
+        except OSError:
+            files = []
+        found = nearest(path.name, files)
+        if found:
+            shown = str(folder / found[0]) if str(folder) != "." else found[0]
+            near = f" (did you mean {shown!r}?)"
+    if not near and (path.name == str(path) or not path.suffix):
+        found = nearest(path.stem, examples.names())
+        if found:
+            near = f" (did you mean the example {found[0]!r}?)"
+    return f"{near}: bt-arrange examples lists the examples, bt-arrange run NAME runs one"
 
 
 def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behaviour:

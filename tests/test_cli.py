@@ -125,7 +125,9 @@ def test_run_exits_1_and_says_so_on_the_last_line_when_an_object_is_not_within(c
     assert code == 1
     lines = out.strip().splitlines()
     assert "failed: stopped after 2 s of world time" in lines[1]
-    assert lines[-1].startswith("single_cube.py: 0 of 1 objects within 1 mm and 1 deg; stopped at the time limit after 2.0 s")
+    assert lines[-1].startswith(
+        "single_cube.py: 0 of 1 objects within 1 mm and 1 deg; stopped at the time limit after 2.0 s"
+    )
 
 
 def test_show_prints_the_tree_as_text(capsys):

@@ -52,7 +52,9 @@ def test_a_target_whose_cube_has_another_colour_is_refused() -> None:
 @pytest.mark.parametrize(("x_m", "y_m"), [(0.30, 0.45), (-0.40, 0.0), (0.5, -0.47), (0.23, 0.0)])
 def test_a_reachable_target_the_camera_cannot_see_is_refused(x_m: float, y_m: float) -> None:  # item 2
     target = Target("red", x_m, y_m)
-    with pytest.raises(PlanError, match=r"outside the camera's view \(at the height of its top face it sees about x 221 to 779 mm"):
+    with pytest.raises(
+        PlanError, match=r"outside the camera's view \(at the height of its top face it sees about x 221 to 779 mm"
+    ):
         check_plan([target], view=VIEW)
 
 

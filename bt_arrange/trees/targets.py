@@ -19,6 +19,7 @@ from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Gripper
+from bt_arrange.suggest import did_you_mean
 
 CORRECT_MODES = ("each", "after_all")
 #: The yaw error (degrees) the correction loop leaves by default.
@@ -72,7 +73,11 @@ def validate_targets(
         if not isinstance(target.object_type, ObjectType):
             raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
         if target.colour not in known:
-            raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
+            raise PlanError(
+                f"target {index}: unknown colour {target.colour!r}{did_you_mean(target.colour, known)}; "
+                f"known colours: {', '.join(known)}",
+                parts=(("target", target.obj),),
+            )
         if target.obj in names:
             first_index = names[target.obj]
             hint = (
@@ -81,7 +86,8 @@ def validate_targets(
                 else ""
             )
             raise PlanError(
-                f"targets {first_index} and {index} are both named {target.obj!r}{hint}", parts=(("target", target.obj),)
+                f"targets {first_index} and {index} are both named {target.obj!r}{hint}",
+                parts=(("target", target.obj),),
             )
         names[target.obj] = index
         seen = type_of_colour.get(target.colour)
@@ -89,7 +95,7 @@ def validate_targets(
             raise PlanError(
                 f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
                 f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type",
-                parts=(("target", plan[seen[1] - 1].obj), ("target", target.obj)),
+                parts=(("target", str(getattr(plan[seen[1] - 1], "obj", ""))), ("target", target.obj)),
             )
         type_of_colour.setdefault(target.colour, (target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]

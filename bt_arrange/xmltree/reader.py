@@ -17,6 +17,7 @@ from typing import Any, NoReturn
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, PortValueError, XmlTreeError
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.xmltree.registry import REGISTRY, NodeModel
 from bt_arrange.xmltree.writer import FORMAT_VERSION
 
@@ -138,7 +139,11 @@ class _Reader:
             return self._subtree(element, entered)
         model = REGISTRY.get(element.tag)
         if model is None:
-            self.fail(element, f"<{element.tag}> is not a registered node (known: {', '.join(sorted(REGISTRY))})")
+            self.fail(
+                element,
+                f"<{element.tag}> is not a registered node{did_you_mean(element.tag, REGISTRY)} "
+                f"(known: {', '.join(sorted(REGISTRY))})",
+            )
         assert model is not None
         name = element.attributes.get("name") or element.tag
         values = self._values(element, model, name)
@@ -169,7 +174,10 @@ class _Reader:
             port = ports.get(attribute)
             if port is None:
                 known = ", ".join(ports) or "none"
-                self.fail(element, f"<{element.tag}> has no port {attribute!r} (its ports: {known})")
+                self.fail(
+                    element,
+                    f"<{element.tag}> has no port {attribute!r}{did_you_mean(attribute, ports)} (its ports: {known})",
+                )
             assert port is not None
             if re.fullmatch(r"\s*\{.*\}\s*", text):
                 self.fail(
@@ -192,7 +200,11 @@ class _Reader:
     def _subtree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
         subtree_id = element.attributes.get("ID", "")
         if subtree_id not in self.trees:
-            self.fail(element, f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file")
+            self.fail(
+                element,
+                f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file"
+                f"{did_you_mean(subtree_id, self.trees)}",
+            )
         if subtree_id in entered:
             self.fail(element, f"<SubTree ID={subtree_id!r}> includes itself")
         extra = set(element.attributes) - {"ID", "name"} - METADATA_ATTRIBUTES
