@@ -42,6 +42,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.filelimits import MAX_COLOURS, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.suggest import did_you_mean
@@ -159,15 +160,15 @@ def load(path: str | Path) -> Plan:
     """Read and check the plan file at ``path``; a ``PlanError`` names the file, the entry and the problem."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_limited(path, "plan file", PlanError)
     except FileNotFoundError:
         raise PlanError(f"plan file {path} not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise PlanError(f"cannot read plan file {path}: {error}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise PlanError(f"{path}: not TOML: {error}") from None
+    except RecursionError:
+        raise PlanError(f"{path}: not TOML a plan can hold: its arrays or tables nest too deep") from None
     plan = _Reader(path).read(data)
     plan.create_root()  # every check of the tree builder (reach, layout, thresholds) now, before anything moves
     return plan
@@ -274,6 +275,11 @@ class _Reader:
         colours = DEFAULT_COLOUR_TABLE
         if not isinstance(table, dict):
             raise self.fail("[colours]", f"must be a table of colours, got {_shown(table)}")
+        if len(table) > MAX_COLOURS:
+            raise self.fail(
+                "[colours]",
+                f"{len(table)} colours, over the limit of {MAX_COLOURS} (bt_arrange.filelimits.MAX_COLOURS)",
+            )
         for name, entry in table.items():
             where = f"[colours.{name}]"
             self.keys(entry, COLOUR_KEYS, where)
@@ -356,6 +362,11 @@ class _Reader:
 
         if not isinstance(entries, list) or not entries:
             raise self.fail("[[targets]]", "must be a list of targets with at least one entry")
+        if len(entries) > MAX_TARGETS:
+            raise self.fail(
+                "[[targets]]",
+                f"{len(entries)} targets, over the limit of {MAX_TARGETS} (bt_arrange.filelimits.MAX_TARGETS)",
+            )
         read = [self.entry(entry, f"[[targets]] {i}", types, colours) for i, entry in enumerate(entries, start=1)]
         counts: dict[str, int] = {}
         for _, colour, *_ in read:
@@ -381,6 +392,11 @@ class _Reader:
         entries = table["starts"]
         if not isinstance(entries, list):
             raise self.fail("[[scene.starts]]", "must be a list of starts")
+        if len(entries) > MAX_TARGETS:
+            raise self.fail(
+                "[[scene.starts]]",
+                f"{len(entries)} starts, over the limit of {MAX_TARGETS} (bt_arrange.filelimits.MAX_TARGETS)",
+            )
         # A start without a name takes the name of the next target of its kind, in order.
         names_by_kind: dict[tuple[str, str], list[str]] = {}
         for target in targets:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, TreeFileError
+from bt_arrange.filelimits import check_tree_size
 from bt_arrange.suggest import nearest
 
 #: What a tree file may be; and how many files of its folder are looked at for a suggestion.
@@ -115,10 +116,13 @@ def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behavio
         root = create_root(**kwargs)
     except BtArrangeError:
         raise
+    except RecursionError as error:
+        raise TreeFileError(f"create_root() in {where} failed: the tree nests too deep for Python") from error
     except Exception as error:
         raise TreeFileError(f"create_root() in {where} failed: {type(error).__name__}: {error}") from error
     if not isinstance(root, py_trees.behaviour.Behaviour):
         raise TreeFileError(f"create_root() in {where} returned {type(root).__name__}, not a py_trees behaviour")
+    check_tree_size(root, f"create_root() in {where}")
     return root
 
 

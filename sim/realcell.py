@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_arrange.errors import PlanError
+from bt_arrange.filelimits import read_limited
 from bt_arrange.suggest import did_you_mean
 
 #: Where the hand-eye fit samples the arm's error: the trials' target area and the scatter area.
@@ -398,11 +399,13 @@ def load_toml(path: Path | str) -> RealCellErrors:
     """Errors from a TOML file; a ``PlanError`` for a missing, unreadable or malformed one."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
+        text = read_limited(path, "cell file", PlanError)
+    except FileNotFoundError as error:
         raise PlanError(f"cannot read cell file {path}: {error.strerror or error}") from error
     try:
         data = _toml_module().loads(text)
+    except RecursionError:
+        raise PlanError(f"cell file {path} is not TOML a cell file can hold: it nests too deep") from None
     except Exception as error:  # tomllib.TOMLDecodeError; one line, whatever the parser says
         raise PlanError(f"cell file {path} is not valid TOML: {error}") from error
     return from_mapping(data, where=f"cell file {path}")
