@@ -128,6 +128,9 @@ class Plan:
             entries[("start", start.name or start.colour)] = f"[[scene.starts]] {index}"
         for name in self.raw.get("colours", {}) if isinstance(self.raw.get("colours"), dict) else ():
             entries[("colour", name)] = f"[colours.{name}]"
+        for name in self.object_types:
+            if name != "cube":
+                entries[("object", name)] = f"[objects.{name}]"
         return PlanSource(str(self.path), entries)
 
     def create_scene(self, seed: int | None = None, backend: Backend | None = None) -> list[ObjectStart]:

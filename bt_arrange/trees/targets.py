@@ -99,6 +99,13 @@ def validate_targets(
             )
         type_of_colour.setdefault(target.colour, (target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]
+    for target in checked:
+        problem = target.object_type.mass_problem(settings)
+        if problem is not None:
+            raise PlanError(
+                f"target {target.obj}: a {target.object_type.name} of {problem}",
+                parts=(("object", target.object_type.name), ("target", target.obj)),
+            )
     kinematics = kinematics or ArmKinematics()
     for target in checked:
         grasp_m, approach_m, _ = settings.tcp_heights_m(target.object_type.shape)
