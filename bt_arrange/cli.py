@@ -261,11 +261,11 @@ def _print_experiment(experiment: Experiment, summary: list[dict[str, Any]], out
     print(experiment.markdown_table(summary), end="")
     if any("folder" in row for row in summary):
         print(
-            f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
+            f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
             f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
         )
     else:
-        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {out}")
+        print(f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in {out}")
 
 
 def _experiment(args: argparse.Namespace) -> int:
