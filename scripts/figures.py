@@ -38,6 +38,7 @@ def _json(*argv: str) -> dict:
 
 
 def cell() -> list[str]:
+    """The README's pick-and-place row."""
     source = "python benchmarks/cell.py --trials 50 --seed 0 --json"
     data = _json("benchmarks/cell.py", "--trials", "50", "--seed", "0", "--json")
     placed = data["placed_error_mm"]
@@ -48,6 +49,7 @@ def cell() -> list[str]:
 
 
 def four_cubes() -> list[str]:
+    """The README's four-cube row."""
     source = "bt-arrange run trees/four_cubes.py --seed 0"
     data = _json("run", "trees/four_cubes.py", "--seed", "0", "--json")
     objects = data["objects"]
@@ -65,6 +67,7 @@ def four_cubes() -> list[str]:
 
 
 def pick_error() -> list[str]:
+    """The README's 2 cm pick error row."""
     source = "python benchmarks/pick_error.py"
     data = _json("benchmarks/pick_error.py", "--json")
     return [
@@ -74,6 +77,7 @@ def pick_error() -> list[str]:
 
 
 def perception() -> list[str]:
+    """The README's cube detection row."""
     source = "python benchmarks/perception.py --poses 100 --seed 0 --json"
     data = _json("benchmarks/perception.py", "--poses", "100", "--seed", "0", "--json")
     xy, yaw = data["xy_error_mm"], data["yaw_error_deg"]
@@ -84,6 +88,7 @@ def perception() -> list[str]:
 
 
 def plan_limits() -> list[str]:
+    """docs/plans.md's colours, usable area and part limits."""
     return [*_run("scripts/plan_limits.py").rstrip().splitlines(), "  [python scripts/plan_limits.py]"]
 
 
@@ -97,6 +102,7 @@ DENSE_RUNS = (
 
 
 def dense() -> list[str]:
+    """docs/dense.md's tables."""
     lines = ["docs/dense.md: worst final offset per seed (truth); smallest gap at the end; most moved by a later step"]
     for label, tree, seeds, inject in DENSE_RUNS:
         argv = ["benchmarks/dense.py", tree, "--seeds", *seeds, *(["--inject", inject] if inject else [])]
@@ -117,6 +123,7 @@ def _summary(folder: Path) -> list[dict]:
 
 
 def table1() -> list[str]:
+    """The README's Table 1 row."""
     source = "bt-arrange experiment --trials 100 --workers 2"
     with tempfile.TemporaryDirectory() as out:
         _run("experiment", "--trials", "100", "--workers", "2", "--out", out)
@@ -132,6 +139,7 @@ def table1() -> list[str]:
 
 
 def real_cell() -> list[str]:
+    """The README's real cell row."""
     rows = "system,translation,orientation"
     lines = []
     for extra, label in (((), "paper strategy, 1 mm"), (("--strategy", "diagonal", "--threshold-mm", "0.5"), "ours")):

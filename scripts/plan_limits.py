@@ -23,6 +23,7 @@ STEP_MM = 25
 
 
 def colours() -> None:
+    """The built-in colours and their paint."""
     print("built-in colours (name: paint rgb; hue range deg; saturation; value)")
     for name in DEFAULT_COLOUR_TABLE.names:
         colour = DEFAULT_COLOUR_TABLE[name]
@@ -37,6 +38,7 @@ def colours() -> None:
 
 
 def usable_area() -> None:
+    """The usable area of the table, as a picture."""
     settings = ManipulationSettings()
     kinematics = ArmKinematics()
     view = CameraConfig().view()
@@ -83,6 +85,7 @@ def usable_area() -> None:
 
 
 def parts() -> None:
+    """The part sizes and masses a plan may ask for."""
     settings = ManipulationSettings()
     gripper = ROBOTIQ_2F85
     print("parts (cuboids):")
@@ -103,6 +106,7 @@ def parts() -> None:
 
 
 def main() -> None:
+    """Print everything."""
     colours()
     print()
     usable_area()
