@@ -354,7 +354,7 @@ def from_mapping(data: Mapping[str, Any], where: str = "cell file") -> RealCellE
                 f"the keys are {', '.join(sorted(known_top))}"
             )
     preset = data.get("preset", "ideal")
-    if preset not in PRESETS:
+    if not isinstance(preset, str) or preset not in PRESETS:
         raise PlanError(f"{where}: preset {preset!r} is not one of {', '.join(PRESETS)}{did_you_mean(preset, PRESETS)}")
     errors = PRESETS[preset]()
     changes: dict[str, Any] = {}
