@@ -261,7 +261,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
     has_truth = getattr(report, "ground_truth", True)
     truth_columns = (4, 6) if not has_truth else ()
     rows: list[tuple[str, ...]] = [
-        ("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+        ("object", "target x, y (mm), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
     ]
     for o in report.objects:
         x, y, yaw = o.target
@@ -269,7 +269,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
         rows.append(
             (
                 o.name,
-                f"{x:.3f}, {y:.3f}, {math.degrees(yaw):.1f}",
+                f"{x * 1000:.1f}, {y * 1000:.1f}, {math.degrees(yaw):.1f}",
                 mm(o.placed_offset_mm),
                 mm(o.final_offset_mm),
                 mm(o.final_offset_truth_mm),
@@ -304,7 +304,9 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
     ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
     if report.objects:
         within = sum(o.status == "within" for o in report.objects)
-        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm; "
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f" and {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm{yaw_text}; "
     else:
         verdict = ""
     # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
@@ -365,11 +367,11 @@ def _print_experiment(
         print(f"the record in {out} is incomplete (the line on stderr says which file and why)")
     elif any("folder" in row for row in summary):
         print(
-            f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
+            f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
             f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
         )
     else:
-        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {out}")
+        print(f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in {out}")
 
 
 def _experiment(args: argparse.Namespace) -> int:

@@ -81,6 +81,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.yaw_threshold_deg = None if yaw_threshold_deg is None else float(yaw_threshold_deg)
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
+        #: The key it cannot judge without, and who writes it (``bt_arrange.keycheck``).
+        self.required_reads: dict[str, str] = {offset_key: f"an Inspect{'' if self.obj is None else ' of ' + self.obj}"}
         if self.yaw_key is not None:
             self.blackboard.register_key(self.yaw_key, access=Access.READ)
         if corrections_key is not None:

@@ -39,7 +39,25 @@ class BtArrangeError(Exception):
 
 
 class PlanError(BtArrangeError, ValueError):
-    """An arrangement plan or a target is malformed or cannot be carried out."""
+    """An arrangement plan or a target is malformed or cannot be carried out.
+
+    ``parts`` names what the error is about, as ``(role, name)`` pairs: ``("target", "red")``,
+    ``("start", "red")``, ``("colour", "teal")``; a plan file turns them into its entries
+    (``[[targets]] 3``, ``[colours.teal]``, ``bt_arrange.plancheck.in_plan``).
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        parts: tuple[tuple[str, str], ...] = (),
+        field: str | None = None,
+        value: Any = None,
+        limit: Any = None,
+        unit: str | None = None,
+    ) -> None:
+        super().__init__(message, field=field, value=value, limit=limit, unit=unit)
+        self.parts = tuple(parts)
 
 
 class OutOfRangeError(BtArrangeError, ValueError):

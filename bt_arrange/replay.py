@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import html
 import json
 import os
+import re
 import shutil
 import subprocess
 from collections.abc import Iterator
@@ -142,15 +144,19 @@ class ReplayRecorder:
             "images": images,
             "moments": self.moments(),
         }
-        # "</" would end the <script> element early: JSON allows "<\/" for it.
-        data = json.dumps(payload, allow_nan=False).replace("</", "<\\/")
-        page = _PAGE.replace("__TITLE__", _html_escape(title)).replace("__DATA__", data)
+        # Every "<" of the data as "\u003c" (JSON's own escape): no "</script>" or "<!--" can end or
+        # change the <script> element, whatever a name or a feedback message holds.
+        data = json.dumps(payload, allow_nan=False).replace("<", "\\u003c")
+        # One pass over the page's markers: a value inserted is never searched for another marker
+        # (a tree named "__DATA__" stays its name).
+        values = {"__TITLE__": _html_escape(title), "__DATA__": data}
+        page = re.sub("__TITLE__|__DATA__", lambda match: values[match.group(0)], _PAGE)
         path.parent.mkdir(parents=True, exist_ok=True)
         return files.write_text(path, page)  # whole or not at all: never a page cut short
 
 
 def _html_escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+    return html.escape(text, quote=True)
 
 
 def status_at(transitions: list[dict[str, Any]], time_s: float) -> dict[str, str]:

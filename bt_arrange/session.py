@@ -47,6 +47,7 @@ from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
@@ -192,8 +193,16 @@ class SessionReport:
     def to_dict(self) -> dict:
         """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
         data = {
-            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
-            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            # target is [x_m, y_m, yaw_rad]; target_mm and target_yaw_deg repeat it in a plan's units (mm, degrees),
+            # as the table shows it.
+            "objects": [
+                {
+                    **asdict(o),
+                    "target_mm": [round(o.target[0] * 1000, 3), round(o.target[1] * 1000, 3)],
+                    "target_yaw_deg": round(math.degrees(o.target[2]), 3),
+                }
+                for o in self.objects
+            ],
             "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "yaw_threshold_deg": self.yaw_threshold_deg,
@@ -248,17 +257,24 @@ class Session:
         #: The colour table of the plan: the world paints with it and the camera's detector reads it.
         self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
         if isinstance(root, Arrangement):
-            check_plan(
-                root.targets,
-                threshold_mm=root.threshold_mm,
-                starts=scene,
-                view=view,
-                colours=self.colours,
-                settings=settings,
-            )
-            check_colours_apart(root.targets, self.colours)
+            try:
+                check_plan(
+                    root.targets,
+                    threshold_mm=root.threshold_mm,
+                    starts=scene,
+                    view=view,
+                    colours=self.colours,
+                    settings=settings,
+                )
+                check_colours_apart(root.targets, self.colours)
+            except PlanError as error:
+                # A plan file's errors name its file and entries ([[targets]] 3, [colours.teal]).
+                if root.source is None:
+                    raise
+                raise root.source.locate(error) from error
         else:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
+        check_keys(root)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
         self.root = root
         #: Every node of the tree by its id (as text): transitions name their node by it.
@@ -492,14 +508,23 @@ class Session:
         return outcomes
 
     def _last_failure(self, transitions: list[Transition], obj: str) -> str:
-        """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
-        for transition in reversed(transitions):
-            if transition.new != Status.FAILURE.value:
-                continue
+        """Why ``obj`` was not finished: the first real cause, not the last symptom.
+
+        Among the behaviours of ``obj`` (``REASON_TYPES``), the first failure after the last success:
+        a Place that found no target, not the Detect that then looked for a part still in the pads.
+        """
+        ended = []
+        for transition in transitions:
             node = self.node(transition)
-            if isinstance(node, REASON_TYPES) and object_of(node) == obj:
-                return transition.feedback
-        return ""
+            if transition.new in (Status.SUCCESS.value, Status.FAILURE.value) and isinstance(node, REASON_TYPES):
+                if object_of(node) == obj:
+                    ended.append(transition)
+        last_success = max((i for i, t in enumerate(ended) if t.new == Status.SUCCESS.value), default=-1)
+        failures = [t for t in ended[last_success + 1 :] if t.new == Status.FAILURE.value]
+        if failures:
+            return failures[0].feedback
+        earlier = [t for t in ended if t.new == Status.FAILURE.value]
+        return earlier[-1].feedback if earlier else ""
 
     def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
         """Within only when the offset and (with a yaw threshold) the yaw error are under their thresholds."""
@@ -536,8 +561,33 @@ def check_colours_apart(targets: Iterable[Target], colours: ColourTable) -> None
             if other != name and colours[name].contains_rgb(colours[other].paint_rgb):
                 raise PlanError(
                     f"colours {name!r} and {other!r} of the plan overlap: {name}'s range holds {other}'s paint "
-                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart"
+                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart: "
+                    f"{_colours_apart_text(colours[name], colours[other])}",
+                    parts=(("colour", name), ("colour", other)),
                 )
+
+
+def _colours_apart_text(holder: Any, held: Any) -> str:
+    """How far ``held``'s paint must move (in hue degrees) to leave ``holder``'s range: the fix of an overlap."""
+    import colorsys
+
+    hue_deg = colorsys.rgb_to_hsv(*held.paint_rgb)[0] * 360.0
+    ranges = [(low, high) for low, high in holder.hue_ranges_deg if low <= hue_deg <= high]
+    if not ranges:
+        return f"give {held.name} a paint outside {holder.name}'s saturation and value ranges"
+    low, high = ranges[0]
+    if len(holder.hue_ranges_deg) == 2 and holder.hue_ranges_deg[0][0] == 0.0:  # a range across hue 0
+        low_end, high_end = holder.hue_ranges_deg[1][0] - 360.0, holder.hue_ranges_deg[0][1]
+        folded = hue_deg - 360.0 if hue_deg > high_end else hue_deg
+        shift = min(folded - low_end, high_end - folded)
+        shown = f"{holder.hue_ranges_deg[1][0]:.0f}..360 and 0..{high_end:.0f}"
+    else:
+        shift = min(hue_deg - low, high - hue_deg)
+        shown = f"{low:.0f}..{high:.0f}"
+    return (
+        f"{held.name}'s paint has hue {hue_deg:.0f} deg, inside {holder.name}'s hue range {shown} deg; move "
+        f"{held.name}'s hue at least {shift + 1:.0f} deg away (its rgb, or hue_deg) or narrow {holder.name}'s range"
+    )
 
 
 def prepare_record_dir(path: Path | str) -> Path:

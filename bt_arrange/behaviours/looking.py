@@ -313,7 +313,7 @@ class Inspect(Detect):
     ) -> None:
         super().__init__(name, obj, colour, object_type, kind_targets)
         self.after_placing = after_placing
-        self.reads(keys.key(obj, keys.TARGET))
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM), keys.key(obj, keys.YAW_ERROR_DEG))
         if after_placing:
             self.writes(keys.key(obj, keys.PLACED_OFFSET_MM), keys.key(obj, keys.PLACED_YAW_ERROR_DEG))

@@ -92,9 +92,9 @@ class Pick(StagedBehaviour):
         #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
         self.object_type = object_type or CUBE
         self.grasp = grasp
-        self.reads(keys.key(obj, keys.POSE))
+        self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
         if grasp is not None:
-            self.reads(keys.key(obj, keys.TARGET))
+            self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
         #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.

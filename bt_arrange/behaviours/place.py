@@ -71,9 +71,9 @@ class Place(StagedBehaviour):
         self.object_type = object_type or CUBE
         self.release = release
         self.where = where
-        self.reads(keys.key(obj, keys.TARGET))
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if where == "pick":
-            self.reads(keys.key(obj, keys.POSE))
+            self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""

@@ -119,7 +119,8 @@ class Push(StagedBehaviour):
         if towards is not None and any(d not in DIRECTIONS for d in towards):
             raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
         self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
-        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.OFFSET_XY_MM), written_by=f"Inspect of {obj}")
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if yaw_threshold_deg is not None:
             self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
         # Push reads the axis it alternates from and writes the next one.

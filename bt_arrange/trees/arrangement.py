@@ -223,6 +223,8 @@ class Arrangement(py_trees.composites.Sequence):
         self.colours = colours if colours is not None else DEFAULT_COLOUR_TABLE
         #: The handling settings the plan was checked and built with: the run's context uses them too.
         self.settings = settings if settings is not None else ManipulationSettings()
+        #: Where the plan was written (a plan file's ``PlanSource``), so the run's checks name its entries; or None.
+        self.source: Any = None
 
 
 def arrangement(

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import ObjectType, built_in_type
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import check_threshold
 from bt_arrange_sim.experiment.rows import ROWS
 
@@ -99,7 +100,7 @@ def parse_rows(text: str) -> list[str]:
         raise PlanError(f"--rows is empty; choose from {', '.join(ROWS)}")
     for row in rows:
         if row not in ROWS:
-            raise PlanError(f"unknown row {row!r}; the rows are {', '.join(ROWS)}")
+            raise PlanError(f"unknown row {row!r}{did_you_mean(row, ROWS)}; the rows are {', '.join(ROWS)}")
     return list(dict.fromkeys(rows))
 
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from bt_arrange import files
 from bt_arrange_sim.experiment.options import Combination, cell_label
-from bt_arrange_sim.experiment.rows import PAPER_SIMULATION_MM, ROW_LABELS
+from bt_arrange_sim.experiment.rows import PAPER_REAL_MM, PAPER_SIMULATION_MM, ROW_LABELS
 
 
 def campaign_rows(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path]) -> list[dict]:
@@ -115,9 +115,11 @@ def _threshold(row: dict) -> float:
 
 
 def summarise(records: list[dict], rows: list[str]) -> list[dict]:
-    """One row of Table 1 per experiment row, with the paper's simulated values beside it.
+    """One row of Table 1 per experiment row, with the paper's values beside it.
 
-    Errored trials (``status = "error"``: no measurement) are counted apart, in ``errored_trials``.
+    The paper's simulated column, or its real robot's for trials in a model of the real cell
+    (``--cell real``); ``paper_column`` says which. Errored trials (``status = "error"``: no
+    measurement) are counted apart, in ``errored_trials``.
     """
     summary = []
     for row in rows:
@@ -126,7 +128,8 @@ def summarise(records: list[dict], rows: list[str]) -> list[dict]:
         placed = np.array([r["placed_mm"] for r in mine if r["placed_mm"] is not None])
         pushed = np.array([r["pushed_mm"] for r in mine if r["pushed_mm"] is not None])
         pushed_truth = np.array([r["pushed_truth_mm"] for r in mine if r["pushed_mm"] is not None])
-        paper = PAPER_SIMULATION_MM.get(row, (None, None, None, None))
+        real = bool(mine) and all(r.get("cell", "ideal") != "ideal" for r in mine)
+        paper = (PAPER_REAL_MM if real else PAPER_SIMULATION_MM).get(row, (None, None, None, None))
         summary.append(
             {
                 "row": row,
@@ -149,6 +152,7 @@ def summarise(records: list[dict], rows: list[str]) -> list[dict]:
                 "paper_placed_std_mm": paper[1],
                 "paper_pushed_mean_mm": paper[2],
                 "paper_pushed_std_mm": paper[3],
+                "paper_column": "real robot" if real else "simulation",
             }
         )
     return summary
@@ -231,9 +235,10 @@ def _table(summary: list[dict]) -> str:
             f"\n{errored} trial(s) errored and are not counted above "
             "(trials.jsonl gives each one's reason; --resume reruns them)."
         )
+    columns = sorted({s.get("paper_column", "simulation") for s in summary})
     return (
         "Offsets Δd_xy in mm, mean ± std, measured by the top camera (as in the paper); ground truth from the "
-        "simulator. Paper: Table 1 a), simulation.\n\n" + "\n".join(lines) + "\n"
+        f"simulator. Paper: Table 1, {' and '.join(columns)} column.\n\n" + "\n".join(lines) + "\n"
     )
 
 
@@ -258,18 +263,26 @@ def plot_fig4(records: list[dict], rows: list[str], path: Path) -> None:
         if all(data):
             ax.boxplot(
                 data,
-                tick_labels=["after\nplacing", "after\npushing"],
+                tick_labels=[f"after\nplacing\nn = {len(data[0])}", f"after\npushing\nn = {len(data[1])}"],
                 showmeans=True,
                 patch_artist=True,
                 medianprops={"color": "white", "linewidth": 2},
                 meanprops={"marker": "o", "markerfacecolor": "black", "markeredgecolor": "black"},
                 boxprops={"facecolor": "tab:blue"},
             )
+        thresholds = sorted({float(r["threshold_mm"]) for r in mine if r.get("threshold_mm") is not None})
+        for threshold in thresholds:
+            ax.axhline(threshold, color="tab:red", linestyle="--", linewidth=1, label=f"threshold {threshold:g} mm")
+        if thresholds:
+            ax.legend(loc="upper right", fontsize=7)
         ax.set_yscale("log")
         ax.set_title(ROW_LABELS[row].replace(" (substitute", "\n(substitute"), fontsize=9)
         ax.grid(True, axis="y", which="both", alpha=0.3)
     axes[0][0].set_ylabel("offset Δd_xy [mm] (camera)")
-    fig.suptitle("Offsets after placing and after pushing\n(white line: median, black dot: mean)", fontsize=10)
+    fig.suptitle(
+        "Offsets after placing and after pushing\n(white line: median, black dot: mean, n: trials per box)",
+        fontsize=10,
+    )
     fig.tight_layout()
     files.save_figure(fig, path, dpi=120)
     plt.close(fig)
