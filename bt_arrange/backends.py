@@ -82,6 +82,10 @@ class RunSession(Protocol):
     """One tree on one world, as a context manager: ``with backend.open_run(...) as run: run.run()``."""
 
     tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], object]]
+    #: Called with every status change (a ``bt_arrange.runner.Transition``), e.g. by the Groot2 publisher.
+    transition_hooks: list[Callable[[Any], object]]
+    #: Called with the runner before the first tick (``--groot-wait-s`` waits there).
+    runner_hooks: list[Callable[[Any], object]]
 
     def elapsed_s(self) -> float:
         """World time since the tree started."""

@@ -102,3 +102,8 @@ def whole_number(
             limit=minimum,
         )
     return int(value)
+
+
+def at_mm(x_m: float, y_m: float) -> str:
+    """A point on the table as a plan file writes it: ``x 450 mm, y 50 mm``."""
+    return f"x {x_m * 1000:.0f} mm, y {y_m * 1000:.0f} mm"

@@ -2,6 +2,7 @@
 
     bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--gui] [--live] [--record DIR] [--json]
+                   [--groot [PORT]] [--groot-wait-s S] [--groot-bind ADDR] [--pace F]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
@@ -13,13 +14,16 @@
     bt-arrange info
 
 Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
-tree-file or plan error (a one-line message, never a traceback), 130 when interrupted, 141 when
-the reader of the output went away (``| head``), 143 when terminated (SIGTERM).
+tree-file or plan error (a one-line message, never a traceback), 3 when the run finished but its
+record did not (a file of ``--record``/``--out`` could not be written: one line naming it, the results
+printed as usual), 130 when interrupted, 141 when the reader of the output went away (``| head``),
+143 when terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -34,14 +38,19 @@ import numpy as np
 
 from bt_arrange import backends, treefile
 from bt_arrange.backends import Backend, Experiment, RunReport
-from bt_arrange.errors import BackendError, BtArrangeError
+from bt_arrange.errors import BackendError, BtArrangeError, RecordError
 
 STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
 EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, EXIT_TERMINATED = 0, 1, 2, 130, 141, 143
+#: The run finished, its record did not (a contract): a recorded file could not be written.
+EXIT_RECORD = 3
 EXIT_CODES_HELP = """exit status:
   0    every object ended within the threshold (measured by the camera)
   1    an object did not (outside, failed, or the time limit stopped the run)
   2    a usage, tree-file or plan error: one line on stderr, before anything moves
+  3    the run finished, its record did not: a file of --record/--out could not be written
+       (disk full, folder removed or read-only); one line names it, the results are printed,
+       and every file is whole or absent
   130  interrupted (Ctrl-C); what was logged so far is kept
   141  the reader of the output went away (e.g. | head)
   143  terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"""
@@ -85,6 +94,44 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _groot_port(text: str) -> int:
+    """An argparse type: the Groot2 server port (the next one is its publisher socket)."""
+    from bt_arrange.groot2 import check_port
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a port number (put the tree file before --groot, or give the port)"
+        ) from None
+    try:
+        return check_port(value)
+    except BtArrangeError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _seconds_or_zero(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"{text} must be 0 or more seconds")
+    return value
+
+
+def _pace(text: str) -> float:
+    """An argparse type: a positive, finite multiple of real time."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (1 is real time)") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive multiple of real time (1 is real time)")
+    return value
+
+
 def _millimetres(text: str) -> float:
     """An argparse type: a number (the plan check decides whether a push can correct it)."""
     try:
@@ -124,6 +171,7 @@ def _info(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
+    _check_groot_options(args)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
@@ -131,33 +179,83 @@ def _run(args: argparse.Namespace) -> int:
     backend = backends.load(args.backend)
     # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
     starts = treefile.scene(module, seed, backend=backend)
-    with backend.open_run(
-        root,
-        starts,
-        gui=args.gui,
-        record_dir=args.record,
-        time_limit_s=args.time_limit_s,
-        title=Path(args.tree_file).name,
-        # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
-        **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
-        **({"calibration": args.calibration} if args.calibration is not None else {}),
-    ) as run:
+    # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
+    with (
+        _groot_publisher(root, args) as groot,
+        backend.open_run(
+            root,
+            starts,
+            gui=args.gui,
+            record_dir=args.record,
+            time_limit_s=args.time_limit_s,
+            title=Path(args.tree_file).name,
+            # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+            **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
+            **({"calibration": args.calibration} if args.calibration is not None else {}),
+        ) as run,
+    ):
+        if groot is not None:
+            run.transition_hooks.append(groot.on_transition)
+            run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
         if args.live:
             from bt_arrange.display import LiveView
 
             view = LiveView(sys.stderr if args.json else sys.stdout)
             run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.elapsed_s()))
-        report = run.run()
+        if args.pace is not None:
+            from bt_arrange.pacing import Pacer
+
+            run.tick_hooks.append(Pacer(args.pace, run.elapsed_s).tick)
+        fault: RecordError | None = None
+        try:
+            report = run.run()
+        except RecordError as error:
+            # The run finished, its record did not: the report is printed all the same, then the one line.
+            fault, report = error, error.result
         if args.live:
             view.close()
     if args.json:
         print(json.dumps(report.to_dict()))
     else:
-        _print_report(report, args)
+        _print_report(report, args, recorded=fault is None)
+    if fault is not None:
+        raise fault
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
 
 
-def _print_report(report: RunReport, args: argparse.Namespace) -> None:
+def _check_groot_options(args: argparse.Namespace) -> None:
+    if args.groot is None:
+        for option, value in (("--groot-wait-s", args.groot_wait_s), ("--groot-bind", args.groot_bind)):
+            if value is not None:
+                raise BtArrangeError(f"{option} serves a run to Groot2 only with --groot [PORT]")
+
+
+def _groot_publisher(root: Any, args: argparse.Namespace) -> Any:
+    """A context manager: the tree's Groot2 publisher (``--groot``), else None."""
+    if args.groot is None:
+        return contextlib.nullcontext(None)
+    from bt_arrange.groot2 import Groot2Publisher
+
+    publisher = Groot2Publisher(
+        root, args.groot, bind=args.groot_bind or "127.0.0.1", tree_id=Path(args.tree_file).stem
+    )
+    print(
+        f"bt-arrange: serving the tree to Groot2 on {publisher.address} "
+        f"({len(publisher.nodes)} nodes; btview snapshot -p {publisher.port})",
+        file=sys.stderr,
+    )
+    return publisher
+
+
+def _wait_for_groot(publisher: Any, wait_s: float | None) -> None:
+    if not wait_s:
+        return
+    print(f"bt-arrange: waiting up to {wait_s:g} s for a Groot2 client to fetch the tree", file=sys.stderr)
+    if not publisher.wait_for_client(wait_s):
+        print(f"bt-arrange: no Groot2 client after {wait_s:g} s; running", file=sys.stderr)
+
+
+def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool = True) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value:.2f}"
 
@@ -168,7 +266,7 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
     has_truth = getattr(report, "ground_truth", True)
     truth_columns = (4, 6) if not has_truth else ()
     rows: list[tuple[str, ...]] = [
-        ("object", "target x, y (m), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+        ("object", "target x, y (mm), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
     ]
     for o in report.objects:
         x, y, yaw = o.target
@@ -176,7 +274,7 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
         rows.append(
             (
                 o.name,
-                f"{x:.3f}, {y:.3f}, {math.degrees(yaw):.1f}",
+                f"{x * 1000:.1f}, {y * 1000:.1f}, {math.degrees(yaw):.1f}",
                 mm(o.placed_offset_mm),
                 mm(o.final_offset_mm),
                 mm(o.final_offset_truth_mm),
@@ -203,12 +301,17 @@ def _print_report(report: RunReport, args: argparse.Namespace) -> None:
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
     if args.record:
-        print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+        if recorded:
+            print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+        else:
+            print(f"the record in {args.record} is incomplete (the line on stderr says which file and why)")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
     ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
     if report.objects:
         within = sum(o.status == "within" for o in report.objects)
-        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm; "
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f" and {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm{yaw_text}; "
     else:
         verdict = ""
     # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
@@ -235,6 +338,7 @@ EXPERIMENT_OPTIONS = (
     ("executor", "local"),
     ("scheduler", None),
     ("calibration", None),
+    ("resume", False),
 )
 
 
@@ -261,15 +365,19 @@ def _experiment_options(
     return options
 
 
-def _print_experiment(experiment: Experiment, summary: list[dict[str, Any]], out: Path) -> None:
+def _print_experiment(
+    experiment: Experiment, summary: list[dict[str, Any]], out: Path, *, recorded: bool = True
+) -> None:
     print(experiment.markdown_table(summary), end="")
-    if any("folder" in row for row in summary):
+    if not recorded:
+        print(f"the record in {out} is incomplete (the line on stderr says which file and why)")
+    elif any("folder" in row for row in summary):
         print(
-            f"trials, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
+            f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in each folder of {out}; "
             f"campaign.json and thresholds.png (final offset and pushes against the threshold) in {out}"
         )
     else:
-        print(f"trials, summary.json, summary.csv, summary.md and fig4.png in {out}")
+        print(f"trials.jsonl, summary.json, summary.csv, summary.md and fig4.png in {out}")
 
 
 def _experiment(args: argparse.Namespace) -> int:
@@ -311,11 +419,11 @@ def _experiment(args: argparse.Namespace) -> int:
             **options,
         )
     except BtArrangeError as error:
-        # Trials lost (a worker died): what did finish is written and printed, then the one-line error.
-        finished = getattr(error, "summary", None)
+        # Trials that errored, or files that could not be written: the summary is printed, then the one line.
+        finished = error.result if isinstance(error, RecordError) else getattr(error, "summary", None)
         if finished:
             bar.close()
-            _print_experiment(experiment, finished, args.out)
+            _print_experiment(experiment, finished, args.out, recorded=not isinstance(error, RecordError))
         raise
     finally:
         bar.close()
@@ -529,6 +637,36 @@ def build_parser() -> argparse.ArgumentParser:
         help="a camera.toml from bt-arrange calibrate: the detector uses its intrinsics, distortion and pose "
         "(default: the cell's nominal camera)",
     )
+    run.add_argument(
+        "--groot",
+        type=_groot_port,
+        nargs="?",
+        const=1667,
+        default=None,
+        metavar="PORT",
+        help="serve the running tree to Groot2 (BehaviorTree.CPP 4's protocol) on PORT and PORT+1 "
+        "(default 1667), read-only; docs/groot2.md",
+    )
+    run.add_argument(
+        "--groot-wait-s",
+        type=_seconds_or_zero,
+        default=None,
+        metavar="S",
+        help="with --groot: wait up to S seconds of wall time for a client to fetch the tree before the first tick",
+    )
+    run.add_argument(
+        "--groot-bind",
+        default=None,
+        metavar="ADDR",
+        help="with --groot: the address to serve on (default 127.0.0.1, this machine only; 0.0.0.0 for all)",
+    )
+    run.add_argument(
+        "--pace",
+        type=_pace,
+        default=None,
+        metavar="F",
+        help="run the world at F times real time (default: as fast as it goes), e.g. 1 to watch it",
+    )
     run.set_defaults(handler=_run)
 
     calibrate = add_command(
@@ -575,7 +713,9 @@ def build_parser() -> argparse.ArgumentParser:
         "experiment",
         "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
         f"rows (--rows):\n{rows_help}\n\n"
-        "exit status: 0 done, 2 a usage error, 130 interrupted (finished trials are kept)",
+        "exit status: 0 done, 2 a usage error or trials that errored (named; --resume reruns them),\n"
+        "3 the campaign finished, its record did not (a file of --out could not be written: named),\n"
+        "130 interrupted or 143 terminated (finished trials are kept; --resume continues)",
     )
     experiment.add_argument(
         "--rows",
@@ -602,6 +742,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the campaign in --out (after Ctrl-C, SIGTERM or a kill): its recorded trials are kept, "
+        "the missing and errored ones run; refused if --out holds another specification",
     )
     add_backend(experiment)
     experiment.add_argument(
@@ -677,6 +823,9 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except RecordError as error:
+        print(f"bt-arrange: error: {error}", file=sys.stderr)
+        return EXIT_RECORD
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE

@@ -19,6 +19,7 @@ from py_trees.common import Access, Status
 
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.numbers import fixed
 from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, OFF_STRING, STRING, Port
 
 
@@ -80,6 +81,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.yaw_threshold_deg = None if yaw_threshold_deg is None else float(yaw_threshold_deg)
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
+        #: The key it cannot judge without, and who writes it (``bt_arrange.keycheck``).
+        self.required_reads: dict[str, str] = {offset_key: f"an Inspect{'' if self.obj is None else ' of ' + self.obj}"}
         if self.yaw_key is not None:
             self.blackboard.register_key(self.yaw_key, access=Access.READ)
         if corrections_key is not None:
@@ -129,7 +132,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             return Status.FAILURE
         yaw = self._yaw_error()
         yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
-        yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {yaw:+.2f} deg"
+        yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
         if offset < self.threshold_mm and yaw_within:
             self.feedback_message = (
                 f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm{yaw_text} after {self.attempts} correction(s)"

@@ -39,7 +39,25 @@ class BtArrangeError(Exception):
 
 
 class PlanError(BtArrangeError, ValueError):
-    """An arrangement plan or a target is malformed or cannot be carried out."""
+    """An arrangement plan or a target is malformed or cannot be carried out.
+
+    ``parts`` names what the error is about, as ``(role, name)`` pairs: ``("target", "red")``,
+    ``("start", "red")``, ``("colour", "teal")``; a plan file turns them into its entries
+    (``[[targets]] 3``, ``[colours.teal]``, ``bt_arrange.plancheck.in_plan``).
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        parts: tuple[tuple[str, str], ...] = (),
+        field: str | None = None,
+        value: Any = None,
+        limit: Any = None,
+        unit: str | None = None,
+    ) -> None:
+        super().__init__(message, field=field, value=value, limit=limit, unit=unit)
+        self.parts = tuple(parts)
 
 
 class OutOfRangeError(BtArrangeError, ValueError):
@@ -107,3 +125,18 @@ class DisplayError(BtArrangeError):
 
 class BackendError(BtArrangeError):
     """No backend of that name is installed, or it does not offer what the command needs."""
+
+
+class RecordError(BtArrangeError):
+    """The run finished, its record did not: a file could not be written (a full disk, a folder gone or read-only).
+
+    Raised after the work is done, so nothing measured is lost: ``result`` is what the call would
+    have returned (a run's report, a campaign's summary rows), ``faults`` the ``WriteFault``s
+    (``bt_arrange.files``: each a path and its cause). The command prints the result as usual,
+    then this one line, and exits 3. The files named are absent or as they were before, never cut short.
+    """
+
+    def __init__(self, message: str, *, faults: Any = (), result: Any = None) -> None:
+        super().__init__(message)
+        self.faults = list(faults)
+        self.result = result

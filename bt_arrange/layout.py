@@ -390,14 +390,52 @@ def check_gaps(parts: Sequence[Part], pads: Pads) -> None:
     for i, first in enumerate(parts):
         for second in parts[i + 1 :]:
             gap = gap_m(first.footprint, second.footprint)
+            both = (("target", first.name), ("target", second.name))
             if gap <= 0.0:
-                raise PlanError(f"targets {first.name} and {second.name} overlap: two parts cannot stand there")
+                raise PlanError(
+                    f"targets {first.name} and {second.name} overlap: two parts cannot stand there; "
+                    f"{_apart_text(first, second, pads)}",
+                    parts=both,
+                )
             if gap < pads.min_gap_m - 1e-9:
                 raise PlanError(
                     f"targets {first.name} and {second.name} are {gap * 1000:.1f} mm apart, under the "
                     f"{pads.min_gap_m * 1000:.0f} mm two parts need so that each can lie within the threshold "
-                    "without touching"
+                    f"without touching; {_apart_text(first, second, pads)}",
+                    parts=both,
                 )
+
+
+def centre_distance_needed_m(first: Part, second: Part, pads: Pads) -> float:
+    """How far apart the two targets' centres must be, along the line between them, for the least gap."""
+    dx, dy = second.x_m - first.x_m, second.y_m - first.y_m
+    length = math.hypot(dx, dy)
+    ux, uy = (dx / length, dy / length) if length > 1e-12 else (1.0, 0.0)
+    a = first.footprint
+    b = second.footprint
+
+    def gap_at(distance_m: float) -> float:
+        moved = Rect(a.x_m + ux * distance_m, a.y_m + uy * distance_m, b.yaw_rad, b.half_x_m, b.half_y_m)
+        return gap_m(a, moved)
+
+    low, high = 0.0, math.hypot(a.half_x_m, a.half_y_m) + math.hypot(b.half_x_m, b.half_y_m) + pads.min_gap_m
+    for _ in range(40):  # the gap grows with the distance along the line: bisect
+        middle = (low + high) / 2
+        if gap_at(middle) >= pads.min_gap_m:
+            high = middle
+        else:
+            low = middle
+    return high
+
+
+def _apart_text(first: Part, second: Part, pads: Pads) -> str:
+    distance_mm = math.hypot(second.x_m - first.x_m, second.y_m - first.y_m) * 1000
+    need_mm = centre_distance_needed_m(first, second, pads) * 1000
+    return (
+        f"their centres are {distance_mm:.1f} mm apart and must be at least {need_mm:.1f} mm apart along that "
+        f"line (their footprints and the {pads.min_gap_m * 1000:.0f} mm gap): move them "
+        f"{need_mm - distance_mm:.1f} mm further apart"
+    )
 
 
 def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence[str] | None = None) -> list[Step]:
@@ -421,7 +459,7 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
         for part in sequence:
             release, in_way = choose_release(part, placed, pads)
             if release is None:
-                raise PlanError(_no_room(part, in_way, pads, after=True))
+                raise PlanError(_no_room(part, in_way, pads, after=True), parts=_parts_of(part, in_way))
             placed.append((part.name, part.footprint))
         return _steps(sequence, pads)
 
@@ -455,8 +493,12 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
     found = search([], parts)
     if found is None:
         depth, part, in_way = max(worst, key=lambda w: w[0])
-        raise PlanError(_no_room(part, in_way, pads, after=False))
+        raise PlanError(_no_room(part, in_way, pads, after=False), parts=_parts_of(part, in_way))
     return _steps(found, pads)
+
+
+def _parts_of(part: Part, in_way: Sequence[str]) -> tuple[tuple[str, str], ...]:
+    return (("target", part.name), *(("target", name) for name in sorted(in_way)))
 
 
 def _no_room(part: Part, in_way: Sequence[str], pads: Pads, after: bool) -> str:

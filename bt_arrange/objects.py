@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 from bt_arrange.errors import PlanError
 from bt_arrange.shapes import ROBOTIQ_2F85, Cuboid, Shape
+from bt_arrange.suggest import did_you_mean
 
 
 @dataclass(frozen=True, init=False)
@@ -71,6 +73,31 @@ class ObjectType:
         x_m, y_m = self.shape.extent_m
         return (float(x_m), float(y_m), float(self.shape.height_m))
 
+    def mass_problem(self, settings: Any) -> str | None:
+        """Why the arm or the pads cannot lift this part (``settings``: ``ManipulationSettings``), naming the limit.
+
+        None when they can, or when the type gives no mass (the cell's parts are light).
+        """
+        if self.mass_kg is None:
+            return None
+        payload_kg = settings.max_payload_part_kg
+        if self.mass_kg > payload_kg:
+            return (
+                f"{self.mass_kg:g} kg is more than the arm can carry: {payload_kg:.2f} kg (the UR5's "
+                f"{settings.arm_payload_kg:g} kg payload less the gripper's {settings.gripper.mass_kg:g} kg)"
+            )
+        friction = self.lateral_friction if self.lateral_friction is not None else DEFAULT_PART_FRICTION
+        lift_kg = settings.max_lift_kg(friction)
+        if self.mass_kg > lift_kg:
+            low, high = settings.gripper.force_range_n
+            return (
+                f"{self.mass_kg:g} kg is more than the pads can lift by friction: {lift_kg:.2f} kg (two pads, "
+                f"friction {settings.gripper.pad_friction:g} x {friction:g}, grip {settings.grip_force_n:g} N, "
+                f"{settings.lift_safety:g} x to spare); a grip force up to {high:g} N "
+                f"(ManipulationSettings.grip_force_n) or a part of more friction lifts more"
+            )
+        return None
+
     @property
     def size_text(self) -> str:
         """The shape in millimetres, e.g. ``80 x 40 x 40 mm``."""
@@ -83,6 +110,11 @@ class ObjectType:
         grown = Cuboid(tuple(v + grown_m for v in self.shape.size_m))  # type: ignore[arg-type]
         return ObjectType(self.name, None, self.mass_kg, self.lateral_friction, shape=grown)
 
+
+#: A part's friction coefficient when its type gives none (the simulated cell's parts: wood on rubber pads).
+DEFAULT_PART_FRICTION = 0.5
+#: A part's mass when its type gives none (the simulated cell's 5 cm wooden cube).
+DEFAULT_PART_MASS_KG = 0.1
 
 #: The paper's 5 cm cube of hard wood (the default type).
 CUBE = ObjectType("cube", (0.05, 0.05, 0.05))
@@ -98,7 +130,9 @@ def built_in_type(name: str) -> ObjectType:
         return BUILT_IN_TYPES[name]
     except KeyError:
         known = ", ".join(sorted(BUILT_IN_TYPES))
-        raise PlanError(f"unknown object type {name!r}: the built-in types are {known}") from None
+        raise PlanError(
+            f"unknown object type {name!r}{did_you_mean(name, BUILT_IN_TYPES)}: the built-in types are {known}"
+        ) from None
 
 
 @dataclass(frozen=True)

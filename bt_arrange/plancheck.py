@@ -24,13 +24,13 @@ and plan files all call this one function.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from bt_arrange.checks import finite_number
+from bt_arrange.checks import at_mm, finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose
 from bt_arrange.layout import Pads, Rect, gap_m, start_clearance_m
@@ -41,7 +41,9 @@ from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Cuboid, folded_yaw, footprint_m, grown, min_centre_distance_m
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
+from bt_arrange.trees.targets import reach_text
 
 #: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
 #: room for a placing error and for the detector's crop around the face.
@@ -114,6 +116,38 @@ class CameraView:
         return (float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
+@dataclass(frozen=True)
+class PlanSource:
+    """Where a plan's parts were written: a file and, per ``(role, name)`` of ``PlanError.parts``, its entry.
+
+    ``locate(error)`` puts the file and the entries in front of a plan check's message
+    (``four_cubes.toml: [[targets]] 3: target blue ...``): a plan file's errors name where to fix them.
+    """
+
+    path: str
+    entries: Mapping[tuple[str, str], str]
+
+    def locate(self, error: PlanError) -> PlanError:
+        """The error with the file and its entries in front (unchanged when it names the file already)."""
+        if str(error).startswith(f"{self.path}:"):
+            return error
+        found: list[str] = []
+        for part in getattr(error, "parts", ()):
+            entry = self.entries.get(part)
+            if entry is not None and entry not in found:
+                found.append(entry)
+        where = f" {' and '.join(found)}:" if found else ""
+        located = PlanError(
+            f"{self.path}:{where} {error}",
+            parts=error.parts,
+            field=error.field,
+            value=error.value,
+            limit=error.limit,
+            unit=error.unit,
+        )
+        return located
+
+
 def _start_name(start: Any) -> str:
     return getattr(start, "name", None) or start.colour
 
@@ -149,31 +183,42 @@ def check_scene(
         if name is not None and (not isinstance(name, str) or not name):
             raise PlanError(f"cube {index} of the scene ({colour}): name={name!r} is not a non-empty string")
         if colour not in known:
-            raise PlanError(f"cube {index} of the scene: unknown colour {colour!r}; the cell knows {', '.join(known)}")
+            raise PlanError(
+                f"cube {index} of the scene: unknown colour {colour!r}{did_you_mean(colour, known)}; "
+                f"the cell knows {', '.join(known)}",
+                parts=(("start", _start_name(start)),),
+            )
         if _start_name(start) in names:
             raise PlanError(
-                f"cubes {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}"
+                f"cubes {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}",
+                parts=(("start", _start_name(start)),),
             )
         kind = object_type_of(start)
         seen = by_colour.get(colour)
         if seen is not None and seen[0] != kind:
             raise PlanError(
                 f"parts {seen[1]} and {index} of the scene are both {colour} but of types {seen[0].name!r} and "
-                f"{kind.name!r}: the camera tells parts apart by colour, so one colour is one type"
+                f"{kind.name!r}: the camera tells parts apart by colour, so one colour is one type",
+                parts=(("start", _start_name(scene[seen[1] - 1])), ("start", _start_name(start))),
             )
         names[_start_name(start)] = index
         by_colour.setdefault(colour, (kind, index))
     for index, start in enumerate(scene, start=1):
         kind = object_type_of(start)
-        where = f"cube {_start_name(start)} starts at ({start.x_m:.3f}, {start.y_m:.3f}) m"
+        where = f"cube {_start_name(start)} starts at {at_mm(start.x_m, start.y_m)}"
+        this = (("start", _start_name(start)),)
         if view is not None and not view.sees_part(start.x_m, start.y_m, start.yaw_rad, kind):
-            raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.shape.height_m)}")
+            raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.shape.height_m)}", parts=this)
         grasp_m, _, _ = settings.tcp_heights_m(kind.shape)
-        pick = gripper_down_pose(start.x_m, start.y_m, grasp_m, folded_yaw(kind.shape, start.yaw_rad))
+        yaw = folded_yaw(kind.shape, start.yaw_rad)
+        pick = gripper_down_pose(start.x_m, start.y_m, grasp_m, yaw)
         try:
             kinematics.check_reachable(pick)
         except UnreachableError as error:
-            raise PlanError(f"{where}, out of the arm's reach: {error}") from error
+            raise PlanError(
+                f"{where}, out of the arm's reach: {reach_text(kinematics, start.x_m, start.y_m, grasp_m, yaw, error)}",
+                parts=this,
+            ) from error
         for other in scene[index:]:
             distance_m = math.hypot(start.x_m - other.x_m, start.y_m - other.y_m)
             other_shape = object_type_of(other).shape
@@ -183,7 +228,9 @@ def check_scene(
                 what = "a cube's diagonal" if cubes else "their half diagonals"
                 raise PlanError(
                     f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
-                    f"closer than {what} ({least_m * 1000:.0f} mm), they would overlap"
+                    f"closer than {what} ({least_m * 1000:.0f} mm), they would overlap: move them "
+                    f"{(least_m - distance_m) * 1000:.0f} mm further apart",
+                    parts=(("start", _start_name(start)), ("start", _start_name(other))),
                 )
     return scene
 
@@ -193,8 +240,9 @@ def _view_text(view: CameraView, top_z_m: float) -> str:
     if not all(math.isfinite(v) for v in (x0, x1, y0, y1)):
         return ""
     return (
-        f" (it sees about x {x0:.2f} to {x1:.2f} m, y {y0:.2f} to {y1:.2f} m; the whole top face and "
-        f"{view.margin_m * 1000:.0f} mm around it must be in the image)"
+        f" (at the height of its top face it sees about x {x0 * 1000:.0f} to {x1 * 1000:.0f} mm, "
+        f"y {y0 * 1000:.0f} to {y1 * 1000:.0f} mm; the whole top face and {view.margin_m * 1000:.0f} mm around it "
+        "must be in the image: the usable area is drawn in docs/plans.md)"
     )
 
 
@@ -223,8 +271,9 @@ def check_plan(
             if not view.sees_part(target.x_m, target.y_m, target.yaw_rad, target.object_type):
                 height_m = target.object_type.shape.height_m
                 raise PlanError(
-                    f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is outside the camera's view"
-                    f"{_view_text(view, height_m)}: the cube could be placed there but never inspected"
+                    f"target {target.obj} at {at_mm(target.x_m, target.y_m)} is outside the camera's view"
+                    f"{_view_text(view, height_m)}: the part could be placed there but never inspected",
+                    parts=(("target", target.obj),),
                 )
     if starts is None:
         return plan
@@ -234,15 +283,21 @@ def check_plan(
         start = by_name.get(target.obj)
         if start is None:
             present = ", ".join(sorted(by_name)) or "none"
-            raise PlanError(f"target {target.obj}: no cube {target.obj!r} in the scene (the scene has {present})")
+            raise PlanError(
+                f"target {target.obj}: no cube {target.obj!r} in the scene (the scene has {present})"
+                f"{did_you_mean(target.obj, by_name)}",
+                parts=(("target", target.obj),),
+            )
         if start.colour != target.colour:
             raise PlanError(
-                f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}"
+                f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}",
+                parts=(("target", target.obj), ("start", target.obj)),
             )
         if object_type_of(start) != target.object_type:
             raise PlanError(
                 f"target {target.obj} is a {target.object_type.name} ({target.object_type.size_text}) but the "
-                f"scene's {target.obj} is a {object_type_of(start).name} ({object_type_of(start).size_text})"
+                f"scene's {target.obj} is a {object_type_of(start).name} ({object_type_of(start).size_text})",
+                parts=(("target", target.obj), ("start", target.obj)),
             )
     pads = Pads.from_settings(settings)
     for part in parts_of(plan, settings):
@@ -257,6 +312,7 @@ def check_plan(
                 raise PlanError(
                     f"cube {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
                     f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's "
-                    "footprint"
+                    f"footprint: move it {(need_m - gap) * 1000:.0f} mm further away",
+                    parts=(("start", _start_name(start)), ("target", part.name)),
                 )
     return plan

@@ -42,11 +42,15 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
+from bt_arrange.filelimits import MAX_COLOURS, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.shapes import Prism
+from bt_arrange.suggest import did_you_mean
 
 if TYPE_CHECKING:
     from bt_arrange.backends import Backend
+    from bt_arrange.plancheck import PlanSource
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -54,11 +58,13 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 TOP_KEYS = ("threshold_mm", "yaw_threshold_deg", "correct", "max_pushes", "objects", "colours", "targets", "scene")
-OBJECT_KEYS = ("size_mm", "mass_kg", "friction")
+OBJECT_KEYS = ("size_mm", "outline_mm", "height_mm", "mass_kg", "friction")
 COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
 TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name")
 SCENE_KEYS = ("seed", "starts")
 START_KEYS = TARGET_KEYS
+#: A position or a size in an ``_mm`` field below this many millimetres looks like metres (0.45 for 450).
+LOOKS_LIKE_METRES_MM = 2.0
 
 
 @dataclass
@@ -94,7 +100,7 @@ class Plan:
         from bt_arrange.trees import arrangement
 
         try:
-            return arrangement(
+            root = arrangement(
                 self.targets,
                 threshold_mm=self.threshold_mm if threshold_mm is None else threshold_mm,
                 max_pushes=self.max_pushes if max_pushes is None else max_pushes,
@@ -102,8 +108,31 @@ class Plan:
                 yaw_threshold_deg=self.yaw_threshold_deg if yaw_threshold_deg is None else yaw_threshold_deg,
                 colours=self.colours,
             )
+        except PlanError as error:
+            raise self.source.locate(error) from error
         except BtArrangeError as error:
             raise PlanError(f"{self.path}: {error}") from error
+        # The run's plan check (the camera's view, the scene, the colours) names this file's entries too.
+        root.source = self.source
+        return root
+
+    @property
+    def source(self) -> PlanSource:
+        """The file and, for each target, start and colour of the plan, its entry (``[[targets]] 3``)."""
+        from bt_arrange.plancheck import PlanSource
+
+        entries: dict[tuple[str, str], str] = {}
+        for index, target in enumerate(self.targets, start=1):
+            entries[("target", target.obj)] = f"[[targets]] {index}"
+            entries.setdefault(("colour", target.colour), f"[[targets]] {index} (colour = {_shown(target.colour)})")
+        for index, start in enumerate(self.starts or [], start=1):
+            entries[("start", start.name or start.colour)] = f"[[scene.starts]] {index}"
+        for name in self.raw.get("colours", {}) if isinstance(self.raw.get("colours"), dict) else ():
+            entries[("colour", name)] = f"[colours.{name}]"
+        for name in self.object_types:
+            if name != "cube":
+                entries[("object", name)] = f"[objects.{name}]"
+        return PlanSource(str(self.path), entries)
 
     def create_scene(self, seed: int | None = None, backend: Backend | None = None) -> list[ObjectStart]:
         """Where the parts start: the file's ``[[scene.starts]]``, or scattered from ``seed`` by ``backend``.
@@ -135,15 +164,15 @@ def load(path: str | Path) -> Plan:
     """Read and check the plan file at ``path``; a ``PlanError`` names the file, the entry and the problem."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_limited(path, "plan file", PlanError)
     except FileNotFoundError:
         raise PlanError(f"plan file {path} not found") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise PlanError(f"cannot read plan file {path}: {error}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise PlanError(f"{path}: not TOML: {error}") from None
+    except RecursionError:
+        raise PlanError(f"{path}: not TOML a plan can hold: its arrays or tables nest too deep") from None
     plan = _Reader(path).read(data)
     plan.create_root()  # every check of the tree builder (reach, layout, thresholds) now, before anything moves
     return plan
@@ -176,7 +205,7 @@ class _Reader:
             raise self.fail(where, f"must be a table, got {_shown(table)}")
         for key in table:
             if key not in known:
-                raise self.fail(where, f"unknown key {key!r} (known: {', '.join(known)})")
+                raise self.fail(where, f"unknown key {key!r}{did_you_mean(key, known)} (known: {', '.join(known)})")
         return table
 
     def number(self, value: Any, where: str, name: str, *, positive: bool = False) -> float:
@@ -224,14 +253,23 @@ class _Reader:
             self.keys(entry, OBJECT_KEYS, where)
             if name == "cube":
                 raise self.fail(where, "'cube' is built in (50 x 50 x 50 mm): name your type otherwise")
+            if "outline_mm" in entry or "height_mm" in entry:
+                types[name] = self.prism_type(name, entry, where)
+                continue
             if "size_mm" not in entry:
-                raise self.fail(where, "missing size_mm = [x, y, z]")
+                raise self.fail(where, "missing size_mm = [x, y, z] (or outline_mm = [[x, y], ...] and height_mm)")
             size = entry["size_mm"]
             if not isinstance(size, list) or len(size) != 3:
                 raise self.fail(where, f"size_mm = {_shown(size)} is not three numbers [x, y, z] in mm")
             edges = [self.number(v, where, "size_mm") for v in size]
             if min(edges) <= 0:
                 raise self.fail(where, f"size_mm = {_shown(size)} has an edge that is not positive")
+            if max(edges) < LOOKS_LIKE_METRES_MM:
+                raise self.fail(
+                    where,
+                    f"size_mm = {_shown(size)} looks like metres: the plan is in millimetres "
+                    f"(size_mm = [{', '.join(f'{v * 1000:g}' for v in edges)}])",
+                )
             mass = self.number(entry["mass_kg"], where, "mass_kg", positive=True) if "mass_kg" in entry else None
             friction = self.number(entry["friction"], where, "friction", positive=True) if "friction" in entry else None
             try:
@@ -240,10 +278,34 @@ class _Reader:
                 raise self.fail(where, str(error)) from None
         return types
 
+    def prism_type(self, name: str, entry: dict[str, Any], where: str) -> ObjectType:
+        """A part type of any simple outline: ``outline_mm = [[x, y], ...]`` and ``height_mm``."""
+        if "size_mm" in entry:
+            raise self.fail(where, "give size_mm (a cuboid) or outline_mm and height_mm (a prism), not both")
+        for key in ("outline_mm", "height_mm"):
+            if key not in entry:
+                raise self.fail(where, f"missing {key}: a prism needs outline_mm = [[x, y], ...] and height_mm")
+        outline = entry["outline_mm"]
+        if not isinstance(outline, list) or not all(isinstance(p, list) and len(p) == 2 for p in outline):
+            raise self.fail(where, f"outline_mm = {_shown(outline)} is not a list of [x, y] points in mm")
+        points = [[self.number(v, where, "outline_mm") / 1000 for v in point] for point in outline]
+        height_m = self.number(entry["height_mm"], where, "height_mm", positive=True) / 1000
+        mass = self.number(entry["mass_kg"], where, "mass_kg", positive=True) if "mass_kg" in entry else None
+        friction = self.number(entry["friction"], where, "friction", positive=True) if "friction" in entry else None
+        try:
+            return ObjectType(name, None, mass, friction, shape=Prism.from_outline(points, height_m))
+        except PlanError as error:
+            raise self.fail(where, str(error)) from None
+
     def colour_table(self, table: Any) -> ColourTable:
         colours = DEFAULT_COLOUR_TABLE
         if not isinstance(table, dict):
             raise self.fail("[colours]", f"must be a table of colours, got {_shown(table)}")
+        if len(table) > MAX_COLOURS:
+            raise self.fail(
+                "[colours]",
+                f"{len(table)} colours, over the limit of {MAX_COLOURS} (bt_arrange.filelimits.MAX_COLOURS)",
+            )
         for name, entry in table.items():
             where = f"[colours.{name}]"
             self.keys(entry, COLOUR_KEYS, where)
@@ -291,7 +353,9 @@ class _Reader:
         type_name = entry.get("object", "cube")
         if not isinstance(type_name, str) or type_name not in types:
             raise self.fail(
-                where, f"unknown object type {_shown(type_name)} (known: {', '.join(types)}; add [objects.NAME])"
+                where,
+                f"unknown object type {_shown(type_name)}{did_you_mean(type_name, types)} "
+                f"(known: {', '.join(types)}; add [objects.NAME])",
             )
         if "colour" not in entry:
             raise self.fail(where, "missing colour")
@@ -299,8 +363,8 @@ class _Reader:
         if not isinstance(colour, str) or colour not in colours:
             raise self.fail(
                 where,
-                f"unknown colour {_shown(colour)}: not in the table ({', '.join(colours.names)}) "
-                "and no [colours.NAME] with rgb",
+                f"unknown colour {_shown(colour)}{did_you_mean(colour, colours.names)}: not in the table "
+                f"({', '.join(colours.names)}) and no [colours.NAME] with rgb",
             )
         for key in ("x_mm", "y_mm"):
             if key not in entry:
@@ -308,6 +372,12 @@ class _Reader:
         x_mm = self.number(entry["x_mm"], where, "x_mm")
         y_mm = self.number(entry["y_mm"], where, "y_mm")
         yaw_deg = self.number(entry.get("yaw_deg", 0.0), where, "yaw_deg")
+        if 0.0 < max(abs(x_mm), abs(y_mm)) < LOOKS_LIKE_METRES_MM:
+            raise self.fail(
+                where,
+                f"x_mm = {_shown(entry['x_mm'])}, y_mm = {_shown(entry['y_mm'])} look like metres: the plan is in "
+                f"millimetres (x_mm = {x_mm * 1000:g}, y_mm = {y_mm * 1000:g})",
+            )
         name = entry.get("name")
         if name is not None and (not isinstance(name, str) or not name.strip() or "/" in name):
             raise self.fail(where, f"name = {_shown(name)} must be a non-empty text without '/'")
@@ -318,6 +388,11 @@ class _Reader:
 
         if not isinstance(entries, list) or not entries:
             raise self.fail("[[targets]]", "must be a list of targets with at least one entry")
+        if len(entries) > MAX_TARGETS:
+            raise self.fail(
+                "[[targets]]",
+                f"{len(entries)} targets, over the limit of {MAX_TARGETS} (bt_arrange.filelimits.MAX_TARGETS)",
+            )
         read = [self.entry(entry, f"[[targets]] {i}", types, colours) for i, entry in enumerate(entries, start=1)]
         counts: dict[str, int] = {}
         for _, colour, *_ in read:
@@ -343,6 +418,11 @@ class _Reader:
         entries = table["starts"]
         if not isinstance(entries, list):
             raise self.fail("[[scene.starts]]", "must be a list of starts")
+        if len(entries) > MAX_TARGETS:
+            raise self.fail(
+                "[[scene.starts]]",
+                f"{len(entries)} starts, over the limit of {MAX_TARGETS} (bt_arrange.filelimits.MAX_TARGETS)",
+            )
         # A start without a name takes the name of the next target of its kind, in order.
         names_by_kind: dict[tuple[str, str], list[str]] = {}
         for target in targets:

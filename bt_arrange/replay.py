@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import html
 import json
 import os
+import re
 import shutil
 import subprocess
 from collections.abc import Iterator
@@ -28,7 +30,10 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
+from bt_arrange import files
 from bt_arrange.errors import BtArrangeError
+from bt_arrange.numbers import fixed
+from bt_arrange.xmltree.registry import type_label
 
 #: Names under which Debian, Ubuntu and Google ship a Chromium-based browser.
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
@@ -55,7 +60,7 @@ def format_value(value: Any) -> str:
     if isinstance(value, bool) or value is None:
         return str(value)
     if isinstance(value, float):
-        return f"{value:.4f}"
+        return fixed(value, 4)
     if isinstance(value, (tuple, list)):
         inner = ", ".join(format_value(v) for v in value)
         return f"({inner})" if isinstance(value, tuple) else f"[{inner}]"
@@ -81,7 +86,7 @@ class ReplayRecorder:
         order = list(_preorder(self.root))
         self._behaviours = [node for node, _, _ in order]
         self.nodes = [
-            {"name": node.name, "kind": type(node).__name__, "depth": depth, "parent": parent}
+            {"name": node.name, "kind": type_label(node), "depth": depth, "parent": parent}
             for node, depth, parent in order
         ]
         self._status = [Status.INVALID] * len(order)
@@ -107,9 +112,13 @@ class ReplayRecorder:
                 self.blackboard.append({"t": time_s, "key": key, "value": text})
             self._values[key] = (value, text)
 
-    def add_image(self, time_s: float, label: str, path: Path | str) -> None:
-        """A camera image saved at ``time_s`` of world time (embedded when the page is written)."""
-        self.images.append({"t": round(time_s, 4), "label": label, "path": str(path)})
+    def add_image(self, time_s: float, label: str, path: Path | str, data: bytes | None = None) -> None:
+        """A camera image saved at ``time_s`` of world time (embedded when the page is written).
+
+        ``data`` is the PNG itself, when the caller has it: the page then does not read ``path``
+        (which a full disk may have kept from being written).
+        """
+        self.images.append({"t": round(time_s, 4), "label": label, "path": str(path), "data": data})
 
     def moments(self) -> list[float]:
         """The world times the slider stops at: every time something the page shows changed."""
@@ -123,7 +132,8 @@ class ReplayRecorder:
         path = Path(path)
         images = []
         for image in self.images:
-            data = base64.b64encode(Path(image["path"]).read_bytes()).decode("ascii")
+            png = image.get("data")
+            data = base64.b64encode(png if png is not None else Path(image["path"]).read_bytes()).decode("ascii")
             images.append({"t": image["t"], "label": image["label"], "src": f"data:image/png;base64,{data}"})
         payload = {
             "title": title,
@@ -134,16 +144,19 @@ class ReplayRecorder:
             "images": images,
             "moments": self.moments(),
         }
-        # "</" would end the <script> element early: JSON allows "<\/" for it.
-        data = json.dumps(payload, allow_nan=False).replace("</", "<\\/")
-        page = _PAGE.replace("__TITLE__", _html_escape(title)).replace("__DATA__", data)
+        # Every "<" of the data as "\u003c" (JSON's own escape): no "</script>" or "<!--" can end or
+        # change the <script> element, whatever a name or a feedback message holds.
+        data = json.dumps(payload, allow_nan=False).replace("<", "\\u003c")
+        # One pass over the page's markers: a value inserted is never searched for another marker
+        # (a tree named "__DATA__" stays its name).
+        values = {"__TITLE__": _html_escape(title), "__DATA__": data}
+        page = re.sub("__TITLE__|__DATA__", lambda match: values[match.group(0)], _PAGE)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(page, encoding="utf-8")
-        return path
+        return files.write_text(path, page)  # whole or not at all: never a page cut short
 
 
 def _html_escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+    return html.escape(text, quote=True)
 
 
 def status_at(transitions: list[dict[str, Any]], time_s: float) -> dict[str, str]:

@@ -13,13 +13,14 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import py_trees
 import py_trees.visitors
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context
+from bt_arrange.files import LineLog
 from bt_arrange.robot import Clock
 
 
@@ -27,7 +28,8 @@ from bt_arrange.robot import Clock
 class Transition:
     """One behaviour changing status, at a moment of world time.
 
-    ``behaviour`` is the node's name and ``kind`` its class name, for people reading the log;
+    ``behaviour`` is the node's name and ``kind`` its BehaviorTree.CPP type as the XML names it
+    (``ForceSuccess`` for a ``FailureIsSuccess``, ``Pick`` for a ``Pick``), for people reading the log;
     programs select by ``node_id`` (the py_trees ``Behaviour.id``, as text), which
     ``TransitionLog.node(transition)`` and ``Runner.node(transition)`` turn back into the node,
     and by ``obj``, the object the node handles (``None`` for a node of no single object).
@@ -90,7 +92,8 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         # the log looks at a few nodes every tick.
         self._last: dict[py_trees.behaviour.Behaviour, Status] = {}
         self._visited: list[py_trees.behaviour.Behaviour] = []
-        self._file: IO[str] | None = None
+        self._file: LineLog | None = None
+        self._kinds: dict[py_trees.behaviour.Behaviour, str] = {}
 
     # -- the visitor ---------------------------------------------------------------------------
 
@@ -160,7 +163,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         return Transition(
             time_s=round(time_s, 4),
             behaviour=node.name,
-            kind=type(node).__name__,
+            kind=self._kind(node),
             old=before.value,
             new=node.status.value,
             feedback=node.feedback_message,
@@ -169,21 +172,32 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             facts=facts_of(node),
         )
 
+    def _kind(self, node: py_trees.behaviour.Behaviour) -> str:
+        kind = self._kinds.get(node)
+        if kind is None:
+            from bt_arrange.xmltree import tag_of  # the XML's vocabulary (imported late: xmltree imports the trees)
+
+            kind = self._kinds[node] = tag_of(node)
+        return kind
+
     def _write(self, changes: list[Transition]) -> None:
         if self.path is None:
             return
         if self._file is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = self.path.open("w")
-        for change in changes:
-            self._file.write(change.to_json() + "\n")
-        self._file.flush()
+            self._file = LineLog(self.path)
+        # Whole lines only; a full disk stops the file at its last whole line (``fault``), the run goes on.
+        self._file.write(change.to_json() for change in changes)
+
+    @property
+    def fault(self) -> OSError | None:
+        """The error that stopped the file (a full disk, a folder gone), or None."""
+        return self._file.fault if self._file is not None else None
 
     def close(self) -> None:
         """Close the file, if one was written."""
         if self._file is not None:
             self._file.close()
-            self._file = None
 
 
 @dataclass

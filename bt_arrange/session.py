@@ -18,8 +18,9 @@ a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
-import json
+import errno
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
@@ -30,6 +31,7 @@ from typing import Any, Protocol, runtime_checkable
 import py_trees
 from py_trees.common import Access, Status
 
+from bt_arrange import files
 from bt_arrange.behaviours import (
     Context,
     Detect,
@@ -46,8 +48,9 @@ from bt_arrange.calibration.camera import CalibratedCamera
 from bt_arrange.calibration.file import CameraCalibration
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
-from bt_arrange.errors import PlanError
+from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
@@ -193,8 +196,16 @@ class SessionReport:
     def to_dict(self) -> dict:
         """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
         data = {
-            # target is [x_m, y_m, yaw_rad]; target_yaw_deg repeats the yaw in degrees, as the table shows it.
-            "objects": [{**asdict(o), "target_yaw_deg": round(math.degrees(o.target[2]), 3)} for o in self.objects],
+            # target is [x_m, y_m, yaw_rad]; target_mm and target_yaw_deg repeat it in a plan's units (mm, degrees),
+            # as the table shows it.
+            "objects": [
+                {
+                    **asdict(o),
+                    "target_mm": [round(o.target[0] * 1000, 3), round(o.target[1] * 1000, 3)],
+                    "target_yaw_deg": round(math.degrees(o.target[2]), 3),
+                }
+                for o in self.objects
+            ],
             "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "yaw_threshold_deg": self.yaw_threshold_deg,
@@ -257,17 +268,24 @@ class Session:
         #: The colour table of the plan: the world paints with it and the camera's detector reads it.
         self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
         if isinstance(root, Arrangement):
-            check_plan(
-                root.targets,
-                threshold_mm=root.threshold_mm,
-                starts=scene,
-                view=view,
-                colours=self.colours,
-                settings=settings,
-            )
-            check_colours_apart(root.targets, self.colours)
+            try:
+                check_plan(
+                    root.targets,
+                    threshold_mm=root.threshold_mm,
+                    starts=scene,
+                    view=view,
+                    colours=self.colours,
+                    settings=settings,
+                )
+                check_colours_apart(root.targets, self.colours)
+            except PlanError as error:
+                # A plan file's errors name its file and entries ([[targets]] 3, [colours.teal]).
+                if root.source is None:
+                    raise
+                raise root.source.locate(error) from error
         else:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
+        check_keys(root)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
         self.root = root
         #: Every node of the tree by its id (as text): transitions name their node by it.
@@ -297,13 +315,20 @@ class Session:
         #: What the replay page shows (recorded runs only), and its heading.
         self.replay: ReplayRecorder | None = None
         self.title = title or root.name
+        #: The recorded files that could not be written (a full disk, the folder gone); the run goes on.
+        self.faults = files.Faults()
 
     def elapsed_s(self) -> float:
         """World time since the tree started (the settling of the scene excluded), as the report counts it."""
         return self.world.clock.now() - self.start_s
 
     def run(self) -> SessionReport:
-        """Tick the tree to the end; returns the report. The world stays open for inspection."""
+        """Tick the tree to the end; returns the report. The world stays open for inspection.
+
+        A recorded file that cannot be written (a full disk, the folder removed or read-only) does
+        not stop the run: each file is whole or absent, and at the end a ``RecordError`` carries the
+        report (``result``) and names the file and the cause ("the run finished, its record did not").
+        """
         py_trees.blackboard.Blackboard.clear()
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
@@ -337,10 +362,37 @@ class Session:
             ground_truth=self.truth is not None,
         )
         if self.record_dir is not None:
-            (self.record_dir / "report.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n")
-            assert self.replay is not None
-            self.replay.write(self.record_dir / "replay.html", title=self.title, summary=report.to_dict())
+            self._finish_log(log, result.transitions)
+            replay = self.replay
+            assert replay is not None
+            ends: dict[str, Callable[[Path], object]] = {
+                "report.json": lambda path: files.write_json(path, report.to_dict()),
+                "replay.html": lambda path: replay.write(path, title=self.title, summary=report.to_dict()),
+            }
+            for name, write in ends.items():
+                path = self.record_dir / name
+                with self.faults.guard(path):
+                    if not self.record_dir.is_dir():  # removed while running: not made again behind the user's back
+                        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+                    write(path)
+        if self.faults:
+            raise RecordError(
+                f"{self.faults.message()}; the run finished, its record did not",
+                faults=self.faults.faults,
+                result=report,
+            )
         return report
+
+    def _finish_log(self, log: TransitionLog, transitions: list[Transition]) -> None:
+        """A transition log a fault stopped is written again whole; if that fails too, it is removed."""
+        if log.fault is None or log.path is None:
+            return
+        try:
+            files.write_text(log.path, "".join(t.to_json() + "\n" for t in transitions))
+        except OSError as error:
+            self.faults.add(log.path, error)
+            with contextlib.suppress(OSError):
+                log.path.unlink()  # complete or absent: never a log that ends where the disk filled
 
     def close(self) -> None:
         """Close the world."""
@@ -427,9 +479,13 @@ class Session:
         assert self.record_dir is not None
         frame = self.world.capture_image()
         path = self.record_dir / f"{stem}.png"
-        cv2.imwrite(str(path), cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
-        if self.replay is not None:
-            self.replay.add_image(self.world.clock.now(), stem.replace("_", " "), path)
+        encoded, png = cv2.imencode(".png", cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2BGR))
+        data = png.tobytes() if encoded else None
+        if data is not None:
+            with self.faults.guard(path):
+                files.write_bytes(path, data)
+        if self.replay is not None and data is not None:
+            self.replay.add_image(self.world.clock.now(), stem.replace("_", " "), path, data)
 
     # -- the report ----------------------------------------------------------------------------
 
@@ -466,14 +522,23 @@ class Session:
         return outcomes
 
     def _last_failure(self, transitions: list[Transition], obj: str) -> str:
-        """The feedback of the last failure of a behaviour of ``obj`` (the reason it was not finished)."""
-        for transition in reversed(transitions):
-            if transition.new != Status.FAILURE.value:
-                continue
+        """Why ``obj`` was not finished: the first real cause, not the last symptom.
+
+        Among the behaviours of ``obj`` (``REASON_TYPES``), the first failure after the last success:
+        a Place that found no target, not the Detect that then looked for a part still in the pads.
+        """
+        ended = []
+        for transition in transitions:
             node = self.node(transition)
-            if isinstance(node, REASON_TYPES) and object_of(node) == obj:
-                return transition.feedback
-        return ""
+            if transition.new in (Status.SUCCESS.value, Status.FAILURE.value) and isinstance(node, REASON_TYPES):
+                if object_of(node) == obj:
+                    ended.append(transition)
+        last_success = max((i for i, t in enumerate(ended) if t.new == Status.SUCCESS.value), default=-1)
+        failures = [t for t in ended[last_success + 1 :] if t.new == Status.FAILURE.value]
+        if failures:
+            return failures[0].feedback
+        earlier = [t for t in ended if t.new == Status.FAILURE.value]
+        return earlier[-1].feedback if earlier else ""
 
     def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
         """Within only when the offset and (with a yaw threshold) the yaw error are under their thresholds."""
@@ -510,8 +575,33 @@ def check_colours_apart(targets: Iterable[Target], colours: ColourTable) -> None
             if other != name and colours[name].contains_rgb(colours[other].paint_rgb):
                 raise PlanError(
                     f"colours {name!r} and {other!r} of the plan overlap: {name}'s range holds {other}'s paint "
-                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart"
+                    f"{tuple(round(v, 2) for v in colours[other].paint_rgb)}; the camera could not tell them apart: "
+                    f"{_colours_apart_text(colours[name], colours[other])}",
+                    parts=(("colour", name), ("colour", other)),
                 )
+
+
+def _colours_apart_text(holder: Any, held: Any) -> str:
+    """How far ``held``'s paint must move (in hue degrees) to leave ``holder``'s range: the fix of an overlap."""
+    import colorsys
+
+    hue_deg = colorsys.rgb_to_hsv(*held.paint_rgb)[0] * 360.0
+    ranges = [(low, high) for low, high in holder.hue_ranges_deg if low <= hue_deg <= high]
+    if not ranges:
+        return f"give {held.name} a paint outside {holder.name}'s saturation and value ranges"
+    low, high = ranges[0]
+    if len(holder.hue_ranges_deg) == 2 and holder.hue_ranges_deg[0][0] == 0.0:  # a range across hue 0
+        low_end, high_end = holder.hue_ranges_deg[1][0] - 360.0, holder.hue_ranges_deg[0][1]
+        folded = hue_deg - 360.0 if hue_deg > high_end else hue_deg
+        shift = min(folded - low_end, high_end - folded)
+        shown = f"{holder.hue_ranges_deg[1][0]:.0f}..360 and 0..{high_end:.0f}"
+    else:
+        shift = min(hue_deg - low, high - hue_deg)
+        shown = f"{low:.0f}..{high:.0f}"
+    return (
+        f"{held.name}'s paint has hue {hue_deg:.0f} deg, inside {holder.name}'s hue range {shown} deg; move "
+        f"{held.name}'s hue at least {shift + 1:.0f} deg away (its rgb, or hue_deg) or narrow {holder.name}'s range"
+    )
 
 
 def prepare_record_dir(path: Path | str) -> Path:

@@ -36,6 +36,10 @@ class ManipulationSettings:
     #: The held cube is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
     grip_force_n: float = 40.0
+    #: The arm's payload (the UR5's 5 kg): the gripper and the part it carries together.
+    arm_payload_kg: float = 5.0
+    #: The pads must hold a part with this factor to spare (``Gripper.friction_lift_kg``).
+    lift_safety: float = 2.0
     #: Opening before a grasp: the full stroke, so a cube up to 17.5 mm off along the closing axis
     #: still lands between the pads (and is dragged to the centre as they close).
     open_width_m: float = ROBOTIQ_2F85.stroke_m
@@ -93,6 +97,15 @@ class ManipulationSettings:
                 f"open width {self.open_width_m * 1000:.1f} mm must be positive "
                 f"and stay within the gripper's {self.gripper.stroke_m * 1000:.0f} mm"
             )
+
+    @property
+    def max_payload_part_kg(self) -> float:
+        """The heaviest part the arm carries: its payload less the gripper's mass."""
+        return self.arm_payload_kg - self.gripper.mass_kg
+
+    def max_lift_kg(self, part_friction: float) -> float:
+        """The heaviest part of that friction the pads lift at ``grip_force_n`` (``Gripper.friction_lift_kg``)."""
+        return self.gripper.friction_lift_kg(self.grip_force_n, part_friction, self.lift_safety)
 
     def tcp_heights_m(self, shape: Shape) -> tuple[float, float, float]:
         """(grasp, approach, push) TCP heights above the table for a part of ``shape``.

@@ -22,6 +22,12 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, TreeFileError
+from bt_arrange.filelimits import check_tree_size
+from bt_arrange.suggest import nearest
+
+#: What a tree file may be; and how many files of its folder are looked at for a suggestion.
+TREE_SUFFIXES = (".py", ".xml", ".toml")
+MAX_LISTED = 1000
 
 if TYPE_CHECKING:
     from bt_arrange.backends import Backend
@@ -35,7 +41,7 @@ def load(path: str | Path) -> ModuleType:
 
         example = examples.path_of(str(path)) if path.name == str(path) and not path.suffix else None
         if example is None:
-            raise TreeFileError(f"tree file {path} not found")
+            raise TreeFileError(f"tree file {path} not found{_nearest_file(path)}")
         path = example
     if path.suffix == ".xml":
         from bt_arrange import xmltree
@@ -69,6 +75,28 @@ def load(path: str | Path) -> ModuleType:
     return module
 
 
+def _nearest_file(path: Path) -> str:
+    """``; did you mean ...?`` for a missing tree file: the nearest file beside it, or the nearest example."""
+    from bt_arrange import examples
+
+    folder = path.parent
+    near = ""
+    if folder.is_dir():
+        try:
+            files = [p.name for p in sorted(folder.iterdir())[:MAX_LISTED] if p.suffix in TREE_SUFFIXES]
+        except OSError:
+            files = []
+        found = nearest(path.name, files)
+        if found:
+            shown = str(folder / found[0]) if str(folder) != "." else found[0]
+            near = f" (did you mean {shown!r}?)"
+    if not near and (path.name == str(path) or not path.suffix):
+        found = nearest(path.stem, examples.names())
+        if found:
+            near = f" (did you mean the example {found[0]!r}?)"
+    return f"{near}: bt-arrange examples lists the examples, bt-arrange run NAME runs one"
+
+
 def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behaviour:
     """Call the file's ``create_root`` with the options it accepts (``None`` values are left out)."""
     create_root = getattr(module, "create_root", None)
@@ -88,10 +116,13 @@ def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behavio
         root = create_root(**kwargs)
     except BtArrangeError:
         raise
+    except RecursionError as error:
+        raise TreeFileError(f"create_root() in {where} failed: the tree nests too deep for Python") from error
     except Exception as error:
         raise TreeFileError(f"create_root() in {where} failed: {type(error).__name__}: {error}") from error
     if not isinstance(root, py_trees.behaviour.Behaviour):
         raise TreeFileError(f"create_root() in {where} returned {type(root).__name__}, not a py_trees behaviour")
+    check_tree_size(root, f"create_root() in {where}")
     return root
 
 

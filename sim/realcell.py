@@ -34,6 +34,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_arrange.errors import PlanError
+from bt_arrange.filelimits import read_limited
+from bt_arrange.suggest import did_you_mean
 
 #: Where the hand-eye fit samples the arm's error: the trials' target area and the scatter area.
 WORKSPACE_X_M = (0.30, 0.66)
@@ -375,10 +377,13 @@ def from_mapping(data: Mapping[str, Any], where: str = "cell file") -> RealCellE
     known_top = {"preset", "cell_seed", "run_seed", *_TERMS}
     for key in data:
         if key not in known_top:
-            raise PlanError(f"{where}: unknown key {key!r}; the keys are {', '.join(sorted(known_top))}")
+            raise PlanError(
+                f"{where}: unknown key {key!r}{did_you_mean(key, known_top)}; "
+                f"the keys are {', '.join(sorted(known_top))}"
+            )
     preset = data.get("preset", "ideal")
-    if preset not in PRESETS:
-        raise PlanError(f"{where}: preset {preset!r} is not one of {', '.join(PRESETS)}")
+    if not isinstance(preset, str) or preset not in PRESETS:
+        raise PlanError(f"{where}: preset {preset!r} is not one of {', '.join(PRESETS)}{did_you_mean(preset, PRESETS)}")
     errors = PRESETS[preset]()
     changes: dict[str, Any] = {}
     for key in ("cell_seed", "run_seed"):
@@ -398,7 +403,9 @@ def from_mapping(data: Mapping[str, Any], where: str = "cell file") -> RealCellE
         values: dict[str, Any] = {}
         for key, value in table.items():
             if key not in names:
-                raise PlanError(f"{where}: unknown key {term}.{key}; [{term}] takes {', '.join(names)}")
+                raise PlanError(
+                    f"{where}: unknown key {term}.{key}{did_you_mean(key, names)}; [{term}] takes {', '.join(names)}"
+                )
             default = getattr(current, key)
             if isinstance(default, bool):
                 if not isinstance(value, bool):
@@ -420,11 +427,13 @@ def load_toml(path: Path | str) -> RealCellErrors:
     """Errors from a TOML file; a ``PlanError`` for a missing, unreadable or malformed one."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
+        text = read_limited(path, "cell file", PlanError)
+    except FileNotFoundError as error:
         raise PlanError(f"cannot read cell file {path}: {error.strerror or error}") from error
     try:
         data = _toml_module().loads(text)
+    except RecursionError:
+        raise PlanError(f"cell file {path} is not TOML a cell file can hold: it nests too deep") from None
     except Exception as error:  # tomllib.TOMLDecodeError; one line, whatever the parser says
         raise PlanError(f"cell file {path} is not valid TOML: {error}") from error
     return from_mapping(data, where=f"cell file {path}")
@@ -437,7 +446,9 @@ def parse_cell(text: str) -> RealCellErrors:
         return PRESETS[name]()
     if name.endswith(".toml"):
         return load_toml(name)
-    raise PlanError(f"unknown cell {name!r}: choose {' or '.join(PRESETS)}, or give a .toml file")
+    raise PlanError(
+        f"unknown cell {name!r}{did_you_mean(name, PRESETS)}: choose {' or '.join(PRESETS)}, or give a .toml file"
+    )
 
 
 def parse_cells(text: str) -> list[tuple[str, RealCellErrors]]:

@@ -76,7 +76,7 @@ def test_plan_with_a_target_out_of_reach(capsys, tmp_path):
         """,
     )
     code, _, err = run_cli(capsys, "run", path)
-    assert_one_line_error(code, err, "out of reach", "1.200")
+    assert_one_line_error(code, err, "out of reach", "x 1200 mm")
 
 
 def test_run_needs_a_scene(capsys, tmp_path):
@@ -125,7 +125,9 @@ def test_run_exits_1_and_says_so_on_the_last_line_when_an_object_is_not_within(c
     assert code == 1
     lines = out.strip().splitlines()
     assert "failed: stopped after 2 s of world time" in lines[1]
-    assert lines[-1].startswith("single_cube.py: 0 of 1 objects within 1 mm; stopped at the time limit after 2.0 s")
+    assert lines[-1].startswith(
+        "single_cube.py: 0 of 1 objects within 1 mm and 1 deg; stopped at the time limit after 2.0 s"
+    )
 
 
 def test_show_prints_the_tree_as_text(capsys):
@@ -183,6 +185,19 @@ def test_json_gives_the_target_yaw_in_degrees_too() -> None:  # item 9
     (entry,) = SimulationReport([red], "SUCCESS", 1.0, 1.0, 1.0, False).to_dict()["objects"]
     assert entry["target"][2] == pytest.approx(math.pi / 6)
     assert entry["target_yaw_deg"] == pytest.approx(30.0)
+    assert entry["target_mm"] == [500.0, 0.0]  # a plan's units beside the metres of "target"
+
+
+def test_the_table_speaks_mm_and_degrees_and_the_last_line_names_the_yaw_threshold(capsys) -> None:
+    from bt_arrange_sim.runs import ObjectOutcome, SimulationReport
+
+    red = ObjectOutcome("red", (0.45, -0.05, math.pi / 6), 0.5, 0.5, 0.5, 0.5, 0, "within")
+    report = SimulationReport([red], "SUCCESS", 1.0, 10.0, 1.0, False, yaw_threshold_deg=1.0)
+    cli._print_report(report, cli.build_parser().parse_args(["run", "plan.toml"]))
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert "target x, y (mm), yaw (deg)" in lines[0]
+    assert "450.0, -50.0, 30.0" in lines[1]
+    assert lines[-1].startswith("plan.toml: 1 of 1 objects within 1 mm and 1 deg; tree SUCCESS")
 
 
 def test_show_text_into_a_file_names_the_file(capsys, tmp_path) -> None:  # item 6

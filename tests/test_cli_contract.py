@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import subprocess
 import sys
 import textwrap
@@ -28,8 +29,11 @@ TREES = Path(__file__).resolve().parents[1] / "trees"
 SINGLE = str(TREES / "single_cube.py")
 
 
-class Simulated(Exception):
-    """Raised by the spies: the command got as far as building a world or running a trial."""
+class Simulated(BaseException):
+    """Raised by the spies: the command got as far as building a world or running a trial.
+
+    A ``BaseException``: a campaign records a trial's ``Exception`` as an errored trial and goes on.
+    """
 
 
 def spy(*_: object, **__: object) -> None:
@@ -419,3 +423,100 @@ def test_a_generated_plan_file_runs_or_is_refused_by_the_contract(tmp_path: Path
     if code != "simulated":
         line = assert_refused(code, err)
         assert str(path) in line, line
+
+
+# ----------------------------------------------------------------------------------------------
+# Generated XML trees and cell files (issue 22): accepted, or one line and exit 2, never a traceback
+# ----------------------------------------------------------------------------------------------
+
+xml_tags = st.sampled_from(
+    ["Sequence", "Fallback", "ReactiveSequence", "Parallel", "Inverter", "Repeat", "RetryUntilSuccessful",
+     "AlwaysSuccess", "AlwaysFailure", "SetBlackboardVariable", "Sequense", "Detect", "RetryUntilThreshold"]
+)  # fmt: skip
+xml_attributes = st.dictionaries(
+    st.sampled_from(["name", "num_cycles", "num_attempts", "success_count", "key", "value", "obj", "bogus"]),
+    st.one_of(st.text(max_size=6), st.sampled_from(["3", "-1", "1e9", "{x}", "red", "0.5,0,0", "nan"])),
+    max_size=2,
+)
+xml_nodes = st.recursive(
+    st.tuples(xml_tags, xml_attributes, st.just(())) | st.tuples(st.just("SubTree"), st.fixed_dictionaries(
+        {"ID": st.sampled_from(["A", "B", "C", "Z"])}), st.just(())),
+    lambda children: st.tuples(xml_tags, xml_attributes, st.lists(children, max_size=3)),
+    max_leaves=12,
+)  # fmt: skip
+
+
+def _xml_text(node: tuple) -> str:
+    from xml.sax.saxutils import quoteattr
+
+    tag, attributes, children = node
+    attrs = "".join(f" {key}={quoteattr(value)}" for key, value in attributes.items())
+    inner = "".join(_xml_text(child) for child in children)
+    return f"<{tag}{attrs}>{inner}</{tag}>" if inner else f"<{tag}{attrs}/>"
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(trees=st.dictionaries(st.sampled_from(["A", "B", "C"]), xml_nodes, min_size=1, max_size=3), main=st.booleans())
+def test_a_generated_xml_tree_is_drawn_or_refused_by_the_contract(tmp_path: Path, trees: dict, main: bool) -> None:
+    body = "".join(f'<BehaviorTree ID="{tree_id}">{_xml_text(node)}</BehaviorTree>' for tree_id, node in trees.items())
+    chosen = f' main_tree_to_execute="{next(iter(trees))}"' if main else ""
+    path = tmp_path / "generated.xml"
+    path.write_text(f'<root BTCPP_format="4"{chosen}>{body}</root>')
+    code, _, err = call(["show", str(path)])
+    if code != 0:
+        line = assert_refused(code, err)
+        assert str(path) in line, line
+
+
+cell_values = st.one_of(
+    st.integers(-5, 5),
+    st.floats(allow_nan=True),
+    st.text(max_size=4),
+    st.booleans(),
+    st.lists(st.integers(), max_size=2),
+)
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(
+    top=st.dictionaries(st.sampled_from(["preset", "cell_seed", "run_seed", "bogus"]), cell_values, max_size=2),
+    tables=st.dictionaries(
+        st.sampled_from(["kinematics", "joints", "camera", "imaging", "gripper", "objects", "friction", "nope"]),
+        st.dictionaries(
+            st.sampled_from(["enabled", "coupling_erp", "joint_sigma_mrad", "distortion_k1", "edge_sigma_mm", "spread",
+                             "blur_sigma_px", "bogus"]), cell_values,
+            max_size=3,
+        ),
+        max_size=3,
+    ),
+)  # fmt: skip
+def test_a_generated_cell_file_runs_or_is_refused_by_the_contract(tmp_path: Path, top: dict, tables: dict) -> None:
+    def toml(value: object) -> str:
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        if isinstance(value, str):
+            return json.dumps(value)
+        if isinstance(value, float):
+            return (
+                "nan"
+                if value != value
+                else ("inf" if value == float("inf") else "-inf" if value < -1e308 else repr(value))
+            )
+        if isinstance(value, list):
+            return "[" + ", ".join(toml(v) for v in value) + "]"
+        return repr(value)
+
+    lines = [f"{key} = {toml(value)}" for key, value in top.items()]
+    for name, table in tables.items():
+        lines.append(f"[{name}]")
+        lines += [f"{key} = {toml(value)}" for key, value in table.items()]
+    path = tmp_path / "cell.toml"
+    path.write_text("\n".join(lines) + "\n")
+    code, _, err = call(["run", SINGLE, "--cell", str(path)])
+    if code != "simulated":
+        line = assert_refused(code, err)
+        assert "cell" in line, line

@@ -6,6 +6,7 @@ The blackboard is cleared around every test by ``clean_blackboard`` in ``conftes
 from __future__ import annotations
 
 import io
+import re
 import shutil
 import stat
 from pathlib import Path
@@ -51,12 +52,12 @@ def two_cubes() -> Arrangement:
 
 
 def tree_lines(text: str) -> list[str]:
-    """The names drawn by py_trees, one per line, without the type marks ({-}, -->, -^-) and indentation."""
+    """The names drawn by py_trees, one per line, without the marks ({-}, -->, -^-), indentation and <Type>."""
     names = []
     for line in text.splitlines():
         parts = line.strip().split(" ", 1)
         if len(parts) == 2 and parts[0] in {"{-}", "[-]", "{o}", "[o]", "/_/", "-^-", "-->"}:
-            names.append(parts[1])
+            names.append(re.sub(r"^<[^>]*> ", "", parts[1]))
     return names
 
 
@@ -103,6 +104,14 @@ class FakeTerminal(io.StringIO):
 # ----------------------------------------------------------------------------------------------
 
 
+def test_text_names_each_node_by_its_bt_cpp_type_with_the_py_trees_class_where_it_differs() -> None:
+    lines = render_tree(two_cubes()).splitlines()
+    assert lines[0].startswith("{-} <Arrangement> ")
+    assert any(line.strip().startswith("-^- <ForceSuccess (py_trees FailureIsSuccess)> ") for line in lines)
+    assert any(line.strip().startswith("-^- <RetryUntilThreshold (RepeatUntilWithin)> ") for line in lines)
+    assert any(line.strip().startswith("--> <Pick> pick red") for line in lines)
+
+
 def test_text_names_the_behaviours_of_two_cubes_in_order() -> None:
     text = render_tree(two_cubes())
     names = tree_lines(text)
@@ -110,7 +119,7 @@ def test_text_names_the_behaviours_of_two_cubes_in_order() -> None:
     assert positions == sorted(positions)
     assert len(names) == 30  # 14 per cube, the root, the arm parked at the end
     assert "[" not in text and "\x1b" not in text  # a fresh tree: no statuses, no escapes
-    assert "Blackboard" not in text
+    assert "Blackboard keys" not in text and "Blackboard:" not in text
 
 
 def test_text_shows_statuses_once_the_tree_has_run() -> None:
@@ -385,6 +394,6 @@ def test_live_view_compact_expands_only_running_subtrees() -> None:
     view.update(root, 1.0)
     text = stream.getvalue()
     assert "first [✓]" in text and "second [*]" in text
-    assert "--> b [*]" in text  # inside the running subtree
-    assert "--> a" not in text  # the finished subtree is folded
+    assert "--> <StatusQueue> b [*]" in text  # inside the running subtree, named by its type as the XML would
+    assert "a [" not in text  # the finished subtree is folded
     assert "..." in text

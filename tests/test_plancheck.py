@@ -52,12 +52,14 @@ def test_a_target_whose_cube_has_another_colour_is_refused() -> None:
 @pytest.mark.parametrize(("x_m", "y_m"), [(0.30, 0.45), (-0.40, 0.0), (0.5, -0.47), (0.23, 0.0)])
 def test_a_reachable_target_the_camera_cannot_see_is_refused(x_m: float, y_m: float) -> None:  # item 2
     target = Target("red", x_m, y_m)
-    with pytest.raises(PlanError, match=r"outside the camera's view \(it sees about x 0\.22 to 0\.78 m"):
+    with pytest.raises(
+        PlanError, match=r"outside the camera's view \(at the height of its top face it sees about x 221 to 779 mm"
+    ):
         check_plan([target], view=VIEW)
 
 
 def test_a_start_the_camera_cannot_see_is_refused() -> None:
-    with pytest.raises(PlanError, match=r"^cube red starts at \(0\.300, 0\.450\) m, outside the camera's view"):
+    with pytest.raises(PlanError, match=r"^cube red starts at x 300 mm, y 450 mm, outside the camera's view"):
         check_scene([CubeStart("red", 0.30, 0.45, 0.0)], view=VIEW)
 
 

@@ -85,7 +85,7 @@ def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:
     ("kwargs", "message"),
     [
         ({"starts": []}, r"^target red: no cube 'red' in the scene \(the scene has none\)$"),
-        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^cube red starts at \(0\.300, 0\.450\) m, outside"),
+        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^cube red starts at x 300 mm, y 450 mm, outside"),
         ({"time_limit_s": 0}, r"^time limit 0 s must be a positive number of seconds$"),
         ({"time_limit_s": -1.0}, r"^time limit -1\.0 s must be a positive number of seconds$"),
         ({"root": "tree"}, r"^the root must be a py_trees behaviour, got str$"),

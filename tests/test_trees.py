@@ -71,8 +71,17 @@ def test_a_valid_plan_comes_back_as_a_list_in_order() -> None:
             [RED, Target("red", 0.55, -0.1)],
             r"^targets 1 and 2 are both named 'red' \(identical parts need a name each, e\.g\. name='red 1'",
         ),
-        ([RED, Target("green", 1.2, 0.0)], r"^target green at \(1.200, 0.000\) m is out of reach: .*reach is 0.918 m"),
-        ([RED, Target("green", 0.45, 0.08)], r"^targets red and green overlap: two parts cannot stand there$"),
+        (
+            [RED, Target("green", 1.2, 0.0)],
+            r"^target green at x 1200 mm, y 0 mm is out of reach: it lies 1200 mm from the base axis; "
+            r"in that direction the arm reaches 110 to 905 mm from its base axis: move it at least 295 mm closer$",
+        ),
+        (
+            [RED, Target("green", 0.45, 0.08)],
+            r"^targets red and green overlap: two parts cannot stand there; their centres are 20.0 mm apart and "
+            r"must be at least 52.0 mm apart along that line \(their footprints and the 2 mm gap\): "
+            r"move them 32.0 mm further apart$",
+        ),
         (
             [RED, Target("green", 0.45, 0.049)],
             r"^targets red and green are 1.0 mm apart, under the 2 mm two parts need",

@@ -192,6 +192,9 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         #: The stage running now (a name of ``bt_arrange.behaviours.stages``), None between runs and
         #: while the arm brakes: what injectors and tests look for, the feedback being for people.
         self.stage: str | None = None
+        #: The keys this behaviour cannot run without, each with who should write it: the tree's
+        #: pre-run check (``bt_arrange.keycheck``) finds a writer for each before anything moves.
+        self.required_reads: dict[str, str] = {}
 
     @property
     def facts(self) -> dict[str, Any]:
@@ -215,10 +218,17 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         """Feedback once every stage succeeded."""
         return "done"
 
-    def reads(self, *keys: str) -> None:
-        """Declare blackboard keys this behaviour reads (absolute, e.g. ``keys.key("red", keys.POSE)``)."""
+    def reads(self, *keys: str, written_by: str | None = None) -> None:
+        """Declare blackboard keys this behaviour reads (absolute, e.g. ``keys.key("red", keys.POSE)``).
+
+        With ``written_by`` (who should write them, for the message) the keys are required: the
+        tree's pre-run check (``bt_arrange.keycheck.check_keys``) refuses a tree in which no node
+        before this one writes them. Without it a key is optional (read when it exists).
+        """
         for key in keys:
             self.blackboard.register_key(key, access=Access.READ)
+            if written_by is not None:
+                self.required_reads[key] = written_by
 
     def writes(self, *keys: str) -> None:
         """Declare blackboard keys this behaviour writes."""

@@ -33,6 +33,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose
+from bt_arrange.numbers import fixed
 from bt_arrange.perception.depth_grasp import SOURCE, DepthGraspEstimator
 
 
@@ -106,6 +107,6 @@ class EstimateGraspFromDepth(StagedBehaviour):
         assert self.found is not None
         planar = self.found.planar()
         return (
-            f"{self.obj} grasp at x={planar.x_m:.4f} m, y={planar.y_m:.4f} m, "
-            f"yaw={math.degrees(planar.yaw_rad):.2f} deg ({SOURCE})"
+            f"{self.obj} grasp at x={fixed(planar.x_m, 4)} m, y={fixed(planar.y_m, 4)} m, "
+            f"yaw={fixed(math.degrees(planar.yaw_rad))} deg ({SOURCE})"
         )

@@ -20,6 +20,9 @@
 
 from __future__ import annotations
 
+#: Who writes ``/<obj>/target``, as the messages name it.
+TARGET_SETTER = "the tree's target setter (a SetBlackboardVariable, bt_arrange.trees.steps.set_target)"
+
 TARGET = "target"
 POSE = "pose"
 OFFSET_MM = "offset_mm"

@@ -13,6 +13,7 @@ from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBeh
 from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
 from bt_arrange.ports import BOOL, STRING, Port
@@ -273,7 +274,8 @@ class Detect(StagedBehaviour):
         assert self.found is not None
         planar = self.found.planar()
         return (
-            f"{self.colour} at x={planar.x_m:.4f} m, y={planar.y_m:.4f} m, yaw={math.degrees(planar.yaw_rad):.2f} deg"
+            f"{self.colour} at x={fixed(planar.x_m, 4)} m, y={fixed(planar.y_m, 4)} m, "
+            f"yaw={fixed(math.degrees(planar.yaw_rad))} deg"
         )
 
 
@@ -311,7 +313,7 @@ class Inspect(Detect):
     ) -> None:
         super().__init__(name, obj, colour, object_type, kind_targets)
         self.after_placing = after_placing
-        self.reads(keys.key(obj, keys.TARGET))
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM), keys.key(obj, keys.YAW_ERROR_DEG))
         if after_placing:
             self.writes(keys.key(obj, keys.PLACED_OFFSET_MM), keys.key(obj, keys.PLACED_YAW_ERROR_DEG))
@@ -343,7 +345,8 @@ class Inspect(Detect):
 
     def success_message(self) -> str:
         """Feedback with the offset."""
-        yaw_text = f"yaw error {self.yaw_error_deg:+.2f} deg"
+        yaw = "unknown" if self.yaw_error_deg is None else fixed(self.yaw_error_deg, sign=True)
+        yaw_text = f"yaw error {yaw} deg"
         return f"{super().success_message()}; {yaw_text}; {self.offset_mm:.2f} mm from the target"
 
 

@@ -15,7 +15,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
     close_stage,
-    grasp_of,
+    free_grasp_pose,
     grasp_width_m,
     heights_m,
     line_to,
@@ -28,6 +28,7 @@ from bt_arrange.behaviours.moves import (
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, nearest_symmetric_yaw
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
@@ -91,9 +92,9 @@ class Pick(StagedBehaviour):
         #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
         self.object_type = object_type or CUBE
         self.grasp = grasp
-        self.reads(keys.key(obj, keys.POSE))
+        self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
         if grasp is not None:
-            self.reads(keys.key(obj, keys.TARGET))
+            self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
         #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.
@@ -111,9 +112,7 @@ class Pick(StagedBehaviour):
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
         if self.grasp is None:
-            yaw = nearest_symmetric_yaw(
-                pose.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            x, y, yaw = free_grasp_pose(s, kind, x, y, pose.yaw_rad, wrist_yaw_rad(context))
         else:
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
             # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.
@@ -280,7 +279,11 @@ class Pick(StagedBehaviour):
         assert self.grip_width_m is not None
         message = f"holding {self.obj}, fingers {self.grip_width_m * 1000:.1f} mm apart"
         if self.squared_from_width_m is not None:
-            turned = f", the wrist turned {math.degrees(self.wrist_turn_rad):+.1f} deg" if self.wrist_turn_rad else ""
+            turned = (
+                f", the wrist turned {fixed(math.degrees(self.wrist_turn_rad), 1, sign=True)} deg"
+                if self.wrist_turn_rad
+                else ""
+            )
             message += (
                 f" ({SQUARED_FEEDBACK} {self.squared_from_width_m * 1000:.1f} mm grip across its corners{turned})"
             )

@@ -11,7 +11,7 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
-    grasp_of,
+    free_grasp_pose,
     heights_m,
     line_to,
     to_pose,
@@ -21,6 +21,7 @@ from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import RELEASE, STRING, Port
 
@@ -70,9 +71,9 @@ class Place(StagedBehaviour):
         self.object_type = object_type or CUBE
         self.release = release
         self.where = where
-        self.reads(keys.key(obj, keys.TARGET))
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if where == "pick":
-            self.reads(keys.key(obj, keys.POSE))
+            self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -84,16 +85,12 @@ class Place(StagedBehaviour):
         opening_m = s.open_width_m
         if self.where == "pick":
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
-            x, y = picked.x_m, picked.y_m
-            yaw = nearest_symmetric_yaw(
-                picked.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            x, y, yaw = free_grasp_pose(s, kind, picked.x_m, picked.y_m, picked.yaw_rad, wrist_yaw_rad(context))
         elif self.release is None:
             # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
-            # will do (any quarter turn for a square top, a half turn otherwise).
-            yaw = nearest_symmetric_yaw(
-                target.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            # will do (any quarter turn for a square top, a half turn otherwise); an off-centre grasp
+            # brings the TCP to where that grasp's centre lies with the part at its target.
+            x, y, yaw = free_grasp_pose(s, kind, x, y, target.yaw_rad, wrist_yaw_rad(context))
         else:
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])
@@ -113,5 +110,8 @@ class Place(StagedBehaviour):
             return f"{self.obj} set down where it was picked, to be looked at and picked again"
         if self.release is not None and self.release.staged:
             dx, dy = self.release.offset_m
-            return f"{self.obj} released {dx * 1000:+.0f}, {dy * 1000:+.0f} mm from its target, to push home"
+            return (
+                f"{self.obj} released {fixed(dx * 1000, 0, sign=True)}, {fixed(dy * 1000, 0, sign=True)} mm "
+                "from its target, to push home"
+            )
         return f"{self.obj} released at its target"

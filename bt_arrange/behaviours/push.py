@@ -22,6 +22,7 @@ from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
@@ -118,7 +119,8 @@ class Push(StagedBehaviour):
         if towards is not None and any(d not in DIRECTIONS for d in towards):
             raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
         self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
-        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.TARGET), keys.key(obj, keys.OFFSET_XY_MM))
+        self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.OFFSET_XY_MM), written_by=f"Inspect of {obj}")
+        self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if yaw_threshold_deg is not None:
             self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
         # Push reads the axis it alternates from and writes the next one.
@@ -332,13 +334,16 @@ class Push(StagedBehaviour):
         assert self.pushed is not None
         axis, distance_m = self.pushed
         if self.squaring:
-            return f"squared the part with a push of {distance_m * 1000:+.2f} mm along {axis}"
+            return f"squared the part with a push of {fixed(distance_m * 1000, sign=True)} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
             return f"nothing to push: {abs(distance_m) * 1000:.2f} mm along {axis}"
         if self.across_m:
             other = "y" if axis == "x" else "x"
-            return f"pushed {distance_m * 1000:+.2f} mm along {axis}, {self.across_m * 1000:+.2f} mm along {other}"
-        return f"pushed {distance_m * 1000:+.2f} mm along {axis}"
+            return (
+                f"pushed {fixed(distance_m * 1000, sign=True)} mm along {axis}, "
+                f"{fixed(self.across_m * 1000, sign=True)} mm along {other}"
+            )
+        return f"pushed {fixed(distance_m * 1000, sign=True)} mm along {axis}"
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from typing import TextIO
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.display.rendering import strip_ansi
+from bt_arrange.display.rendering import strip_ansi, with_types
 
 # ----------------------------------------------------------------------------------------------
 # Live view
@@ -120,7 +120,7 @@ class LiveView:
 
     def _tree(self, root: py_trees.behaviour.Behaviour) -> str:
         draw = py_trees.display.unicode_tree if self._unicode else py_trees.display.ascii_tree
-        text = draw(root, show_status=True)
+        text = with_types(draw(root, show_status=True), root)
         compact = self.compact
         if compact is None:
             compact = self.tty and self._rows(text) > shutil.get_terminal_size().lines - 2
@@ -128,7 +128,9 @@ class LiveView:
             expanded: dict[uuid.UUID, Status] = {
                 node.id: node.status for node in root.iterate() if node.status in (Status.RUNNING, Status.FAILURE)
             }
-            text = draw(root, show_only_visited=True, show_status=True, visited=expanded)
+            text = with_types(
+                draw(root, show_only_visited=True, show_status=True, visited=expanded), root, visited=expanded
+            )
         return text if self.tty else strip_ansi(text)
 
     def _rows(self, text: str) -> int:

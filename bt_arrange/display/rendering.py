@@ -44,9 +44,52 @@ def _has_run(root: py_trees.behaviour.Behaviour) -> bool:
     return any(node.status != Status.INVALID for node in root.iterate())
 
 
+def with_types(
+    text: str,
+    root: py_trees.behaviour.Behaviour,
+    *,
+    visited: dict[uuid.UUID, Status] | None = None,
+    classes: bool = False,
+) -> str:
+    """py_trees' text tree with each node's BehaviorTree.CPP type before its name, as the XML writes it.
+
+    ``-^- <ForceSuccess> then the next (red) [✓]``; ``classes`` adds the py_trees class where it
+    differs (``<ForceSuccess (py_trees FailureIsSuccess)>``). ``visited`` is what the text was drawn
+    with (``show_only_visited``): a collapsed subtree is one ``...`` line. Text that does not line
+    up with the tree (not drawn by py_trees) is returned as it is.
+    """
+    from bt_arrange.xmltree import tag_of, type_label
+
+    order: list[py_trees.behaviour.Behaviour | None] = [root]
+
+    def walk(node: py_trees.behaviour.Behaviour) -> None:
+        for child in node.children:
+            order.append(child)
+            if child.children:
+                if visited is None or child.id in visited:
+                    walk(child)
+                else:
+                    order.append(None)  # py_trees' "..." line
+
+    walk(root)
+    lines = text.rstrip("\n").split("\n")
+    if len(lines) != len(order):
+        return text
+    typed = []
+    for line, node in zip(lines, order, strict=True):
+        if node is not None:
+            name = node.name.replace("\n", " ")
+            at = line.find(name)
+            if at >= 0:
+                label = type_label(node) if classes else tag_of(node)
+                line = f"{line[:at]}<{label}> {line[at:]}"
+        typed.append(line)
+    return "\n".join(typed) + ("\n" if text.endswith("\n") else "")
+
+
 def text_tree(root: py_trees.behaviour.Behaviour, *, blackboard: bool = False) -> str:
-    """py_trees' unicode tree, with statuses once the tree has run, and optionally its blackboard keys."""
-    text = strip_ansi(py_trees.display.unicode_tree(root, show_status=_has_run(root)))
+    """py_trees' unicode tree with the nodes' BehaviorTree.CPP types, statuses once it has run, optionally its keys."""
+    text = with_types(strip_ansi(py_trees.display.unicode_tree(root, show_status=_has_run(root))), root, classes=True)
     if blackboard:
         text += "\n" + blackboard_table(root)
     return text

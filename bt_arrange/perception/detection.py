@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.perception.corners import (
@@ -459,7 +460,8 @@ class CubeDetector:
         return replace(
             measured,
             status=DetectionStatus.FOUND,
-            reason=f"{name} cube at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, yaw={math.degrees(pose.yaw_rad):.2f} deg",
+            reason=f"{name} cube at x={fixed(pose.x_m, 4)} m, y={fixed(pose.y_m, 4)} m, "
+            f"yaw={fixed(math.degrees(pose.yaw_rad))} deg",
             pose_world=pose,
             reprojection_error_px=error_px,
         )

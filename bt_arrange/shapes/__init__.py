@@ -20,6 +20,7 @@ from bt_arrange.shapes.base import (
 )
 from bt_arrange.shapes.cuboid import Cuboid
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
+from bt_arrange.shapes.prism import Prism, outline_problem
 
 __all__ = [
     "MAX_HEIGHT_M",
@@ -28,12 +29,14 @@ __all__ = [
     "Cuboid",
     "Grasp",
     "Gripper",
+    "Prism",
     "PushedFace",
     "Shape",
     "folded_yaw",
     "footprint_m",
     "grown",
     "min_centre_distance_m",
+    "outline_problem",
     "preferred_grasp",
     "yaw_error_rad",
 ]

@@ -29,13 +29,15 @@ class Grasp:
 
     ``yaw_offset_rad`` is the gripper's yaw minus the part's (the closing axis lies along the
     gripper's yaw), ``width_m`` the part's width between the pads, ``height_m`` the TCP's (mid-pad)
-    height above the table.
+    height above the table, ``centre_m`` where the pads' centre stands in the part's frame (the
+    origin for a cuboid; off it where an irregular part's grasped edges are).
     """
 
     axis: str
     yaw_offset_rad: float
     width_m: float
     height_m: float
+    centre_m: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass(frozen=True)

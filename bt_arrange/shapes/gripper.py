@@ -37,6 +37,18 @@ class Gripper:
     #: A finger keeps this far from a neighbour's face (the arm's error and pybullet's 1 mm
     #: collision margins; 1 mm was measured to shove a neighbour 1.6 mm).
     neighbour_clearance_m: float = 0.002
+    #: The pads' friction coefficient (the simulated cell's pads; a contact's friction is the
+    #: product of the pads' and the part's, as Bullet combines them).
+    pad_friction: float = 1.2
+    #: The gripper's own mass: it counts against the arm's payload.
+    mass_kg: float = 0.925
+
+    def friction_lift_kg(self, grip_force_n: float, part_friction: float, safety: float = 2.0) -> float:
+        """The heaviest part the pads hold by friction: two pads, each ``pad_friction x part_friction x force``.
+
+        ``safety`` covers the moves' accelerations and the pads' wear (2: half of what holds it at rest).
+        """
+        return 2.0 * self.pad_friction * part_friction * grip_force_n / (9.81 * safety)
 
     @property
     def max_grasp_width_m(self) -> float:

@@ -29,6 +29,7 @@ from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import Release
+from bt_arrange.numbers import fixed
 from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
@@ -222,7 +223,8 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
     obj = target.obj
     dx, dy = release.offset_m
     return py_trees.composites.Sequence(
-        name=f"release {obj} again {dx * 1000:+.0f}, {dy * 1000:+.0f} mm to push it {towards}{label}",
+        name=f"release {obj} again {fixed(dx * 1000, 0, sign=True)}, {fixed(dy * 1000, 0, sign=True)} mm "
+        f"to push it {towards}{label}",
         memory=True,
         children=[
             py_trees.behaviours.CheckBlackboardVariableValue(

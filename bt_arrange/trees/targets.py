@@ -6,10 +6,11 @@ colours, names, reach, and the layout of ``plan_steps``); ``check_threshold`` th
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from bt_arrange.checks import finite_number, positive_number
+from bt_arrange.checks import at_mm, finite_number, positive_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import Pads, Part, Step, plan_layout
@@ -18,6 +19,7 @@ from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Gripper
+from bt_arrange.suggest import did_you_mean
 
 CORRECT_MODES = ("each", "after_all")
 #: The yaw error (degrees) the correction loop leaves by default.
@@ -71,7 +73,11 @@ def validate_targets(
         if not isinstance(target.object_type, ObjectType):
             raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
         if target.colour not in known:
-            raise PlanError(f"target {index}: unknown colour {target.colour!r}; known colours: {', '.join(known)}")
+            raise PlanError(
+                f"target {index}: unknown colour {target.colour!r}{did_you_mean(target.colour, known)}; "
+                f"known colours: {', '.join(known)}",
+                parts=(("target", target.obj),),
+            )
         if target.obj in names:
             first_index = names[target.obj]
             hint = (
@@ -79,16 +85,27 @@ def validate_targets(
                 if target.name is None
                 else ""
             )
-            raise PlanError(f"targets {first_index} and {index} are both named {target.obj!r}{hint}")
+            raise PlanError(
+                f"targets {first_index} and {index} are both named {target.obj!r}{hint}",
+                parts=(("target", target.obj),),
+            )
         names[target.obj] = index
         seen = type_of_colour.get(target.colour)
         if seen is not None and seen[0] != target.object_type:
             raise PlanError(
                 f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
-                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type"
+                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type",
+                parts=(("target", str(getattr(plan[seen[1] - 1], "obj", ""))), ("target", target.obj)),
             )
         type_of_colour.setdefault(target.colour, (target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]
+    for target in checked:
+        problem = target.object_type.mass_problem(settings)
+        if problem is not None:
+            raise PlanError(
+                f"target {target.obj}: a {target.object_type.name} of {problem}",
+                parts=(("object", target.object_type.name), ("target", target.obj)),
+            )
     kinematics = kinematics or ArmKinematics()
     for target in checked:
         grasp_m, approach_m, _ = settings.tcp_heights_m(target.object_type.shape)
@@ -97,10 +114,55 @@ def validate_targets(
                 kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
             except UnreachableError as error:
                 raise PlanError(
-                    f"target {target.obj} at ({target.x_m:.3f}, {target.y_m:.3f}) m is out of reach: {error}"
+                    f"target {target.obj} at {at_mm(target.x_m, target.y_m)} is out of reach: "
+                    f"{reach_text(kinematics, target.x_m, target.y_m, height_m, target.yaw_rad, error)}",
+                    parts=(("target", target.obj),),
                 ) from error
     plan_steps(checked, settings)
     return checked
+
+
+def reach_band_m(
+    kinematics: ArmKinematics, x_m: float, y_m: float, height_m: float, yaw_rad: float
+) -> tuple[float, float] | None:
+    """How near and how far from the arm's base axis, towards (x, y), the pads reach at ``height_m``.
+
+    ``(nearest, farthest)`` in metres on the table (the geometric checks of ``check_reachable``,
+    no inverse kinematics: cheap), or None when no distance up to 2 m is reachable that way.
+    """
+    base = kinematics.base_pose_world.position_m
+    dx, dy = x_m - float(base[0]), y_m - float(base[1])
+    length = math.hypot(dx, dy)
+    ux, uy = (dx / length, dy / length) if length > 1e-9 else (1.0, 0.0)
+    reachable = []
+    for step in range(401):  # every 5 mm out to 2 m
+        r_m = step * 0.005
+        pose = gripper_down_pose(float(base[0]) + ux * r_m, float(base[1]) + uy * r_m, height_m, yaw_rad)
+        try:
+            kinematics.check_reachable(pose)
+        except UnreachableError:
+            continue
+        reachable.append(r_m)
+    return (min(reachable), max(reachable)) if reachable else None
+
+
+def reach_text(
+    kinematics: ArmKinematics, x_m: float, y_m: float, height_m: float, yaw_rad: float, error: UnreachableError
+) -> str:
+    """Why (x, y) is out of reach, in mm, with the fix: how far the arm reaches that way (no raw pose)."""
+    base = kinematics.base_pose_world.position_m
+    r_mm = math.hypot(x_m - float(base[0]), y_m - float(base[1])) * 1000
+    band = reach_band_m(kinematics, x_m, y_m, height_m, yaw_rad)
+    if band is None:
+        return f"the arm reaches no point that way at a TCP height of {height_m * 1000:.0f} mm"
+    near_mm, far_mm = band[0] * 1000, band[1] * 1000
+    reaches = f"in that direction the arm reaches {near_mm:.0f} to {far_mm:.0f} mm from its base axis"
+    if r_mm > far_mm:
+        return f"it lies {r_mm:.0f} mm from the base axis; {reaches}: move it at least {r_mm - far_mm:.0f} mm closer"
+    if r_mm < near_mm:
+        return f"it lies {r_mm:.0f} mm from the base axis; {reaches}: move it at least {near_mm - r_mm:.0f} mm out"
+    reason = str(error).split(": ", 1)[-1] if "Pose(" in str(error) else str(error)
+    return f"{reason} ({reaches})"
 
 
 def kinds(targets: Iterable[Target]) -> dict[str, tuple[PlanarPose, ...]]:
@@ -135,8 +197,14 @@ def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = 
 
 
 def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
-    """The axes of the part's frame the pads may close across: those of its shape's grasps."""
-    return tuple(grasp.axis for grasp in kind.shape.grasps(gripper))
+    """The axes of the part's frame the pads may close across among neighbours: those of its shape's grasps.
+
+    The layout models the pads beside a part's x or y faces only; a part with no grasp along
+    either (an irregular part) is given both, which serve its spacing checks: such a part is
+    never placed among neighbours (``arrange_one`` refuses it).
+    """
+    axes = tuple(grasp.axis for grasp in kind.shape.grasps(gripper) if grasp.axis in ("x", "y"))
+    return axes or ("x", "y")
 
 
 def plan_steps(

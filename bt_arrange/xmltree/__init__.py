@@ -66,7 +66,7 @@ from bt_arrange.xmltree.reader import (
     load_xml,
     parse_elements,
 )
-from bt_arrange.xmltree.registry import REGISTRY, NodeModel, model_of, register, register_node
+from bt_arrange.xmltree.registry import REGISTRY, NodeModel, model_of, register, register_node, tag_of, type_label
 from bt_arrange.xmltree.tree_module import iter_structure, load_module
 from bt_arrange.xmltree.writer import FORMAT_VERSION, to_xml
 
@@ -102,5 +102,7 @@ __all__ = [
     "parse_elements",
     "register",
     "register_node",
+    "tag_of",
     "to_xml",
+    "type_label",
 ]

@@ -17,6 +17,8 @@ from typing import Any, NoReturn
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, PortValueError, XmlTreeError
+from bt_arrange.filelimits import MAX_FILE_BYTES, MAX_TREE_DEPTH, MAX_TREE_NODES, read_limited, too_large
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.xmltree.registry import REGISTRY, NodeModel
 from bt_arrange.xmltree.writer import FORMAT_VERSION
 
@@ -45,6 +47,11 @@ def parse_elements(text: str, source: str = "<string>") -> Element:
     top: list[Element] = []
 
     def start(tag: str, attributes: dict[str, str]) -> None:
+        if len(stack) >= MAX_TREE_DEPTH + 2:  # <root> and <BehaviorTree> above the nodes
+            raise XmlTreeError(
+                f"{source} line {parser.CurrentLineNumber}: elements nest more than {MAX_TREE_DEPTH} levels deep "
+                "below <BehaviorTree>, the limit (bt_arrange.filelimits.MAX_TREE_DEPTH)"
+            )
         element = Element(tag, dict(attributes), parser.CurrentLineNumber)
         (stack[-1].children if stack else top).append(element)
         stack.append(element)
@@ -73,16 +80,17 @@ def load_xml(path: str | Path, tree_id: str | None = None) -> py_trees.behaviour
     """Build the tree of a BehaviorTree.CPP v4 file from registered nodes only."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
+        text = read_limited(path, "XML tree", XmlTreeError)
+    except FileNotFoundError as error:
         raise XmlTreeError(f"cannot read XML tree {path}: {error.strerror}") from error
-    except UnicodeDecodeError as error:
-        raise XmlTreeError(f"XML tree {path} is not UTF-8 text") from error
     return from_xml(text, source=str(path), tree_id=tree_id)
 
 
 def from_xml(text: str, source: str = "<string>", tree_id: str | None = None) -> py_trees.behaviour.Behaviour:
-    """Build a tree from BehaviorTree.CPP v4 XML text (see ``load_xml``)."""
+    """Build a tree from BehaviorTree.CPP v4 XML text (see ``load_xml``), within ``bt_arrange.filelimits``."""
+    size = len(text.encode("utf-8", errors="replace"))
+    if size > MAX_FILE_BYTES:
+        raise XmlTreeError(too_large("XML tree", source, size))
     return _Reader(parse_elements(text, source), source).build(tree_id)
 
 
@@ -126,7 +134,70 @@ class _Reader:
             self.fail(
                 self.document, f"main tree {main!r} is not one of the <BehaviorTree> IDs: {', '.join(self.trees)}"
             )
+        self._check_size(main)
         return self._tree(self.trees[main], ())
+
+    def _check_size(self, main: str) -> None:
+        """Refuse a tree whose SubTrees expand beyond the node or depth limit, before any node is built.
+
+        Each <BehaviorTree> is measured once (its own nodes and depth, and where it holds SubTrees),
+        then the expanded sizes are summed without recursion: a file whose trees each hold two
+        SubTrees of the next is refused in milliseconds, however far it would double.
+        """
+        local: dict[str, tuple[int, int, list[tuple[int, str, Element]]]] = {}
+        for tree_id, tree in self.trees.items():
+            count, deepest, calls = 0, 0, []
+            stack = [(child, 1) for child in tree.children]
+            while stack:
+                element, level = stack.pop()
+                if element.tag == "SubTree":
+                    calls.append((level - 1, element.attributes.get("ID", ""), element))
+                    continue
+                count += 1
+                deepest = max(deepest, level)
+                stack.extend((child, level + 1) for child in element.children)
+            local[tree_id] = (count, deepest, calls)
+        sizes: dict[str, tuple[int, int]] = {}
+        visiting: set[str] = set()
+        pending = [(main, False)]
+        while pending:
+            tree_id, ready = pending.pop()
+            if tree_id in sizes:
+                continue
+            calls = [(level, called, element) for level, called, element in local[tree_id][2] if called in self.trees]
+            if not ready:
+                if tree_id in visiting:
+                    return  # a cycle: _subtree names it at its line
+                visiting.add(tree_id)
+                pending.append((tree_id, True))
+                pending.extend((called, False) for _, called, _ in calls if called not in sizes)
+                continue
+            if any(called not in sizes for _, called, _ in calls):
+                return  # a cycle below: _subtree names it
+            count, deepest, _ = local[tree_id]
+            for level, called, element in calls:
+                count += sizes[called][0]
+                deepest = max(deepest, level + sizes[called][1])
+                if count > MAX_TREE_NODES:
+                    self.fail(
+                        element,
+                        f"<SubTree ID={called!r}>: the tree {tree_id!r} expands to more than {MAX_TREE_NODES:,} "
+                        f"nodes with its SubTrees ({count:,} so far), the limit (bt_arrange.filelimits.MAX_TREE_NODES)",
+                    )
+                if deepest > MAX_TREE_DEPTH:
+                    self.fail(
+                        element,
+                        f"<SubTree ID={called!r}>: the tree {tree_id!r} nests more than {MAX_TREE_DEPTH} levels deep "
+                        "with its SubTrees, the limit (bt_arrange.filelimits.MAX_TREE_DEPTH)",
+                    )
+            if count > MAX_TREE_NODES:
+                self.fail(
+                    self.trees[tree_id],
+                    f"<BehaviorTree ID={tree_id!r}> has {count:,} nodes, over the limit of {MAX_TREE_NODES:,} "
+                    "(bt_arrange.filelimits.MAX_TREE_NODES)",
+                )
+            sizes[tree_id] = (count, deepest)
+            visiting.discard(tree_id)
 
     def _tree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
         if len(element.children) != 1:
@@ -138,7 +209,11 @@ class _Reader:
             return self._subtree(element, entered)
         model = REGISTRY.get(element.tag)
         if model is None:
-            self.fail(element, f"<{element.tag}> is not a registered node (known: {', '.join(sorted(REGISTRY))})")
+            self.fail(
+                element,
+                f"<{element.tag}> is not a registered node{did_you_mean(element.tag, REGISTRY)} "
+                f"(known: {', '.join(sorted(REGISTRY))})",
+            )
         assert model is not None
         name = element.attributes.get("name") or element.tag
         values = self._values(element, model, name)
@@ -169,7 +244,10 @@ class _Reader:
             port = ports.get(attribute)
             if port is None:
                 known = ", ".join(ports) or "none"
-                self.fail(element, f"<{element.tag}> has no port {attribute!r} (its ports: {known})")
+                self.fail(
+                    element,
+                    f"<{element.tag}> has no port {attribute!r}{did_you_mean(attribute, ports)} (its ports: {known})",
+                )
             assert port is not None
             if re.fullmatch(r"\s*\{.*\}\s*", text):
                 self.fail(
@@ -192,7 +270,11 @@ class _Reader:
     def _subtree(self, element: Element, entered: tuple[str, ...]) -> py_trees.behaviour.Behaviour:
         subtree_id = element.attributes.get("ID", "")
         if subtree_id not in self.trees:
-            self.fail(element, f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file")
+            self.fail(
+                element,
+                f"<SubTree ID={subtree_id!r}> names no <BehaviorTree> of this file"
+                f"{did_you_mean(subtree_id, self.trees)}",
+            )
         if subtree_id in entered:
             self.fail(element, f"<SubTree ID={subtree_id!r}> includes itself")
         extra = set(element.attributes) - {"ID", "name"} - METADATA_ATTRIBUTES

@@ -152,6 +152,37 @@ def port_values(node: Any, ports: tuple[Port, ...]) -> dict[str, Any]:
     return {port.name: getattr(node, port.name) for port in ports}
 
 
+def generic_model(cls: type) -> NodeModel:
+    """A model of an unregistered class for the Groot2 view only: its class name, its category, no ports."""
+
+    def cannot_build(name: str, values: dict[str, Any], children: Children) -> py_trees.behaviour.Behaviour:
+        raise XmlTreeError(f"<{cls.__name__}> is not a registered node")
+
+    return NodeModel(cls.__name__, category_of(cls), cls, (), cannot_build)
+
+
+def tag_of(node: py_trees.behaviour.Behaviour) -> str:
+    """The node's BehaviorTree.CPP type, as the XML names it (``ForceSuccess`` for a ``FailureIsSuccess``).
+
+    A node of no registered model is named by its class. This is the one vocabulary of the replay
+    page, ``bt-arrange show``, the live view, the transitions and the Groot2 view.
+    """
+    for model in REGISTRY.values():
+        if type(node) is model.cls and model.matches(node):
+            return model.tag
+    return type(node).__name__
+
+
+def type_label(node: py_trees.behaviour.Behaviour) -> str:
+    """``tag_of(node)``, then the class where the two differ: ``ForceSuccess (py_trees FailureIsSuccess)``."""
+    tag = tag_of(node)
+    cls = type(node)
+    if cls.__name__ == tag:
+        return tag
+    owner = "py_trees " if cls.__module__.startswith("py_trees") else ""
+    return f"{tag} ({owner}{cls.__name__})"
+
+
 def model_of(node: py_trees.behaviour.Behaviour) -> NodeModel:
     """The registered model that writes ``node`` (its exact class: a subclass is not the same node)."""
     for model in REGISTRY.values():

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from bt_arrange.errors import XmlTreeError
+from bt_arrange.filelimits import read_limited
 from bt_arrange.trees import Arrangement
 from bt_arrange.xmltree.reader import from_xml, load_xml
 from bt_arrange.xmltree.registry import model_of
@@ -32,7 +33,7 @@ def load_module(path: str | Path) -> ModuleType:
     """
     path = Path(path)
     text_root = load_xml(path)  # fails here, before anything runs, on any error of the file
-    source = path.read_text(encoding="utf-8")
+    source = read_limited(path, "XML tree", XmlTreeError)
     module = ModuleType(f"bt_arrange_xml_tree_{path.stem}", f"BehaviorTree.CPP XML tree {path}")
     module.__file__ = str(path)
 

@@ -4,30 +4,48 @@ Every node is written from its registered model (``registry.model_of``): its tag
 and each port's text. An ``optional`` port whose text is its default's is left out (files
 written before it existed stay as they were). The ``TreeNodesModel`` lists the ports, types,
 defaults and descriptions of the non-builtin nodes the tree uses, sorted by tag.
+
+The Groot2 publisher (``bt_arrange.groot2``) asks for two more things: ``uids`` writes each node's
+``_uid`` (BehaviorTree.CPP's ``WriteTreeToXML`` metadata, which Groot2 matches with the status
+buffer), and ``generic=True`` writes a node of no registered model under its class name with no
+ports (a user's Python tree can be watched even where it cannot be saved as XML).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from xml.sax.saxutils import escape, quoteattr
 
 import py_trees
 
 from bt_arrange.errors import PortValueError, XmlTreeError
 from bt_arrange.ports import Port
-from bt_arrange.xmltree.registry import NodeModel, model_of
+from bt_arrange.xmltree.registry import NodeModel, generic_model, model_of
 
 FORMAT_VERSION = "4"
 
 
-def to_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree", *, comment: str | None = None) -> str:
-    """The tree as a BehaviorTree.CPP v4 document, with the ``TreeNodesModel`` of the non-builtin nodes it uses."""
+def to_xml(
+    root: py_trees.behaviour.Behaviour,
+    tree_id: str = "MainTree",
+    *,
+    comment: str | None = None,
+    uids: Mapping[py_trees.behaviour.Behaviour, int] | None = None,
+    generic: bool = False,
+) -> str:
+    """The tree as a BehaviorTree.CPP v4 document, with the ``TreeNodesModel`` of the non-builtin nodes it uses.
+
+    ``uids`` (node to number) adds each node's ``_uid`` attribute; ``generic`` writes an unregistered
+    node under its class name instead of refusing it.
+    """
     used: dict[str, NodeModel] = {}
+    options = _Options(uids or {}, generic)
     lines = ['<?xml version="1.0" encoding="UTF-8"?>']
     if comment:
         lines.append(f"<!-- {comment.replace('--', '- -')} -->")
     lines.append(f'<root BTCPP_format="{FORMAT_VERSION}" main_tree_to_execute={quoteattr(tree_id)}>')
     lines.append(f"  <BehaviorTree ID={quoteattr(tree_id)}>")
-    _write_node(root, lines, depth=2, used=used)
+    _write_node(root, lines, depth=2, used=used, options=options)
     lines.append("  </BehaviorTree>")
     lines.append("  <TreeNodesModel>")
     for tag in sorted(used):
@@ -51,10 +69,25 @@ def to_xml(root: py_trees.behaviour.Behaviour, tree_id: str = "MainTree", *, com
     return "\n".join(lines) + "\n"
 
 
-def _write_node(node: py_trees.behaviour.Behaviour, lines: list[str], depth: int, used: dict[str, NodeModel]) -> None:
-    model = model_of(node)
+class _Options:
+    def __init__(self, uids: Mapping[py_trees.behaviour.Behaviour, int], generic: bool) -> None:
+        self.uids = uids
+        self.generic = generic
+
+
+def _write_node(
+    node: py_trees.behaviour.Behaviour, lines: list[str], depth: int, used: dict[str, NodeModel], options: _Options
+) -> None:
+    try:
+        model = model_of(node)
+    except XmlTreeError:
+        if not options.generic:
+            raise
+        model = generic_model(type(node))
     used[model.tag] = model
     attributes = [f"name={quoteattr(node.name)}"]
+    if node in options.uids:
+        attributes.append(f'_uid="{options.uids[node]}"')
     for port, text in _port_texts(node, model):
         if port.optional and text == port.type.format(port.default):
             continue
@@ -66,7 +99,7 @@ def _write_node(node: py_trees.behaviour.Behaviour, lines: list[str], depth: int
         return
     lines.append(opening + ">")
     for child in node.children:
-        _write_node(child, lines, depth + 1, used)
+        _write_node(child, lines, depth + 1, used, options)
     lines.append(f"{indent}</{model.tag}>")
 
 

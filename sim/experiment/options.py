@@ -15,6 +15,7 @@ from pathlib import Path
 
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import ObjectType, built_in_type
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import check_threshold
 from bt_arrange_sim.experiment.rows import ROWS
 
@@ -106,7 +107,7 @@ def parse_rows(text: str) -> list[str]:
         raise PlanError(f"--rows is empty; choose from {', '.join(ROWS)}")
     for row in rows:
         if row not in ROWS:
-            raise PlanError(f"unknown row {row!r}; the rows are {', '.join(ROWS)}")
+            raise PlanError(f"unknown row {row!r}{did_you_mean(row, ROWS)}; the rows are {', '.join(ROWS)}")
     return list(dict.fromkeys(rows))
 
 
@@ -179,11 +180,13 @@ def check_options(
     object_name: str | Sequence[str] = "cube",
     rows: Iterable[str] = (),
     calibration: str | Path | None = None,
+    resume: bool = False,
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
     ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
-    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``.
+    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``. ``resume``
+    needs nothing checked here: ``run_experiment`` compares the folder's specification.
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)

@@ -7,15 +7,16 @@
 from __future__ import annotations
 
 import csv
+import io
 import itertools
-import json
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from bt_arrange import files
 from bt_arrange_sim.experiment.options import Combination, cell_label
-from bt_arrange_sim.experiment.rows import PAPER_SIMULATION_MM, ROW_LABELS
+from bt_arrange_sim.experiment.rows import PAPER_REAL_MM, PAPER_SIMULATION_MM, ROW_LABELS
 
 
 def campaign_rows(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path]) -> list[dict]:
@@ -34,11 +35,29 @@ def campaign_rows(summaries: dict[Combination, list[dict]], folders: dict[Combin
     ]
 
 
-def write_campaign(summaries: dict[Combination, list[dict]], folders: dict[Combination, Path], out_dir: Path) -> None:
-    """``campaign.json`` (every combination's summary rows, with its folder) and ``thresholds.png``."""
+def write_campaign(
+    summaries: dict[Combination, list[dict]],
+    folders: dict[Combination, Path],
+    out_dir: Path,
+    faults: files.Faults | None = None,
+) -> None:
+    """``campaign.json`` (every combination's summary rows, with its folder) and ``thresholds.png``.
+
+    Each file whole or absent; with ``faults``, one that cannot be written is noted there and the next is tried.
+    """
     rows = campaign_rows(summaries, folders)
-    (out_dir / "campaign.json").write_text(json.dumps(rows, indent=2) + "\n")
-    plot_thresholds(rows, out_dir / "thresholds.png")
+    faults = faults if faults is not None else _Raising()
+    with faults.guard(out_dir / "campaign.json"):
+        files.write_json(out_dir / "campaign.json", rows)
+    with faults.guard(out_dir / "thresholds.png"):
+        plot_thresholds(rows, out_dir / "thresholds.png")
+
+
+class _Raising(files.Faults):
+    """Faults that are raised at once (for callers that hand in none)."""
+
+    def add(self, path: Path | str, error: OSError) -> files.WriteFault:
+        raise error
 
 
 def plot_thresholds(rows: list[dict], path: Path) -> None:
@@ -87,7 +106,7 @@ def plot_thresholds(rows: list[dict], path: Path) -> None:
     pushes_ax.legend(fontsize=7, ncol=2)
     fig.suptitle("Final offset and pushes against the threshold", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -96,14 +115,21 @@ def _threshold(row: dict) -> float:
 
 
 def summarise(records: list[dict], rows: list[str]) -> list[dict]:
-    """One row of Table 1 per experiment row, with the paper's simulated values beside it."""
+    """One row of Table 1 per experiment row, with the paper's values beside it.
+
+    The paper's simulated column, or its real robot's for trials in a model of the real cell
+    (``--cell real``); ``paper_column`` says which. Errored trials (``status = "error"``: no
+    measurement) are counted apart, in ``errored_trials``.
+    """
     summary = []
     for row in rows:
-        mine = [r for r in records if r["row"] == row]
+        errored = sum(r["row"] == row and r.get("status") == "error" for r in records)
+        mine = [r for r in records if r["row"] == row and r.get("status") != "error"]
         placed = np.array([r["placed_mm"] for r in mine if r["placed_mm"] is not None])
         pushed = np.array([r["pushed_mm"] for r in mine if r["pushed_mm"] is not None])
         pushed_truth = np.array([r["pushed_truth_mm"] for r in mine if r["pushed_mm"] is not None])
-        paper = PAPER_SIMULATION_MM.get(row, (None, None, None, None))
+        real = bool(mine) and all(r.get("cell", "ideal") != "ideal" for r in mine)
+        paper = (PAPER_REAL_MM if real else PAPER_SIMULATION_MM).get(row, (None, None, None, None))
         summary.append(
             {
                 "row": row,
@@ -121,10 +147,12 @@ def summarise(records: list[dict], rows: list[str]) -> list[dict]:
                 "failed_trials": sum(r["status"] == "failed" for r in mine),
                 "regrasp_trials": sum(r.get("regrasps", 0) > 0 for r in mine),
                 "squared_trials": sum(r.get("squarings", 0) > 0 for r in mine),
+                "errored_trials": errored,
                 "paper_placed_mean_mm": paper[0],
                 "paper_placed_std_mm": paper[1],
                 "paper_pushed_mean_mm": paper[2],
                 "paper_pushed_std_mm": paper[3],
+                "paper_column": "real robot" if real else "simulation",
             }
         )
     return summary
@@ -134,14 +162,22 @@ def _stat(values: np.ndarray, function: Callable[[np.ndarray], float]) -> float 
     return round(float(function(values)), 4) if values.size else None
 
 
-def write_summary(summary: list[dict], out_dir: Path) -> None:
-    """``summary.json``, ``summary.csv`` and the Markdown table ``summary.md``."""
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    with (out_dir / "summary.csv").open("w", newline="") as out:
-        writer = csv.DictWriter(out, fieldnames=list(summary[0]))
-        writer.writeheader()
-        writer.writerows(summary)
-    (out_dir / "summary.md").write_text(markdown_table(summary))
+def write_summary(summary: list[dict], out_dir: Path, faults: files.Faults | None = None) -> None:
+    """``summary.json``, ``summary.csv`` and the Markdown table ``summary.md``, each whole or absent.
+
+    With ``faults``, a file that cannot be written is noted there and the next one is tried.
+    """
+    faults = faults if faults is not None else _Raising()
+    with faults.guard(out_dir / "summary.json"):
+        files.write_json(out_dir / "summary.json", summary)
+    table = io.StringIO(newline="")
+    writer = csv.DictWriter(table, fieldnames=list(summary[0]))
+    writer.writeheader()
+    writer.writerows(summary)
+    with faults.guard(out_dir / "summary.csv"):
+        files.write_text(out_dir / "summary.csv", table.getvalue())
+    with faults.guard(out_dir / "summary.md"):
+        files.write_text(out_dir / "summary.md", markdown_table(summary))
 
 
 def markdown_table(summary: list[dict]) -> str:
@@ -193,9 +229,16 @@ def _table(summary: list[dict]) -> str:
             f"| {_mm_or_dash(s['pushes_mean'])} | {success} | {_mm_or_dash(s.get('pushed_max_mm'))} "
             f"| {s.get('regrasp_trials', 0)} | {s.get('squared_trials', 0)} | {truth} |"
         )
+    errored = sum(s.get("errored_trials", 0) for s in summary)
+    if errored:
+        lines.append(
+            f"\n{errored} trial(s) errored and are not counted above "
+            "(trials.jsonl gives each one's reason; --resume reruns them)."
+        )
+    columns = sorted({s.get("paper_column", "simulation") for s in summary})
     return (
         "Offsets Δd_xy in mm, mean ± std, measured by the top camera (as in the paper); ground truth from the "
-        "simulator. Paper: Table 1 a), simulation.\n\n" + "\n".join(lines) + "\n"
+        f"simulator. Paper: Table 1, {' and '.join(columns)} column.\n\n" + "\n".join(lines) + "\n"
     )
 
 
@@ -220,18 +263,26 @@ def plot_fig4(records: list[dict], rows: list[str], path: Path) -> None:
         if all(data):
             ax.boxplot(
                 data,
-                tick_labels=["after\nplacing", "after\npushing"],
+                tick_labels=[f"after\nplacing\nn = {len(data[0])}", f"after\npushing\nn = {len(data[1])}"],
                 showmeans=True,
                 patch_artist=True,
                 medianprops={"color": "white", "linewidth": 2},
                 meanprops={"marker": "o", "markerfacecolor": "black", "markeredgecolor": "black"},
                 boxprops={"facecolor": "tab:blue"},
             )
+        thresholds = sorted({float(r["threshold_mm"]) for r in mine if r.get("threshold_mm") is not None})
+        for threshold in thresholds:
+            ax.axhline(threshold, color="tab:red", linestyle="--", linewidth=1, label=f"threshold {threshold:g} mm")
+        if thresholds:
+            ax.legend(loc="upper right", fontsize=7)
         ax.set_yscale("log")
         ax.set_title(ROW_LABELS[row].replace(" (substitute", "\n(substitute"), fontsize=9)
         ax.grid(True, axis="y", which="both", alpha=0.3)
     axes[0][0].set_ylabel("offset Δd_xy [mm] (camera)")
-    fig.suptitle("Offsets after placing and after pushing\n(white line: median, black dot: mean)", fontsize=10)
+    fig.suptitle(
+        "Offsets after placing and after pushing\n(white line: median, black dot: mean, n: trials per box)",
+        fontsize=10,
+    )
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)

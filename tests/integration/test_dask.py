@@ -20,13 +20,20 @@ def _by_trial(path):
 def test_dask_local_cluster_of_two_workers_gives_the_same_records_as_the_local_executor(tmp_path):
     rows, trials = ["translation"], 2
     run_experiment(rows, trials, seed=11, threshold_mm=1.0, out_dir=tmp_path / "local")
+    # A campaign killed mid-write: its first record, then half of the second.
+    first, second = (tmp_path / "local" / "trials.jsonl").read_text().splitlines()
+    (tmp_path / "resumed").mkdir()
+    (tmp_path / "resumed" / "trials.jsonl").write_text(first + "\n" + second[: len(second) // 2])
     with open_executor("dask", workers=2) as executor:
         assert executor is not None
         assert len(executor._client.scheduler_info()["workers"]) == 2, "two real worker processes"
         run_experiment(rows, trials, seed=11, threshold_mm=1.0, out_dir=tmp_path / "dask", executor=executor)
+        run_experiment(rows, trials, 11, 1.0, tmp_path / "resumed", executor=executor, resume=True)
     local, dask = _by_trial(tmp_path / "local" / "trials.jsonl"), _by_trial(tmp_path / "dask" / "trials.jsonl")
     assert sorted(local) == [("translation", 0), ("translation", 1)]
     assert dask == local
+    resumed = (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()
+    assert len(resumed) == 2 and _by_trial(tmp_path / "resumed" / "trials.jsonl") == local, "resumed on Dask"
 
 
 def test_executor_choices_are_checked_before_anything_starts():

@@ -126,7 +126,7 @@ def test_a_threshold_sweep_writes_a_folder_per_combination_and_the_threshold_fig
     assert a["target"] == b["target"] and a["placed_mm"] == b["placed_mm"]
 
 
-def test_a_trial_that_does_not_come_back_is_reported_and_a_rerun_completes_it(tmp_path):
+def test_a_trial_that_does_not_come_back_is_recorded_as_an_error_and_a_resume_reruns_it(tmp_path):
     class DyingWorker(Executor):
         """Runs trials in this process, but the worker dies on the second one."""
 
@@ -142,11 +142,17 @@ def test_a_trial_that_does_not_come_back_is_reported_and_a_rerun_completes_it(tm
                 future.set_result(fn(*args, **kwargs))
             return future
 
-    with pytest.raises(CampaignIncompleteError, match=r"1 trial\(s\) did not finish .*worker died.*rerun"):
+    errored = r"^1 trial\(s\) errored \(first: system #1: RuntimeError: worker died\).*--resume"
+    with pytest.raises(CampaignIncompleteError, match=errored) as raised:
         run_experiment(["system"], trials=2, seed=4, threshold_mm=1.0, out_dir=tmp_path, executor=DyingWorker())
-    assert [r["trial"] for r in read_trials(tmp_path / "trials.jsonl")] == [0], "what finished is kept"
-    run_experiment(["system"], trials=2, seed=4, threshold_mm=1.0, out_dir=tmp_path)
-    assert sorted(r["trial"] for r in read_trials(tmp_path / "trials.jsonl")) == [0, 1]
+    records = sorted(read_trials(tmp_path / "trials.jsonl"), key=lambda r: r["trial"])
+    assert [(r["trial"], r["status"]) for r in records] == [(0, "within"), (1, "error")]
+    assert records[1]["reason"] == "RuntimeError: worker died"
+    (row,) = raised.value.summary
+    assert (row["trials"], row["errored_trials"]) == (1, 1), "the errored trial is counted apart"
+    run_experiment(["system"], trials=2, seed=4, threshold_mm=1.0, out_dir=tmp_path, resume=True)
+    records = sorted(read_trials(tmp_path / "trials.jsonl"), key=lambda r: r["trial"])
+    assert [(r["trial"], r["status"]) for r in records] == [(0, "within"), (1, "within")], "the error line is gone"
 
 
 def _quick_trial(spec):
