@@ -169,6 +169,16 @@ def _info(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _note_uncalibrated(cells: str, calibration: Path | None) -> None:
+    """One line on stderr when a real cell runs on its nominal camera (a lens and a pose off by centimetres)."""
+    if calibration is None and "real" in [c.strip() for c in cells.split(",")]:
+        print(
+            "bt-arrange: the real cell's camera is uncalibrated (its nominal intrinsics and pose): "
+            "bt-arrange calibrate --cell real --out camera.toml, then --calibration camera.toml",
+            file=sys.stderr,
+        )
+
+
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
     _check_groot_options(args)
@@ -179,6 +189,7 @@ def _run(args: argparse.Namespace) -> int:
     backend = backends.load(args.backend)
     # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
     starts = treefile.scene(module, seed, backend=backend)
+    _note_uncalibrated(args.cell, args.calibration)
     # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
     with (
         _groot_publisher(root, args) as groot,
@@ -362,6 +373,7 @@ def _experiment_options(
             **({"rows": rows} if "object_name" in options else {}),
             **{key: value for key, value in options.items() if key not in ("cell", "strategy")},
         )
+    _note_uncalibrated(args.cell, args.calibration)
     return options
 
 

@@ -33,3 +33,16 @@ def test_run_with_a_missing_calibration_file_is_one_line(tmp_path, capsys) -> No
     code = cli.main(["run", "four_cubes", "--calibration", str(tmp_path / "none.toml")])
     err = capsys.readouterr().err
     assert code == 2 and "cannot read the calibration file" in err
+
+
+def test_a_real_cell_on_its_nominal_camera_is_named_in_one_line(capsys) -> None:
+    from pathlib import Path
+
+    from bt_arrange.cli import _note_uncalibrated
+
+    _note_uncalibrated("ideal,real", None)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "uncalibrated" in lines[0] and "bt-arrange calibrate --cell real" in lines[0]
+    _note_uncalibrated("real", Path("camera.toml"))
+    _note_uncalibrated("ideal", None)
+    assert capsys.readouterr().err == ""
