@@ -43,7 +43,7 @@ from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose, fold_yaw
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median, _side_edge_points, chroma
+from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, CornerRefinement, _median, _side_edge_points, chroma
 from bt_arrange.perception.detection import CubeDetector, _View
 from bt_arrange.perception.segmentation import Blob, colour_mask
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, WorldRegion
@@ -359,13 +359,13 @@ def _face(detector: CubeDetector, view: _View, colour: ColourRange, blob: Blob, 
     # non-convex face may not hold its own centroid).
     centre = np.array([blob.centroid_px[0] - x0, blob.centroid_px[1] - y0])
 
-    def distance(contour: FloatArray) -> float:
+    def distance(contour: NDArray[np.int32]) -> float:
         moments = cv2.moments(contour)
         if moments["m00"] <= 0:
             return math.inf
         return float(np.hypot(moments["m10"] / moments["m00"] - centre[0], moments["m01"] / moments["m00"] - centre[1]))
 
-    chosen = min(contours, key=lambda c: distance(np.asarray(c, dtype=float)))
+    chosen = min(contours, key=lambda c: distance(np.asarray(c, dtype=np.int32)))
     contour = chosen.reshape(-1, 2) + np.array([x0, y0])
     area_px = float(cv2.contourArea(chosen))
     touches = bool(
@@ -483,10 +483,15 @@ def register(
     plane_z_m: float,
     px_per_m: float,
     kernel_px: int,
+    method: CornerRefinement = CornerRefinement.EDGE_LINES,
 ) -> tuple[OutlineFit | None, list[OutlineFit]]:
-    """The coarse registrations of ``model`` to the face (best first), and the sub-pixel fit of the best.
+    """The coarse registrations of ``model`` to the face (best first), and the fine fit of the best.
 
-    The fine fit is None when the edges could not be measured below a pixel.
+    The fine fit is None when the edges could not be measured below a pixel. ``method`` chooses it
+    (for comparison; docs/perception.md has the figures): ``EDGE_LINES``, sub-pixel edge points and
+    least squares on the model's edge lines (the default); ``CORNER_SUBPIX``, ``cv2.cornerSubPix``
+    at the outline's vertices on the face-coverage image and a rigid fit of the vertices;
+    ``CONTOUR_LINES``, the contour's ICP alone; ``NONE``, the contour's centroid and the coarse grid's yaw.
     """
     metre = 1.0 / px_per_m
     points = _resample(face.contour_m, COARSE_POINTS)
@@ -509,6 +514,14 @@ def register(
     if not fits:
         return None, fits
     best = fits[0]
+    if method is CornerRefinement.NONE:
+        grid = yaws[0] if yaws else 0.0
+        coarse = (float(face.centroid_m[0]), float(face.centroid_m[1]), fold_yaw(grid, model.symmetry_rad))
+        return replace(best, x_m=coarse[0], y_m=coarse[1], yaw_rad=coarse[2], rms_px=0.0), fits
+    if method is CornerRefinement.CONTOUR_LINES:
+        return replace(best, rms_px=0.0), fits
+    if method is CornerRefinement.CORNER_SUBPIX:
+        return _corner_fit(view, face, best, plane_z_m, px_per_m), fits
     pose = (best.x_m, best.y_m, best.yaw_rad)
     near_outside_px: float | None = None
     residual = np.empty(0)
@@ -526,6 +539,42 @@ def register(
     yaw = fold_yaw(pose[2], model.symmetry_rad)
     fine = replace(best, x_m=pose[0], y_m=pose[1], yaw_rad=yaw, rms_px=rms_px, edge_points=len(residual))
     return fine, fits
+
+
+def _corner_fit(view: _View, face: _Face, coarse: OutlineFit, plane_z_m: float, px_per_m: float) -> OutlineFit | None:
+    """The outline's vertices by ``cv2.cornerSubPix`` on the face-coverage image, and a rigid fit of the model's."""
+    model = coarse.model
+    posed = model.posed(coarse.x_m, coarse.y_m, coarse.yaw_rad)
+    start = _project(view, np.column_stack([posed, np.full(len(posed), plane_z_m)]))
+    height, width = view.rgb.shape[:2]
+    margin = 16
+    x0, y0 = np.maximum(np.floor(start.min(axis=0)).astype(int) - margin, 0)
+    x1, y1 = np.minimum(np.ceil(start.max(axis=0)).astype(int) + margin + 1, [width, height])
+    face_chroma = face.face_chroma
+    coverage = (chroma(view.rgb[y0:y1, x0:x1]) @ face_chroma / float(face_chroma @ face_chroma)).astype(np.float32)
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-4)
+    seeds = (start - [x0, y0]).astype(np.float32).reshape(-1, 1, 2)
+    corners = cv2.cornerSubPix(coverage, seeds, (5, 5), (-1, -1), criteria).reshape(-1, 2).astype(float) + [x0, y0]
+    if view.undistort is not None:
+        corners = view.undistort(corners)
+    measured = pixels_on_plane(view.intrinsics, view.T_W_C, corners, plane_z_m)
+    # Procrustes: the rotation that best turns the model's vertices onto the measured ones.
+    centre = measured.mean(axis=0)
+    model_centre = model.outline_m.mean(axis=0)
+    a, b = model.outline_m - model_centre, measured - centre
+    yaw = math.atan2(float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])), float(np.sum(a * b)))
+    c, s = math.cos(yaw), math.sin(yaw)
+    origin = centre - np.array([[c, -s], [s, c]]) @ model_centre
+    fitted = model.posed(float(origin[0]), float(origin[1]), yaw)
+    rms_px = float(np.sqrt(np.mean(np.sum((fitted - measured) ** 2, axis=1)))) * px_per_m
+    return replace(
+        coarse,
+        x_m=float(origin[0]),
+        y_m=float(origin[1]),
+        yaw_rad=fold_yaw(yaw, model.symmetry_rad),
+        rms_px=rms_px,
+        edge_points=len(measured),
+    )
 
 
 # -- outcomes ----------------------------------------------------------------------------------
@@ -595,7 +644,7 @@ def _judge(
                 expected_px,
             )
         else:
-            fine, fits = register(view, face, model, plane_z_m, px_per_m, config.kernel_px)
+            fine, fits = register(view, face, model, plane_z_m, px_per_m, config.kernel_px, config.corner_refinement)
             verdicts[model.name] = _verdict_of_fit(
                 name, blob_xy_m, model, fine, fits, face.area_px, expected_px, config
             )
