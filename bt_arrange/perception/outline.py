@@ -794,7 +794,7 @@ def detect_outlines(
             )
         else:
             others = ", ".join(
-                f"a {owner} at ({v[owner].fit.x_m:.3f}, {v[owner].fit.y_m:.3f}) m"  # type: ignore[union-attr]
+                f"the {owner} at ({v[owner].fit.x_m:.3f}, {v[owner].fit.y_m:.3f}) m"  # type: ignore[union-attr]
                 for v, owner in zip(judged, owners, strict=True)
                 if owner is not None
             )
