@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.shapes import Prism
 
 if TYPE_CHECKING:
     from bt_arrange.backends import Backend
@@ -54,7 +55,7 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 TOP_KEYS = ("threshold_mm", "yaw_threshold_deg", "correct", "max_pushes", "objects", "colours", "targets", "scene")
-OBJECT_KEYS = ("size_mm", "mass_kg", "friction")
+OBJECT_KEYS = ("size_mm", "outline_mm", "height_mm", "mass_kg", "friction")
 COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
 TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name")
 SCENE_KEYS = ("seed", "starts")
@@ -224,8 +225,11 @@ class _Reader:
             self.keys(entry, OBJECT_KEYS, where)
             if name == "cube":
                 raise self.fail(where, "'cube' is built in (50 x 50 x 50 mm): name your type otherwise")
+            if "outline_mm" in entry or "height_mm" in entry:
+                types[name] = self.prism_type(name, entry, where)
+                continue
             if "size_mm" not in entry:
-                raise self.fail(where, "missing size_mm = [x, y, z]")
+                raise self.fail(where, "missing size_mm = [x, y, z] (or outline_mm = [[x, y], ...] and height_mm)")
             size = entry["size_mm"]
             if not isinstance(size, list) or len(size) != 3:
                 raise self.fail(where, f"size_mm = {_shown(size)} is not three numbers [x, y, z] in mm")
@@ -239,6 +243,25 @@ class _Reader:
             except PlanError as error:
                 raise self.fail(where, str(error)) from None
         return types
+
+    def prism_type(self, name: str, entry: dict[str, Any], where: str) -> ObjectType:
+        """A part type of any simple outline: ``outline_mm = [[x, y], ...]`` and ``height_mm``."""
+        if "size_mm" in entry:
+            raise self.fail(where, "give size_mm (a cuboid) or outline_mm and height_mm (a prism), not both")
+        for key in ("outline_mm", "height_mm"):
+            if key not in entry:
+                raise self.fail(where, f"missing {key}: a prism needs outline_mm = [[x, y], ...] and height_mm")
+        outline = entry["outline_mm"]
+        if not isinstance(outline, list) or not all(isinstance(p, list) and len(p) == 2 for p in outline):
+            raise self.fail(where, f"outline_mm = {_shown(outline)} is not a list of [x, y] points in mm")
+        points = [[self.number(v, where, "outline_mm") / 1000 for v in point] for point in outline]
+        height_m = self.number(entry["height_mm"], where, "height_mm", positive=True) / 1000
+        mass = self.number(entry["mass_kg"], where, "mass_kg", positive=True) if "mass_kg" in entry else None
+        friction = self.number(entry["friction"], where, "friction", positive=True) if "friction" in entry else None
+        try:
+            return ObjectType(name, None, mass, friction, shape=Prism.from_outline(points, height_m))
+        except PlanError as error:
+            raise self.fail(where, str(error)) from None
 
     def colour_table(self, table: Any) -> ColourTable:
         colours = DEFAULT_COLOUR_TABLE

@@ -29,6 +29,7 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import CUBE, ObjectType, PartOnTable
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.shapes import Cuboid
 
 
 @dataclass(frozen=True)
@@ -148,6 +149,11 @@ def _parse_object_type(text: str) -> ObjectType:
 def _format_object_type(object_type: ObjectType) -> str:
     if object_type == CUBE:
         return ""
+    if not isinstance(object_type.shape, Cuboid):
+        raise ValueError(
+            f"object type {object_type.name!r} is a {object_type.shape.describe()}: XML trees describe cuboids "
+            "(name=x_m*y_m*z_m) only; run its plan file instead"
+        )
     return f"{object_type.name}=" + "*".join(_format_float(v) for v in object_type.size_m)
 
 

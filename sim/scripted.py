@@ -18,7 +18,7 @@ from bt_arrange.behaviours import Context, MoveStage, Pick, Place, Push, StagedB
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.motion import CartesianLimits, JointLimits
-from bt_arrange.objects import CUBE
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.runner import Runner
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange_sim.cell import WorkCell
@@ -58,20 +58,23 @@ class ScriptedPickPlace:
         joint_limits: JointLimits | None = None,
         cartesian_limits: CartesianLimits | None = None,
         time_limit_s: float = 60.0,
+        object_type: ObjectType = CUBE,
     ) -> None:
         self.cell = cell
         self.context = Context.create(
             cell.robot, joint_limits=joint_limits, cartesian_limits=cartesian_limits, settings=settings
         )
         self.time_limit_s = time_limit_s
+        #: The type of the part handled (default the paper's cube).
+        self.object_type = object_type
         self._blackboard = py_trees.blackboard.Client(name="ground truth")
         for field in (keys.POSE, keys.TARGET, keys.OFFSET_XY_MM, keys.PUSH_AXIS):
             self._blackboard.register_key(keys.key(OBJ, field), access=py_trees.common.Access.WRITE)
 
     def pick(self, x_m: float, y_m: float, yaw_rad: float) -> PickPlaceResult:
         """Grasp a cube resting at (x, y, yaw) and lift it (``Pick``)."""
-        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=CUBE.shape.height_m / 2))
-        pick = Pick("pick", OBJ)
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=self.object_type.shape.height_m / 2))
+        pick = Pick("pick", OBJ, self.object_type)
         status, seconds = self._run(pick)
         width = pick.grip_width_m if pick.grip_width_m is not None else self.cell.gripper.width()
         return PickPlaceResult(status == Status.SUCCESS, width, seconds, pick.feedback_message)
@@ -79,7 +82,7 @@ class ScriptedPickPlace:
     def place(self, x_m: float, y_m: float, yaw_rad: float) -> float:
         """Carry the held cube to (x, y, yaw), lower it, release it, retreat (``Place``); returns sim seconds."""
         self._write(keys.TARGET, PlanarPose(x_m, y_m, yaw_rad))
-        return self._expect_success(Place("place", OBJ))
+        return self._expect_success(Place("place", OBJ, self.object_type))
 
     def push(self, x_m: float, y_m: float, axis: str, distance_m: float) -> float:
         """Push a cube resting at (x, y) by ``distance_m`` along world ``axis`` (``Push``); returns sim seconds."""

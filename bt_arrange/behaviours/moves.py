@@ -10,7 +10,7 @@ import math
 from bt_arrange.behaviours.base import GripperStage
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import FloatArray
-from bt_arrange.motion import Motion, gripper_down_pose
+from bt_arrange.motion import Motion, gripper_down_pose, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Grasp, preferred_grasp
@@ -56,6 +56,26 @@ def holding(context: Context, object_type: ObjectType | None = None) -> bool:
 def grasp_of(settings: ManipulationSettings, object_type: ObjectType) -> Grasp:
     """The grasp the pads take on a part: its shape's preferred one for the settings' gripper."""
     return preferred_grasp(object_type.shape, settings.gripper)
+
+
+def free_grasp_pose(
+    settings: ManipulationSettings, object_type: ObjectType, x_m: float, y_m: float, yaw_rad: float, wrist_rad: float
+) -> tuple[float, float, float]:
+    """The TCP's (x, y, gripper yaw) for the part's grasp with the part at ``(x, y, yaw)``, turning the wrist least.
+
+    The grasp's yaw is taken modulo the shape's symmetry. A grasp centred on the part (a cuboid's)
+    stands the TCP at the part's origin; an off-centre one (an irregular part's) at its centre,
+    turned with the part. The gripper's own half turn is not taken: the part's turn in the pads
+    is then the same at the pick and at the place, which each compute it from this alone.
+    """
+    grasp = grasp_of(settings, object_type)
+    yaw = nearest_symmetric_yaw(yaw_rad + grasp.yaw_offset_rad, wrist_rad, object_type.shape.symmetry_rad)
+    if grasp.centre_m == (0.0, 0.0):
+        return x_m, y_m, yaw
+    part_yaw = yaw - grasp.yaw_offset_rad  # the turn of the part, within its symmetry, this grasp is taken at
+    c, s = math.cos(part_yaw), math.sin(part_yaw)
+    cx, cy = grasp.centre_m
+    return x_m + c * cx - s * cy, y_m + s * cx + c * cy, yaw
 
 
 def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:

@@ -15,7 +15,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
     close_stage,
-    grasp_of,
+    free_grasp_pose,
     grasp_width_m,
     heights_m,
     line_to,
@@ -111,9 +111,7 @@ class Pick(StagedBehaviour):
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
         if self.grasp is None:
-            yaw = nearest_symmetric_yaw(
-                pose.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            x, y, yaw = free_grasp_pose(s, kind, x, y, pose.yaw_rad, wrist_yaw_rad(context))
         else:
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
             # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.

@@ -11,7 +11,7 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
-    grasp_of,
+    free_grasp_pose,
     heights_m,
     line_to,
     to_pose,
@@ -84,16 +84,12 @@ class Place(StagedBehaviour):
         opening_m = s.open_width_m
         if self.where == "pick":
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
-            x, y = picked.x_m, picked.y_m
-            yaw = nearest_symmetric_yaw(
-                picked.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            x, y, yaw = free_grasp_pose(s, kind, picked.x_m, picked.y_m, picked.yaw_rad, wrist_yaw_rad(context))
         elif self.release is None:
             # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
-            # will do (any quarter turn for a square top, a half turn otherwise).
-            yaw = nearest_symmetric_yaw(
-                target.yaw_rad + grasp_of(s, kind).yaw_offset_rad, wrist_yaw_rad(context), kind.shape.symmetry_rad
-            )
+            # will do (any quarter turn for a square top, a half turn otherwise); an off-centre grasp
+            # brings the TCP to where that grasp's centre lies with the part at its target.
+            x, y, yaw = free_grasp_pose(s, kind, x, y, target.yaw_rad, wrist_yaw_rad(context))
         else:
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])

@@ -287,6 +287,29 @@ class Prism:
         contact = points[along <= float(np.min(along)) + PUSH_CONTACT_BAND_M] @ across
         return float(np.min(contact)), float(np.max(contact))
 
+    def convex_pieces(self) -> list[FloatArray]:
+        """The top face split into convex polygons (counter-clockwise), for engines whose bodies are convex hulls.
+
+        Ear clipping gives triangles; neighbouring pieces are then merged while the union stays
+        convex (Hertel and Mehlhorn), so a convex outline is one piece and an L two.
+        """
+        points = self.outline_m
+        pieces = [list(triangle) for triangle in _ear_clip(points)]
+        merged = True
+        while merged:
+            merged = False
+            for i in range(len(pieces)):
+                for j in range(i + 1, len(pieces)):
+                    union = _merge_if_convex(points, pieces[i], pieces[j])
+                    if union is not None:
+                        pieces[i] = union
+                        del pieces[j]
+                        merged = True
+                        break
+                if merged:
+                    break
+        return [points[piece] for piece in pieces]
+
     def problems(self, gripper: Gripper) -> list[str]:
         """Too thin or too tall for the pads, a short edge at a corner, no grasp the gripper can take."""
         found = []
@@ -337,6 +360,53 @@ def _facing(upper_low: float, upper_high: float, lower_low: float, lower_high: f
         span = (lower_low, lower_high) if upper_high - upper_low < corner_m else (upper_low, upper_high)
         return span[0] + margin_m <= point <= span[1] - margin_m
     return min(upper_high, lower_high) - max(upper_low, lower_low) >= MIN_GRASP_OVERLAP_M
+
+
+def _cross_z(o: FloatArray, a: FloatArray, b: FloatArray) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+def _ear_clip(points: FloatArray) -> list[tuple[int, int, int]]:
+    """Triangles (vertex indices, counter-clockwise) covering a simple counter-clockwise polygon."""
+    remaining = list(range(len(points)))
+    triangles: list[tuple[int, int, int]] = []
+    while len(remaining) > 3:
+        for k in range(len(remaining)):
+            i, j, n = remaining[k - 1], remaining[k], remaining[(k + 1) % len(remaining)]
+            a, b, c = points[i], points[j], points[n]
+            if _cross_z(a, b, c) <= 1e-14:
+                continue  # a reflex or flat corner is no ear
+            inside = any(
+                _cross_z(a, b, points[m]) >= 0 and _cross_z(b, c, points[m]) >= 0 and _cross_z(c, a, points[m]) >= 0
+                for m in remaining
+                if m not in (i, j, n)
+            )
+            if not inside:
+                triangles.append((i, j, n))
+                del remaining[k]
+                break
+        else:  # numerically degenerate: fan out what is left
+            break
+    for k in range(1, len(remaining) - 1):
+        triangles.append((remaining[0], remaining[k], remaining[k + 1]))
+    return triangles
+
+
+def _merge_if_convex(points: FloatArray, first: list[int], second: list[int]) -> list[int] | None:
+    """The union of two convex pieces sharing an edge (vertex indices), if it is convex; else None."""
+    for a in range(len(first)):
+        u, v = first[a], first[(a + 1) % len(first)]
+        if v in second and second[(second.index(v) + 1) % len(second)] == u:
+            start = second.index(u)
+            rest = [second[(start + k) % len(second)] for k in range(1, len(second) - 1)]
+            union = first[: a + 1] + rest + first[a + 1 :]
+            return union if _is_convex(points[union]) else None
+    return None
+
+
+def _is_convex(points: FloatArray) -> bool:
+    count = len(points)
+    return all(_cross_z(points[k - 1], points[k], points[(k + 1) % count]) >= -1e-14 for k in range(count))
 
 
 def _turn_rad(before: FloatArray, here: FloatArray, after: FloatArray) -> float:

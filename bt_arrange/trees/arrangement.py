@@ -45,6 +45,7 @@ from bt_arrange.layout import DIRECTIONS, Pads, Release, Step, free_push_directi
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Cuboid
 from bt_arrange.trees.steps import Locate, check_strategy, correction, inspect, set_target, transfer
 from bt_arrange.trees.targets import (
     CORRECT_MODES,
@@ -86,6 +87,11 @@ def arrange_one(
     pads = Pads.from_settings(settings)
     obj = target.obj
     dense = step is not None and _is_dense(step)
+    if dense and not isinstance(target.object_type.shape, Cuboid):
+        raise PlanError(
+            f"target {target.obj}: a {target.object_type.shape.describe()} among neighbours (released off its "
+            "target, or with a side blocked): irregular parts are arranged only with room around them so far"
+        )
     release = step.release if dense and step is not None else None
     towards = step.push_towards if dense and step is not None else None
     restage = step.restage if dense and step is not None else None

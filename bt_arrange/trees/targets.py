@@ -135,8 +135,14 @@ def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = 
 
 
 def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
-    """The axes of the part's frame the pads may close across: those of its shape's grasps."""
-    return tuple(grasp.axis for grasp in kind.shape.grasps(gripper))
+    """The axes of the part's frame the pads may close across among neighbours: those of its shape's grasps.
+
+    The layout models the pads beside a part's x or y faces only; a part with no grasp along
+    either (an irregular part) is given both, which serve its spacing checks: such a part is
+    never placed among neighbours (``arrange_one`` refuses it).
+    """
+    axes = tuple(grasp.axis for grasp in kind.shape.grasps(gripper) if grasp.axis in ("x", "y"))
+    return axes or ("x", "y")
 
 
 def plan_steps(

@@ -1,0 +1,89 @@
+"""Plan files with irregular parts: ``outline_mm`` and ``height_mm`` (issue 20's contract), checked up front."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bt_arrange import plans
+from bt_arrange.errors import PlanError
+from bt_arrange.shapes import Prism
+from bt_arrange.trees import Arrangement
+
+ELL_PLAN = """
+[objects.ell]
+outline_mm = [[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]]   # the top face, in mm, either winding
+height_mm = 20
+
+[[targets]]
+object = "ell"
+colour = "red"
+x_mm = 480
+y_mm = 50
+yaw_deg = 30
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "plan.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_an_outline_type_is_a_prism_about_its_centroid_and_its_target_says_where_the_centroid_goes(tmp_path) -> None:
+    plan = plans.load(write(tmp_path, ELL_PLAN))
+    ell = plan.object_types["ell"]
+    assert isinstance(ell.shape, Prism)
+    assert ell.shape.height_m == pytest.approx(0.02)
+    assert ell.shape.area_m2 == pytest.approx(0.0018)
+    (target,) = plan.targets
+    assert (target.x_m, target.y_m, math.degrees(target.yaw_rad)) == pytest.approx((0.48, 0.05, 30.0))
+    root = plan.create_root()
+    assert isinstance(root, Arrangement) and root.targets[0].object_type == ell
+    clockwise = ELL_PLAN.replace(
+        "[[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]]",
+        "[[0, 50], [20, 50], [20, 20], [60, 20], [60, 0], [0, 0]]",
+    )
+    assert plans.load(write(tmp_path, clockwise, "cw.toml")).object_types["ell"] == ell
+
+
+@pytest.mark.parametrize(
+    ("entry", "message"),
+    [
+        ("outline_mm = [[0, 0], [60, 60], [60, 0], [0, 40]]\nheight_mm = 20", "crosses itself"),
+        ("outline_mm = [[0, 0], [60, 0]]\nheight_mm = 20", "at least three points"),
+        ("outline_mm = [[0, 0], [30, 0], [60, 0]]\nheight_mm = 20", "encloses no area"),
+        ("outline_mm = [[0, 0], [60, 0], [60, 40], [55, 45], [0, 45]]\nheight_mm = 20", "under the 10 mm the camera"),
+        ("outline_mm = [[0, 0], [100, 0], [100, 90], [0, 90]]\nheight_mm = 20", "no two edges the 2F-85 can close on"),
+        ("outline_mm = [[0, 0], [60, 0], [0, 50]]\nheight_mm = 8", "thinner than the pads"),
+        ("outline_mm = [[0, 0], [60, 0], [0, 50]]\nheight_mm = 120", "taller than 100 mm"),
+        ("outline_mm = [[0, 0], [60, 0], [0, 50]]", "missing height_mm"),
+        ("outline_mm = [[0, 0], [60, 0], [0, 50]]\nheight_mm = 20\nsize_mm = [50, 50, 50]", "not both"),
+        ("outline_mm = [0, 60, 0]\nheight_mm = 20", r"is not a list of \[x, y\] points"),
+    ],
+)
+def test_a_bad_outline_is_one_line_naming_the_file_and_the_type(tmp_path, entry, message) -> None:
+    lines = ELL_PLAN.splitlines()
+    text = "\n".join(lines[:2] + [entry] + lines[4:]) + "\n"
+    path = write(tmp_path, text)
+    with pytest.raises(PlanError, match=message) as caught:
+        plans.load(path)
+    assert "[objects.ell]" in str(caught.value) and str(path) in str(caught.value)
+    assert "\n" not in str(caught.value)
+
+
+def test_an_outline_plan_shown_as_xml_says_why_it_cannot_be_in_one_line(tmp_path) -> None:
+    path = write(tmp_path, ELL_PLAN)
+    result = subprocess.run(
+        [sys.executable, "-m", "bt_arrange.cli", "show", str(path), "--format", "xml"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "XML trees describe cuboids" in lines[0], result.stderr
