@@ -8,11 +8,12 @@ Every pose puts one part at a random place over the visible table (whole in the 
 yaw), yaw over the full circle, 45..100 % light, and renders it three ways with
 ``bt_arrange.perception.synthetic`` (ground truth exact): anti-aliased (8 x 8 samples per
 pixel), aliased (pixel centres only, like pybullet's TinyRenderer) and noisy (4 grey levels of
-noise after a 0.8 px blur). ``--cell`` also renders scenes of the five parts in the pybullet
-cell's top camera (one scene per ``--poses`` / 5, the parts in different colours), as static
-visual-only bodies (a 0.1 mm coloured top plate on near-white sides, like the cell's cubes)
-until ``bt_arrange_sim.objects.create_object`` builds prisms. ``--method`` compares the fine
-registrations (``edge_lines``, the default; ``corner_subpix``; ``contour_lines``; ``none``).
+noise after a 0.8 px blur). ``--cell`` also renders scenes in the pybullet cell's top camera
+(TinyRenderer, 1920 x 1080): four of the five parts each, in different colours, as the cell's
+bodies (``bt_arrange_sim.objects.create_object``), about ``--poses`` of each outline in all; the
+truth is the simulator's pose after the parts settle. ``ms_per_detection`` is the median CPU
+time of one ``detect`` (the machine is shared). ``--method`` compares the fine registrations
+(``edge_lines``, the default; ``corner_subpix``; ``contour_lines``; ``none``).
 """
 
 from __future__ import annotations
@@ -100,87 +101,19 @@ def synthetic(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
                 frame = render_frame(
                     [SyntheticPrism(colour, x, y, yaw, shape, brightness)], seed=seed * 100003 + index, **options
                 )
-                start = time.perf_counter()
+                start = time.process_time()
                 detection = detector.detect(frame, colour)
-                ms = (time.perf_counter() - start) * 1000
+                ms = (time.process_time() - start) * 1000
                 results.append({"source": render, "outline": name, "ms": ms, **_error(detection, part, x, y, yaw)})
     return results
 
 
-def _triangulate(outline: np.ndarray) -> list[tuple[int, int, int]]:
-    """Ear clipping of a simple counter-clockwise polygon."""
-    remaining = list(range(len(outline)))
-    triangles = []
-
-    def cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-        return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
-
-    while len(remaining) > 3:
-        for k in range(len(remaining)):
-            i, j, m = remaining[k - 1], remaining[k], remaining[(k + 1) % len(remaining)]
-            a, b, c = outline[i], outline[j], outline[m]
-            if cross(a, b, c) <= 0:
-                continue  # a reflex vertex is no ear
-            inside = any(
-                cross(a, b, outline[p]) >= 0 and cross(b, c, outline[p]) >= 0 and cross(c, a, outline[p]) >= 0
-                for p in remaining
-                if p not in (i, j, m)
-            )
-            if not inside:
-                triangles.append((i, j, m))
-                remaining.pop(k)
-                break
-        else:
-            raise ValueError("no ear found: the outline is not simple")
-    triangles.append(tuple(remaining))  # type: ignore[arg-type]
-    return triangles
-
-
-def _prism_visual(client, shape: Prism, rgb: tuple[float, float, float]) -> int:  # noqa: ANN001
-    """A static, visual-only prism body (near-white sides, a 0.1 mm coloured top plate), frame at mid height."""
-    import pybullet
-
-    from bt_arrange_sim.objects import SIDE_RGB, TOP_PLATE_M
-
-    outline = shape.outline_m
-    count = len(outline)
-    half = shape.height_m / 2
-
-    def slab(z_low: float, z_high: float, with_top: bool) -> tuple[list, list, list]:
-        vertices, indices, normals = [], [], []
-        for k in range(count):
-            a, b = outline[k], outline[(k + 1) % count]
-            edge = b - a
-            normal = [edge[1] / np.hypot(*edge), -edge[0] / np.hypot(*edge), 0.0]
-            base = len(vertices)
-            vertices += [[a[0], a[1], z_low], [b[0], b[1], z_low], [b[0], b[1], z_high], [a[0], a[1], z_high]]
-            normals += [normal] * 4
-            indices += [base, base + 1, base + 2, base, base + 2, base + 3]
-        if with_top:
-            base = len(vertices)
-            vertices += [[p[0], p[1], z_high] for p in outline]
-            normals += [[0.0, 0.0, 1.0]] * count
-            for i, j, m in _triangulate(outline):
-                indices += [base + i, base + j, base + m]
-        return vertices, indices, normals
-
-    body_v, body_i, body_n = slab(-half, half - TOP_PLATE_M, True)
-    plate_v, plate_i, plate_n = slab(half - TOP_PLATE_M, half, True)
-    shapes = []
-    for vertices, indices, normals, colour in ((body_v, body_i, body_n, SIDE_RGB), (plate_v, plate_i, plate_n, rgb)):
-        shapes.append(
-            client.createVisualShape(
-                pybullet.GEOM_MESH, vertices=vertices, indices=indices, normals=normals, rgbaColor=[*colour, 1.0]
-            )
-        )
-    body = client.createMultiBody(baseMass=0.0, baseVisualShapeIndex=shapes[0], basePosition=[0, 0, -1])
-    top = client.createMultiBody(baseMass=0.0, baseVisualShapeIndex=shapes[1], basePosition=[0, 0, -1])
-    return body * 100000 + top
-
-
 def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
-    """Scenes in the pybullet cell's top camera, four of the five outlines each (one per colour)."""
-    from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE
+    """Scenes in the pybullet cell's top camera: four of the five parts (one per colour) as the cell's bodies.
+
+    Each part is ``create_object``'s exact prism (a 0.1 mm coloured top plate on near-white
+    sides), settled on the table; the truth is the simulator's pose of the body after settling.
+    """
     from bt_arrange_sim import CellConfig, WorkCell
 
     rng = np.random.default_rng(seed + 1)
@@ -188,19 +121,11 @@ def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
     config = replace(DetectorConfig(), corner_refinement=method)
     detectors = {name: CubeDetector(config=config).for_object(part) for name, part in PARTS.items()}
     with WorkCell(CellConfig()) as world:
-        client = world.client
         view = world.config.camera.view()
-        bodies = {}
-        for name, part in PARTS.items():
-            shape = part.shape
-            assert isinstance(shape, Prism)
-            bodies[name] = {
-                colour: _prism_visual(client, shape, DEFAULT_COLOUR_TABLE[colour].paint_rgb) for colour in COLOURS
-            }
         scenes = max(1, round(poses * len(PARTS) / len(COLOURS)))
         for _ in range(scenes):
-            names = list(rng.permutation(list(PARTS)))[: len(COLOURS)]
-            placed: list[tuple[str, str, float, float, float]] = []
+            names = [str(n) for n in rng.permutation(list(PARTS))][: len(COLOURS)]
+            placed: list[tuple[str, str, float, float]] = []
             for colour, name in zip(COLOURS, names, strict=True):
                 shape = PARTS[name].shape
                 assert isinstance(shape, Prism)
@@ -208,26 +133,21 @@ def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
                     x, y = float(rng.uniform(0.29, 0.71)), float(rng.uniform(-0.40, 0.40))
                     if math.hypot(x, y) > 0.8 or not view.sees_disc(x, y, shape.sweep_radius_m + 0.005, HEIGHT_M):
                         continue
-                    if all(math.hypot(x - px, y - py) > 0.085 for _, _, px, py, _ in placed):
+                    if all(math.hypot(x - px, y - py) > 0.085 for _, _, px, py in placed):
                         break
-                placed.append((colour, name, x, y, float(rng.uniform(-math.pi, math.pi))))
-            for colour, name, x, y, yaw in placed:
-                key = bodies[name][colour]
-                orientation = client.getQuaternionFromEuler([0.0, 0.0, yaw])
-                for body in (key // 100000, key % 100000):
-                    client.resetBasePositionAndOrientation(body, [x, y, HEIGHT_M / 2], orientation)
+                placed.append((colour, name, x, y))
+                world.add_object(PARTS[name], colour, x, y, float(rng.uniform(-math.pi, math.pi)), name=name)
+            world.settle(0.05)
             frame = world.camera.capture()
-            for colour, name, x, y, yaw in placed:
-                start = time.perf_counter()
-                detection = detectors[name].detect(frame, colour)
-                ms = (time.perf_counter() - start) * 1000
-                results.append(
-                    {"source": "cell", "outline": name, "ms": ms, **_error(detection, PARTS[name], x, y, yaw)}
-                )
             for colour, name, *_ in placed:
-                key = bodies[name][colour]
-                for body in (key // 100000, key % 100000):
-                    client.resetBasePositionAndOrientation(body, [0, 0, -1], [0, 0, 0, 1])
+                start = time.process_time()
+                detection = detectors[name].detect(frame, colour)
+                ms = (time.process_time() - start) * 1000
+                x, y, yaw = world.cube_planar_truth(name)
+                error = _error(detection, PARTS[name], x, y, yaw)
+                results.append({"source": "cell", "outline": name, "ms": ms, **error})
+            for _, name, *_ in placed:
+                world.remove_cube(name)
     return results
 
 
