@@ -53,6 +53,8 @@ from bt_arrange.shapes import Prism
 #: The coarse yaw grid (degrees) and how many contour points it scores.
 COARSE_STEP_DEG = 2.0
 COARSE_POINTS = 160
+#: The contour points the ICP fits (evenly spaced along it).
+ICP_POINTS = 320
 #: Two yaws this far apart (after folding to the symmetry) are different registrations.
 DISTINCT_YAW_DEG = 10.0
 #: The sub-pixel passes: (band half width, px; margin at the edge's ends, px), as the cube's.
@@ -169,14 +171,31 @@ def pixels_on_plane(intrinsics: CameraIntrinsics, T_W_C: Pose, pixels: FloatArra
     return origin[:2] + scale[:, None] * rays[:, :2]
 
 
-def _segment_distances(points: FloatArray, model: OutlineModel) -> tuple[FloatArray, FloatArray]:
+def _segment_distances(points: FloatArray, model: OutlineModel | _Segments) -> tuple[FloatArray, FloatArray]:
     """Distances (..., M, N) from points (..., M, 2) in the model's frame to each edge, and where along it (0..1)."""
     relative = points[..., None, :] - model.starts  # (..., M, N, 2)
     along = np.einsum("...nk,nk->...n", relative, model.directions)
     t = np.clip(along / model.lengths, 0.0, 1.0)
-    nearest = model.starts + (t * model.lengths)[..., None] * model.directions
-    gap = points[..., None, :] - nearest
-    return np.sqrt(np.einsum("...k,...k->...", gap, gap)), t
+    # |p - a - t L d|^2 = |p - a|^2 - 2 t L (p - a).d + (t L)^2
+    tl = t * model.lengths
+    squared = np.einsum("...k,...k->...", relative, relative) - 2 * tl * along + tl * tl
+    return np.sqrt(np.maximum(squared, 0.0)), t
+
+
+@dataclass(frozen=True)
+class _Segments:
+    """Straight segments: starts (N x 2), unit directions and lengths."""
+
+    starts: FloatArray
+    directions: FloatArray
+    lengths: FloatArray
+
+    @classmethod
+    def closed(cls, points: FloatArray) -> _Segments:
+        """The edges of a closed polygon through ``points``."""
+        vectors = np.roll(points, -1, axis=0) - points
+        lengths = np.maximum(np.hypot(vectors[:, 0], vectors[:, 1]), 1e-12)
+        return cls(points, vectors / lengths[:, None], lengths)
 
 
 def _to_model(points: FloatArray, x_m: float, y_m: float, yaw_rad: float) -> FloatArray:
@@ -314,17 +333,12 @@ def outline_deviation_m(
     points = np.vstack(samples) if samples else np.empty((0, 2))
     if len(points) == 0:
         return outward
-    closed = np.vstack([local, local[:1]])
-    contour_model = OutlineModel.__new__(OutlineModel)
-    vectors = np.diff(closed, axis=0)
-    lengths = np.maximum(np.hypot(vectors[:, 0], vectors[:, 1]), 1e-12)
-    object.__setattr__(contour_model, "starts", closed[:-1])
-    object.__setattr__(contour_model, "directions", vectors / lengths[:, None])
-    object.__setattr__(contour_model, "lengths", lengths)
-    inward = 0.0
-    for chunk in np.array_split(points, max(1, len(points) // 64)):
-        d, _ = _segment_distances(chunk, contour_model)
-        inward = max(inward, float(d.min(axis=1).max()))
+    # The contour's pixels are at most a pixel and a half apart: its nearest point is near enough.
+    nearest = np.full(len(points), np.inf)
+    for chunk in np.array_split(local, max(1, len(local) // 256)):
+        gap = points[:, None, :] - chunk[None, :, :]
+        nearest = np.minimum(nearest, np.einsum("ijk,ijk->ij", gap, gap).min(axis=1))
+    inward = float(np.sqrt(nearest.max()))
     return max(outward, inward)
 
 
@@ -436,12 +450,7 @@ def _edge_points(
     c, s = math.cos(pose[2]), math.sin(pose[2])
     world_normals = model.normals @ np.array([[c, s], [-s, c]])
     inside_px = _project(view, np.hstack([middles - 0.002 * world_normals, z]))
-    image_edges = OutlineModel.__new__(OutlineModel)
-    vectors = np.roll(corners_px, -1, axis=0) - corners_px
-    lengths = np.maximum(np.hypot(vectors[:, 0], vectors[:, 1]), 1e-12)
-    object.__setattr__(image_edges, "starts", corners_px)
-    object.__setattr__(image_edges, "directions", vectors / lengths[:, None])
-    object.__setattr__(image_edges, "lengths", lengths)
+    image_edges = _Segments.closed(corners_px)
     all_points, all_edges, spreads = [], [], []
     for k in range(count):
         p, q = corners_px[k], corners_px[(k + 1) % count]
@@ -498,9 +507,10 @@ def register(
     rounding_m = 0.5 * kernel_px * metre
     yaws = coarse_yaws(points, face.centroid_m, model, cap_m=6.0 * metre)
     contour_dense = face.contour_m
+    icp_points = _resample(contour_dense, ICP_POINTS) if len(contour_dense) > ICP_POINTS else contour_dense
     fits: list[OutlineFit] = []
-    for yaw in yaws[:4]:
-        pose = icp(contour_dense, model, (float(face.centroid_m[0]), float(face.centroid_m[1]), yaw), 0.3 * metre)
+    for yaw in yaws[:3]:
+        pose = icp(icp_points, model, (float(face.centroid_m[0]), float(face.centroid_m[1]), yaw), 0.3 * metre)
         folded = fold_yaw(pose[2], model.symmetry_rad)
         pose = (pose[0], pose[1], folded)
         if any(
@@ -684,7 +694,7 @@ def _verdict_of_fit(
             DetectionStatus.AMBIGUOUS,
             f"{name} {model.name} fits at yaw {math.degrees(best.yaw_rad):.1f} "
             f"and {math.degrees(second.yaw_rad):.1f} deg "
-            f"(within {second.deviation_px:.1f} px): the outline is too nearly symmetric to tell",
+            f"(within {second.deviation_px:.1f} px): too nearly symmetric to tell apart at this resolution",
             area_px,
             expected_px,
         )
