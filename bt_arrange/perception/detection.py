@@ -52,6 +52,7 @@ from bt_arrange.perception.segmentation import (
 )
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, WorldRegion
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange.shapes import Prism
 
 
 @dataclass(frozen=True)
@@ -259,6 +260,11 @@ class CubeDetector:
         return split
 
     def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+        if isinstance(self.config.part.shape, Prism):
+            # A prism's face is registered to its outline (bt_arrange.perception.outline), not cornered.
+            from bt_arrange.perception.outline import detect_outline
+
+            return detect_outline(self, view, colour, roi)
         config = self.config
         candidates, outside_roi = self._candidates(view, colour, roi)
         xy = tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)

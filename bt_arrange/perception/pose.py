@@ -293,3 +293,13 @@ def expected_face_area_px(
     corners = np.asarray(centre_world, dtype=float) + np.array([[-h, -k, 0.0], [h, -k, 0.0], [h, k, 0.0], [-h, k, 0.0]])
     p = project_world(intrinsics, T_W_C, corners)
     return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))
+
+
+def expected_outline_area_px(
+    intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray, outline_m: FloatArray
+) -> float:
+    """Image area of a level face of ``outline_m`` (N x 2, about its origin) at ``centre_world``, in pixels."""
+    outline = np.asarray(outline_m, dtype=float)
+    points = np.column_stack([outline, np.zeros(len(outline))]) + np.asarray(centre_world, dtype=float)
+    p = project_world(intrinsics, T_W_C, points)
+    return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))

@@ -1,4 +1,4 @@
-"""Synthetic top-camera frames of cubes on a table, with exactly known ground truth.
+"""Synthetic top-camera frames of cubes and flat prisms on a table, with exactly known ground truth.
 
 Used by the tests and by :mod:`bt_arrange.perception.evaluate` to measure the pipeline without
 a simulator. Cubes are drawn as their visible faces (near-white sides first, coloured tops
@@ -6,6 +6,9 @@ last, like a z-buffer would for a camera above the table), each pixel is sampled
 ``supersample x supersample`` grid and averaged with ``cv2.INTER_AREA``: the result is an
 area-sampled, anti-aliased image whose polygon edges are known to floating-point precision.
 ``supersample=1`` samples pixel centres only, the aliased look of pybullet's TinyRenderer.
+A :class:`SyntheticPrism` (any simple outline, convex or not) is drawn the same way: its
+near-white sides that face the camera, then its coloured top face, each sample tested against
+the exact polygon.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from bt_arrange.geometry import FloatArray, Pose, rotation_z
 from bt_arrange.objects import CUBE
 from bt_arrange.perception.colours import PAINT_RGB, SIDE_RGB
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.shapes import Prism
 
 #: The simulated cell's top-face colours (RGB 0..1, fully lit) and cube sides.
 SIM_CUBE_COLOURS_RGB = PAINT_RGB
@@ -94,6 +98,44 @@ class SyntheticCube:
         return self.corners_world(self.table_z_m + self.edge_m)
 
 
+@dataclass(frozen=True)
+class SyntheticPrism:
+    """A flat part resting on the table: a :class:`Prism` at ``(x, y)`` (its area centroid) turned by ``yaw_rad``.
+
+    The top face is ``rgb`` if given, else the simulator's colour of that name, scaled by
+    ``brightness``; the sides are near-white and shaded like a cube's.
+    """
+
+    colour: str
+    x_m: float
+    y_m: float
+    yaw_rad: float
+    prism: Prism
+    brightness: float = 1.0
+    rgb: tuple[float, float, float] | None = None
+    table_z_m: float = 0.0
+
+    @property
+    def top_rgb(self) -> FloatArray:
+        """The top face's rendered colour (0..1)."""
+        rgb = self.rgb if self.rgb is not None else SIM_CUBE_COLOURS_RGB[self.colour]
+        return np.asarray(rgb, dtype=float) * self.brightness
+
+    @property
+    def centre_world(self) -> Pose:
+        """Pose of the part's frame in the world: the area centroid, half the height above the table."""
+        return Pose.from_planar(self.x_m, self.y_m, self.yaw_rad, self.table_z_m + self.prism.height_m / 2)
+
+    def outline_world(self, z_m: float) -> FloatArray:
+        """The outline at height ``z_m`` (N x 3), counter-clockwise seen from above."""
+        local = np.column_stack([self.prism.outline_m, np.zeros(len(self.prism.outline_m))])
+        return local @ rotation_z(self.yaw_rad).T + np.array([self.x_m, self.y_m, z_m])
+
+    def top_outline_world(self) -> FloatArray:
+        """The top face's outline (N x 3)."""
+        return self.outline_world(self.table_z_m + self.prism.height_m)
+
+
 def project_points(intrinsics: CameraIntrinsics, camera_pose_world: Pose, points_world: ArrayLike) -> FloatArray:
     """Pinhole projection (no distortion) of world points to pixel coordinates (Nx2)."""
     points = np.atleast_2d(np.asarray(points_world, dtype=float))
@@ -106,8 +148,9 @@ def project_points(intrinsics: CameraIntrinsics, camera_pose_world: Pose, points
 
 @dataclass(frozen=True)
 class _Face:
-    polygon_px: FloatArray  # convex, Nx2
+    polygon_px: FloatArray  # Nx2; convex unless ``convex`` is False
     rgb: FloatArray  # 0..1
+    convex: bool = True
 
 
 def _visible_faces(
@@ -142,6 +185,38 @@ def _visible_faces(
     return sides, top_face
 
 
+def _visible_prism_faces(
+    part: SyntheticPrism,
+    intrinsics: CameraIntrinsics,
+    camera_pose_world: Pose,
+    side_rgb: tuple[float, float, float],
+    light_direction: FloatArray,
+) -> tuple[list[_Face], _Face]:
+    """The prism's sides that face the camera (farthest first), shaded, and its top face (any simple polygon)."""
+    top = part.top_outline_world()
+    bottom = part.outline_world(part.table_z_m)
+    count = len(top)
+    eye = camera_pose_world.position_m
+    sides = []
+    for i in range(count):
+        j = (i + 1) % count
+        quad = np.array([bottom[i], bottom[j], top[j], top[i]])
+        edge = top[j] - top[i]
+        normal = np.array([edge[1], -edge[0], 0.0])  # counter-clockwise outline: outward is right of travel
+        normal /= np.linalg.norm(normal)
+        if normal @ (eye - quad.mean(axis=0)) <= 0:
+            continue
+        shade = 0.45 + 0.55 * max(0.0, float(normal @ light_direction))
+        distance = float(np.linalg.norm(quad.mean(axis=0) - eye))
+        sides.append(
+            (distance, _Face(project_points(intrinsics, camera_pose_world, quad), np.asarray(side_rgb) * shade))
+        )
+    # A non-convex prism's sides may hide each other: paint the farther ones first.
+    ordered = [face for _, face in sorted(sides, key=lambda item: -item[0])]
+    top_face = _Face(project_points(intrinsics, camera_pose_world, top), part.top_rgb, convex=False)
+    return ordered, top_face
+
+
 def _paint(tile: NDArray[np.float32], origin_px: tuple[int, int], supersample: int, face: _Face) -> None:
     """Paint a convex polygon into a supersampled tile, testing each sample's centre exactly."""
     s = supersample
@@ -160,6 +235,9 @@ def _paint(tile: NDArray[np.float32], origin_px: tuple[int, int], supersample: i
         return
     u = x0 + (np.arange(i0, i1) + 0.5) / s - 0.5
     v = y0 + (np.arange(j0, j1) + 0.5) / s - 0.5
+    if not face.convex:
+        tile[j0:j1, i0:i1][_inside_polygon(polygon, u, v)] = face.rgb.astype(np.float32)
+        return
     area2 = float(np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1]))
     orientation = 1.0 if area2 > 0 else -1.0
     inside = np.ones((j1 - j0, i1 - i0), dtype=bool)
@@ -171,8 +249,24 @@ def _paint(tile: NDArray[np.float32], origin_px: tuple[int, int], supersample: i
     tile[j0:j1, i0:i1][inside] = face.rgb.astype(np.float32)
 
 
+def _inside_polygon(polygon: FloatArray, u: FloatArray, v: FloatArray) -> NDArray[np.bool_]:
+    """Which samples (v rows x u columns) lie inside a simple polygon, by the even-odd rule (exact per sample)."""
+    inside = np.zeros((len(v), len(u)), dtype=bool)
+    for k in range(len(polygon)):
+        (ua, va), (ub, vb) = polygon[k], polygon[(k + 1) % len(polygon)]
+        if va == vb:
+            continue  # a horizontal edge crosses no sample's row in a half-open test
+        # Rows whose centre lies in [min(va, vb), max(va, vb)): the edge crosses them once.
+        rows = (v >= min(va, vb)) & (v < max(va, vb))
+        if not np.any(rows):
+            continue
+        u_cross = ua + (v[rows] - va) * (ub - ua) / (vb - va)
+        inside[rows] ^= u[None, :] < u_cross[:, None]
+    return inside
+
+
 def render_frame(
-    cubes: Sequence[SyntheticCube],
+    cubes: Sequence[SyntheticCube | SyntheticPrism],
     intrinsics: CameraIntrinsics | None = None,
     camera_pose_world: Pose | None = None,
     *,
@@ -184,7 +278,7 @@ def render_frame(
     blur_sigma_px: float = 0.0,
     seed: int = 0,
 ) -> CameraFrame:
-    """Render cubes on a grey table as the top camera sees them.
+    """Render cubes and prisms on a grey table as the top camera sees them.
 
     ``noise_sigma`` is Gaussian sensor noise in 0..255 grey levels, ``blur_sigma_px`` a Gaussian
     blur applied before the noise; the default camera is the simulated cell's.
@@ -196,7 +290,12 @@ def render_frame(
     image[:] = np.asarray(table_rgb, dtype=np.float32)
     light = np.asarray(light_direction, dtype=float) / np.linalg.norm(light_direction)
 
-    faces = [_visible_faces(cube, intrinsics, camera_pose_world, side_rgb, light) for cube in cubes]
+    faces = [
+        _visible_prism_faces(part, intrinsics, camera_pose_world, side_rgb, light)
+        if isinstance(part, SyntheticPrism)
+        else _visible_faces(part, intrinsics, camera_pose_world, side_rgb, light)
+        for part in cubes
+    ]
     # Tiles: the cubes' pixel boxes, merged where they overlap so that shared edges mix the two
     # colours that meet there (and not the table's).
     boxes: list[list[int]] = []

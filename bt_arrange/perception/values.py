@@ -15,10 +15,10 @@ from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.corners import CornerRefinement
-from bt_arrange.perception.pose import PoseModel, expected_face_area_px
+from bt_arrange.perception.pose import PoseModel, expected_face_area_px, expected_outline_area_px
 from bt_arrange.perception.segmentation import PAPER_KERNEL_PX
 from bt_arrange.robot import CameraIntrinsics
-from bt_arrange.shapes import Cuboid
+from bt_arrange.shapes import Cuboid, Prism
 
 
 class DetectionStatus(str, enum.Enum):
@@ -32,6 +32,9 @@ class DetectionStatus(str, enum.Enum):
     AMBIGUOUS = "ambiguous"
     #: One blob that is not a whole face: cut by the image border, covered, or not a 5 cm square.
     PARTIAL = "partial"
+    #: Prisms only: a whole face of the colour whose outline is not the part's (another part of
+    #: that colour, or one whose outline is not known).
+    WRONG_OUTLINE = "wrong_outline"
 
 
 @dataclass(frozen=True)
@@ -65,7 +68,8 @@ class DetectorConfig:
     intrinsics, the camera pose and the height of the top faces (``table_z_m`` + the part's height).
     """
 
-    #: The part looked for: a cuboid, whose top face (x by y) stands its height above the table
+    #: The part looked for: a cuboid, whose top face (x by y) stands its height above the table,
+    #: or a prism, whose top face is its outline (registered by ``bt_arrange.perception.outline``)
     #: (``CubeDetector.for_object`` sets it; the paper's cube by default).
     part: ObjectType = CUBE
     #: World z of the table top; the top faces lie the part's height above it.
@@ -95,9 +99,10 @@ class DetectorConfig:
     coarse_face_edge_px: float = 24.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.part.shape, Cuboid):
+        if not isinstance(self.part.shape, (Cuboid, Prism)):
             raise PerceptionError(
-                f"the detector finds cuboids' top faces, not {self.part.name} ({self.part.shape.describe()})"
+                f"the detector finds cuboids' and prisms' top faces, "
+                f"not {self.part.name} ({self.part.shape.describe()})"
             )
 
     @property
@@ -119,11 +124,16 @@ class DetectorConfig:
     @property
     def face_text(self) -> str:
         """The top face in words: ``5.0 cm square`` or ``8.0 x 4.0 cm rectangle``."""
+        if isinstance(self.part.shape, Prism):
+            return f"{self.part.name} outline"
         x, y, _ = self.size_m
         return f"{x * 100:.0f} cm square" if self.square_top else f"{x * 100:.1f} x {y * 100:.1f} cm rectangle"
 
     def face_area_px(self, intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray) -> float:
         """Image area of one top face centred at ``centre_world`` (level, axis-aligned), pixels."""
+        shape = self.part.shape
+        if isinstance(shape, Prism):
+            return expected_outline_area_px(intrinsics, T_W_C, centre_world, shape.outline_m)
         x, y, _ = self.size_m
         return expected_face_area_px(intrinsics, T_W_C, centre_world, x, y)
 
