@@ -40,7 +40,7 @@ from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Cuboid, folded_yaw, footprint_m, grown, min_centre_distance_m
+from bt_arrange.shapes import Cuboid, folded_yaw, footprint_m, grown, min_centre_distance_m, told_apart
 from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 from bt_arrange.trees.targets import reach_text
@@ -172,7 +172,7 @@ def check_scene(
     settings = settings or ManipulationSettings()
     kinematics = kinematics or ArmKinematics()
     names: dict[str, int] = {}
-    by_colour: dict[str, tuple[ObjectType, int]] = {}
+    by_colour: dict[str, list[tuple[ObjectType, int]]] = {}
     for index, start in enumerate(scene, start=1):
         colour = getattr(start, "colour", None)
         if not isinstance(colour, str):
@@ -194,15 +194,23 @@ def check_scene(
                 parts=(("start", _start_name(start)),),
             )
         kind = object_type_of(start)
-        seen = by_colour.get(colour)
-        if seen is not None and seen[0] != kind:
+        seen = next(
+            (
+                (other, first)
+                for other, first in by_colour.get(colour, [])
+                if other != kind and not told_apart(other.shape, kind.shape)
+            ),
+            None,
+        )
+        if seen is not None:
             raise PlanError(
                 f"parts {seen[1]} and {index} of the scene are both {colour} but of types {seen[0].name!r} and "
-                f"{kind.name!r}: the camera tells parts apart by colour, so one colour is one type",
+                f"{kind.name!r}: the camera tells parts apart by colour, so one colour is one type "
+                "(irregular parts of different outlines may share one)",
                 parts=(("start", _start_name(scene[seen[1] - 1])), ("start", _start_name(start))),
             )
         names[_start_name(start)] = index
-        by_colour.setdefault(colour, (kind, index))
+        by_colour.setdefault(colour, []).append((kind, index))
     for index, start in enumerate(scene, start=1):
         kind = object_type_of(start)
         where = f"cube {_start_name(start)} starts at {at_mm(start.x_m, start.y_m)}"

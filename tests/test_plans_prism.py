@@ -87,3 +87,45 @@ def test_an_outline_plan_shown_as_xml_says_why_it_cannot_be_in_one_line(tmp_path
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "XML trees describe cuboids" in lines[0], result.stderr
+
+
+TWO_RED = """
+[objects.ell]
+outline_mm = [[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]]
+height_mm = 20
+
+[objects.other]
+outline_mm = OTHER
+height_mm = 20
+
+[[targets]]
+object = "ell"
+colour = "red"
+name = "red ell"
+x_mm = 450
+y_mm = 80
+yaw_deg = 30
+
+[[targets]]
+object = "other"
+colour = "red"
+name = "red other"
+x_mm = 560
+y_mm = -60
+yaw_deg = -45
+"""
+
+
+def test_irregular_parts_of_different_outlines_may_share_a_colour_congruent_ones_may_not(tmp_path) -> None:
+    from bt_arrange.shapes import told_apart
+
+    trapezoid = "[[0, 0], [70, 0], [50, 35], [15, 35]]"
+    plan = plans.load(write(tmp_path, TWO_RED.replace("OTHER", trapezoid)))
+    assert [t.colour for t in plan.targets] == ["red", "red"]
+    # The same L written mirrored and turned: congruent, so the camera could not tell the two apart.
+    mirrored = "[[0, 0], [0, 60], [20, 60], [20, 20], [50, 20], [50, 0]]"
+    with pytest.raises(PlanError, match="one colour is one type"):
+        plans.load(write(tmp_path, TWO_RED.replace("OTHER", mirrored), "mirrored.toml"))
+    ell = plan.object_types["ell"].shape
+    assert told_apart(ell, plan.object_types["other"].shape)
+    assert not told_apart(ell, ell)

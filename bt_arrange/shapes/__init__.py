@@ -20,7 +20,7 @@ from bt_arrange.shapes.base import (
 )
 from bt_arrange.shapes.cuboid import Cuboid
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
-from bt_arrange.shapes.prism import Prism, outline_problem
+from bt_arrange.shapes.prism import Prism, outline_problem, told_apart
 
 __all__ = [
     "MAX_HEIGHT_M",
@@ -37,6 +37,7 @@ __all__ = [
     "grown",
     "min_centre_distance_m",
     "outline_problem",
+    "told_apart",
     "preferred_grasp",
     "yaw_error_rad",
 ]

@@ -70,6 +70,24 @@ def _segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArr
     )
 
 
+def told_apart(first: object, second: object) -> bool:
+    """True when the camera tells parts of these two shapes apart by outline alone: two prisms not congruent.
+
+    Congruent outlines (the same vertices up to a turn and a mirror, within half a millimetre)
+    register onto each other, so parts of one colour must differ in outline to share it.
+    """
+    if not (isinstance(first, Prism) and isinstance(second, Prism)):
+        return False
+    a, b = first.outline_m, second.outline_m
+    if len(a) != len(b) or abs(first.area_m2 - second.area_m2) > 0.01 * max(first.area_m2, second.area_m2):
+        return True
+
+    def sides(points: FloatArray) -> FloatArray:
+        return np.sort(np.hypot(*(np.roll(points, -1, axis=0) - points).T))
+
+    return not np.allclose(sides(a), sides(b), atol=SYMMETRY_TOLERANCE_M)
+
+
 def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
     """Why ``points`` (N x 2, metres) is no simple polygon: too few points, degenerate, self-intersecting."""
     array = np.asarray(points, dtype=float)

@@ -18,7 +18,7 @@ from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Gripper
+from bt_arrange.shapes import Gripper, told_apart
 from bt_arrange.suggest import did_you_mean
 
 CORRECT_MODES = ("each", "after_all")
@@ -64,7 +64,7 @@ def validate_targets(
     known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
     settings = settings or ManipulationSettings()
     names: dict[str, int] = {}
-    type_of_colour: dict[str, tuple[ObjectType, int]] = {}
+    type_of_colour: dict[str, list[tuple[ObjectType, int]]] = {}
     for index, target in enumerate(plan, start=1):
         if not isinstance(target, Target):
             raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
@@ -90,14 +90,22 @@ def validate_targets(
                 parts=(("target", target.obj),),
             )
         names[target.obj] = index
-        seen = type_of_colour.get(target.colour)
-        if seen is not None and seen[0] != target.object_type:
+        seen = next(
+            (
+                (kind, first)
+                for kind, first in type_of_colour.get(target.colour, [])
+                if kind != target.object_type and not told_apart(kind.shape, target.object_type.shape)
+            ),
+            None,
+        )
+        if seen is not None:
             raise PlanError(
                 f"targets {seen[1]} and {index} are both {target.colour} but of types {seen[0].name!r} and "
-                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type",
+                f"{target.object_type.name!r}: the camera tells parts apart by colour, so one colour is one type "
+                "(irregular parts of different outlines may share one)",
                 parts=(("target", str(getattr(plan[seen[1] - 1], "obj", ""))), ("target", target.obj)),
             )
-        type_of_colour.setdefault(target.colour, (target.object_type, index))
+        type_of_colour.setdefault(target.colour, []).append((target.object_type, index))
     checked = [target for target in plan if isinstance(target, Target)]
     for target in checked:
         problem = target.object_type.mass_problem(settings)

@@ -54,3 +54,23 @@ def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> N
         x, y, yaw = cell.cube_planar_truth("ell")
         assert math.hypot(x - target[0], y - target[1]) < 0.002, "placed within 2 mm (no push yet)"
         assert abs(math.degrees(fold_yaw(yaw - target[2], 2 * math.pi))) < 1.0
+
+
+def test_two_red_parts_of_different_outlines_are_told_apart_and_arranged_by_the_camera(tmp_path) -> None:
+    from bt_arrange import treefile
+    from bt_arrange_sim.runs import SimulatedRun
+
+    path = tmp_path / "two_red.toml"
+    path.write_text(
+        "[objects.ell]\noutline_mm = [[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]]\nheight_mm = 20\n"
+        "[objects.trapezoid]\noutline_mm = [[0, 0], [70, 0], [50, 35], [15, 35]]\nheight_mm = 20\n"
+        '[[targets]]\nobject = "ell"\ncolour = "red"\nname = "red ell"\nx_mm = 450\ny_mm = 80\nyaw_deg = 30\n'
+        '[[targets]]\nobject = "trapezoid"\ncolour = "red"\nname = "red trapezoid"\nx_mm = 560\ny_mm = -60\n'
+        "yaw_deg = -45\n"
+    )
+    module = treefile.load(path)
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=0)) as run:
+        report = run.run()
+    for outcome in report.objects:
+        assert outcome.status == "within", (outcome.name, outcome.reason)
+        assert outcome.final_offset_truth_mm < 1.0 and abs(outcome.final_yaw_error_truth_deg) < 1.0
