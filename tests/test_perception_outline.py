@@ -16,7 +16,8 @@ from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector, DetectionStatus, DetectorConfig
-from bt_arrange.perception.outline import OutlineDetector, OutlineModel
+from bt_arrange.perception.outline_detector import OutlineDetector
+from bt_arrange.perception.outline_fit import OutlineModel
 from bt_arrange.perception.synthetic import SyntheticCube, SyntheticPrism, render_frame, sim_intrinsics
 from bt_arrange.shapes import Prism
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -26,7 +26,6 @@ from bt_arrange.objects import ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.perception.corners import (
     CornerRefinement,
-    Undistort,
     refine_contour_lines,
     refine_corner_subpix,
     refine_edge_lines,
@@ -50,22 +49,9 @@ from bt_arrange.perception.segmentation import (
     outline_deviation_px,
     to_hsv,
 )
-from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, WorldRegion
+from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
-
-
-@dataclass(frozen=True)
-class _View:
-    """One frame, prepared once for any number of colours."""
-
-    rgb: NDArray[np.uint8]
-    intrinsics: CameraIntrinsics
-    T_W_C: Pose
-    scale: int
-    hsv_small: NDArray[np.uint8]
-    min_blob_area_px: float
-    undistort: Undistort | None
 
 
 def _format_xy(points: Iterable[tuple[float, float]]) -> str:
@@ -117,8 +103,8 @@ class CubeDetector:
         a low-resolution frame (``PixelWindow.full(intrinsics, binning=8)``), to choose a window to
         measure in. Centres are accurate to about a pixel of ``frame``.
         """
-        candidates, _ = self._candidates(self._prepare(frame), self.colours[colour], roi)
-        return tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
+        found, _ = self.candidates(self._prepare(frame), self.colours[colour], roi)
+        return tuple((float(p[0]), float(p[1])) for _, p, _ in found)
 
     def search_binning(self, intrinsics: CameraIntrinsics, T_W_C: Pose, face_edge_px: float = 12.0) -> int:
         """Binning of a full view in which a face at the image centre is about ``face_edge_px`` wide.
@@ -155,7 +141,7 @@ class CubeDetector:
 
     # -- stages ----------------------------------------------------------------------------
 
-    def _prepare(self, frame: CameraFrame) -> _View:
+    def _prepare(self, frame: CameraFrame) -> PreparedView:
         rgb, intrinsics = frame.rgb, frame.intrinsics
         if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
             raise PerceptionError(f"expected an RGB uint8 image (H x W x 3), got {rgb.dtype} {rgb.shape}")
@@ -198,10 +184,12 @@ class CubeDetector:
                 undistorted = cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix)
                 return np.asarray(undistorted, dtype=np.float64).reshape(-1, 2)
 
-        return _View(rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort)
+        return PreparedView(
+            rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort
+        )
 
-    def _candidates(
-        self, view: _View, colour: ColourRange, roi: WorldRegion | None
+    def candidates(
+        self, view: PreparedView, colour: ColourRange, roi: WorldRegion | None
     ) -> tuple[list[tuple[Blob, FloatArray, float]], int]:
         """Blobs of the colour that may be faces, and how many lay outside ``roi``.
 
@@ -226,7 +214,7 @@ class CubeDetector:
             candidates.append((blob, on_plane, expected_px))
         return candidates, outside_roi
 
-    def _split_merged(self, view: _View, colour: ColourRange, blobs: list[Blob]) -> list[Blob]:
+    def _split_merged(self, view: PreparedView, colour: ColourRange, blobs: list[Blob]) -> list[Blob]:
         """Blobs of the downscaled search, a blob larger than a face looked at again at full resolution.
 
         Two faces of one colour a few pixels apart (identical parts 2 mm apart) merge in the
@@ -259,14 +247,14 @@ class CubeDetector:
         split.sort(key=lambda b: -b.area_px)
         return split
 
-    def _detect(self, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+    def _detect(self, view: PreparedView, colour: ColourRange, roi: WorldRegion | None) -> Detection:
         if isinstance(self.config.part.shape, Prism):
             # A prism's face is registered to its outline (bt_arrange.perception.outline), not cornered.
             from bt_arrange.perception.outline import detect_outline
 
             return detect_outline(self, view, colour, roi)
         config = self.config
-        candidates, outside_roi = self._candidates(view, colour, roi)
+        candidates, outside_roi = self.candidates(view, colour, roi)
         xy = tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
         name = colour.name
 
@@ -299,7 +287,7 @@ class CubeDetector:
 
     def _measure(
         self,
-        view: _View,
+        view: PreparedView,
         colour: ColourRange,
         blob: Blob,
         expected_px: float,
@@ -328,7 +316,7 @@ class CubeDetector:
         return self._pose_from_corners(view, name, corners, area_px, expected_px, xy)
 
     def _face_contour(
-        self, view: _View, colour: ColourRange, blob: Blob, expected_px: float
+        self, view: PreparedView, colour: ColourRange, blob: Blob, expected_px: float
     ) -> tuple[NDArray[np.int32], float]:
         """The blob's outline at full resolution (image pixels) and its area; rejected if it vanished."""
         x_m, y_m, _ = self.config.size_m
@@ -349,7 +337,7 @@ class CubeDetector:
         return contour.reshape(-1, 2) + np.array([x0, y0]), float(cv2.contourArea(contour))
 
     def _check_whole_face(
-        self, view: _View, name: str, contour: NDArray[np.int32], area_px: float, expected_px: float
+        self, view: PreparedView, name: str, contour: NDArray[np.int32], area_px: float, expected_px: float
     ) -> None:
         """One whole top face: not cut by the image border, not two faces, not a covered piece of one."""
         height, width = view.rgb.shape[:2]
@@ -414,7 +402,7 @@ class CubeDetector:
 
     def _pose_from_corners(
         self,
-        view: _View,
+        view: PreparedView,
         name: str,
         corners: FloatArray,
         area_px: float,
@@ -472,7 +460,7 @@ class CubeDetector:
             reprojection_error_px=error_px,
         )
 
-    def _refine(self, view: _View, polygon: FloatArray, outline: FloatArray) -> FloatArray | None:
+    def _refine(self, view: PreparedView, polygon: FloatArray, outline: FloatArray) -> FloatArray | None:
         """Corners in undistorted pixel coordinates, by the configured method, or None.
 
         ``polygon`` holds the Douglas-Peucker vertices and ``outline`` the pixel-level corners

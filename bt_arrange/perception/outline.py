@@ -24,9 +24,10 @@ registering that outline to the face seen by the top camera, in three steps:
 Corners are never used: the mask's corners are rounded by the 7x7 morphology (by several
 pixels at an acute corner), whereas every edge point between them is measured exactly.
 
-``OutlineDetector`` (a ``CubeDetector``) tells parts of one colour apart by their outlines;
-``CubeDetector.for_object(prism part)`` returns one, so ``Detect`` and ``Inspect`` need nothing
-new. Perception stays free of the simulator.
+``CubeDetector`` hands a prism part's face to ``detect_outline``, so ``Detect`` and ``Inspect``
+need nothing new; ``bt_arrange.perception.outline_detector.OutlineDetector`` tells parts of one
+colour apart by their outlines. The registration on the table plane is
+``bt_arrange.perception.outline_fit``. Perception stays free of the simulator.
 """
 
 from __future__ import annotations
@@ -34,315 +35,47 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose, fold_yaw
-from bt_arrange.objects import ObjectType
-from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.perception.colours import ColourRange
 from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, CornerRefinement, _median, _side_edge_points, chroma
-from bt_arrange.perception.detection import CubeDetector, _View
+from bt_arrange.perception.outline_fit import (
+    COARSE_POINTS,
+    DISTINCT_YAW_DEG,
+    EDGE_PASSES,
+    ICP_POINTS,
+    MIN_EDGE_POINTS,
+    EdgeSegments,
+    OutlineFit,
+    OutlineModel,
+    area_centroid,
+    coarse_yaws,
+    gauss_newton,
+    icp,
+    outline_deviation_m,
+    pixels_on_plane,
+    resample,
+    segment_distances,
+)
 from bt_arrange.perception.segmentation import Blob, colour_mask
-from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, WorldRegion
-from bt_arrange.robot import CameraFrame, CameraIntrinsics
-from bt_arrange.shapes import Prism
-
-#: The coarse yaw grid (degrees) and how many contour points it scores.
-COARSE_STEP_DEG = 2.0
-COARSE_POINTS = 160
-#: The contour points the ICP fits (evenly spaced along it).
-ICP_POINTS = 320
-#: Two yaws this far apart (after folding to the symmetry) are different registrations.
-DISTINCT_YAW_DEG = 10.0
-#: The sub-pixel passes: (band half width, px; margin at the edge's ends, px), as the cube's.
-EDGE_PASSES: tuple[tuple[int, float], ...] = ((5, 3.0), (4, 3.0))
-#: Fewer edge points than this on an edge: the edge is left out of the fit.
-MIN_EDGE_POINTS = 5
+from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 
 
-@dataclass(frozen=True)
-class OutlineModel:
-    """A known outline, ready to register.
+class FaceSearch(Protocol):
+    """What the outline side needs of a detector (``CubeDetector`` is one): its config and its blob search."""
 
-    The part, its outline (counter-clockwise about the centroid, metres), height and symmetry, and
-    its edges (start, unit direction, length, outward normal and the normal's offset ``n . a``).
-    """
+    config: DetectorConfig
 
-    part: ObjectType
-    outline_m: FloatArray
-    height_m: float
-    symmetry_rad: float
-    area_m2: float
-    starts: FloatArray
-    directions: FloatArray
-    lengths: FloatArray
-    normals: FloatArray
-    offsets: FloatArray
-    #: Per vertex: how far (metres, before scaling by the morphology's radius) its rounding reaches.
-    corner_sharpness: FloatArray
-
-    @classmethod
-    def of(cls, part: ObjectType) -> OutlineModel:
-        """The model of a prism part; a ``PerceptionError`` for any other shape."""
-        prism = part.shape
-        if not isinstance(prism, Prism):
-            raise PerceptionError(f"{part.name} is no prism ({prism.describe()})")
-        outline = np.asarray(prism.outline_m, dtype=float)
-        vectors = np.roll(outline, -1, axis=0) - outline
-        lengths = np.hypot(vectors[:, 0], vectors[:, 1])
-        directions = vectors / lengths[:, None]
-        normals = np.column_stack([directions[:, 1], -directions[:, 0]])  # right of travel: outward
-        offsets = np.einsum("ij,ij->i", normals, outline)
-        # The interior angle at each vertex; the morphology rounds a corner of angle b (the
-        # sharper of the face's and the outside's) out to r / sin(b / 2) from the vertex.
-        before, after = -np.roll(directions, 1, axis=0), directions
-        angles = np.arccos(np.clip(np.einsum("ij,ij->i", before, after), -1.0, 1.0))
-        sharp = np.minimum(angles, 2 * math.pi - angles)
-        sharpness = 1.0 / np.maximum(np.sin(sharp / 2), 0.05)
-        return cls(
-            part,
-            outline,
-            float(prism.height_m),
-            float(prism.symmetry_rad),
-            float(prism.area_m2),
-            outline,
-            directions,
-            lengths,
-            normals,
-            offsets,
-            sharpness,
-        )
-
-    @property
-    def name(self) -> str:
-        """The part's name."""
-        return self.part.name
-
-    def posed(self, x_m: float, y_m: float, yaw_rad: float) -> FloatArray:
-        """The outline on the table (N x 2) with its centroid at ``(x, y)`` turned by ``yaw_rad``."""
-        c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-        return self.outline_m @ np.array([[c, s], [-s, c]]) + np.array([x_m, y_m])
-
-
-@dataclass(frozen=True)
-class OutlineFit:
-    """A registration of an outline to a face: the pose on the table and how well it explains the face.
-
-    ``deviation_px`` is the largest distance, either way, between the mask's contour and the fitted
-    outline away from the corners; ``rms_px`` the RMS distance of the sub-pixel edge points from
-    the model's edges (None for a coarse fit only); ``edge_points`` how many were used.
-    """
-
-    model: OutlineModel
-    x_m: float
-    y_m: float
-    yaw_rad: float
-    deviation_px: float
-    rms_px: float | None = None
-    edge_points: int = 0
-
-
-# -- geometry on the plane ---------------------------------------------------------------------
-
-
-def pixels_on_plane(intrinsics: CameraIntrinsics, T_W_C: Pose, pixels: FloatArray, plane_z_m: float) -> FloatArray:
-    """World (x, y) where the rays of undistorted ``pixels`` (N x 2) meet ``z = plane_z_m`` (N x 2).
-
-    A ray that misses the plane (parallel to it, or meeting it behind the camera) gives NaN.
-    """
-    pixels = np.asarray(pixels, dtype=float).reshape(-1, 2)
-    rays = (
-        np.column_stack(
-            [
-                (pixels[:, 0] - intrinsics.cx_px) / intrinsics.fx_px,
-                (pixels[:, 1] - intrinsics.cy_px) / intrinsics.fy_px,
-                np.ones(len(pixels)),
-            ]
-        )
-        @ T_W_C.rotation.T
-    )
-    origin = T_W_C.position_m
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = (plane_z_m - origin[2]) / rays[:, 2]
-    scale = np.where(scale > 0, scale, np.nan)
-    return origin[:2] + scale[:, None] * rays[:, :2]
-
-
-def _segment_distances(points: FloatArray, model: OutlineModel | _Segments) -> tuple[FloatArray, FloatArray]:
-    """Distances (..., M, N) from points (..., M, 2) in the model's frame to each edge, and where along it (0..1)."""
-    relative = points[..., None, :] - model.starts  # (..., M, N, 2)
-    along = np.einsum("...nk,nk->...n", relative, model.directions)
-    t = np.clip(along / model.lengths, 0.0, 1.0)
-    # |p - a - t L d|^2 = |p - a|^2 - 2 t L (p - a).d + (t L)^2
-    tl = t * model.lengths
-    squared = np.einsum("...k,...k->...", relative, relative) - 2 * tl * along + tl * tl
-    return np.sqrt(np.maximum(squared, 0.0)), t
-
-
-@dataclass(frozen=True)
-class _Segments:
-    """Straight segments: starts (N x 2), unit directions and lengths."""
-
-    starts: FloatArray
-    directions: FloatArray
-    lengths: FloatArray
-
-    @classmethod
-    def closed(cls, points: FloatArray) -> _Segments:
-        """The edges of a closed polygon through ``points``."""
-        vectors = np.roll(points, -1, axis=0) - points
-        lengths = np.maximum(np.hypot(vectors[:, 0], vectors[:, 1]), 1e-12)
-        return cls(points, vectors / lengths[:, None], lengths)
-
-
-def _to_model(points: FloatArray, x_m: float, y_m: float, yaw_rad: float) -> FloatArray:
-    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-    return (points - np.array([x_m, y_m])) @ np.array([[c, -s], [s, c]])
-
-
-def _area_centroid(points: FloatArray) -> tuple[float, FloatArray]:
-    x, y = points[:, 0], points[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    area = 0.5 * float(np.sum(cross))
-    if abs(area) < 1e-12:
-        return 0.0, points.mean(axis=0)
-    cx = float(np.sum((x + xn) * cross)) / (6 * area)
-    cy = float(np.sum((y + yn) * cross)) / (6 * area)
-    return abs(area), np.array([cx, cy])
-
-
-def _resample(points: FloatArray, count: int) -> FloatArray:
-    """``count`` points evenly spaced by arc length along a closed polyline."""
-    closed = np.vstack([points, points[:1]])
-    steps = np.hypot(*np.diff(closed, axis=0).T)
-    arc = np.concatenate([[0.0], np.cumsum(steps)])
-    targets = np.linspace(0.0, arc[-1], count, endpoint=False)
-    return np.column_stack([np.interp(targets, arc, closed[:, 0]), np.interp(targets, arc, closed[:, 1])])
-
-
-def coarse_yaws(points_m: FloatArray, centre_m: FloatArray, model: OutlineModel, cap_m: float) -> list[float]:
-    """Yaws on the coarse grid over one symmetry turn, best first: the local minima of the contour's score.
-
-    The score of a yaw is the mean of ``min(d, cap)^2`` over the contour points, ``d`` the point's
-    distance to the outline turned by that yaw about ``centre_m``.
-    """
-    turn = min(model.symmetry_rad, 2 * math.pi)
-    count = max(1, int(round(math.degrees(turn) / COARSE_STEP_DEG)))
-    yaws = np.arange(count) * (turn / count)
-    relative = points_m - centre_m
-    c, s = np.cos(yaws), np.sin(yaws)
-    # Each point into the model's frame for every yaw: R(-yaw) p.
-    local = np.stack(
-        [
-            c[:, None] * relative[None, :, 0] + s[:, None] * relative[None, :, 1],
-            -s[:, None] * relative[None, :, 0] + c[:, None] * relative[None, :, 1],
-        ],
-        axis=-1,
-    )
-    distances, _ = _segment_distances(local, model)
-    scores = np.mean(np.minimum(distances.min(axis=-1), cap_m) ** 2, axis=-1)
-    minima = [k for k in range(count) if scores[k] <= scores[k - 1] and scores[k] <= scores[(k + 1) % count]]
-    return [float(yaws[k]) for k in sorted(minima, key=lambda k: scores[k])]
-
-
-def _gauss_newton(
-    points_m: FloatArray,
-    edge: NDArray[np.intp],
-    model: OutlineModel,
-    pose: tuple[float, float, float],
-    trim_floor_m: float,
-    iterations: int = 8,
-) -> tuple[tuple[float, float, float], FloatArray]:
-    """Trimmed least squares of the points' distances to their edges' lines over (x, y, yaw); the kept residuals."""
-    x, y, yaw = pose
-    normals, offsets = model.normals[edge], model.offsets[edge]
-    keep = np.ones(len(points_m), dtype=bool)
-    residual = np.zeros(len(points_m))
-    for _ in range(iterations):
-        c, s = math.cos(yaw), math.sin(yaw)
-        world_normals = np.column_stack([c * normals[:, 0] - s * normals[:, 1], s * normals[:, 0] + c * normals[:, 1]])
-        relative = points_m - np.array([x, y])
-        residual = np.einsum("ij,ij->i", world_normals, relative) - offsets
-        jacobian = np.column_stack(
-            [
-                -world_normals[:, 0],
-                -world_normals[:, 1],
-                np.einsum("ij,ij->i", relative, world_normals[:, ::-1] * [-1, 1]),
-            ]
-        )
-        limit = max(3.5 * 1.4826 * float(_median(np.abs(residual[keep]))), trim_floor_m)
-        keep = np.abs(residual) <= limit
-        if keep.sum() < 3:
-            break
-        step, *_ = np.linalg.lstsq(jacobian[keep], -residual[keep], rcond=None)
-        x, y, yaw = x + float(step[0]), y + float(step[1]), yaw + float(step[2])
-        if float(np.max(np.abs(step))) < 1e-9:
-            break
-    return (x, y, yaw), residual[keep]
-
-
-def icp(
-    points_m: FloatArray, model: OutlineModel, pose: tuple[float, float, float], trim_floor_m: float, rounds: int = 6
-) -> tuple[float, float, float]:
-    """Point-to-line ICP of contour points on the plane: each point to its nearest edge's line, re-assigned each round.
-
-    Points whose nearest place on the outline is a vertex (the rounded corners) are left out.
-    """
-    for _ in range(rounds):
-        local = _to_model(points_m, *pose)
-        distances, t = _segment_distances(local, model)
-        edge = np.argmin(distances, axis=1)
-        along = t[np.arange(len(edge)), edge]
-        inner = (along > 0.0) & (along < 1.0)
-        if inner.sum() < 6:
-            break
-        new_pose, _ = _gauss_newton(points_m[inner], edge[inner], model, pose, trim_floor_m, iterations=3)
-        moved = max(abs(new_pose[0] - pose[0]), abs(new_pose[1] - pose[1]))
-        pose = new_pose
-        if moved < 1e-6:
-            break
-    return pose
-
-
-def outline_deviation_m(
-    contour_m: FloatArray, model: OutlineModel, pose: tuple[float, float, float], rounding_m: float
-) -> float:
-    """The largest distance, either way, between the contour (on the plane) and the posed outline, away from corners.
-
-    Near each vertex the morphology rounds the mask by up to ``rounding_m / sin(b / 2)`` (``b`` the
-    corner's sharper angle): contour points and outline samples within that, plus ``rounding_m``,
-    of a vertex are not counted (but never more than 40 % of the edges meeting there).
-    """
-    local = _to_model(contour_m, *pose)
-    zone = (model.corner_sharpness + 1.0) * rounding_m
-    zone = np.minimum(zone, 0.4 * np.minimum(model.lengths, np.roll(model.lengths, 1)))
-    to_vertex = np.hypot(*(local[:, None, :] - model.outline_m[None, :, :]).transpose(2, 0, 1))
-    away = np.all(to_vertex > zone[None, :], axis=1)
-    distances, _ = _segment_distances(local[away], model)
-    outward = float(distances.min(axis=1).max()) if away.any() else 0.0
-    # The outline's samples to the contour: a missing piece of the face shows here.
-    samples = []
-    step = rounding_m / 2
-    for k in range(len(model.outline_m)):
-        s_values = np.arange(zone[k], model.lengths[k] - zone[(k + 1) % len(zone)], step)
-        samples.append(model.starts[k] + s_values[:, None] * model.directions[k])
-    points = np.vstack(samples) if samples else np.empty((0, 2))
-    if len(points) == 0:
-        return outward
-    # The contour's pixels are at most a pixel and a half apart: its nearest point is near enough.
-    nearest = np.full(len(points), np.inf)
-    for chunk in np.array_split(local, max(1, len(local) // 256)):
-        gap = points[:, None, :] - chunk[None, :, :]
-        nearest = np.minimum(nearest, np.einsum("ijk,ijk->ij", gap, gap).min(axis=1))
-    inward = float(np.sqrt(nearest.max()))
-    return max(outward, inward)
-
-
-# -- the face seen in one frame ----------------------------------------------------------------
+    def candidates(
+        self, view: PreparedView, colour: ColourRange, roi: WorldRegion | None
+    ) -> tuple[list[tuple[Blob, FloatArray, float]], int]:
+        """Blobs of the colour that may be faces (blob, centre on the plane, area px), and how many lay outside."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -358,7 +91,7 @@ class _Face:
     touches_border: bool
 
 
-def _face(detector: CubeDetector, view: _View, colour: ColourRange, blob: Blob, plane_z_m: float) -> _Face | None:
+def _face(detector: FaceSearch, view: PreparedView, colour: ColourRange, blob: Blob, plane_z_m: float) -> _Face | None:
     """The blob's face at full resolution, or None when it vanished."""
     height, width = view.rgb.shape[:2]
     x, y, w, h = blob.bbox_px
@@ -395,7 +128,7 @@ def _face(detector: CubeDetector, view: _View, colour: ColourRange, blob: Blob, 
     on_plane = pixels_on_plane(view.intrinsics, view.T_W_C, points, plane_z_m)
     if not np.all(np.isfinite(on_plane)):
         return None
-    area_m2, centroid = _area_centroid(on_plane)
+    area_m2, centroid = area_centroid(on_plane)
     inner = np.zeros_like(mask)
     cv2.drawContours(inner, [chosen], -1, 255, thickness=cv2.FILLED)
     inner = np.asarray(cv2.erode(inner & mask, np.ones((5, 5), np.uint8)), dtype=np.uint8)
@@ -407,7 +140,7 @@ def _face(detector: CubeDetector, view: _View, colour: ColourRange, blob: Blob, 
     return _Face(contour, area_px, on_plane, area_m2, centroid, face, touches)
 
 
-def _project(view: _View, points_world: FloatArray) -> FloatArray:
+def _project(view: PreparedView, points_world: FloatArray) -> FloatArray:
     """World points (N x 3) to raw image pixels (with the lens's distortion, if any)."""
     intrinsics = view.intrinsics
     if view.undistort is None:
@@ -431,7 +164,7 @@ def _project(view: _View, points_world: FloatArray) -> FloatArray:
 
 
 def _edge_points(
-    view: _View,
+    view: PreparedView,
     face: _Face,
     model: OutlineModel,
     pose: tuple[float, float, float],
@@ -450,7 +183,7 @@ def _edge_points(
     c, s = math.cos(pose[2]), math.sin(pose[2])
     world_normals = model.normals @ np.array([[c, s], [-s, c]])
     inside_px = _project(view, np.hstack([middles - 0.002 * world_normals, z]))
-    image_edges = _Segments.closed(corners_px)
+    image_edges = EdgeSegments.closed(corners_px)
     all_points, all_edges, spreads = [], [], []
     for k in range(count):
         p, q = corners_px[k], corners_px[(k + 1) % count]
@@ -460,7 +193,7 @@ def _edge_points(
         if len(points) == 0:
             continue
         # Keep the points whose band cannot reach another edge of the face.
-        distances, _ = _segment_distances(points, image_edges)
+        distances, _ = segment_distances(points, image_edges)
         distances[:, k] = np.inf
         clear = distances.min(axis=1) >= half_width_px + 2.0
         points, spread = points[clear], spread[clear]
@@ -486,7 +219,7 @@ def _spans_two_directions(model: OutlineModel, edges: NDArray[np.intp]) -> bool:
 
 
 def register(
-    view: _View,
+    view: PreparedView,
     face: _Face,
     model: OutlineModel,
     plane_z_m: float,
@@ -503,11 +236,11 @@ def register(
     ``CONTOUR_LINES``, the contour's ICP alone; ``NONE``, the contour's centroid and the coarse grid's yaw.
     """
     metre = 1.0 / px_per_m
-    points = _resample(face.contour_m, COARSE_POINTS)
+    points = resample(face.contour_m, COARSE_POINTS)
     rounding_m = 0.5 * kernel_px * metre
     yaws = coarse_yaws(points, face.centroid_m, model, cap_m=6.0 * metre)
     contour_dense = face.contour_m
-    icp_points = _resample(contour_dense, ICP_POINTS) if len(contour_dense) > ICP_POINTS else contour_dense
+    icp_points = resample(contour_dense, ICP_POINTS) if len(contour_dense) > ICP_POINTS else contour_dense
     fits: list[OutlineFit] = []
     for yaw in yaws[:3]:
         pose = icp(icp_points, model, (float(face.centroid_m[0]), float(face.centroid_m[1]), yaw), 0.3 * metre)
@@ -542,7 +275,7 @@ def register(
         )
         if len(points_m) < 3 * MIN_EDGE_POINTS or not _spans_two_directions(model, edges):
             return None, fits
-        pose, residual = _gauss_newton(points_m, edges, model, pose, 0.05 * metre)
+        pose, residual = gauss_newton(points_m, edges, model, pose, 0.05 * metre)
         excess = max(0.0, float(_median(spread)) - SHARP_EDGE_SPREAD)
         near_outside_px = 1.0 + 4.0 * excess
     rms_px = float(np.sqrt(np.mean(residual**2))) * px_per_m if len(residual) else math.inf
@@ -551,7 +284,9 @@ def register(
     return fine, fits
 
 
-def _corner_fit(view: _View, face: _Face, coarse: OutlineFit, plane_z_m: float, px_per_m: float) -> OutlineFit | None:
+def _corner_fit(
+    view: PreparedView, face: _Face, coarse: OutlineFit, plane_z_m: float, px_per_m: float
+) -> OutlineFit | None:
     """The outline's vertices by ``cv2.cornerSubPix`` on the face-coverage image, and a rigid fit of the model's."""
     model = coarse.model
     posed = model.posed(coarse.x_m, coarse.y_m, coarse.yaw_rad)
@@ -603,8 +338,8 @@ class _Verdict:
 
 
 def _judge(
-    detector: CubeDetector,
-    view: _View,
+    detector: FaceSearch,
+    view: PreparedView,
     colour: ColourRange,
     blob: Blob,
     blob_xy_m: tuple[float, float],
@@ -744,15 +479,15 @@ def _detection(colour: str, verdict: _Verdict, xy: tuple[tuple[float, float], ..
 
 
 def detect_outlines(
-    detector: CubeDetector,
-    view: _View,
+    detector: FaceSearch,
+    view: PreparedView,
     colour: ColourRange,
     roi: WorldRegion | None,
     models: Sequence[OutlineModel],
 ) -> dict[str, Detection]:
     """For each model (by name), the detection of the one part of ``colour`` with that outline."""
     name = colour.name
-    candidates, outside_roi = detector._candidates(view, colour, roi)
+    candidates, outside_roi = detector.candidates(view, colour, roi)
     xy = tuple((float(p[0]), float(p[1])) for _, p, _ in candidates)
     if not candidates:
         where = "in the image" if roi is None else f"inside the region of interest ({outside_roi} outside)"
@@ -814,49 +549,7 @@ def detect_outlines(
     return results
 
 
-def detect_outline(detector: CubeDetector, view: _View, colour: ColourRange, roi: WorldRegion | None) -> Detection:
+def detect_outline(detector: FaceSearch, view: PreparedView, colour: ColourRange, roi: WorldRegion | None) -> Detection:
     """``CubeDetector``'s outcome for a prism part: the one part of ``colour`` whose face is its outline."""
     model = OutlineModel.of(detector.config.part)
     return detect_outlines(detector, view, colour, roi, [model])[model.name]
-
-
-class OutlineDetector:
-    """Finds prism parts' top faces by their outlines; parts of one colour are told apart by outline.
-
-    ``detect(frame, colour, part=name)`` looks for one part (the first by default),
-    ``detect_each(frame, colour)`` answers for every part by name: a face that fits another part's
-    outline better is that part's. The blob search is the cube detector's.
-    """
-
-    def __init__(
-        self,
-        parts: Sequence[ObjectType],
-        colours: ColourTable = DEFAULT_COLOUR_TABLE,
-        config: DetectorConfig | None = None,
-    ) -> None:
-        if not parts:
-            raise PerceptionError("an outline detector needs at least one part")
-        self.models = tuple(OutlineModel.of(part) for part in parts)
-        if len({m.name for m in self.models}) != len(self.models):
-            raise PerceptionError(
-                f"parts of an outline detector need distinct names, got {[m.name for m in self.models]}"
-            )
-        # The blob search keeps any blob of a quarter of the smallest face.
-        smallest = min(self.models, key=lambda m: m.area_m2)
-        self.search = CubeDetector(colours, replace(config or DetectorConfig(), part=smallest.part))
-
-    def detect(
-        self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None, part: str | None = None
-    ) -> Detection:
-        """The part named ``part`` (default the first) of ``colour``."""
-        results = self.detect_each(frame, colour, roi)
-        name = part or self.models[0].name
-        if name not in results:
-            raise PerceptionError(f"unknown part {name!r}: this detector knows {', '.join(results)}")
-        return results[name]
-
-    def detect_each(self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None) -> dict[str, Detection]:
-        """Every part of ``colour`` by name, each told apart from the others by its outline."""
-        colour_range = self.search.colours[colour]
-        view = self.search._prepare(frame)
-        return detect_outlines(self.search, view, colour_range, roi, self.models)

@@ -11,10 +11,13 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
+import numpy as np
+from numpy.typing import NDArray
+
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception.corners import CornerRefinement
+from bt_arrange.perception.corners import CornerRefinement, Undistort
 from bt_arrange.perception.pose import PoseModel, expected_face_area_px, expected_outline_area_px
 from bt_arrange.perception.segmentation import PAPER_KERNEL_PX
 from bt_arrange.robot import CameraIntrinsics
@@ -180,3 +183,16 @@ class Detection:
     def planar(self) -> PlanarPose | None:
         """x, y and folded yaw of the cube's centre on the table, when found."""
         return None if self.pose_world is None else self.pose_world.planar()
+
+
+@dataclass(frozen=True)
+class PreparedView:
+    """One frame, prepared once for any number of colours: what the detectors' stages share."""
+
+    rgb: NDArray[np.uint8]
+    intrinsics: CameraIntrinsics
+    T_W_C: Pose
+    scale: int
+    hsv_small: NDArray[np.uint8]
+    min_blob_area_px: float
+    undistort: Undistort | None
