@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange.calibration import BoardMount, CharucoBoard, matrix_rpy
-from bt_arrange.calibration.run import CalibrationRun
+from bt_arrange.calibration_run import CalibrationRun
 from bt_arrange.geometry import Pose
 from bt_arrange.robot import CameraIntrinsics
 
