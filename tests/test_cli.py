@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_arrange import cli
+from bt_arrange import cli, cli_run
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
 
@@ -171,7 +171,7 @@ def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(caps
         report = SimulationReport(
             [outcome(str(i), s) for i, s in enumerate(statuses)], "SUCCESS", 1.0, 10.0, 1.0, False
         )
-        cli._print_report(report, args)
+        cli_run._print_report(report, args)
         last = capsys.readouterr().out.strip().splitlines()[-1]
         assert last.startswith(f"four.py: {expected} after 10.0 s of world time")
         assert report.all_within_threshold == (statuses == ["within"] * 4)
@@ -193,7 +193,7 @@ def test_the_table_speaks_mm_and_degrees_and_the_last_line_names_the_yaw_thresho
 
     red = ObjectOutcome("red", (0.45, -0.05, math.pi / 6), 0.5, 0.5, 0.5, 0.5, 0, "within")
     report = SimulationReport([red], "SUCCESS", 1.0, 10.0, 1.0, False, yaw_threshold_deg=1.0)
-    cli._print_report(report, cli.build_parser().parse_args(["run", "plan.toml"]))
+    cli_run._print_report(report, cli.build_parser().parse_args(["run", "plan.toml"]))
     lines = capsys.readouterr().out.strip().splitlines()
     assert "target x, y (mm), yaw (deg)" in lines[0]
     assert "450.0, -50.0, 30.0" in lines[1]

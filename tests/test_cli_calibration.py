@@ -38,7 +38,7 @@ def test_run_with_a_missing_calibration_file_is_one_line(tmp_path, capsys) -> No
 def test_a_real_cell_on_its_nominal_camera_is_named_in_one_line(capsys) -> None:
     from pathlib import Path
 
-    from bt_arrange.cli import _note_uncalibrated
+    from bt_arrange.cli_common import _note_uncalibrated
 
     _note_uncalibrated("ideal,real", None)
     lines = capsys.readouterr().err.strip().splitlines()

@@ -518,12 +518,12 @@ def test_fig4_draws_the_threshold_and_counts_each_box(tmp_path: Path, monkeypatc
 
 
 def test_the_experiment_names_the_trials_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    from bt_arrange import cli
+    from bt_arrange import cli_experiment
 
     class Table:
         @staticmethod
         def markdown_table(summary: list[dict]) -> str:
             return ""
 
-    cli._print_experiment(Table(), [{}], tmp_path)  # type: ignore[arg-type]
+    cli_experiment._print_experiment(Table(), [{}], tmp_path)  # type: ignore[arg-type]
     assert capsys.readouterr().out.startswith("trials.jsonl, summary.json")

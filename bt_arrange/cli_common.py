@@ -1,0 +1,137 @@
+"""What the ``bt-arrange`` commands share: exit codes, option types, the threshold and cell checks."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any, NoReturn
+
+from bt_arrange.errors import BtArrangeError
+
+STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "numpy")
+EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, EXIT_TERMINATED = 0, 1, 2, 130, 141, 143
+#: The run finished, its record did not (a contract): a recorded file could not be written.
+EXIT_RECORD = 3
+EXIT_CODES_HELP = """exit status:
+  0    every object ended within the threshold (measured by the camera)
+  1    an object did not (outside, failed, or the time limit stopped the run)
+  2    a usage, tree-file or plan error: one line on stderr, before anything moves
+  3    the run finished, its record did not: a file of --record/--out could not be written
+       (disk full, folder removed or read-only); one line names it, the results are printed,
+       and every file is whole or absent
+  130  interrupted (Ctrl-C); what was logged so far is kept
+  141  the reader of the output went away (e.g. | head)
+  143  terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (the usage is one ``--help`` away), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print one line and exit with the usage status."""
+        self.exit(
+            EXIT_USAGE,
+            f"bt-arrange: error: {self.prog.removeprefix('bt-arrange').strip() or 'usage'}: "
+            f"{message} (see {self.prog} --help)\n",
+        )
+
+
+def _whole(minimum: int) -> Any:
+    """An argparse type: a whole number of at least ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value} must be {minimum} or more")
+        return value
+
+    return parse
+
+
+def _positive_seconds(text: str) -> float:
+    """An argparse type: a positive, finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive number of seconds")
+    return value
+
+
+def _groot_port(text: str) -> int:
+    """An argparse type: the Groot2 server port (the next one is its publisher socket)."""
+    from bt_arrange.groot2 import check_port
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a port number (put the tree file before --groot, or give the port)"
+        ) from None
+    try:
+        return check_port(value)
+    except BtArrangeError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _seconds_or_zero(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"{text} must be 0 or more seconds")
+    return value
+
+
+def _pace(text: str) -> float:
+    """An argparse type: a positive, finite multiple of real time."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (1 is real time)") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a positive multiple of real time (1 is real time)")
+    return value
+
+
+def _millimetres(text: str) -> float:
+    """An argparse type: a number (the plan check decides whether a push can correct it)."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of millimetres") from None
+
+
+def _check_threshold_option(threshold_mm: float | None) -> None:
+    if threshold_mm is None:
+        return
+    from bt_arrange.trees import check_threshold
+
+    try:
+        check_threshold(threshold_mm)
+    except BtArrangeError as error:
+        raise BtArrangeError(f"--threshold-mm {threshold_mm:g}: {error}") from error
+
+
+CELL_HELP = (
+    "the work cell: ideal (default; today's simulated cell), real (the paper's real cell's errors, "
+    "docs/simulation.md) or FILE.toml with your own values (the sim backend)"
+)
+
+
+def _note_uncalibrated(cells: str, calibration: Path | None) -> None:
+    """One line on stderr when a real cell runs on its nominal camera (a lens and a pose off by centimetres)."""
+    if calibration is None and "real" in [c.strip() for c in cells.split(",")]:
+        print(
+            "bt-arrange: the real cell's camera is uncalibrated (its nominal intrinsics and pose): "
+            "bt-arrange calibrate --cell real --out camera.toml, then --calibration camera.toml",
+            file=sys.stderr,
+        )

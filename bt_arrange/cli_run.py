@@ -1,0 +1,174 @@
+"""``bt-arrange run``: a tree file, plan or XML tree run on a backend, with its report, Groot2 and pacing."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from bt_arrange import backends, treefile
+from bt_arrange.backends import RunReport
+from bt_arrange.cli_common import (
+    EXIT_NOT_WITHIN,
+    EXIT_OK,
+    _check_threshold_option,
+    _note_uncalibrated,
+)
+from bt_arrange.errors import BtArrangeError, RecordError
+
+
+def _run(args: argparse.Namespace) -> int:
+    _check_threshold_option(args.threshold_mm)
+    _check_groot_options(args)
+    module = treefile.load(args.tree_file)
+    root = treefile.build_root(module, threshold_mm=args.threshold_mm)
+    # A plan file names its own seed ([scene] seed); --seed overrides it.
+    seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
+    backend = backends.load(args.backend)
+    # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
+    starts = treefile.scene(module, seed, backend=backend)
+    _note_uncalibrated(args.cell, args.calibration)
+    # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
+    with (
+        _groot_publisher(root, args) as groot,
+        backend.open_run(
+            root,
+            starts,
+            gui=args.gui,
+            record_dir=args.record,
+            time_limit_s=args.time_limit_s,
+            title=Path(args.tree_file).name,
+            # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
+            **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
+            **({"calibration": args.calibration} if args.calibration is not None else {}),
+        ) as run,
+    ):
+        if groot is not None:
+            run.transition_hooks.append(groot.on_transition)
+            run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
+        if args.live:
+            from bt_arrange.display import LiveView
+
+            view = LiveView(sys.stderr if args.json else sys.stdout)
+            run.tick_hooks.append(lambda tree_root: view.update(tree_root, run.elapsed_s()))
+        if args.pace is not None:
+            from bt_arrange.pacing import Pacer
+
+            run.tick_hooks.append(Pacer(args.pace, run.elapsed_s).tick)
+        fault: RecordError | None = None
+        try:
+            report = run.run()
+        except RecordError as error:
+            # The run finished, its record did not: the report is printed all the same, then the one line.
+            fault, report = error, error.result
+        if args.live:
+            view.close()
+    if args.json:
+        print(json.dumps(report.to_dict()))
+    else:
+        _print_report(report, args, recorded=fault is None)
+    if fault is not None:
+        raise fault
+    return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _check_groot_options(args: argparse.Namespace) -> None:
+    if args.groot is None:
+        for option, value in (("--groot-wait-s", args.groot_wait_s), ("--groot-bind", args.groot_bind)):
+            if value is not None:
+                raise BtArrangeError(f"{option} serves a run to Groot2 only with --groot [PORT]")
+
+
+def _groot_publisher(root: Any, args: argparse.Namespace) -> Any:
+    """A context manager: the tree's Groot2 publisher (``--groot``), else None."""
+    if args.groot is None:
+        return contextlib.nullcontext(None)
+    from bt_arrange.groot2 import Groot2Publisher
+
+    publisher = Groot2Publisher(
+        root, args.groot, bind=args.groot_bind or "127.0.0.1", tree_id=Path(args.tree_file).stem
+    )
+    print(
+        f"bt-arrange: serving the tree to Groot2 on {publisher.address} "
+        f"({len(publisher.nodes)} nodes; btview snapshot -p {publisher.port})",
+        file=sys.stderr,
+    )
+    return publisher
+
+
+def _wait_for_groot(publisher: Any, wait_s: float | None) -> None:
+    if not wait_s:
+        return
+    print(f"bt-arrange: waiting up to {wait_s:g} s for a Groot2 client to fetch the tree", file=sys.stderr)
+    if not publisher.wait_for_client(wait_s):
+        print(f"bt-arrange: no Groot2 client after {wait_s:g} s; running", file=sys.stderr)
+
+
+def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool = True) -> None:
+    def mm(value: float | None) -> str:
+        return "-" if value is None else f"{value:.2f}"
+
+    def deg(value: float | None) -> str:
+        return "-" if value is None else f"{value:+.2f}"
+
+    # A world without ground truth (a real cell) reports what the camera measured, and only that.
+    has_truth = getattr(report, "ground_truth", True)
+    truth_columns = (4, 6) if not has_truth else ()
+    rows: list[tuple[str, ...]] = [
+        ("object", "target x, y (mm), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+    ]
+    for o in report.objects:
+        x, y, yaw = o.target
+        status = o.status if not o.reason else f"{o.status}: {o.reason}"
+        rows.append(
+            (
+                o.name,
+                f"{x * 1000:.1f}, {y * 1000:.1f}, {math.degrees(yaw):.1f}",
+                mm(o.placed_offset_mm),
+                mm(o.final_offset_mm),
+                mm(o.final_offset_truth_mm),
+                deg(getattr(o, "final_yaw_error_deg", None)),
+                deg(getattr(o, "final_yaw_error_truth_deg", None)),
+                str(o.pushes),
+                status,
+            )
+        )
+    rows = [tuple(cell for i, cell in enumerate(row) if i not in truth_columns) for row in rows]
+    if report.objects:
+        widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]
+        for row in rows:
+            print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False)) + "  " + row[-1])
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f", yaw {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        truth_text = (
+            "truth = the simulator's ground truth (evaluation only)"
+            if has_truth
+            else "camera only: this world has no ground truth"
+        )
+        print(
+            f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
+            f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
+        )
+    if args.record:
+        if recorded:
+            print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+        else:
+            print(f"the record in {args.record} is incomplete (the line on stderr says which file and why)")
+    speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
+    ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
+    if report.objects:
+        within = sum(o.status == "within" for o in report.objects)
+        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
+        yaw_text = f" and {yaw_threshold:g} deg" if yaw_threshold is not None else ""
+        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm{yaw_text}; "
+    else:
+        verdict = ""
+    # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
+    print(
+        f"{Path(args.tree_file).name}: {verdict}{ending} after {report.sim_seconds:.1f} s of world time "
+        f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
+    )
