@@ -24,7 +24,6 @@ import errno
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
@@ -54,6 +53,7 @@ from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
+from bt_arrange.report import ObjectOutcome, SessionReport
 from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.settings import ManipulationSettings
@@ -142,85 +142,6 @@ class World(Protocol):
 
 # ----------------------------------------------------------------------------------------------
 # The report
-# ----------------------------------------------------------------------------------------------
-
-
-@dataclass
-class ObjectOutcome:
-    """How one object ended. Offsets in millimetres; ``*_truth_*`` is the world's ground truth (None without)."""
-
-    name: str
-    target: tuple[float, float, float]
-    placed_offset_mm: float | None
-    final_offset_mm: float | None
-    final_offset_truth_mm: float | None
-    placed_offset_truth_mm: float | None
-    pushes: int
-    status: str
-    reason: str = ""
-    #: Measured minus target yaw, folded to the part's symmetry (degrees): camera, then ground truth.
-    placed_yaw_error_deg: float | None = None
-    final_yaw_error_deg: float | None = None
-    final_yaw_error_truth_deg: float | None = None
-    #: The part's type and its size (mm), for the report.
-    object_type: str = "cube"
-    size_mm: tuple[float, float, float] = (50.0, 50.0, 50.0)
-    #: The most later steps (a neighbour's release and pushes) moved it between two looks at it:
-    #: by the camera (``Recheck``), and by ground truth at the same moments; None when never looked at again.
-    moved_by_later_mm: float | None = None
-    moved_by_later_truth_mm: float | None = None
-
-
-@dataclass
-class SessionReport:
-    """A run's outcome: per object, and for the whole tree."""
-
-    objects: list[ObjectOutcome]
-    tree_status: str
-    threshold_mm: float | None
-    sim_seconds: float
-    wall_seconds: float
-    timed_out: bool
-    transitions: list[Transition] = field(default_factory=list, repr=False)
-    yaw_threshold_deg: float | None = None
-    #: False when the world had no ground truth: the ``*_truth_*`` figures are None, the report camera only.
-    ground_truth: bool = True
-
-    @property
-    def all_within_threshold(self) -> bool:
-        """True when every object ended within the threshold, as measured by the camera."""
-        if not self.objects:
-            return self.tree_status == Status.SUCCESS.value
-        return all(o.status == "within" for o in self.objects)
-
-    def to_dict(self) -> dict:
-        """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
-        data = {
-            # target is [x_m, y_m, yaw_rad]; target_mm and target_yaw_deg repeat it in a plan's units (mm, degrees),
-            # as the table shows it.
-            "objects": [
-                {
-                    **asdict(o),
-                    "target_mm": [round(o.target[0] * 1000, 3), round(o.target[1] * 1000, 3)],
-                    "target_yaw_deg": round(math.degrees(o.target[2]), 3),
-                }
-                for o in self.objects
-            ],
-            "objects_within": sum(o.status == "within" for o in self.objects),
-            "threshold_mm": self.threshold_mm,
-            "yaw_threshold_deg": self.yaw_threshold_deg,
-            "tree_status": self.tree_status,
-            "timed_out": self.timed_out,
-            "sim_seconds": round(self.sim_seconds, 3),
-            "wall_seconds": round(self.wall_seconds, 3),
-        }
-        if not self.ground_truth:
-            data["ground_truth"] = False
-        return data
-
-
-# ----------------------------------------------------------------------------------------------
-# The session
 # ----------------------------------------------------------------------------------------------
 
 

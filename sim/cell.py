@@ -31,7 +31,8 @@ from bt_arrange.robot import CameraIntrinsics, Robot
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
-from bt_arrange_sim.realcell import RealCellErrors, hand_eye_base_pose, write_perturbed_urdf
+from bt_arrange_sim.perturbed_robot import hand_eye_base_pose, write_perturbed_urdf
+from bt_arrange_sim.realcell import RealCellErrors
 from bt_arrange_sim.scenes import CubeStart
 
 #: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
@@ -211,7 +212,7 @@ _HAND_EYE: dict[str, tuple[np.ndarray, float]] = {}
 
 
 def _cached_hand_eye(urdf_path: os.PathLike[str] | str) -> tuple[np.ndarray, float]:
-    """``realcell.hand_eye_base_pose`` once per process and URDF (it solves 40 IK problems)."""
+    """``perturbed_robot.hand_eye_base_pose`` once per process and URDF (it solves 40 IK problems)."""
     key = str(urdf_path)
     if key not in _HAND_EYE:
         from pathlib import Path

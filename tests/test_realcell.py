@@ -11,14 +11,14 @@ import pytest
 from bt_arrange.errors import PlanError
 from bt_arrange.motion import ArmKinematics, default_urdf_path
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES
-from bt_arrange_sim import realcell
+from bt_arrange_sim import perturbed_robot, realcell
 from bt_arrange_sim.cell import CellConfig
 
 
 def test_the_ideal_cell_is_todays_cell_with_every_term_off() -> None:
     assert CellConfig.ideal() == CellConfig()
     assert not CellConfig().errors.enabled
-    assert realcell.write_perturbed_urdf(realcell.ideal()) is None
+    assert perturbed_robot.write_perturbed_urdf(realcell.ideal()) is None
 
 
 def test_the_real_cell_turns_every_term_on_and_each_can_be_switched_off() -> None:
@@ -39,21 +39,21 @@ def test_fixed_draws_follow_the_cell_seed_and_per_run_draws_the_run_seed() -> No
 
 def test_the_perturbed_urdf_moves_the_tcp_millimetres_and_the_hand_eye_fit_absorbs_the_mean() -> None:
     errors = realcell.real()
-    path = realcell.write_perturbed_urdf(errors)
+    path = perturbed_robot.write_perturbed_urdf(errors)
     assert path is not None and path.exists()
     q = np.array([0.2, -1.6, 1.7, -1.7, -1.57, 0.2])
     raw_mm = np.linalg.norm(ArmKinematics(path).forward(q).position_m - ArmKinematics().forward(q).position_m) * 1000
     assert 0.2 < raw_mm < 10.0
-    raw = realcell.tcp_error_over_workspace_mm(
+    raw = perturbed_robot.tcp_error_over_workspace_mm(
         dataclasses.replace(errors, kinematics=dataclasses.replace(errors.kinematics, hand_eye_absorbs_mean=False))
     )
-    fitted = realcell.tcp_error_over_workspace_mm(errors)
+    fitted = perturbed_robot.tcp_error_over_workspace_mm(errors)
     assert np.linalg.norm(fitted, axis=1).mean() < np.linalg.norm(raw, axis=1).mean()
     assert np.ptp(fitted[:, 0]) > 0.05, "what remains varies over the workspace"
 
 
 def test_a_zero_perturbation_leaves_the_urdf_kinematics_alone() -> None:
-    text = realcell.perturbed_urdf_text(
+    text = perturbed_robot.perturbed_urdf_text(
         default_urdf_path().read_text(), ARM_JOINT_NAMES, FINGER_JOINT_NAMES, np.zeros(6), np.zeros(6), 0.0
     )
     path = Path(__file__).parent / "_zero.urdf"
