@@ -144,3 +144,13 @@ def test_a_prism_is_a_part_type_whose_footprint_is_its_outline_on_the_table() ->
     assert ell.size_m == pytest.approx((2 * 0.0366667, 2 * 0.0316667, 0.02), abs=1e-6)
     corners = footprint_m(ell.shape, 0.5, 0.1, math.pi)
     np.testing.assert_allclose(corners[0], [0.5 + 0.0233333, 0.1 + 0.0183333], atol=1e-6)
+
+
+def test_pads_on_the_push_line_meet_the_outline_where_it_lies_within_their_span_not_a_corner_beside_them() -> None:
+    triangle = Prism.from_outline([[0, 0], [0.06, 0], [0.015, 0.045]], 0.02)
+    # Pushed along +x, the back-most point is the corner 25 mm behind the centroid and 15 mm to its
+    # side; pads 16 mm wide on the push's line meet the slanted edge instead, 22.67 mm behind it.
+    assert triangle.pushed_face(0.0, 0.0).depth_m == pytest.approx(0.05)
+    assert triangle.back_within_m(0.0, 0.0, 0.008) == pytest.approx(0.025 - 0.007 / 3, abs=1e-9)
+    # Wide enough to reach the corner, the pads meet it first.
+    assert triangle.back_within_m(0.0, 0.0, 0.02) == pytest.approx(0.025)

@@ -26,6 +26,7 @@ from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.shapes import Prism
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
@@ -229,11 +230,18 @@ class Push(StagedBehaviour):
         squares the part nor pushes it home (a cube turned 9.4 deg, with the paper's opening,
         stopped 4.2 mm short, turned 12.8 deg, and later pushes to the same line did not move it).
         """
-        face = self.object_type.shape.pushed_face(heading_rad, object_yaw_rad)
+        shape = self.object_type.shape
+        face = shape.pushed_face(heading_rad, object_yaw_rad)
         gripper = s.gripper
         opening_m = min(gripper.free_push_opening_m(face.width_m), s.open_width_m)
         reach_m = face.depth_m / 2 + gripper.pad_width_m / 2
-        return max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m)), reach_m
+        opening_m = max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m))
+        if isinstance(shape, Prism):
+            # An irregular part: the pads stop where they first meet it, which need not be its
+            # back-most point (a corner beside the pads is never touched by them).
+            half_span_m = opening_m / 2 + gripper.pad_thickness_m
+            reach_m = shape.back_within_m(heading_rad, object_yaw_rad, half_span_m) + gripper.pad_width_m / 2
+        return opening_m, reach_m
 
     def _turned(self) -> bool:
         """True when the measured yaw error is at or above ``yaw_threshold_deg``."""

@@ -295,6 +295,28 @@ class Prism:
         width = float(np.max(contact) - np.min(contact)) if len(contact) > 1 else 0.0
         return PushedFace(width, -2.0 * back, width)
 
+    def back_within_m(self, heading_rad: float, yaw_rad: float, half_span_m: float) -> float:
+        """How far back from the centroid, along a push, the outline reaches within ``half_span_m`` of the push's line.
+
+        Pads ``2 half_span_m`` wide, centred on the line through the centroid, first touch the part
+        there: a corner that leads beside the pads (a triangle's) is not what they meet.
+        """
+        relative = heading_rad - yaw_rad
+        forward = np.array([math.cos(relative), math.sin(relative)])
+        across = np.array([-forward[1], forward[0]])
+        points = self.outline_m
+        along, side = points @ forward, points @ across
+        reach = [float(-a) for a, c in zip(along, side, strict=True) if abs(c) <= half_span_m]
+        count = len(points)
+        for k in range(count):
+            a0, a1 = along[k], along[(k + 1) % count]
+            c0, c1 = side[k], side[(k + 1) % count]
+            for bound in (-half_span_m, half_span_m):
+                if (c0 - bound) * (c1 - bound) < 0:
+                    s = (bound - c0) / (c1 - c0)
+                    reach.append(float(-(a0 + s * (a1 - a0))))
+        return max(reach) if reach else float(-np.min(along))
+
     def push_contact_m(self, heading_rad: float, yaw_rad: float) -> tuple[float, float]:
         """The span (low, high) across the push, from the line through the centroid, of what the pads meet."""
         relative = heading_rad - yaw_rad
