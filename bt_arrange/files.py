@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import hashlib
 import json
 import os
 import re
 import secrets
+import tempfile
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -72,6 +74,19 @@ def write_bytes(path: Path | str, data: bytes) -> Path:
 def write_text(path: Path | str, text: str) -> Path:
     """``write_bytes`` of ``text`` in UTF-8."""
     return write_bytes(path, text.encode("utf-8"))
+
+
+def shared_temp_file(prefix: str, suffix: str, text: str) -> Path:
+    """A file of ``text`` in the temporary directory, named by its content, written once (whole or absent).
+
+    For files other processes may write at the same time with the same content (a URDF, a mesh):
+    each writes under its own temporary name and renames, so every reader finds a whole file.
+    """
+    digest = hashlib.sha1(text.encode()).hexdigest()[:16]
+    path = Path(tempfile.gettempdir()) / f"{prefix}{digest}{suffix}"
+    if not path.exists():
+        write_text(path, text)
+    return path
 
 
 def write_json(path: Path | str, value: Any, *, indent: int | None = 2) -> Path:

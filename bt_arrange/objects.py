@@ -120,6 +120,8 @@ DEFAULT_PART_MASS_KG = 0.1
 CUBE = ObjectType("cube", (0.05, 0.05, 0.05))
 #: An 80 x 40 x 40 mm bar: the cuboid of the examples and of ``bt-arrange experiment --object bar``.
 BAR = ObjectType("bar", (0.08, 0.04, 0.04))
+#: The type of a target or a start that names none (XML writes it as an empty ``object_type``).
+DEFAULT_TYPE = CUBE
 #: The types known by name without a plan file.
 BUILT_IN_TYPES: dict[str, ObjectType] = {t.name: t for t in (CUBE, BAR)}
 

@@ -27,7 +27,7 @@ from typing import Any
 from bt_arrange.errors import BtArrangeError, PortValueError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Release
-from bt_arrange.objects import CUBE, ObjectType, PartOnTable
+from bt_arrange.objects import DEFAULT_TYPE, ObjectType, PartOnTable
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.shapes import Cuboid
 
@@ -135,9 +135,9 @@ def _format_planar_pose(pose: PlanarPose) -> str:
 
 
 def _parse_object_type(text: str) -> ObjectType:
-    """``""`` (the cube) or ``name=x*y*z`` in metres."""
+    """``""`` (the default type, the cube) or ``name=x*y*z`` in metres."""
     if not text.strip():
-        return CUBE
+        return DEFAULT_TYPE
     name, _, size = text.partition("=")
     parts = size.split("*")
     if len(parts) != 3:
@@ -147,7 +147,7 @@ def _parse_object_type(text: str) -> ObjectType:
 
 
 def _format_object_type(object_type: ObjectType) -> str:
-    if object_type == CUBE:
+    if object_type == DEFAULT_TYPE:
         return ""
     if not isinstance(object_type.shape, Cuboid):
         raise ValueError(
@@ -167,7 +167,7 @@ def _parse_targets(text: str, make: Callable[..., PartOnTable]) -> list[Any]:
             raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]")
         colour, x, y, yaw = fields[:4]
         name = fields[4] if len(fields) >= 5 and fields[4] else None
-        kind = _parse_object_type(fields[5]) if len(fields) == 6 else CUBE
+        kind = _parse_object_type(fields[5]) if len(fields) == 6 else DEFAULT_TYPE
         targets.append(make(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name, object_type=kind))
     return targets
 
@@ -177,9 +177,9 @@ def _format_targets(targets: list[PartOnTable]) -> str:
     for t in targets:
         fields = [t.colour, _format_float(t.x_m), _format_float(t.y_m), _format_float(t.yaw_rad)]
         named = t.name is not None and t.name != t.colour
-        if named or t.object_type != CUBE:
+        if named or t.object_type != DEFAULT_TYPE:
             fields.append(t.name if named and t.name is not None else "")
-        if t.object_type != CUBE:
+        if t.object_type != DEFAULT_TYPE:
             fields.append(_format_object_type(t.object_type))
         entries.append(",".join(fields))
     return ";".join(entries)

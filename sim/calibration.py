@@ -24,6 +24,7 @@ import numpy as np
 
 from bt_arrange.calibration import BoardMount, CharucoBoard, matrix_rpy
 from bt_arrange.calibration_run import CalibrationRun
+from bt_arrange.files import shared_temp_file
 from bt_arrange.geometry import Pose
 from bt_arrange.robot import CameraIntrinsics
 
@@ -106,14 +107,9 @@ def urdf_with_board(urdf_text: str, board: CharucoBoard, mount: BoardMount) -> s
 
 def write_urdf_with_board(urdf_path: Path, board: CharucoBoard, mount: BoardMount) -> Path:
     """A temporary URDF file: ``urdf_path``'s robot with the board on its flange."""
-    text = urdf_with_board(Path(urdf_path).read_text(), board, mount)
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    path = Path(tempfile.gettempdir()) / f"bt_arrange_board_robot_{digest}.urdf"
-    if not path.exists():
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(text)
-        tmp.replace(path)
-    return path
+    return shared_temp_file(
+        "bt_arrange_board_robot_", ".urdf", urdf_with_board(Path(urdf_path).read_text(), board, mount)
+    )
 
 
 def texture_board(client: object, robot_id: int, link_index: int, board: CharucoBoard) -> None:

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import hashlib
-import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from bt_arrange.errors import PlanError
+from bt_arrange.files import shared_temp_file
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, PAINT_RGB, SIDE_RGB, ColourRange, ColourTable
 from bt_arrange.shapes import Cuboid, Prism
@@ -90,7 +87,7 @@ def prism_mesh_files(shape: Prism) -> tuple[str, str, str]:
 
     The collision file holds one object per convex piece (``Prism.convex_pieces``): Bullet makes a
     compound of their convex hulls, exact for a non-convex outline. The files are named by their
-    content in one folder of the temporary directory and written once (complete or absent).
+    content in the temporary directory and written once, whole or absent (``files.shared_temp_file``).
     """
     half = shape.height_m / 2
     pieces = shape.convex_pieces()
@@ -103,17 +100,10 @@ def prism_mesh_files(shape: Prism) -> tuple[str, str, str]:
     )
     sides = _obj([("sides", outline, -half, half - TOP_PLATE_M, pieces)])
     top = _obj([("top", outline, half - TOP_PLATE_M, half, pieces)])
-    folder = Path(tempfile.gettempdir()) / "bt_arrange_meshes"
-    folder.mkdir(exist_ok=True)
-    names = []
-    for text in (collision, sides, top):
-        path = folder / (hashlib.sha1(text.encode()).hexdigest()[:16] + ".obj")
-        if not path.exists():
-            partial = path.with_suffix(f".{os.getpid()}.part")
-            partial.write_text(text)
-            os.replace(partial, path)
-        names.append(str(path))
-    return names[0], names[1], names[2]
+    collision_path, sides_path, top_path = (
+        str(shared_temp_file("bt_arrange_mesh_", ".obj", text)) for text in (collision, sides, top)
+    )
+    return collision_path, sides_path, top_path
 
 
 def _shrunk(polygon: np.ndarray, margin_m: float) -> np.ndarray:

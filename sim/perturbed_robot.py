@@ -7,17 +7,14 @@ hand-eye calibration of that robot would report.
 
 from __future__ import annotations
 
-import hashlib
 import math
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-#: Where the hand-eye fit samples the arm's error: the trials' target area and the scatter area.
+from bt_arrange.files import shared_temp_file
 from bt_arrange_sim.realcell import WORKSPACE_X_M, WORKSPACE_Y_M, RealCellErrors
 
 # -- the perturbed robot ------------------------------------------------------------------------
@@ -105,13 +102,7 @@ def write_perturbed_urdf(errors: RealCellErrors) -> Path | None:
         default_urdf_path().read_text(), ARM_JOINT_NAMES, FINGER_JOINT_NAMES, link_errors, zero_errors, finger_offset
     )
     # Meshes are none (primitive shapes), so the file may live anywhere.
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    path = Path(tempfile.gettempdir()) / f"bt_arrange_realcell_{errors.cell_seed}_{digest}.urdf"
-    if not path.exists():
-        tmp = path.with_suffix(f".{digest}.{os.getpid()}.tmp")
-        tmp.write_text(text)
-        tmp.replace(path)
-    return path
+    return shared_temp_file(f"bt_arrange_realcell_{errors.cell_seed}_", ".urdf", text)
 
 
 def hand_eye_base_pose(urdf_path: Path) -> tuple[NDArray[np.float64], float]:

@@ -79,8 +79,7 @@ class SyntheticCube:
     @property
     def top_rgb(self) -> FloatArray:
         """The top face's rendered colour (0..1)."""
-        rgb = self.rgb if self.rgb is not None else SIM_CUBE_COLOURS_RGB[self.colour]
-        return np.asarray(rgb, dtype=float) * self.brightness
+        return _top_rgb(self.rgb, self.colour, self.brightness)
 
     @property
     def centre_world(self) -> Pose:
@@ -96,6 +95,11 @@ class SyntheticCube:
     def top_corners_world(self) -> FloatArray:
         """The top face's corners (4x3)."""
         return self.corners_world(self.table_z_m + self.edge_m)
+
+
+def _top_rgb(rgb: tuple[float, float, float] | None, colour: str, brightness: float) -> FloatArray:
+    """A top face's rendered colour (0..1): ``rgb``, else the simulator's paint of ``colour``, lit by ``brightness``."""
+    return np.asarray(rgb if rgb is not None else SIM_CUBE_COLOURS_RGB[colour], dtype=float) * brightness
 
 
 @dataclass(frozen=True)
@@ -118,8 +122,7 @@ class SyntheticPrism:
     @property
     def top_rgb(self) -> FloatArray:
         """The top face's rendered colour (0..1)."""
-        rgb = self.rgb if self.rgb is not None else SIM_CUBE_COLOURS_RGB[self.colour]
-        return np.asarray(rgb, dtype=float) * self.brightness
+        return _top_rgb(self.rgb, self.colour, self.brightness)
 
     @property
     def centre_world(self) -> Pose:

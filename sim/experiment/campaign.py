@@ -472,13 +472,7 @@ def one_line(error: BaseException) -> str:
 def error_record(spec: TrialSpec, reason: str) -> dict:
     """The record of a trial that measured nothing: its spec, ``status = "error"`` and the reason."""
     return {
-        "row": spec.row,
-        "trial": spec.index,
-        "seed": spec.seed,
-        "threshold_mm": spec.threshold_mm,
-        "cell": spec.cell,
-        "strategy": spec.strategy,
-        "object": spec.object_name,
+        **spec.record_fields(),
         "target": None,
         "placed_mm": None,
         "pushed_mm": None,

@@ -37,6 +37,19 @@ class TrialSpec:
     #: A camera calibration file (``bt-arrange calibrate``) the detector uses; None: the cell's nominal camera.
     calibration: str | None = None
 
+    def record_fields(self) -> dict[str, object]:
+        """What names the trial in its record (``trials.jsonl``), in the records' order."""
+        return {
+            "row": self.row,
+            "trial": self.index,
+            "seed": self.seed,
+            "threshold_mm": self.threshold_mm,
+            "cell": self.cell,
+            "strategy": self.strategy,
+            "object": self.object_name,
+            **({"calibration": self.calibration} if self.calibration is not None else {}),
+        }
+
 
 @dataclass(frozen=True)
 class Combination:

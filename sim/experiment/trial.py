@@ -71,14 +71,7 @@ def _run_trial(spec: TrialSpec) -> dict:
     # Pick states what its grip was as facts (``Pick.facts``), not only in its feedback text.
     squarings = [t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and t.facts.get("squared")]
     return {
-        "row": spec.row,
-        "trial": spec.index,
-        "seed": spec.seed,
-        "threshold_mm": spec.threshold_mm,
-        "cell": spec.cell,
-        "strategy": spec.strategy,
-        "object": spec.object_name,
-        **({"calibration": spec.calibration} if spec.calibration is not None else {}),
+        **spec.record_fields(),
         "target": [round(v, 6) for v in outcome.target],
         "placed_mm": outcome.placed_offset_mm,
         "pushed_mm": outcome.final_offset_mm,
