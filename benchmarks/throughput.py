@@ -30,12 +30,15 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
+import numpy as np
 import py_trees
 from py_trees.common import Status
 
 from bt_arrange import treefile
 from bt_arrange.behaviours import Context
 from bt_arrange.behaviours.base import GripperStage, MoveStage, OnlyIf, StagedBehaviour
+from bt_arrange.motion import LinearMotion
+from bt_arrange.motion.bounds import finger_bound_s, joint_move_bound_s, line_bound_s
 from bt_arrange.runner import Runner
 from bt_arrange.timing import SectionTimers
 from bt_arrange_sim import WorkCell
@@ -85,8 +88,78 @@ def _stage_of(root: py_trees.behaviour.Behaviour, context: Context) -> tuple[str
     return "other", label
 
 
+class BoundRecorder:
+    """The motions and finger travel of a run, by stage, and their lower bounds (``bt_arrange.motion.bounds``).
+
+    Every motion a stage plans is bounded by the time-optimal rest-to-rest trajectory between the
+    same joint vectors at the UR5's joint speeds and the project's fastest acceleration and jerk
+    (and, for a line, its path at 1 m/s); the fingers by their travel at the 2F-85's top speed.
+    A motion handed on to the next without stopping (``Motion.handed_on``) is bounded together with
+    it, from the first one's start to the last one's end: passing through a waypoint at speed is not
+    bounded by stopping there. Settling, looking and the ticks between behaviours are bounded by 0.
+    """
+
+    def __init__(self, context: Context) -> None:
+        self.settings = context.settings
+        self.motions: list[tuple[str, object, np.ndarray]] = []
+        self._seen: set[int] = set()
+        self.finger_travel_m: dict[str, float] = defaultdict(float)
+        self._width_m: float | None = None
+
+    def on_tick(self, category: str, stage: str, node: py_trees.behaviour.Behaviour | None, context: Context) -> None:
+        """Record a newly planned motion, or the fingers' travel in a gripper stage."""
+        width = context.robot.gripper.width()
+        if category == "gripper" and self._width_m is not None:
+            self.finger_travel_m[stage] += abs(width - self._width_m)
+        self._width_m = width
+        if not isinstance(node, StagedBehaviour):
+            return
+        inner = _inner_stage(node)
+        motion = getattr(inner, "motion", None)
+        if isinstance(inner, MoveStage) and motion is not None and id(motion) not in self._seen:
+            self._seen.add(id(motion))
+            self.motions.append((stage, motion, np.asarray(getattr(inner, "start_q", motion.target_positions_rad))))
+
+    def bounds_by_stage(self) -> dict[str, float]:
+        """Seconds of lower bound per stage label (a chain of handed-on motions goes to its first stage)."""
+        s = self.settings
+        joint_limits, line_limits = s.free_joint_limits, s.free_line_limits
+        bounds: dict[str, float] = defaultdict(float)
+        chain: list[tuple[str, object, np.ndarray]] = []
+        for entry in self.motions:
+            chain.append(entry)
+            _, motion, _ = entry
+            if getattr(motion, "handed_on", False):
+                continue
+            first_stage, first, start_q = chain[0]
+            target_q = motion.target_positions_rad  # type: ignore[attr-defined]
+            if len(chain) == 1 and isinstance(first, LinearMotion):
+                bound = line_bound_s(start_q, target_q, first.length_m, joint_limits, line_limits)
+            else:
+                bound = joint_move_bound_s(start_q, target_q, joint_limits)
+            bounds[first_stage] += bound
+            chain = []
+        top_speed = s.gripper.speed_range_m_s[1]
+        for stage, travel in self.finger_travel_m.items():
+            bounds[stage] += finger_bound_s(travel, top_speed)
+        return dict(bounds)
+
+
+def _inner_stage(node: StagedBehaviour) -> object | None:
+    stages = node._stages  # noqa: SLF001 - a benchmark looks inside
+    if node._index >= len(stages):  # noqa: SLF001
+        return None
+    stage = stages[node._index]  # noqa: SLF001
+    return stage._stage if isinstance(stage, OnlyIf) else stage  # noqa: SLF001
+
+
+def _running_node(root: py_trees.behaviour.Behaviour) -> StagedBehaviour | None:
+    running = [n for n in root.iterate() if isinstance(n, StagedBehaviour) and n.status == Status.RUNNING]
+    return running[-1] if running else None
+
+
 def run_trial(tree_file: Path, seed: int) -> dict:
-    """One tree in a fresh cell, instrumented; returns its time split and its outcome."""
+    """One tree in a fresh cell, instrumented; returns its time split, its lower bound and its outcome."""
     module = treefile.load(tree_file)
     root = treefile.build_root(module)
     timers = SectionTimers()
@@ -103,10 +176,13 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         for method in ("move_joints", "move_to_pose", "move_line"):
             timers.wrap_method(context.planner, method, "planning")
 
+        recorder = BoundRecorder(context)
+
         def on_tick(tree_root: py_trees.behaviour.Behaviour) -> None:
             category, stage = _stage_of(tree_root, context)
             world_by_category[category] += period_s
             world_by_stage[stage] += period_s
+            recorder.on_tick(category, stage, _running_node(tree_root), context)
 
         def time_ticks(runner: Runner) -> None:
             timers.wrap_method(runner, "tick_tree", "tree")
@@ -118,6 +194,8 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         report = run.run()
         wall_s = time.perf_counter() - start - timers.seconds.get("benchmark", 0.0)
         captures = timers.calls.get("render", 0)
+    bound_by_stage = recorder.bounds_by_stage()
+    bound_s = sum(bound_by_stage.values())
     seconds = {name: timers.seconds.get(name, 0.0) for name in SECTIONS[:-1]}
     seconds["rest"] = max(0.0, wall_s - sum(seconds.values()))
     physics_s = seconds["physics"]
@@ -133,6 +211,9 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         "pushes": [o.pushes for o in objects],
         "world_s": round(report.sim_seconds, 3),
         "world_s_per_object": round(report.sim_seconds / max(1, len(objects)), 3),
+        "bound_s": round(bound_s, 3),
+        "bound_s_per_object": round(bound_s / max(1, len(objects)), 3),
+        "bound_ratio": round(report.sim_seconds / bound_s, 3) if bound_s > 0 else None,
         "wall_s": round(wall_s, 3),
         "wall_s_by_section": {name: round(value, 3) for name, value in seconds.items()},
         "share_by_section": {name: round(value / wall_s, 4) for name, value in seconds.items()},
@@ -141,6 +222,7 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         "render_ms_per_capture": round(1000 * seconds["render"] / captures, 1) if captures else None,
         "world_s_by_activity": {k: round(v, 3) for k, v in sorted(world_by_category.items())},
         "world_s_by_stage": {k: round(v, 3) for k, v in sorted(world_by_stage.items(), key=lambda kv: -kv[1])},
+        "bound_s_by_stage": {k: round(v, 3) for k, v in sorted(bound_by_stage.items(), key=lambda kv: -kv[1])},
     }
 
 
@@ -159,6 +241,8 @@ def main(argv: list[str] | None = None) -> int:
         "render_share": single["share_by_section"]["render"],
         "floor_ratio": single["floor_ratio"],
         "world_s_per_object": four["world_s_per_object"],
+        "bound_s_per_object": four["bound_s_per_object"],
+        "bound_ratio": four["bound_ratio"],
         "bare_robot": bare,
         "single_cube": single,
         "four_cubes": four,
@@ -173,6 +257,12 @@ def main(argv: list[str] | None = None) -> int:
                 f"in {trial['wall_s']} s of wall time: {split}; wall / physics {trial['floor_ratio']}"
             )
             print(f"  world time by activity: {trial['world_s_by_activity']}")
+            print(
+                f"  lower bound {trial['bound_s']} s ({trial['bound_s_per_object']} s per object): "
+                f"world time / bound {trial['bound_ratio']}"
+            )
+            for stage, world_s in trial["world_s_by_stage"].items():
+                print(f"    {stage:55s} {world_s:6.3f} s  bound {trial['bound_s_by_stage'].get(stage, 0.0):6.3f} s")
         print(
             f"bare robot: {bare['physics_steps_per_s']} physics steps per second "
             f"({bare['real_time_factor']}x real time)"

@@ -74,12 +74,15 @@ class Gripper(Protocol):
         """Widest opening in metres."""
         ...
 
-    def open(self, width_m: float) -> None:
-        """Move the fingers to an opening of ``width_m``; returns at once."""
+    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
+        """Move the fingers to an opening of ``width_m`` at ``speed_m_s`` (None: the device's own); returns at once."""
         ...
 
-    def close(self, force_n: float) -> None:
-        """Close until the fingers squeeze with at most ``force_n``; returns at once."""
+    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
+        """Close at ``speed_m_s`` (None: the device's own) until the fingers squeeze with at most ``force_n``.
+
+        Returns at once.
+        """
         ...
 
     def width(self) -> float:

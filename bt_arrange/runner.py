@@ -297,6 +297,11 @@ class Runner:
                     self.on_tick(self.root)
                 self.context.brake.step()
                 if self.root.status in (Status.SUCCESS, Status.FAILURE):
+                    # A motion handed on at speed by the last behaviour runs to its end (the arm
+                    # arrives where it was going) before the run ends: the world time includes it.
+                    while self.context.brake.busy and clock.now() - start_s < self.time_limit_s:
+                        self.step_world()
+                        self.context.brake.step()
                     break
                 if clock.now() - start_s >= self.time_limit_s:
                     timed_out = True

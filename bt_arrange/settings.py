@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 
 from bt_arrange.errors import OutOfRangeError
-from bt_arrange.motion.limits import CartesianLimits
+from bt_arrange.motion.limits import HARDWARE_JOINT_VELOCITY_RAD_S, CartesianLimits, JointLimits
 from bt_arrange.shapes import ROBOTIQ_2F85, Gripper, Shape, preferred_grasp
 
 #: How ``Pick`` squares a cube pinched across its corners (``ManipulationSettings.squaring``).
@@ -78,9 +78,37 @@ class ManipulationSettings:
     min_push_m: float = 0.0002
     #: The line that pushes: slower than the planner's lines, so the cube stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
-    #: After a motion, the arm gets this long to settle before the next step (the position-controlled
-    #: joints lag their setpoints by a fraction of a millimetre at the end of a jerk-limited motion).
+    #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
+    #: speeds (the URDF's 3.15 and 3.2 rad/s), 16 rad/s^2 (0.2 s to full speed; the pendant allows 40)
+    #: and 200 rad/s^3. What the arm carries or pushes moves at the planner's gentler limits
+    #: (``JointLimits()``: 2 rad/s, 8 rad/s^2): there a jolt could shift the part in the pads.
+    free_joint_limits: JointLimits = JointLimits(
+        velocity_rad_s=HARDWARE_JOINT_VELOCITY_RAD_S, acceleration_rad_s2=16.0, jerk_rad_s3=200.0
+    )
+    #: Straight lines with empty pads (down to a part, up from one just released): the UR5's typical
+    #: TCP speed of 1 m/s, 4 m/s^2 and 40 m/s^3 (a 7.5 cm line in about 0.3 s, at rest at both ends).
+    free_line_limits: CartesianLimits = CartesianLimits(velocity_m_s=1.0, acceleration_m_s2=4.0, jerk_m_s3=40.0)
+    #: A line up from a part (the lift, the retreat) hands on to the joint move after it this far
+    #: below its end, without stopping there (m): the pads are then 1.65 cm above the part's top (a
+    #: held part's bottom 1.5 cm above a neighbour as tall), and the next move goes on rising.
+    hand_on_remaining_m: float = 0.015
+    #: After a motion the arm counts as settled once every joint moves slower than this (rad/s; 1 mrad/s
+    #: is under a millimetre per second at the TCP). Measured in the cell: the position-controlled
+    #: joints are that still within one or two control periods of a jerk-limited motion's end.
+    settled_speed_rad_s: float = 0.001
+    #: The longest the arm is given to settle after a motion (s): a joint still moving then is left to
+    #: the next step.
     settle_s: float = 0.05
+    #: The 2F-85's finger speed for closing on a part and for releasing one (the datasheet's
+    #: 20 to 150 mm/s; 150: a 35 mm close takes 0.23 s).
+    finger_speed_m_s: float = 0.15
+    #: The finger speed of a close that squares a part pinched across its corners (``squaring``):
+    #: the pads turn the part as they meet it. Measured: at 75 to 150 mm/s a cube turned 33 degrees
+    #: was held up to 6 degrees off square after the wrist turn; at 50 mm/s under 5 (both ways).
+    squaring_finger_speed_m_s: float = 0.05
+    #: A release opens the pads only this far beyond the held part's width on each side (m), enough
+    #: for the straight retreat up (the next pick opens them fully on its way).
+    release_clearance_per_side_m: float = 0.008
     #: The fingers must stop within this time after an open or close command.
     gripper_timeout_s: float = 2.0
 

@@ -174,16 +174,16 @@ class FakeGripper:
         """The 2F-85 stroke."""
         return GRIPPER_MAX_WIDTH_M
 
-    def open(self, width_m: float) -> None:
-        """Move to ``width_m``."""
+    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
+        """Move to ``width_m`` (at the fake's own speed: ``speed_m_s`` is recorded, not modelled)."""
         if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
             raise OutOfRangeError(f"gripper width {width_m * 1000:.1f} mm is outside 0 to 85 mm")
         self.commands.append(GripperCommand(self._clock.now(), "open", width_m))
         self._closing = False
         self._move_to(width_m)
 
-    def close(self, force_n: float) -> None:
-        """Close until the pads meet the object, or each other."""
+    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
+        """Close until the pads meet the object, or each other (at the fake's own speed)."""
         low, high = GRIPPER_FORCE_RANGE_N
         if not low <= force_n <= high:
             raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
@@ -359,7 +359,13 @@ def tick_until_done(
         run.ticks.append(tick)
         context.brake.step()
         clock.advance(arm.control_period_s)
-        if behaviour.status != Status.RUNNING or (until is not None and until(tick)):
+        if until is not None and until(tick):
+            return run
+        if behaviour.status != Status.RUNNING:
+            # As the runner does: a motion the behaviour handed on at speed runs to its end.
+            while context.brake.busy:
+                context.brake.step()
+                clock.advance(arm.control_period_s)
             return run
     raise AssertionError(f"{behaviour.name} still RUNNING after {max_ticks} ticks: {behaviour.feedback_message}")
 

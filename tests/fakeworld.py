@@ -229,16 +229,16 @@ class _KinematicGripper(FakeGripper):
         super().__init__(world.clock)
         self._world = world
 
-    def close(self, force_n: float) -> None:
+    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
         """Close; stop at the cube's width when one is between the pads."""
         self.object_width_m = self._world.grasp()
-        super().close(force_n)
+        super().close(force_n, speed_m_s)
 
-    def open(self, width_m: float) -> None:
+    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
         """Open; a held cube stays where it is."""
         self._world.release()
         self.object_width_m = None
-        super().open(width_m)
+        super().open(width_m, speed_m_s)
 
 
 class _WorldCamera(FakeCamera):

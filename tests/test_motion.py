@@ -107,9 +107,9 @@ def test_limit_defaults_and_per_joint_values() -> None:
     per_joint = JointLimits(velocity_rad_s=[0.5, 0.6, 0.7, 0.8, 0.9, 1.0])
     assert per_joint.velocity_rad_s == (0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
     cartesian = CartesianLimits()
-    assert (cartesian.velocity_m_s, cartesian.acceleration_m_s2, cartesian.jerk_m_s3) == (0.4, 2.0, 20.0)
+    assert (cartesian.velocity_m_s, cartesian.acceleration_m_s2, cartesian.jerk_m_s3) == (0.6, 3.0, 30.0)
     slower = cartesian.time_scaled(0.5)
-    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.2, 0.5, 2.5))
+    assert (slower.velocity_m_s, slower.acceleration_m_s2, slower.jerk_m_s3) == pytest.approx((0.3, 0.75, 3.75))
 
 
 @pytest.mark.parametrize(

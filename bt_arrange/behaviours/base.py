@@ -17,6 +17,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
@@ -47,42 +48,95 @@ class Stage(ABC):
         return None
 
 
+#: Decides, after each setpoint, whether a motion may be handed on at speed to the next stage.
+HandOn = Callable[[Context, Motion], bool]
+
+
 class MoveStage(Stage):
     """Follow a motion planned at the start of the step, then let the arm settle.
 
-    ``plan(context, q)`` receives the measured joint positions and returns the motion.
+    ``plan(context, q)`` receives the measured joint positions and returns the motion. A plan that
+    can start from a moving arm (``moving_start``: a joint move, e.g. ``moves.to_pose``) is called as
+    ``plan(context, q, velocities, accelerations)`` when the previous stage handed its motion on at
+    speed; any other waits for that motion to be braked to rest first.
+
+    ``hand_on(context, motion)``, when given, is asked after every setpoint: once it holds, the
+    step ends without stopping or settling and the motion runs on (``ArmBrake.carry_on``) until the
+    next motion takes it over: the waypoint is passed at speed, where nothing needs the arm at rest.
     """
 
-    def __init__(self, name: str, plan: Callable[[Context, FloatArray], Motion]) -> None:
+    def __init__(
+        self,
+        name: str,
+        plan: Callable[..., Motion],
+        hand_on: HandOn | None = None,
+    ) -> None:
         super().__init__(name)
         self._plan = plan
+        self._hand_on = hand_on
         self.motion: Motion | None = None
+        #: The joint vector the motion starts from (rad): measured, or a handed-on motion's last setpoint.
+        self.start_q: FloatArray | None = None
         self._done_at_s: float | None = None
+        self._waiting_for_rest = False
+        self._skip_command = False
 
     def start(self, context: Context) -> None:
-        """Plan the motion from where the arm is now."""
-        self.motion = self._plan(context, context.robot.arm.joint_positions())
+        """Plan the motion from where the arm is now, taking over a motion handed on at speed if it can."""
         self._done_at_s = None
+        self._skip_command = False
+        self._waiting_for_rest = False
+        self.motion = None
+        brake = context.brake
+        if brake.carrying:
+            if not getattr(self._plan, "moving_start", False):
+                brake.brake_carried()
+                self._waiting_for_rest = True
+                return
+            q, velocities, accelerations, commanded = brake.take_over()
+            self.start_q = q
+            self.motion = self._plan(context, q, velocities, accelerations)
+            # The handed-on motion already had this period's setpoint: the new one starts with the next.
+            self._skip_command = commanded
+            return
+        self.start_q = context.robot.arm.joint_positions()
+        self.motion = self._plan(context, self.start_q)
 
     def poll(self, context: Context) -> Status:
-        """Send the next setpoint; after the last one, wait ``settle_s`` of world time."""
+        """Send the next setpoint; after the last one, wait until the arm is still (at most ``settle_s``)."""
+        if self._waiting_for_rest:
+            if context.brake.active:
+                return Status.RUNNING
+            self._waiting_for_rest = False
+            self.start_q = context.robot.arm.joint_positions()
+            self.motion = self._plan(context, self.start_q)
         assert self.motion is not None
         clock = context.robot.clock
+        if self._skip_command:
+            self._skip_command = False
+            return Status.RUNNING
         if not self.motion.done:
             setpoint = self.motion.step()
             context.robot.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
+            if not self.motion.done and self._hand_on is not None and self._hand_on(context, self.motion):
+                context.brake.carry_on(self.motion)
+                return Status.SUCCESS
             if self.motion.done:
                 self._done_at_s = clock.now()
             # Even after the last setpoint: the next stage commands the arm on the next tick, not this one.
             return Status.RUNNING
         assert self._done_at_s is not None
-        if clock.now() - self._done_at_s < context.settings.settle_s:
+        settings = context.settings
+        # Settled when measured so, not after a fixed wait: the joints track a jerk-limited motion
+        # closely and are usually still one control period after its last setpoint.
+        still = float(np.max(np.abs(context.robot.arm.joint_velocities()))) < settings.settled_speed_rad_s
+        if not still and clock.now() - self._done_at_s < settings.settle_s:
             return Status.RUNNING
         return Status.SUCCESS
 
     def interrupt(self, context: Context) -> None:
         """Hand a running motion to the brake."""
-        if self.motion is not None and not self.motion.done:
+        if self.motion is not None and not self.motion.done and not self.motion.handed_on:
             context.brake.take(self.motion)
 
 
@@ -92,26 +146,43 @@ class GripperStage(Stage):
     #: Control periods to wait before reading the fingers' speed: they need a moment to start.
     START_PERIODS = 3
 
-    def __init__(self, name: str, command: Callable[[Context], None], wait: bool = True) -> None:
+    def __init__(
+        self, name: str, command: Callable[[Context], None], wait: bool = True, start_periods: int | None = None
+    ) -> None:
+        """``start_periods``: polls before the fingers' speed counts (``START_PERIODS``; 0 for a wait on an earlier command)."""
         super().__init__(name)
         self._command = command
         self._wait = wait
+        self._start_periods = self.START_PERIODS if start_periods is None else start_periods
         self._started_at_s = 0.0
         self._polls = 0
+        self._commanded = False
 
     def start(self, context: Context) -> None:
-        """Send the command."""
-        self._command(context)
-        self._started_at_s = context.robot.clock.now()
+        """Send the command (a waiting one only with the arm at rest: a motion handed on is braked first)."""
         self._polls = 0
+        self._commanded = False
+        if self._wait and context.brake.carrying:
+            context.brake.brake_carried()
+            return
+        self._send(context)
+
+    def _send(self, context: Context) -> None:
+        self._command(context)
+        self._commanded = True
+        self._started_at_s = context.robot.clock.now()
 
     def poll(self, context: Context) -> Status:
         """SUCCESS once the fingers stand still."""
         if not self._wait:
             return Status.SUCCESS
+        if not self._commanded:
+            if context.brake.active:
+                return Status.RUNNING
+            self._send(context)
         self._polls += 1
         gripper = context.robot.gripper
-        if self._polls <= self.START_PERIODS or gripper.is_moving():
+        if self._polls <= self._start_periods or gripper.is_moving():
             waited_s = context.robot.clock.now() - self._started_at_s
             if waited_s > context.settings.gripper_timeout_s:
                 self.reason = (

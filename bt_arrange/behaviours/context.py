@@ -18,21 +18,43 @@ from bt_arrange.settings import ManipulationSettings
 
 
 class ArmBrake:
-    """Finishes interrupted motions with their jerk-limited stop, one setpoint per control period.
+    """Drives the motions no behaviour drives any more, one setpoint per control period.
 
-    A behaviour that is interrupted mid-motion (``terminate(INVALID)``) is not ticked again, so it
-    hands its motion here; the runner calls ``step()`` once per control period. Behaviours wait
-    for the brake to be idle before they start a motion of their own.
+    Two kinds:
+
+    - an interrupted motion (``take``): a behaviour that is interrupted mid-motion
+      (``terminate(INVALID)``) is not ticked again, so it hands its motion here, which finishes its
+      jerk-limited stop. Behaviours wait for the brake to be idle (``active``) before they start a
+      motion of their own.
+    - a motion handed on at speed (``carry_on``): a stage that needs no stop at its waypoint ends
+      while its motion still runs; the motion keeps going until the next motion stage takes it over
+      from its state (``take_over``: position, velocity, acceleration), or, if the next stage needs
+      the arm at rest, until it is braked (``brake_carried``). Unclaimed, it runs to its end.
+
+    The runner calls ``step()`` once per control period, after the tick. A motion handed over
+    during a tick already had its setpoint for this period: the brake leaves it until the next.
     """
 
     def __init__(self, arm: Arm) -> None:
         self._arm = arm
         self._motion: Motion | None = None
+        self._carried: Motion | None = None
+        self._commanded_this_period = False
 
     @property
     def active(self) -> bool:
         """True while a stopping motion still moves the arm."""
         return self._motion is not None
+
+    @property
+    def busy(self) -> bool:
+        """True while the brake drives the arm: braking, or carrying a handed-on motion."""
+        return self._motion is not None or self._carried is not None
+
+    @property
+    def carrying(self) -> bool:
+        """True while a motion handed on at speed runs, waiting for the next motion to take it over."""
+        return self._carried is not None
 
     def take(self, motion: Motion) -> None:
         """Start the jerk-limited stop of ``motion`` and drive it from now on."""
@@ -41,14 +63,46 @@ class ArmBrake:
         motion.stop()
         self._motion = motion
 
-    def step(self) -> None:
-        """Hand the arm the next braking setpoint (nothing when idle)."""
-        if self._motion is None:
+    def carry_on(self, motion: Motion) -> None:
+        """Keep ``motion`` running past its stage (its setpoint for this period already sent)."""
+        if motion.done:
             return
-        setpoint = self._motion.step()
+        motion.handed_on = True
+        self._carried = motion
+        self._commanded_this_period = True
+
+    def take_over(self) -> tuple[FloatArray, FloatArray, FloatArray, bool]:
+        """The carried motion's state for the next motion to start from, and whether it was commanded this period.
+
+        The brake stops driving it. Only while ``carrying``.
+        """
+        assert self._carried is not None
+        q, velocity, acceleration = self._carried.state()
+        commanded = self._commanded_this_period
+        self._carried = None
+        self._commanded_this_period = False
+        return q, velocity, acceleration, commanded
+
+    def brake_carried(self) -> None:
+        """The next stage needs the arm at rest: stop the carried motion (jerk-limited) instead."""
+        if self._carried is not None:
+            motion, self._carried = self._carried, None
+            motion.handed_on = False
+            self.take(motion)
+
+    def step(self) -> None:
+        """Hand the arm the next setpoint of the stopping or carried motion (nothing when idle)."""
+        motion = self._motion or self._carried
+        if motion is None:
+            return
+        if self._commanded_this_period:
+            self._commanded_this_period = False
+            return
+        setpoint = motion.step()
         self._arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
-        if self._motion.done:
+        if motion.done:
             self._motion = None
+            self._carried = None
 
 
 @dataclass

@@ -12,6 +12,7 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
+from bt_arrange.behaviours.moves import JointMovePlan
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
@@ -42,12 +43,8 @@ EXPECTED_MARGIN_M = 0.008
 
 
 def park_stage(name: str = stage.PARK) -> MoveStage:
-    """A joint motion home, or nothing when the arm is already there."""
-
-    def plan(context: Context, q: np.ndarray):  # noqa: ANN202 - a Motion
-        return context.planner.move_joints(q, context.home_q)
-
-    return MoveStage(name, plan)
+    """A joint motion home at the free-space limits (it may take over a motion handed on at speed)."""
+    return MoveStage(name, JointMovePlan(lambda context: context.home_q, free=True))
 
 
 def is_parked(context: Context) -> bool:

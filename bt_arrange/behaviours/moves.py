@@ -6,34 +6,91 @@ Stage planners (a joint move, a TCP line), the fingers' stages, the held part's 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from bt_arrange.behaviours.base import GripperStage
 from bt_arrange.behaviours.context import Context
-from bt_arrange.geometry import FloatArray
-from bt_arrange.motion import Motion, gripper_down_pose, nearest_symmetric_yaw
+from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.motion import LinearMotion, Motion, gripper_down_pose, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Grasp, preferred_grasp
 
 
-def to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float):  # noqa: ANN202 - a planning function
-    """A stage planner: a joint-space move to a gripper-down pose (fast, path free)."""
+class JointMovePlan:
+    """A stage planner for a joint-space move; it may start from a moving arm (``moving_start``).
 
-    def plan(context: Context, q: FloatArray) -> Motion:
-        return context.planner.move_to_pose(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
+    ``target(context)`` gives the goal: a TCP pose (solved by IK from the start) or a joint vector.
+    ``free``: the pads hold nothing, so the move runs at the settings' free-space limits
+    (``free_joint_limits``, the UR5's joint speeds); otherwise at the planner's gentler ones.
+    """
 
-    return plan
+    #: ``MoveStage`` may call it with a handed-on motion's velocities and accelerations.
+    moving_start = True
+
+    def __init__(self, target: Callable[[Context], Pose | FloatArray], free: bool = False) -> None:
+        self._target = target
+        self._free = free
+
+    def __call__(
+        self,
+        context: Context,
+        q: FloatArray,
+        velocities_rad_s: FloatArray | None = None,
+        accelerations_rad_s2: FloatArray | None = None,
+    ) -> Motion:
+        limits = context.settings.free_joint_limits if self._free else None
+        target = self._target(context)
+        if isinstance(target, Pose):
+            return context.planner.move_to_pose(
+                q,
+                target,
+                start_velocities_rad_s=velocities_rad_s,
+                start_accelerations_rad_s2=accelerations_rad_s2,
+                joint_limits=limits,
+            )
+        return context.planner.move_joints(
+            q, target, velocities_rad_s, start_accelerations_rad_s2=accelerations_rad_s2, joint_limits=limits
+        )
 
 
-def line_to(x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False):  # noqa: ANN202
+def to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float, free: bool = False) -> JointMovePlan:
+    """A stage planner: a joint-space move to a gripper-down pose (fast, path free; ``JointMovePlan``)."""
+    pose = gripper_down_pose(x_m, y_m, z_m, yaw_rad)
+    return JointMovePlan(lambda context: pose, free=free)
+
+
+def line_nearly_done(remaining_m: float) -> Callable[[Context, Motion], bool]:
+    """A ``MoveStage`` hand-on: a line passes its last ``remaining_m`` at speed into the next (joint) move."""
+
+    def hand_on(context: Context, motion: Motion) -> bool:
+        return isinstance(motion, LinearMotion) and motion.remaining_m <= remaining_m
+
+    return hand_on
+
+
+def line_to(  # noqa: ANN201 - a planning function
+    x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False, free: bool = False
+):
     """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
 
     ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    ``free``: the pads hold nothing and touch nothing on the way (down to a part, up from a released
+    one): at the settings' free-space line and joint limits.
     """
 
     def plan(context: Context, q: FloatArray) -> Motion:
-        limits = context.settings.push_limits if pushing else None
-        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
+        s = context.settings
+        if pushing:
+            return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=s.push_limits)
+        if free:
+            return context.planner.move_line(
+                q,
+                gripper_down_pose(x_m, y_m, z_m, yaw_rad),
+                cartesian_limits=s.free_line_limits,
+                joint_limits=s.free_joint_limits,
+            )
+        return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad))
 
     return plan
 
@@ -103,6 +160,21 @@ def open_stage(name: str, opening_m: float) -> GripperStage:
     return GripperStage(name, lambda c: c.robot.gripper.open(opening_m))
 
 
-def close_stage(name: str, force_n: float) -> GripperStage:
-    """Close the fingers with ``force_n`` and wait for them to stop."""
-    return GripperStage(name, lambda c: c.robot.gripper.close(force_n))
+def close_stage(name: str, force_n: float, squaring: bool = False) -> GripperStage:
+    """Close the fingers with ``force_n`` and wait for them to stop.
+
+    At the settings' ``finger_speed_m_s``; a close that squares a part pinched across its corners
+    (``squaring``) at ``squaring_finger_speed_m_s``, slower: the pads turn the part as they meet it.
+    """
+
+    def close(context: Context) -> None:
+        s = context.settings
+        context.robot.gripper.close(force_n, speed_m_s=s.squaring_finger_speed_m_s if squaring else s.finger_speed_m_s)
+
+    return GripperStage(name, close)
+
+
+def release_opening_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """How far a release opens the pads: the held side plus the release clearance each side, within the stroke."""
+    held_m = grasp_width_m(settings, object_type)
+    return min(settings.open_width_m, held_m + 2.0 * settings.release_clearance_per_side_m)

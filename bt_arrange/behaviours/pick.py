@@ -18,6 +18,7 @@ from bt_arrange.behaviours.moves import (
     free_grasp_pose,
     grasp_width_m,
     heights_m,
+    line_nearly_done,
     line_to,
     max_grip_width_m,
     min_held_width_m,
@@ -140,15 +141,15 @@ class Pick(StagedBehaviour):
 
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_ABOVE_CUBE, to_pose(x, y, approach_m, yaw)),
-            GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None),
-            MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw)),
-            GripperStage(stage.CLOSE_ON_CUBE, lambda c: c.robot.gripper.close(s.grip_force_n)),
+            MoveStage(stage.MOVE_ABOVE_CUBE, to_pose(x, y, approach_m, yaw, free=True)),
+            GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None, start_periods=0),
+            MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw, free=True)),
+            close_stage(stage.CLOSE_ON_CUBE, s.grip_force_n),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             *squaring,
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
             OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
-            MoveStage(stage.LIFT_CUBE, lift_plan),
+            MoveStage(stage.LIFT_CUBE, lift_plan, hand_on=line_nearly_done(s.hand_on_remaining_m)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
 
@@ -172,17 +173,17 @@ class Pick(StagedBehaviour):
             steps: list[Stage] = [
                 open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SWEEP_TO_SQUARE, closing * towards_base * s.squaring_sweep_m, pushing=True),
-                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
             ]
         else:  # "shift"
             along_pads = np.array([-math.sin(yaw), math.cos(yaw)]) * s.squaring_shift_m
             steps = [
                 open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SHIFT_ALONG_PADS, along_pads),
-                close_stage(stage.CLOSE_TO_SQUARE, s.grip_force_n),
+                close_stage(stage.CLOSE_TO_SQUARE, s.grip_force_n, squaring=True),
                 open_stage(stage.OPEN_SQUARED_CUBE, opening_m),
                 line(stage.RECENTRE_ON_CUBE, np.zeros(2)),
-                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
             ]
         steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
         return [OnlyIf(step, self._turned) for step in steps]
@@ -209,13 +210,13 @@ class Pick(StagedBehaviour):
         one_way: list[Stage] = [
             open_stage(stage.OPEN_TO_SQUARE, opening_m),
             turn(stage.TURN_WRIST_TO_SQUARE, turn_rad),
-            close_stage(stage.CLOSE_ON_TURNED_CUBE, s.grip_force_n),
+            close_stage(stage.CLOSE_ON_TURNED_CUBE, s.grip_force_n, squaring=True),
             InstantStage(stage.CHECK_TURNED_GRASP, self._check_squared_grasp),
         ]
         other_way: list[Stage] = [
             open_stage(stage.OPEN_TO_TURN_BACK, opening_m),
             turn(stage.TURN_WRIST_OTHER_WAY, -turn_rad),
-            close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n),
+            close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
             InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp),
         ]
         guarded: list[Stage] = [OnlyIf(step, self._turned) for step in one_way]

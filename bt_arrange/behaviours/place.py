@@ -13,7 +13,9 @@ from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
     free_grasp_pose,
     heights_m,
+    line_nearly_done,
     line_to,
+    release_opening_m,
     to_pose,
     wrist_yaw_rad,
 )
@@ -82,7 +84,7 @@ class Place(StagedBehaviour):
         kind = self.object_type
         grasp_m, approach_m, _ = heights_m(s, kind)
         x, y = target.x_m, target.y_m
-        opening_m = s.open_width_m
+        opening_m = release_opening_m(s, kind)
         if self.where == "pick":
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
             x, y, yaw = free_grasp_pose(s, kind, picked.x_m, picked.y_m, picked.yaw_rad, wrist_yaw_rad(context))
@@ -100,8 +102,8 @@ class Place(StagedBehaviour):
         return [
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw)),
             MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
-            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m)),
-            MoveStage(stage.RETREAT, line_to(x, y, approach_m, yaw)),
+            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)),
+            MoveStage(stage.RETREAT, line_to(x, y, approach_m, yaw, free=True), hand_on=line_nearly_done(s.hand_on_remaining_m)),
         ]
 
     def success_message(self) -> str:

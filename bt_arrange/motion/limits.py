@@ -35,6 +35,8 @@ MAX_TCP_ACCELERATION_M_S2 = 10.0
 MAX_TCP_JERK_M_S3 = 500.0
 
 _BUNDLED = read_joint_limits()
+#: The bundled UR5's joint speed limits (rad/s, URDF order): what the hardware allows.
+HARDWARE_JOINT_VELOCITY_RAD_S: tuple[float, ...] = tuple(_BUNDLED.velocity_rad_s)
 
 
 def _check_positive_at_most(what: str, value: float, cap: float, unit: str) -> float:
@@ -161,20 +163,21 @@ class JointLimits:
 class CartesianLimits:
     """Limits of a straight TCP line, along the path (the orientation stays constant on a line).
 
-    Defaults, and why:
+    Defaults (the lines that carry a part: the lift and the lowering), and why:
 
-    - ``velocity_m_s = 0.4``: descend, lift, lower and retreat are short (7 to 8 cm); with the
-      acceleration below a 7.5 cm line takes 0.5 s (at the former 0.15 m/s a 9.5 cm one took 1.1 s). A push
-      uses slower limits of its own (``ManipulationSettings.push_limits``: 0.15 m/s, which does not
-      make a 5 cm cube tip, bounce or slide on).
-    - ``acceleration_m_s2 = 2.0``: full speed after 0.3 s and about 5 cm of travel.
-    - ``jerk_m_s3 = 20.0``: full acceleration after 0.1 s, which keeps the joint jerks of a
+    - ``velocity_m_s = 0.6``: the lift and the lowering are short (7 to 8 cm); a 7.5 cm line takes
+      0.43 s (0.5 s at the former 0.4 m/s). Lines with empty pads run at
+      ``ManipulationSettings.free_line_limits`` (1 m/s), a push at ``push_limits`` (0.15 m/s, which
+      does not make a 5 cm cube tip, bounce or slide on).
+    - ``acceleration_m_s2 = 3.0``: full speed after 0.25 s; a held 5 cm wooden cube (0.1 kg) then
+      needs 0.3 N of the pads' 40 N of grip, and no more than the carrying joint moves ask.
+    - ``jerk_m_s3 = 30.0``: full acceleration after 0.1 s, which keeps the joint jerks of a
       typical line under the joint default (100 rad/s^3), so a line plans once, without a slowdown.
     """
 
-    velocity_m_s: float = 0.4
-    acceleration_m_s2: float = 2.0
-    jerk_m_s3: float = 20.0
+    velocity_m_s: float = 0.6
+    acceleration_m_s2: float = 3.0
+    jerk_m_s3: float = 30.0
 
     def __post_init__(self) -> None:
         for name, value, cap, unit in (

@@ -46,17 +46,45 @@ class MotionPlanner:
         self.control_period_s = check_control_period(control_period_s)
 
     def move_joints(
-        self, start_q: ArrayLike, target_q: ArrayLike, start_velocities_rad_s: ArrayLike | None = None
+        self,
+        start_q: ArrayLike,
+        target_q: ArrayLike,
+        start_velocities_rad_s: ArrayLike | None = None,
+        *,
+        start_accelerations_rad_s2: ArrayLike | None = None,
+        joint_limits: JointLimits | None = None,
     ) -> JointMotion:
-        """Joint-space motion from ``start_q`` to ``target_q``."""
+        """Joint-space motion from ``start_q`` (at rest, or moving at the given rates) to ``target_q``.
+
+        ``joint_limits`` replaces the planner's for this motion (e.g. the faster free-space ones).
+        """
         return JointMotion(
-            start_q, target_q, self.joint_limits, self.control_period_s, start_velocities_rad_s=start_velocities_rad_s
+            start_q,
+            target_q,
+            joint_limits or self.joint_limits,
+            self.control_period_s,
+            start_velocities_rad_s=start_velocities_rad_s,
+            start_accelerations_rad_s2=start_accelerations_rad_s2,
         )
 
-    def move_to_pose(self, start_q: ArrayLike, target_pose: Pose) -> JointMotion:
+    def move_to_pose(
+        self,
+        start_q: ArrayLike,
+        target_pose: Pose,
+        *,
+        start_velocities_rad_s: ArrayLike | None = None,
+        start_accelerations_rad_s2: ArrayLike | None = None,
+        joint_limits: JointLimits | None = None,
+    ) -> JointMotion:
         """Joint-space motion to the IK solution of ``target_pose`` nearest ``start_q``'s branch."""
         target_q = self.kinematics.inverse(target_pose, start_q)
-        return self.move_joints(start_q, target_q)
+        return self.move_joints(
+            start_q,
+            target_q,
+            start_velocities_rad_s,
+            start_accelerations_rad_s2=start_accelerations_rad_s2,
+            joint_limits=joint_limits,
+        )
 
     def move_line(
         self,
@@ -64,17 +92,19 @@ class MotionPlanner:
         target_pose: Pose,
         orientation_tolerance_rad: float = DEFAULT_LINE_ORIENTATION_TOLERANCE_RAD,
         cartesian_limits: CartesianLimits | None = None,
+        joint_limits: JointLimits | None = None,
     ) -> LinearMotion:
         """Straight TCP line from the TCP at ``start_q`` to ``target_pose``'s position, orientation kept.
 
-        ``cartesian_limits`` replaces the planner's path limits for this line (e.g. a slower push).
+        ``cartesian_limits`` replaces the planner's path limits for this line (e.g. a slower push),
+        ``joint_limits`` the joint limits the line is checked against.
         """
         return LinearMotion(
             self.kinematics,
             start_q,
             target_pose,
             cartesian_limits or self.cartesian_limits,
-            self.joint_limits,
+            joint_limits or self.joint_limits,
             self.control_period_s,
             orientation_tolerance_rad=orientation_tolerance_rad,
         )

@@ -102,6 +102,9 @@ class Motion(ABC):
         self._stopping = False
         self._steps = 0
         self._last: JointSetpoint | None = None
+        #: True once the motion was handed on to the next one before its end, without stopping
+        #: (``ArmBrake.carry_on``): its waypoint was passed at speed.
+        self.handed_on = False
 
     @property
     def control_period_s(self) -> float:
@@ -143,6 +146,17 @@ class Motion(ABC):
         self._last = setpoint
         self._done = finished
         return setpoint
+
+    def state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Positions, velocities and accelerations of the last setpoint handed out (the start state before any).
+
+        What the next motion starts from when this one is handed on at speed.
+        """
+        return self._state()
+
+    @abstractmethod
+    def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The last setpoint's positions, velocities and accelerations."""
 
     def stop(self) -> None:
         """Bring the motion to rest as fast as the limits allow (jerk-limited); idempotent.
@@ -238,6 +252,15 @@ class JointMotion(Motion):
     def target_positions_rad(self) -> FloatArray:
         """The target joint vector."""
         return self._target.copy()
+
+    def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The ruckig input's current state: after ``pass_to_input`` that is the last setpoint."""
+        inp = self._input
+        return (
+            np.array(inp.current_position, dtype=float),
+            np.array(inp.current_velocity, dtype=float),
+            np.array(inp.current_acceleration, dtype=float),
+        )
 
     def _advance(self) -> tuple[JointSetpoint, bool]:
         """One ruckig update: the classic ``update()`` then ``pass_to_input()`` control cycle."""
@@ -518,6 +541,24 @@ class LinearMotion(Motion):
     def knots_m(self) -> FloatArray:
         """Path lengths (m) where IK was solved; the joints between them are interpolated."""
         return self._knots_m.copy()
+
+    @property
+    def remaining_m(self) -> float:
+        """Path length still ahead of the last setpoint (m); the whole line before the first step."""
+        return self._length_m - float(self._s[self._index]) if self._stop_otg is None else 0.0
+
+    def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The last planned sample: joints, ``dq/ds * ds/dt``, and the samples' second difference."""
+        if self._stop_otg is not None:
+            raise MotionError("a stopping line has no planned state to hand on")
+        k, dt = self._index, self._control_period_s
+        positions = self._positions
+        velocity = self._joints_per_metre[k] * self._s_dot[k]
+        if 0 < k < len(positions) - 1:
+            acceleration = (positions[k + 1] - 2.0 * positions[k] + positions[k - 1]) / dt**2
+        else:
+            acceleration = np.zeros(len(ARM_JOINT_NAMES))
+        return positions[k].copy(), velocity, acceleration
 
     def path_positions_rad(self, s_m: ArrayLike) -> FloatArray:
         """Joints (one row per value) at path lengths ``s_m`` in metres from the start, on the planned path."""

@@ -30,7 +30,20 @@ def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
     arm = fake_arm(context)
     assert len(arm.commands) > 50, "a joint motion of a second or more, one setpoint per control period"
     np.testing.assert_allclose(arm.joint_positions(), context.home_q, atol=1e-9)
-    # Then the arm settles: the last ticks wait settle_s without sending anything.
-    settle_ticks = [t for t in run.running if t.time_s > arm.commands[-1].time_s]
+    # Then the arm settles: the fake arm is still at once (its last setpoint is at rest), so the
+    # stage ends on the next tick, without sending anything more.
+    settle_ticks = [t for t in run.ticks if t.time_s > arm.commands[-1].time_s]
+    assert len(settle_ticks) == 1
+    assert all(t.arm_commands == 0 for t in settle_ticks)
+
+
+def test_move_home_waits_while_the_arm_still_moves_but_no_longer_than_settle_s(clock) -> None:
+    context = make_context(clock, q=AWAY_Q)
+    arm = fake_arm(context)
+    real_velocities = arm.joint_velocities
+    arm.joint_velocities = lambda: real_velocities() + 0.01  # type: ignore[method-assign] - a joint that creeps on
+    run = tick_until_done(set_up(MoveHome("park"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    settle_ticks = [t for t in run.ticks if t.time_s > arm.commands[-1].time_s]
     assert len(settle_ticks) == pytest.approx(SETTINGS.settle_s / arm.control_period_s, abs=1)
     assert all(t.arm_commands == 0 for t in settle_ticks)

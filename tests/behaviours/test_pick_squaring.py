@@ -31,7 +31,7 @@ def _squared_by_the_second_close(context: Context, squared_width_m: float) -> No
     gripper = fake_gripper(context)
     close = gripper.close
 
-    def close_then_square(force_n: float) -> None:
+    def close_then_square(force_n: float, speed_m_s: float | None = None) -> None:
         close(force_n)
         gripper.object_width_m = squared_width_m
 
@@ -120,7 +120,7 @@ def _closes_stop_at(context: Context, widths_m: list[float]) -> None:
     close = gripper.close
     count = [0]
 
-    def close_at_next_width(force_n: float) -> None:
+    def close_at_next_width(force_n: float, speed_m_s: float | None = None) -> None:
         gripper.object_width_m = widths_m[min(count[0], len(widths_m) - 1)]
         count[0] += 1
         close(force_n)

@@ -31,7 +31,9 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
         stages.RETREAT,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
-    assert [(c.kind, c.value) for c in gripper.commands] == [("open", SETTINGS.open_width_m)]
+    # The pads open only the release clearance beyond the cube on each side (8 mm: 66 mm for a 5 cm cube).
+    opening_m = CUBE_EDGE_M + 2 * SETTINGS.release_clearance_per_side_m
+    assert [(c.kind, c.value) for c in gripper.commands] == [("open", pytest.approx(opening_m))]
     release = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[0].time_s).positions_rad)
     expected_z_m = CUBE_GRASP_HEIGHT_M + SETTINGS.release_clearance_m
     np.testing.assert_allclose(release.position_m, [0.45, -0.1, expected_z_m], atol=1e-6)

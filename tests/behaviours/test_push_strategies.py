@@ -84,7 +84,8 @@ def test_a_diagonal_push_goes_sideways_while_the_pads_touch_and_says_so(clock) -
     assert deepest[0] == pytest.approx(-CUBE_PUSH_REACH_M + 0.003, abs=1e-6)
     assert deepest[1] == pytest.approx(0.001, abs=1e-6), "1 mm along y by the end of the push"
     # Where the pads meet the face (reach from the centre), the line has not gone sideways yet.
-    meet = low[int(np.argmin(np.abs(low[:, 0] + CUBE_PUSH_REACH_M)))]
+    pushing = low[: int(np.argmax(low[:, 0])) + 1]  # up to the deepest point: the back-off comes after
+    meet = pushing[int(np.argmin(np.abs(pushing[:, 0] + CUBE_PUSH_REACH_M)))]
     assert meet[1] == pytest.approx(0.0, abs=5e-5)
     assert low[0][1] == pytest.approx(-0.001 * s.push_clearance_m / 0.003, abs=1e-6), "started that far the other way"
 
