@@ -120,6 +120,26 @@ class ManipulationSettings:
         low, high = self.gripper.force_range_n
         if not low <= self.grip_force_n <= high:
             raise OutOfRangeError(f"grip force {self.grip_force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
+        low_speed, high_speed = self.gripper.speed_range_m_s
+        for name, speed in (
+            ("finger speed", self.finger_speed_m_s),
+            ("squaring finger speed", self.squaring_finger_speed_m_s),
+        ):
+            if not low_speed <= speed <= high_speed:
+                raise OutOfRangeError(
+                    f"{name} {speed * 1000:.0f} mm/s is outside the gripper's "
+                    f"{low_speed * 1000:.0f} to {high_speed * 1000:.0f} mm/s"
+                )
+        if not self.settled_speed_rad_s > 0.0:
+            raise OutOfRangeError(f"settled speed {self.settled_speed_rad_s:g} rad/s must be positive")
+        if not self.settle_s >= 0.0:
+            raise OutOfRangeError(f"settle time {self.settle_s:g} s must not be negative")
+        for name, value in (
+            ("hand-on distance", self.hand_on_remaining_m),
+            ("release clearance per side", self.release_clearance_per_side_m),
+        ):
+            if not value >= 0.0:
+                raise OutOfRangeError(f"{name} {value * 1000:g} mm must not be negative")
         if not 0.0 < self.open_width_m <= self.gripper.stroke_m:
             raise OutOfRangeError(
                 f"open width {self.open_width_m * 1000:.1f} mm must be positive "

@@ -67,6 +67,13 @@ class PhysicsConfig:
     gripper_speed_m_s: float = 0.05
     #: Opening speed: the 2F-85's fastest; letting go faster did not move the released cube more.
     gripper_open_speed_m_s: float = 0.15
+    #: Parts at rest sleep (Bullet's deactivation): they leave the contact solve until something
+    #: touches them, which wakes them. With four cubes resting on the table the cell stepped at about
+    #: half the bare robot's rate, with them asleep at 0.86 of it (``benchmarks/throughput.py``). A part
+    #: counts as at rest when its mean squared velocity (m/s, rad/s) stays under ``sleep_threshold``
+    #: (1e-6: about 1 mm/s) for Bullet's two seconds; every pose reset of a part wakes it.
+    parts_sleep: bool = True
+    sleep_threshold: float = 1e-6
     gear_max_force_n: float = 200.0
     gear_erp: float = 0.8
     cube_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001)
@@ -405,7 +412,18 @@ class WorkCell:
             self.colours,
         )
         self.object_types[name] = object_type
+        if self.config.physics.parts_sleep:
+            self.client.changeDynamics(
+                self.cubes[name],
+                -1,
+                activationState=import_pybullet().ACTIVATION_STATE_ENABLE_SLEEPING,
+                sleepThreshold=self.config.physics.sleep_threshold,
+            )
         return name
+
+    def _wake(self, name: str) -> None:
+        """A part whose pose or contacts were changed from outside moves again under physics."""
+        self.client.changeDynamics(self.cubes[name], -1, activationState=import_pybullet().ACTIVATION_STATE_WAKE_UP)
 
     def remove_cube(self, name: str) -> None:
         """Take a cube off the table."""
@@ -432,6 +450,7 @@ class WorkCell:
         pose = self.cube_pose_truth(name)
         moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
         self.client.resetBasePositionAndOrientation(self.cubes[name], moved.position_m, moved.quaternion_xyzw)
+        self._wake(name)
 
     def place_cube_truth(self, name: str, pose: Pose) -> None:
         """Error injection: put a cube at ``pose`` (a tilt, a drag by a sticking finger); it moves on by physics.
@@ -439,6 +458,7 @@ class WorkCell:
         The robot learns of it only through its camera. Never used to steer or to fake a result.
         """
         self.client.resetBasePositionAndOrientation(self.cubes[name], pose.position_m, pose.quaternion_xyzw)
+        self._wake(name)
 
     def finger_opening_m(self, finger: int) -> float:
         """True position of one finger joint (``finger_joint_indices``): its pad's distance from the centre."""
@@ -461,6 +481,7 @@ class WorkCell:
             contact.apply(self.client, self.robot_id, finger)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 0)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 1)
+        self._wake(cube)
 
     def add_cubes(self, starts: Iterable[CubeStart]) -> None:
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""

@@ -29,6 +29,7 @@ class JointMovePlan:
     moving_start = True
 
     def __init__(self, target: Callable[[Context], Pose | FloatArray], free: bool = False) -> None:
+        """Move to ``target(context)`` (read when the move starts)."""
         self._target = target
         self._free = free
 
@@ -39,6 +40,7 @@ class JointMovePlan:
         velocities_rad_s: FloatArray | None = None,
         accelerations_rad_s2: FloatArray | None = None,
     ) -> Motion:
+        """The move from ``q`` (at rest, or moving at the given rates: a motion handed on)."""
         limits = context.settings.free_joint_limits if self._free else None
         target = self._target(context)
         if isinstance(target, Pose):
@@ -82,7 +84,9 @@ def line_to(  # noqa: ANN201 - a planning function
     def plan(context: Context, q: FloatArray) -> Motion:
         s = context.settings
         if pushing:
-            return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=s.push_limits)
+            return context.planner.move_line(
+                q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=s.push_limits
+            )
         if free:
             return context.planner.move_line(
                 q,

@@ -102,8 +102,14 @@ class Place(StagedBehaviour):
         return [
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw)),
             MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
-            GripperStage(stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)),
-            MoveStage(stage.RETREAT, line_to(x, y, approach_m, yaw, free=True), hand_on=line_nearly_done(s.hand_on_remaining_m)),
+            GripperStage(
+                stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)
+            ),
+            MoveStage(
+                stage.RETREAT,
+                line_to(x, y, approach_m, yaw, free=True),
+                hand_on=line_nearly_done(s.hand_on_remaining_m),
+            ),
         ]
 
     def success_message(self) -> str:

@@ -14,6 +14,7 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     heights_m,
+    line_nearly_done,
     line_to,
     to_pose,
     wrist_yaw_rad,
@@ -207,12 +208,17 @@ class Push(StagedBehaviour):
             opening_m = min(opening_m, self.opening_m)
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw)),
-            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
-            MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw)),
+            # Only the push itself touches the part: the moves before and after it run at the free-space limits.
+            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
+            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
+            MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
             MoveStage(stage.push(distance_m, axis), line_to(end[0], end[1], push_m, yaw, pushing=True)),
-            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw)),
-            MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
+            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
+            MoveStage(
+                stage.LIFT_FINGERS,
+                line_to(back[0], back[1], approach_m, yaw, free=True),
+                hand_on=line_nearly_done(s.hand_on_remaining_m),
+            ),
         ]
 
     def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:

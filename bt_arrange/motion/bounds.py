@@ -60,9 +60,7 @@ def line_bound_s(
     start_q: ArrayLike, target_q: ArrayLike, length_m: float, joint_limits: JointLimits, line_limits: CartesianLimits
 ) -> float:
     """A straight line's lower bound: its ends' joint-space bound, or its path at 1 m/s, whichever is longer."""
-    path_s = rest_to_rest_s(
-        [0.0], [length_m], MAX_TCP_SPEED_M_S, line_limits.acceleration_m_s2, line_limits.jerk_m_s3
-    )
+    path_s = rest_to_rest_s([0.0], [length_m], MAX_TCP_SPEED_M_S, line_limits.acceleration_m_s2, line_limits.jerk_m_s3)
     return max(joint_move_bound_s(start_q, target_q, joint_limits), path_s)
 
 
