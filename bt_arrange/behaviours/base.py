@@ -149,7 +149,7 @@ class GripperStage(Stage):
     def __init__(
         self, name: str, command: Callable[[Context], None], wait: bool = True, start_periods: int | None = None
     ) -> None:
-        """``start_periods``: polls before the fingers' speed counts (``START_PERIODS``; 0: wait on an earlier command)."""
+        """``start_periods``: polls before the fingers' speed counts (``START_PERIODS``; 0 after a command)."""
         super().__init__(name)
         self._command = command
         self._wait = wait
