@@ -14,10 +14,18 @@ benchmark only (``bt_arrange.timing``): an ordinary run is not instrumented.
 World time is attributed per tick to what the running behaviour was doing: following a motion,
 letting the arm settle after one, waiting for the fingers, or braking.
 
-Key figures: ``render_share`` (rendering's fraction of the single-cube trial's wall time),
-``floor_ratio`` (that trial's wall time over the time spent stepping its physics: 1.0 would mean
-nothing but physics costs anything) and ``world_s_per_object`` (the four-cube tree). Wall-clock
-figures depend on the machine and on what else runs on it: compare ratios from one run.
+Beside it, a lower bound for the same waypoints (``BoundRecorder``, ``bt_arrange.motion.bounds``):
+every motion the run planned, as the time-optimal jerk-limited trajectory between the same joint
+vectors at the UR5's joint speeds (the URDF's) and the project's fastest acceleration and jerk
+(``ManipulationSettings.free_joint_limits``), a line no faster than its path at 1 m/s; motions
+handed on at speed bounded together, from the first one's start to the last one's end; the fingers'
+travel at the 2F-85's 150 mm/s; settling, looking and ticks between behaviours at nothing.
+
+Key figures (``--json`` keys; the last three a contract): ``render_share`` (rendering's fraction of
+the single-cube trial's wall time), ``floor_ratio`` (that trial's wall time over the time spent
+stepping its physics: 1.0 would mean nothing but physics costs anything), and for the four-cube
+tree ``world_s_per_object``, ``bound_s_per_object`` and ``bound_ratio`` (world time over the bound).
+Wall-clock figures depend on the machine and on what else runs on it: compare ratios from one run.
 """
 
 from __future__ import annotations
@@ -121,7 +129,7 @@ class BoundRecorder:
             self.motions.append((stage, motion, np.asarray(getattr(inner, "start_q", motion.target_positions_rad))))
 
     def bounds_by_stage(self) -> dict[str, float]:
-        """Seconds of lower bound per stage label (a chain of handed-on motions goes to its first stage)."""
+        """Seconds of lower bound per stage label; a chain of handed-on motions under its stages joined by " + "."""
         s = self.settings
         joint_limits, line_limits = s.free_joint_limits, s.free_line_limits
         bounds: dict[str, float] = defaultdict(float)
@@ -132,12 +140,13 @@ class BoundRecorder:
             if getattr(motion, "handed_on", False):
                 continue
             first_stage, first, start_q = chain[0]
+            label = " + ".join(dict.fromkeys(stage for stage, _, _ in chain))
             target_q = motion.target_positions_rad  # type: ignore[attr-defined]
             if len(chain) == 1 and isinstance(first, LinearMotion):
                 bound = line_bound_s(start_q, target_q, first.length_m, joint_limits, line_limits)
             else:
                 bound = joint_move_bound_s(start_q, target_q, joint_limits)
-            bounds[first_stage] += bound
+            bounds[label] += bound
             chain = []
         top_speed = s.gripper.speed_range_m_s[1]
         for stage, travel in self.finger_travel_m.items():
@@ -226,6 +235,19 @@ def run_trial(tree_file: Path, seed: int) -> dict:
     }
 
 
+def _stage_rows(trial: dict) -> list[tuple[str, float, float]]:
+    """(stage or chain of stages, world time, bound) for the table, longest first."""
+    world, bounds = trial["world_s_by_stage"], trial["bound_s_by_stage"]
+    rows = []
+    in_chains: set[str] = set()
+    for label, bound_s in bounds.items():
+        stages = label.split(" + ")
+        in_chains.update(stages)
+        rows.append((label, sum(world.get(stage, 0.0) for stage in stages), bound_s))
+    rows += [(stage, world_s, 0.0) for stage, world_s in world.items() if stage not in in_chains]
+    return sorted(rows, key=lambda row: -row[1])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=0, help="scene seed of both trials (default 0)")
@@ -261,8 +283,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"  lower bound {trial['bound_s']} s ({trial['bound_s_per_object']} s per object): "
                 f"world time / bound {trial['bound_ratio']}"
             )
-            for stage, world_s in trial["world_s_by_stage"].items():
-                print(f"    {stage:55s} {world_s:6.3f} s  bound {trial['bound_s_by_stage'].get(stage, 0.0):6.3f} s")
+            for label, world_s, bound_s in _stage_rows(trial):
+                print(f"    {label:85s} {world_s:6.3f} s  bound {bound_s:6.3f} s")
         print(
             f"bare robot: {bare['physics_steps_per_s']} physics steps per second "
             f"({bare['real_time_factor']}x real time)"

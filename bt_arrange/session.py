@@ -60,7 +60,7 @@ from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import Arrangement, Target
 
-#: World time the scene settles for before the tree starts (parts dropped onto the table come to rest), seconds.
+#: The longest the scene settles before the tree starts (parts put on the table come to rest), seconds.
 SETTLE_S = 0.3
 
 #: Behaviours whose failure explains why an object was not finished (each knows its ``obj``).
@@ -124,7 +124,7 @@ class World(Protocol):
         ...
 
     def settle(self, seconds: float) -> None:
-        """Let ``seconds`` of world time pass with the robot still (parts come to rest)."""
+        """Let world time pass with the robot still until the parts rest, at most ``seconds`` (or just that long)."""
         ...
 
     def step(self) -> None:

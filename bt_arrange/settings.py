@@ -80,9 +80,16 @@ class ManipulationSettings:
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
     #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
     #: speeds (the URDF's 3.15 and 3.2 rad/s), 16 rad/s^2 (0.2 s to full speed; the pendant allows 40)
-    #: and 200 rad/s^3. What the arm carries or pushes moves at the planner's gentler limits
-    #: (``JointLimits()``: 2 rad/s, 8 rad/s^2): there a jolt could shift the part in the pads.
+    #: and 200 rad/s^3. The lines that carry a part (the lift, the lowering) run at the planner's
+    #: gentler limits (``CartesianLimits()``: 0.6 m/s, 3 m/s^2), a push at ``push_limits``.
     free_joint_limits: JointLimits = JointLimits(
+        velocity_rad_s=HARDWARE_JOINT_VELOCITY_RAD_S, acceleration_rad_s2=16.0, jerk_rad_s3=200.0
+    )
+    #: The carry of a held part above its target: as fast as a move with empty pads. Its inertia asks
+    #: little of the grip (a 5 cm wooden cube at the 13 m/s^2 that 16 rad/s^2 gives at the UR5's reach:
+    #: 1.6 N of the pads' 96 N of friction at 40 N); measured in Table 1 (40 trials a row) and the
+    #: four-cube tree, the parts landed as close as at 2 rad/s and 8 rad/s^2.
+    carry_joint_limits: JointLimits = JointLimits(
         velocity_rad_s=HARDWARE_JOINT_VELOCITY_RAD_S, acceleration_rad_s2=16.0, jerk_rad_s3=200.0
     )
     #: Straight lines with empty pads (down to a part, up from one just released): the UR5's typical
@@ -106,6 +113,9 @@ class ManipulationSettings:
     #: the pads turn the part as they meet it. Measured: at 75 to 150 mm/s a cube turned 33 degrees
     #: was held up to 6 degrees off square after the wrist turn; at 50 mm/s under 5 (both ways).
     squaring_finger_speed_m_s: float = 0.05
+    #: A first close wider than the grasped side by more than this (m) left the part a little turned
+    #: in the pads (a 5 cm cube about 1.1 degrees): Pick opens just clear of it and closes again slowly.
+    square_grip_tolerance_m: float = 0.001
     #: A release opens the pads only this far beyond the held part's width on each side (m), enough
     #: for the straight retreat up (the next pick opens them fully on its way).
     release_clearance_per_side_m: float = 0.008

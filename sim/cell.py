@@ -357,6 +357,14 @@ class WorkCell:
         """Let the world run with the current commands, e.g. after adding cubes."""
         self.step(max(1, round(seconds / self.config.physics.control_period_s)))
 
+    def parts_at_rest(self, speed_m_s: float = 0.001, speed_rad_s: float = 0.01) -> bool:
+        """True when every part moves slower than ``speed_m_s`` and turns slower than ``speed_rad_s``."""
+        for body in self.cubes.values():
+            linear, angular = self.client.getBaseVelocity(body)
+            if np.linalg.norm(linear) > speed_m_s or np.linalg.norm(angular) > speed_rad_s:
+                return False
+        return True
+
     def joint_name(self, index: int) -> str:
         """Name of a joint of the robot by its pybullet index."""
         return self.client.getJointInfo(self.robot_id, index)[1].decode()

@@ -16,6 +16,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import py_trees
 
 from bt_arrange.calibration import CameraCalibration
@@ -49,6 +50,10 @@ __all__ = [
 ]
 
 
+#: The scene has settled once its parts rest (``WorkCell.parts_at_rest``) this many control periods running.
+RESTING_PERIODS = 3
+
+
 class SimWorld:
     """A ``WorkCell`` as a ``World``: its robot, clock and camera, and the simulator's ground truth.
 
@@ -79,8 +84,19 @@ class SimWorld:
         self.cell.add_cubes(starts)
 
     def settle(self, seconds: float) -> None:
-        """Run the physics for ``seconds`` of world time with the arm holding still."""
-        self.cell.settle(seconds)
+        """Run the physics with the arm holding still until every part rests, at most ``seconds`` of world time.
+
+        At rest: the cell's ``parts_at_rest`` (the simulator's velocities: the scene's own state,
+        never the robot's input) for ``RESTING_PERIODS`` control periods running. Parts placed on
+        the table rest within a few periods.
+        """
+        periods = max(1, round(seconds / self.cell.robot.arm.control_period_s))
+        resting = 0
+        for _ in range(periods):
+            self.cell.step()
+            resting = resting + 1 if self.cell.parts_at_rest() else 0
+            if resting >= RESTING_PERIODS:
+                return
 
     def step(self) -> None:
         """One control period (several physics steps)."""

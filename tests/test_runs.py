@@ -49,6 +49,12 @@ class FakeCell:
     def step(self) -> None:
         self.clock.advance(0.008)
 
+    #: What ``parts_at_rest`` answers (the fake's parts never move unless a test says so).
+    resting = True
+
+    def parts_at_rest(self) -> bool:
+        return self.resting
+
     def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
         start = self.starts[name]
         return start.x_m, start.y_m, start.yaw_rad
@@ -66,8 +72,17 @@ def fake_cell(monkeypatch: pytest.MonkeyPatch) -> type[FakeCell]:
 
 def test_the_run_counts_world_time_from_the_start_of_the_tree(fake_cell) -> None:  # item 9: live view vs report
     run = runs.SimulatedRun(arrangement([RED]), [RED_START])
-    assert run.cell.clock.now() == pytest.approx(runs.SETTLE_S)
+    # The scene settles only as long as its parts move: these rest at once.
+    assert run.cell.clock.now() == pytest.approx(runs.RESTING_PERIODS * 0.008)
     assert run.elapsed_s() == pytest.approx(0.0)
+
+
+def test_the_scene_settles_while_a_part_moves_at_most_the_settle_time(
+    fake_cell, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(FakeCell, "resting", False)
+    run = runs.SimulatedRun(arrangement([RED]), [RED_START])
+    assert run.cell.clock.now() == pytest.approx(round(runs.SETTLE_S / 0.008) * 0.008)
 
 
 def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:  # issue 19, item 2

@@ -22,16 +22,20 @@ class JointMovePlan:
 
     ``target(context)`` gives the goal: a TCP pose (solved by IK from the start) or a joint vector.
     ``free``: the pads hold nothing, so the move runs at the settings' free-space limits
-    (``free_joint_limits``, the UR5's joint speeds); otherwise at the planner's gentler ones.
+    (``free_joint_limits``, the UR5's joint speeds); ``carrying``: the carry of a held part
+    (``carry_joint_limits``); otherwise at the planner's limits.
     """
 
     #: ``MoveStage`` may call it with a handed-on motion's velocities and accelerations.
     moving_start = True
 
-    def __init__(self, target: Callable[[Context], Pose | FloatArray], free: bool = False) -> None:
+    def __init__(
+        self, target: Callable[[Context], Pose | FloatArray], free: bool = False, carrying: bool = False
+    ) -> None:
         """Move to ``target(context)`` (read when the move starts)."""
         self._target = target
         self._free = free
+        self._carrying = carrying
 
     def __call__(
         self,
@@ -41,7 +45,8 @@ class JointMovePlan:
         accelerations_rad_s2: FloatArray | None = None,
     ) -> Motion:
         """The move from ``q`` (at rest, or moving at the given rates: a motion handed on)."""
-        limits = context.settings.free_joint_limits if self._free else None
+        s = context.settings
+        limits = s.free_joint_limits if self._free else s.carry_joint_limits if self._carrying else None
         target = self._target(context)
         if isinstance(target, Pose):
             return context.planner.move_to_pose(
@@ -56,10 +61,12 @@ class JointMovePlan:
         )
 
 
-def to_pose(x_m: float, y_m: float, z_m: float, yaw_rad: float, free: bool = False) -> JointMovePlan:
+def to_pose(
+    x_m: float, y_m: float, z_m: float, yaw_rad: float, free: bool = False, carrying: bool = False
+) -> JointMovePlan:
     """A stage planner: a joint-space move to a gripper-down pose (fast, path free; ``JointMovePlan``)."""
     pose = gripper_down_pose(x_m, y_m, z_m, yaw_rad)
-    return JointMovePlan(lambda context: pose, free=free)
+    return JointMovePlan(lambda context: pose, free=free, carrying=carrying)
 
 
 def line_nearly_done(remaining_m: float) -> Callable[[Context, Motion], bool]:

@@ -146,12 +146,42 @@ class Pick(StagedBehaviour):
             MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw, free=True)),
             close_stage(stage.CLOSE_ON_CUBE, s.grip_force_n),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
+            *self._reclose_stages(s, opening_m),
             *squaring,
             # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
             OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
             MoveStage(stage.LIFT_CUBE, lift_plan, hand_on=line_nearly_done(s.hand_on_remaining_m)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
+
+    def _reclose_stages(self, s: ManipulationSettings, opening_m: float) -> list[Stage]:
+        """After a fast close that left the part a little turned in the pads: open just clear of it, close slowly.
+
+        The first close runs at the fingers' full speed (``finger_speed_m_s``); pads that meet a turned
+        part that fast leave it turned more often than a slow close, which turns it square as the
+        pads meet it. A grip wider than the grasped side by ``square_grip_tolerance_m`` (a cube more
+        than about a degree off square), but not pinched across its corners (squaring's case), opens
+        to just outside the part's widest (its sweep diameter and the release clearance) and closes
+        again at ``squaring_finger_speed_m_s``. A square grip costs nothing.
+        """
+        reopen_m = min(opening_m, 2.0 * self.object_type.shape.sweep_radius_m + 2.0 * s.release_clearance_per_side_m)
+        steps: list[Stage] = [
+            GripperStage(
+                stage.OPEN_TO_CLOSE_SLOWLY,
+                lambda c: c.robot.gripper.open(reopen_m, speed_m_s=c.settings.finger_speed_m_s),
+            ),
+            close_stage(stage.CLOSE_SLOWLY_ON_CUBE, s.grip_force_n, squaring=True),
+            InstantStage(stage.CHECK_GRASP_AFTER_CLOSING_SLOWLY, self._check_grasp),
+        ]
+        return [OnlyIf(step, self._a_little_turned) for step in steps]
+
+    def _a_little_turned(self, context: Context) -> bool:
+        """The fast close left the grip wider than a square hold, but not pinched across the corners."""
+        width = self.grip_width_m
+        s = context.settings
+        if width is None or self._turned(context):
+            return False
+        return width > grasp_width_m(s, self.object_type) + s.square_grip_tolerance_m
 
     def _squaring_stages(
         self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float

@@ -100,7 +100,7 @@ class Place(StagedBehaviour):
             yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
             opening_m = self.release.opening_m
         return [
-            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw)),
+            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=True)),
             MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
             GripperStage(
                 stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)
