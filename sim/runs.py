@@ -16,7 +16,6 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import py_trees
 
 from bt_arrange.calibration import CameraCalibration
