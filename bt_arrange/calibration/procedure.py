@@ -197,7 +197,9 @@ def calibration_tree(
     children: list[py_trees.behaviour.Behaviour] = []
     if sheet is not None:
         children.append(
-            py_trees.decorators.FailureIsSuccess("go on if the sheet is not seen", CaptureSheet("capture the table sheet", sheet))
+            py_trees.decorators.FailureIsSuccess(
+                "go on if the sheet is not seen", CaptureSheet("capture the table sheet", sheet)
+            )
         )
     views: list[py_trees.behaviour.Behaviour] = []
     for index, pose in enumerate(poses):
