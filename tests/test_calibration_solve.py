@@ -137,7 +137,8 @@ def _procedure_views(noise_px: float, seed: int, arm_error: bool) -> tuple[list[
     board, view = CharucoBoard(), CameraView(NOMINAL_K, NOMINAL_CAMERA)
     rng = np.random.default_rng(seed)
     views = []
-    for tcps, working in ((board_poses(view, board, count=14), False), (working_plane_poses(view, board, count=14), True)):
+    lens, working_plane = board_poses(view, board, count=14), working_plane_poses(view, board, count=14)
+    for tcps, working in ((lens, False), (working_plane, True)):
         for tcp in tcps:
             observation = _observe(board, TRUE_CAMERA.inverse() @ tcp @ TRUE_MOUNT, rng, noise_px)
             views.append(BoardView(observation, _arm_error(tcp) if arm_error else tcp, working))
