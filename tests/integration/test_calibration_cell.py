@@ -45,8 +45,12 @@ def test_the_real_cells_short_calibration_finds_its_lens_and_pose(real_cell_cali
     assert -0.14 < k1 < -0.10 and 0.03 < k2 < 0.09, "the lens's radial distortion (k1 -0.12, k2 0.06)"
     # The transition log of the procedure, as of any run: one move and one capture per view.
     folder = real_cell_calibration.parent
-    kinds = [json.loads(line)["kind"] for line in (folder / "transitions.jsonl").read_text().splitlines()]
-    assert "CaptureBoard" in kinds and "SolveCalibration" in kinds
+    records = [json.loads(line) for line in (folder / "transitions.jsonl").read_text().splitlines()]
+    kinds = [record["kind"] for record in records]
+    assert "CaptureSheet" in kinds and "CaptureBoard" in kinds and "SolveCalibration" in kinds
+    # The sheet was seen and the working-plane views were enough: camera to base is on the table plane.
+    solved = [r for r in records if r["kind"] == "SolveCalibration" and r["new"] == "SUCCESS"]
+    assert solved and "on the table plane" in solved[-1]["feedback"], solved
 
 
 def test_fewer_views_than_a_calibration_needs_is_one_line_before_anything_moves(tmp_path, capsys) -> None:
