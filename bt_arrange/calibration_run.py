@@ -50,10 +50,14 @@ class CalibrationRun:
         cell: str = "",
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        plane_poses: list[Pose] | None = None,
+        sheet: CharucoBoard | None = None,
     ) -> None:
         self.board = board or CharucoBoard()
-        self.root = calibration_tree(poses, self.board, cell=cell)
-        self.poses = len(poses)
+        self.sheet = sheet
+        plane_poses = plane_poses or []
+        self.root = calibration_tree(poses, self.board, cell=cell, plane_poses=plane_poses, sheet=sheet)
+        self.poses = len(poses) + len(plane_poses)
         self.session = Session(
             self.root, [], open_world, view=view, record_dir=record_dir, time_limit_s=time_limit_s, title="calibrate"
         )

@@ -76,6 +76,8 @@ class SimBackend:
         import dataclasses
 
         from bt_arrange.calibration import CharucoBoard, board_poses
+        from bt_arrange.calibration.board import TABLE_SHEET
+        from bt_arrange.calibration.procedure import working_plane_poses
         from bt_arrange.errors import PlanError
         from bt_arrange_sim.calibration import SimCalibrationRun
         from bt_arrange_sim.cell import CellConfig, WorkCell, require_display
@@ -89,8 +91,11 @@ class SimBackend:
         board = CharucoBoard()
         config = CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
         config = dataclasses.replace(config, board=board)
-        # The poses are planned on the camera the cell's software knows: the nominal one.
-        poses = board_poses(config.camera.view(), board, config.board_mount, count=views)
+        # The poses are planned on the camera the cell's software knows: the nominal one. Half the
+        # views are the lens's (tilted, over the image), half where the arm works (docs/calibration.md).
+        view = config.camera.view()
+        poses = board_poses(view, board, config.board_mount, count=views - views // 2)
+        plane_poses = working_plane_poses(view, board, config.board_mount, count=views // 2)
 
         def open_world() -> SimWorld:
             if gui:
@@ -98,7 +103,14 @@ class SimBackend:
             return SimWorld(WorkCell(config, gui=gui))
 
         return SimCalibrationRun(
-            open_world, poses, board=board, cell=cell, record_dir=record_dir, time_limit_s=time_limit_s
+            open_world,
+            poses,
+            board=board,
+            cell=cell,
+            record_dir=record_dir,
+            time_limit_s=time_limit_s,
+            plane_poses=plane_poses,
+            sheet=TABLE_SHEET,
         )
 
     def scatter(

@@ -18,14 +18,17 @@ import hashlib
 import os
 import tempfile
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from bt_arrange.calibration import BoardMount, CharucoBoard, matrix_rpy
+from bt_arrange.calibration.board import TABLE_SHEET_THICKNESS_M
 from bt_arrange.calibration_run import CalibrationRun
 from bt_arrange.files import shared_temp_file
-from bt_arrange.geometry import Pose
+from bt_arrange.geometry import Pose, matrix_to_quaternion
 from bt_arrange.robot import CameraIntrinsics
 
 #: The link the board is on, and its joint.
@@ -132,8 +135,50 @@ def board_pose_truth(cell: object) -> np.ndarray:
     return matrix
 
 
+#: Where the table sheet lies: its centre (x, y, m) and the turn of its long side from the world's x
+#: axis (rad): across the working area, laid by hand a little askew. The procedure does not know it.
+TABLE_SHEET_PLACE = (0.48, 0.01, 1.62)
+
+
+def lay_table_sheet(cell: object, sheet: CharucoBoard, place: tuple[float, float, float] = TABLE_SHEET_PLACE) -> int:
+    """Lay the table sheet on the table, face up (visual only: nothing touches it); returns its body id.
+
+    The sheet is a tool of the procedure like the flange board: a plate with the pattern on its face,
+    its back on the table top (``TABLE_SHEET_THICKNESS_M`` thick, so its face is that high).
+    """
+    client = cell.client  # type: ignore[attr-defined]
+    mesh, texture = board_files(sheet)
+    x, y, turn = place
+    c, s = np.cos(turn), np.sin(turn)
+    # The board frame's z axis points into the plate: face up, it points down.
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.diag([1.0, -1.0, -1.0])
+    origin = np.array([x, y, TABLE_SHEET_THICKNESS_M]) - rotation @ sheet.centre_m
+    visual = client.createVisualShape(client.GEOM_MESH, fileName=str(mesh), meshScale=[1, 1, 1])
+    body = int(
+        client.createMultiBody(
+            0.0, -1, visual, basePosition=origin.tolist(), baseOrientation=matrix_to_quaternion(rotation).tolist()
+        )
+    )
+    client.changeVisualShape(body, -1, textureUniqueId=client.loadTexture(str(texture)), rgbaColor=[1, 1, 1, 1])
+    return body
+
+
 class SimCalibrationRun(CalibrationRun):
-    """A ``CalibrationRun`` in the pybullet cell, with the simulator's truth to judge it by (evaluation only)."""
+    """A ``CalibrationRun`` in the pybullet cell, with the simulator's truth to judge it by (evaluation only).
+
+    With a ``sheet``, the world it opens has the table sheet laid on the table (``lay_table_sheet``).
+    """
+
+    def __init__(self, open_world: Callable[[], Any], poses: list[Pose], **options: Any) -> None:
+        sheet = options.get("sheet")
+
+        def open_with_sheet() -> Any:
+            world = open_world()
+            if sheet is not None:
+                lay_table_sheet(world.cell, sheet)
+            return world
+
+        super().__init__(open_with_sheet, poses, **options)
 
     def true_camera(self) -> tuple[CameraIntrinsics, Pose]:
         """The true camera's intrinsics (with its lens) and pose ``T_W_C``: what the calibration should find."""

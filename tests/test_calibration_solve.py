@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from bt_arrange.calibration import BoardView, CharucoBoard, linear_ax_yb, solve_eye_to_hand, solve_intrinsics
-from bt_arrange.calibration.board import BoardObservation
-from bt_arrange.calibration.procedure import BoardMount, board_poses
-from bt_arrange.calibration.solve import check_view_count
+from bt_arrange.calibration.board import TABLE_SHEET, TABLE_SHEET_THICKNESS_M, BoardObservation
+from bt_arrange.calibration.procedure import WORKING_TCP_HEIGHTS_M, BoardMount, board_poses, working_plane_poses
+from bt_arrange.calibration.solve import check_view_count, solve_on_table_plane
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose
 from bt_arrange.plancheck import CameraView
@@ -103,3 +103,103 @@ def test_with_exact_arm_poses_freeing_the_intrinsics_in_the_last_refinement_reco
     solution = solve_eye_to_hand(views, intrinsics, refine_intrinsics=True)
     assert np.linalg.norm(solution.camera_to_base.position_m - TRUE_CAMERA.position_m) * 1000 < 0.1
     assert _rotation_error_mrad(solution.camera_to_base, TRUE_CAMERA) < 0.3
+
+
+# -- camera to base referenced to the table plane --------------------------------------------------
+
+SHEET_ON_TABLE = Pose.from_rotation(
+    [0.27, -0.22, TABLE_SHEET_THICKNESS_M],
+    np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) @ _small_turn(0.0, 0.0, 0.05) @ np.diag([1, -1, -1]),
+)
+
+
+def _observe(board: CharucoBoard, T_C_P: Pose, rng: np.random.Generator, noise_px: float) -> BoardObservation:
+    points = board.corners_m()
+    pixels, _ = cv2.projectPoints(points, cv2.Rodrigues(T_C_P.rotation)[0], T_C_P.position_m, TRUE_K.matrix,
+                                  np.asarray(TRUE_K.distortion))  # fmt: skip
+    pixels = pixels.reshape(-1, 2) + rng.normal(0.0, noise_px, (len(points), 2))
+    inside = (pixels[:, 0] > 0) & (pixels[:, 0] < 1919) & (pixels[:, 1] > 0) & (pixels[:, 1] < 1079)
+    return BoardObservation(pixels[inside], np.flatnonzero(inside).astype(np.int32), points[inside])
+
+
+def _arm_error(tcp: Pose) -> Pose:
+    """An arm right where it works (TCP 4 to 10 cm above the table) and off above it: what the controller reports.
+
+    1 mm along x and 0.5 mm along z per 10 cm of height above 7 cm: the kind of error a real arm's
+    link lengths give, larger the further its configuration is from where it was levelled.
+    """
+    rise = tcp.position_m[2] - 0.07
+    return Pose.from_rotation(tcp.position_m + np.array([0.010, 0.0, 0.005]) * rise, tcp.rotation)
+
+
+def _procedure_views(noise_px: float, seed: int, arm_error: bool) -> tuple[list[BoardView], BoardObservation]:
+    """The procedure's lens and working-plane views of the true camera, and the table sheet's view."""
+    board, view = CharucoBoard(), CameraView(NOMINAL_K, NOMINAL_CAMERA)
+    rng = np.random.default_rng(seed)
+    views = []
+    lens, working_plane = board_poses(view, board, count=14), working_plane_poses(view, board, count=14)
+    for tcps, working in ((lens, False), (working_plane, True)):
+        for tcp in tcps:
+            observation = _observe(board, TRUE_CAMERA.inverse() @ tcp @ TRUE_MOUNT, rng, noise_px)
+            views.append(BoardView(observation, _arm_error(tcp) if arm_error else tcp, working))
+    return views, _observe(TABLE_SHEET, TRUE_CAMERA.inverse() @ SHEET_ON_TABLE, rng, noise_px)
+
+
+def _table_error_mm(intrinsics: CameraIntrinsics, camera: Pose) -> float:
+    """Mean planar error (mm) of points on a cube's top (5 cm) over the working area, seen by the true camera."""
+    points = np.array([[x, y, 0.05] for x in np.linspace(0.32, 0.64, 5) for y in np.linspace(-0.26, 0.26, 5)])
+    in_camera = TRUE_CAMERA.inverse()
+    pixels, _ = cv2.projectPoints(points, cv2.Rodrigues(in_camera.rotation)[0], in_camera.position_m,
+                                  TRUE_K.matrix, np.asarray(TRUE_K.distortion))  # fmt: skip
+    rays = cv2.undistortPoints(pixels, intrinsics.matrix, np.asarray(intrinsics.distortion)).reshape(-1, 2)
+    directions = np.c_[rays, np.ones(len(rays))] @ camera.rotation.T
+    hits = camera.position_m + directions * ((0.05 - camera.position_m[2]) / directions[:, 2])[:, None]
+    return float(np.linalg.norm((hits - points)[:, :2], axis=1).mean() * 1000)
+
+
+def test_the_table_plane_solve_recovers_the_camera_from_noisy_corners() -> None:
+    views, sheet = _procedure_views(noise_px=0.1, seed=2, arm_error=False)
+    working = [v for v in views if v.working_plane]
+    # The solve itself, on the true lens: the camera to well under 0.5 mm and 1 mrad.
+    solution = solve_on_table_plane(working, TRUE_K, sheet, solve_eye_to_hand(views, TRUE_K), TABLE_SHEET_THICKNESS_M)
+    error_mm = np.linalg.norm(solution.camera_to_base.position_m - TRUE_CAMERA.position_m) * 1000
+    assert error_mm < 0.2, error_mm
+    assert _rotation_error_mrad(solution.camera_to_base, TRUE_CAMERA) < 0.4
+    assert solution.reprojection_error_px < 0.3
+    # On the lens calibrateCamera finds, the pose trades a little with the principal point, but what
+    # the camera reports on the table stays right.
+    intrinsics = solve_intrinsics([v.observation for v in views] + [sheet], 1920, 1080).intrinsics
+    solution = solve_on_table_plane(working, intrinsics, sheet, solve_eye_to_hand(views, intrinsics),
+                                    TABLE_SHEET_THICKNESS_M)  # fmt: skip
+    assert _table_error_mm(intrinsics, solution.camera_to_base) < 0.05
+
+
+def test_the_table_plane_keeps_an_arm_wrong_above_where_it_works_out_of_the_camera() -> None:
+    views, sheet = _procedure_views(noise_px=0.1, seed=3, arm_error=True)
+    intrinsics = solve_intrinsics([v.observation for v in views] + [sheet], 1920, 1080).intrinsics
+    every_view = solve_eye_to_hand(views, intrinsics)
+    on_plane = solve_on_table_plane([v for v in views if v.working_plane], intrinsics, sheet, every_view,
+                                    TABLE_SHEET_THICKNESS_M)  # fmt: skip
+    # The plain solve spreads the arm's error at the lens views over the camera; the table plane does not.
+    assert _table_error_mm(intrinsics, every_view.camera_to_base) > 0.3
+    assert _table_error_mm(intrinsics, on_plane.camera_to_base) < 0.1
+
+
+def test_the_working_plane_poses_keep_the_gripper_down_over_the_working_area_and_the_board_in_view() -> None:
+    view = CameraView(NOMINAL_K, NOMINAL_CAMERA)
+    poses = working_plane_poses(view, count=16)
+    assert len(poses) == 16
+    for tcp in poses:
+        assert np.allclose(tcp.rotation[:, 2], [0.0, 0.0, -1.0]), "the gripper points straight down"
+        assert 0.30 <= tcp.position_m[0] <= 0.66 and -0.28 <= tcp.position_m[1] <= 0.28
+        assert tcp.position_m[2] in WORKING_TCP_HEIGHTS_M
+    yaws = {round(math.degrees(p.yaw_rad)) for p in poses}
+    assert len(yaws) > 8, "the board turns about the vertical from pose to pose"
+
+
+def test_the_two_boards_are_never_taken_for_each_other() -> None:
+    flange, sheet = CharucoBoard(), TABLE_SHEET
+    for board, other in ((flange, sheet), (sheet, flange)):
+        image = np.dstack([other.plate_image(3000.0)] * 3)
+        assert board.detect(image) is None
+        assert other.detect(image) is not None

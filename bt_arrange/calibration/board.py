@@ -58,6 +58,9 @@ class CharucoBoard:
     dictionary: str = "DICT_4X4_50"
     #: White margin around the pattern on the plate (the outer markers need a quiet zone).
     margin_m: float = 0.010
+    #: The id of the board's first marker: two boards of one dictionary with disjoint ids are never
+    #: taken for each other (the table sheet's markers follow the flange board's).
+    first_marker_id: int = 0
 
     def __post_init__(self) -> None:
         if self.squares_x < 3 or self.squares_y < 3:
@@ -66,6 +69,13 @@ class CharucoBoard:
             raise PlanError(f"the markers ({self.marker_m} m) must be smaller than the squares ({self.square_m} m)")
         if not hasattr(cv2.aruco, self.dictionary):
             raise PlanError(f"unknown ArUco dictionary {self.dictionary!r}")
+        markers = (self.squares_x * self.squares_y) // 2
+        size = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary)).bytesList.shape[0]
+        if self.first_marker_id < 0 or self.first_marker_id + markers > size:
+            raise PlanError(
+                f"markers {self.first_marker_id} to {self.first_marker_id + markers - 1} do not fit in "
+                f"{self.dictionary} ({size} markers)"
+            )
 
     @property
     def size_m(self) -> tuple[float, float]:
@@ -92,7 +102,10 @@ class CharucoBoard:
     def opencv_board(self) -> cv2.aruco.CharucoBoard:
         """The OpenCV board object."""
         dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
-        return cv2.aruco.CharucoBoard((self.squares_x, self.squares_y), self.square_m, self.marker_m, dictionary)
+        ids = np.arange(self.first_marker_id, self.first_marker_id + (self.squares_x * self.squares_y) // 2)
+        return cv2.aruco.CharucoBoard(
+            (self.squares_x, self.squares_y), self.square_m, self.marker_m, dictionary, ids.astype(np.int32)
+        )
 
     def corners_m(self) -> FloatArray:
         """Every inner corner in the board frame, by id (N x 3)."""
@@ -115,3 +128,15 @@ class CharucoBoard:
             return None
         ids = np.asarray(ids, dtype=np.int32).reshape(-1)
         return BoardObservation(np.asarray(corners, dtype=np.float64).reshape(-1, 2), ids, self.corners_m()[ids].copy())
+
+
+#: The table sheet: a ChArUco board printed on a flat plate and laid on the table top by hand, where
+#: the parts lie (``bt_arrange.calibration.procedure``). 12 x 9 squares of 40 mm (480 x 360 mm, about
+#: A2) with 30 mm markers 17 to 70 of ``DICT_4X4_100``: the same family as the flange board's (whose
+#: markers are 0 to 16, ``DICT_4X4_50`` being the first 50 of it), so neither is taken for the other.
+TABLE_SHEET = CharucoBoard(
+    squares_x=12, squares_y=9, square_m=0.040, marker_m=0.030, dictionary="DICT_4X4_100", first_marker_id=17
+)
+#: The sheet's thickness (a print on a 3 mm composite plate, which keeps it flat): its face lies this
+#: far above the table top.
+TABLE_SHEET_THICKNESS_M = 0.003

@@ -16,6 +16,7 @@ then the arm parks and ``SolveCalibration`` solves (or fails with one line: too 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,15 +24,26 @@ import py_trees
 from numpy.typing import ArrayLike
 
 from bt_arrange.behaviours.looking import MoveHome
-from bt_arrange.calibration.behaviours import CaptureBoard, MoveBoard, SolveCalibration
+from bt_arrange.calibration.behaviours import CaptureBoard, CaptureSheet, MoveBoard, SolveCalibration
 from bt_arrange.calibration.board import CharucoBoard
 from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.motion import gripper_down_rotation
 from bt_arrange.plancheck import CameraView
 
 #: The heights above the table (m) the board's centre is taken to: 40 and 30 cm below the camera.
 BOARD_HEIGHTS_M = (0.30, 0.40)
 #: Where in the image (fractions of width and height) the board's centre is put at each height.
 IMAGE_SPOTS = ((0.5, 0.5), (0.22, 0.3), (0.78, 0.3), (0.22, 0.7), (0.78, 0.7), (0.5, 0.25), (0.5, 0.75))
+#: Where the arm works (base frame, m): the trials' targets and the parts' scatter area. The working-plane
+#: views put the TCP over it, gripper down, as it is when it grasps, places and pushes.
+WORKING_AREA_X_M = (0.30, 0.66)
+WORKING_AREA_Y_M = (-0.28, 0.28)
+#: The TCP's heights above the table in the working-plane views: the grasp's and the approach's,
+#: about (2.5 and 10 cm for a 5 cm cube), kept 4 cm clear of the table.
+WORKING_TCP_HEIGHTS_M = (0.04, 0.10)
+#: How far above its working-plane pose the board is first brought (a joint motion near the table
+#: could dip the fingers into it; from straight above, it cannot).
+APPROACH_HEIGHT_M = 0.15
 
 
 @dataclass(frozen=True)
@@ -106,11 +118,89 @@ def board_poses(
     return poses
 
 
-def calibration_tree(
-    poses: list[Pose], board: CharucoBoard | None = None, cell: str = ""
-) -> py_trees.behaviour.Behaviour:
-    """The procedure as a tree: per pose move and capture (skipped on failure), park, solve."""
+def _inside_image(view: CameraView, T_W_P: Pose, board: CharucoBoard, margin_px: float = 30.0) -> bool:
+    """Whether every corner of the plate falls inside the nominal camera's image, ``margin_px`` in."""
+    width, height = board.plate_size_m
+    m = board.margin_m
+    corners = np.array([[-m, -m, 0.0], [width - m, -m, 0.0], [width - m, height - m, 0.0], [-m, height - m, 0.0]])
+    T_C_P = view.camera_pose_world.inverse() @ T_W_P
+    points = corners @ T_C_P.rotation.T + T_C_P.position_m
+    k = view.intrinsics
+    u = k.fx_px * points[:, 0] / points[:, 2] + k.cx_px
+    v = k.fy_px * points[:, 1] / points[:, 2] + k.cy_px
+    return bool(
+        np.all(points[:, 2] > 0)
+        and np.all((u > margin_px) & (u < k.width_px - margin_px) & (v > margin_px) & (v < k.height_px - margin_px))
+    )
+
+
+def working_plane_poses(
+    view: CameraView,
+    board: CharucoBoard | None = None,
+    mount: BoardMount | None = None,
+    count: int = 10,
+    table_z_m: float = 0.0,
+) -> list[Pose]:
+    """``count`` TCP poses where the arm works: gripper down over the working area, at the working heights.
+
+    The TCP goes to a grid of the working area (``WORKING_AREA_*``) at ``WORKING_TCP_HEIGHTS_M``, the
+    gripper pointing straight down as when it grasps and pushes, turned so that the board (beside
+    the TCP on its mount) lies in the nominal camera's image; the side it lies on turns from pose
+    to pose (beside, ahead, the other side, behind, as the image allows), so the turns about the
+    vertical tell the board's mount apart from the camera's place. The poses are taken spread over
+    the grid first. The arm's kinematic error at these poses is the error it has where it works,
+    so a camera placed by them agrees with the arm there (docs/calibration.md).
+    """
     board = board or CharucoBoard()
+    mount = mount or BoardMount()
+    T_T_P = mount.board_to_tool(board)
+    columns, rows = 4, 5
+    grid = [
+        (float(x), float(y), table_z_m + z)
+        for z in WORKING_TCP_HEIGHTS_M
+        for x in np.linspace(*WORKING_AREA_X_M, columns)
+        for y in np.linspace(*WORKING_AREA_Y_M, rows)
+    ]
+    # A stride coprime with the grid's size visits it spread out (neighbours far apart in the order).
+    stride = next(s for s in (7, 11, 13, 3) if math.gcd(s, len(grid)) == 1)
+    poses: list[Pose] = []
+    for k in range(len(grid)):
+        if len(poses) == count:
+            break
+        x, y, z = grid[(k * stride) % len(grid)]
+        radial = math.atan2(y, x)
+        for turn in range(4):
+            # The board lies along the TCP's y axis, which a gripper-down yaw of a points along a - 90 deg.
+            board_direction = radial + math.pi / 2 * ((k + turn) % 4 - 1)
+            rotation = gripper_down_rotation(board_direction + math.pi / 2)
+            tcp = Pose.from_rotation([x, y, z], rotation)
+            if _inside_image(view, tcp @ T_T_P, board):
+                poses.append(tcp)
+                break
+    return poses
+
+
+def calibration_tree(
+    poses: list[Pose],
+    board: CharucoBoard | None = None,
+    cell: str = "",
+    plane_poses: Sequence[Pose] = (),
+    sheet: CharucoBoard | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """The procedure as a tree: the table sheet, per pose move and capture (skipped on failure), park, solve.
+
+    ``poses`` are the lens views (``board_poses``); ``plane_poses`` the working-plane views
+    (``working_plane_poses``), each approached from ``APPROACH_HEIGHT_M`` straight above; ``sheet``
+    the board lying on the table, captured first (without it, the solve has no table plane).
+    """
+    board = board or CharucoBoard()
+    children: list[py_trees.behaviour.Behaviour] = []
+    if sheet is not None:
+        children.append(
+            py_trees.decorators.FailureIsSuccess(
+                "go on if the sheet is not seen", CaptureSheet("capture the table sheet", sheet)
+            )
+        )
     views: list[py_trees.behaviour.Behaviour] = []
     for index, pose in enumerate(poses):
         sequence = py_trees.composites.Sequence(
@@ -119,12 +209,22 @@ def calibration_tree(
             children=[MoveBoard(f"move the board to pose {index}", pose), CaptureBoard(f"capture {index}", board)],
         )
         views.append(py_trees.decorators.FailureIsSuccess(f"skip view {index} if it fails", sequence))
-    return py_trees.composites.Sequence(
-        "calibrate",
-        memory=True,
-        children=[
-            py_trees.composites.Sequence("views", memory=True, children=views),
-            MoveHome("park the arm"),
-            SolveCalibration("solve", len(poses), cell=cell, board=board),
-        ],
-    )
+    for index, pose in enumerate(plane_poses, start=len(poses)):
+        above = Pose.from_rotation(pose.position_m + np.array([0.0, 0.0, APPROACH_HEIGHT_M]), pose.rotation)
+        sequence = py_trees.composites.Sequence(
+            f"view {index} (working plane)",
+            memory=True,
+            children=[
+                MoveBoard(f"bring the board above pose {index}", above),
+                MoveBoard(f"lower the board to pose {index}", pose),
+                CaptureBoard(f"capture {index}", board, working_plane=True),
+                MoveBoard(f"raise the board from pose {index}", above),
+            ],
+        )
+        views.append(py_trees.decorators.FailureIsSuccess(f"skip view {index} if it fails", sequence))
+    children += [
+        py_trees.composites.Sequence("views", memory=True, children=views),
+        MoveHome("park the arm"),
+        SolveCalibration("solve", len(poses) + len(plane_poses), cell=cell, board=board),
+    ]
+    return py_trees.composites.Sequence("calibrate", memory=True, children=children)

@@ -20,7 +20,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -43,6 +43,8 @@ class BoardView:
     observation: BoardObservation
     #: ``T_B_T``: the TCP in the base frame, from the arm's own kinematics and its joint readings.
     tcp_pose: Pose
+    #: Taken where the arm works (``procedure.working_plane_poses``): these place the camera on the table plane.
+    working_plane: bool = False
 
 
 @dataclass(frozen=True)
@@ -184,26 +186,26 @@ def _residuals(p: FloatArray, views: Sequence[BoardView], intrinsics: CameraIntr
 
 
 def _levenberg_marquardt(
-    p: FloatArray, views: Sequence[BoardView], intrinsics: CameraIntrinsics, iterations: int = 50
+    residuals: Callable[[FloatArray], FloatArray], p: FloatArray, steps: FloatArray, iterations: int = 50
 ) -> FloatArray:
-    """Minimise the reprojection residuals over the 12 parameters (numerical Jacobian, Marquardt damping)."""
-    residual = _residuals(p, views, intrinsics)
+    """Minimise ``residuals(p)`` (numerical Jacobian with ``steps``, Marquardt damping)."""
+    residual = residuals(p)
     cost = float(residual @ residual)
     damping = 1e-3
-    steps = np.array([1e-7] * 12 + [1e-4] * 4 + [1e-7] * 4)[: len(p)]
     for _ in range(iterations):
         jacobian = np.empty((len(residual), len(p)))
         for k in range(len(p)):
             shifted = p.copy()
             shifted[k] += steps[k]
-            jacobian[:, k] = (_residuals(shifted, views, intrinsics) - residual) / steps[k]
+            jacobian[:, k] = (residuals(shifted) - residual) / steps[k]
         normal = jacobian.T @ jacobian
         gradient = jacobian.T @ residual
         improved = False
         for _ in range(10):
-            delta = np.linalg.solve(normal + damping * np.diag(np.diag(normal)), -gradient)
+            # The pseudo-inverse: a direction the views leave free stays where the start put it.
+            delta = -np.linalg.lstsq(normal + damping * np.diag(np.diag(normal)), gradient, rcond=1e-12)[0]
             candidate = p + delta
-            candidate_residual = _residuals(candidate, views, intrinsics)
+            candidate_residual = residuals(candidate)
             candidate_cost = float(candidate_residual @ candidate_residual)
             if candidate_cost < cost:
                 p, residual, improved = candidate, candidate_residual, True
@@ -217,6 +219,34 @@ def _levenberg_marquardt(
     return p
 
 
+def board_pose(observation: BoardObservation, intrinsics: CameraIntrinsics) -> Pose:
+    """``T_C_P``, the board in the camera frame, from its corners (``solvePnP`` IPPE, then ``solvePnPRefineLM``)."""
+    matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=np.float64)
+    points = observation.board_points_m.reshape(-1, 1, 3)
+    pixels = observation.image_points_px.reshape(-1, 1, 2)
+    ok, rvec, tvec = cv2.solvePnP(points, pixels, matrix, distortion, flags=cv2.SOLVEPNP_IPPE)
+    if not ok:
+        raise PlanError("a board view gives no pose (solvePnP failed)")
+    rvec, tvec = cv2.solvePnPRefineLM(points, pixels, matrix, distortion, rvec, tvec)
+    return _pose(rvec, tvec)
+
+
+def _hand_eye_figures(
+    views: Sequence[BoardView], intrinsics: CameraIntrinsics, x: Pose, y: Pose
+) -> tuple[float, float]:
+    """RMS reprojection error (px) through the arm's poses, and the RMS corner distance (mm) arm against camera."""
+    residual = _residuals(np.concatenate([_rvec(x.rotation), x.position_m, _rvec(y.rotation), y.position_m]),
+                          views, intrinsics)  # fmt: skip
+    rms_px = float(math.sqrt(np.mean(residual.reshape(-1, 2) ** 2) * 2))
+    distances = []
+    for view in views:
+        by_arm = (view.tcp_pose @ x).matrix
+        by_camera = (y @ board_pose(view.observation, intrinsics)).matrix
+        points = np.c_[view.observation.board_points_m, np.ones(view.observation.count)].T
+        distances.append(np.linalg.norm((by_arm @ points - by_camera @ points)[:3], axis=0))
+    return rms_px, float(math.sqrt(np.mean(np.concatenate(distances) ** 2)) * 1000)
+
+
 def solve_eye_to_hand(
     views: Sequence[BoardView], intrinsics: CameraIntrinsics, refine_intrinsics: bool = False
 ) -> HandEyeSolution:
@@ -228,43 +258,70 @@ def solve_eye_to_hand(
     poses then follow the arm's: fewer unknowns, but the arm's kinematic error enters the intrinsics).
     """
     check_view_count(len(views))
-    matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=np.float64)
-    board_poses = []
-    for view in views:
-        ok, rvec, tvec = cv2.solvePnP(
-            view.observation.board_points_m.reshape(-1, 1, 3),
-            view.observation.image_points_px.reshape(-1, 1, 2),
-            matrix,
-            distortion,
-            flags=cv2.SOLVEPNP_IPPE,
-        )
-        if not ok:
-            raise PlanError("a board view gives no pose (solvePnP failed)")
-        rvec, tvec = cv2.solvePnPRefineLM(
-            view.observation.board_points_m.reshape(-1, 1, 3),
-            view.observation.image_points_px.reshape(-1, 1, 2),
-            matrix,
-            distortion,
-            rvec,
-            tvec,
-        )
-        board_poses.append(_pose(rvec, tvec))
+    board_poses = [board_pose(view.observation, intrinsics) for view in views]
     x0, y0 = linear_ax_yb([v.tcp_pose for v in views], board_poses)
     start = np.concatenate([_rvec(x0.rotation), x0.position_m, _rvec(y0.rotation), y0.position_m])
     if refine_intrinsics:
         k = intrinsics
         start = np.concatenate([start, [k.fx_px, k.fy_px, k.cx_px, k.cy_px, *k.distortion[:4]]])
-    solved = _levenberg_marquardt(start, views, intrinsics)
+    steps = np.array([1e-7] * 12 + [1e-4] * 4 + [1e-7] * 4)[: len(start)]
+    solved = _levenberg_marquardt(lambda p: _residuals(p, views, intrinsics), start, steps)
     intrinsics = _with_intrinsics(solved, intrinsics)
     x, y = _unpack(solved)
-    residual = _residuals(np.concatenate([_rvec(x.rotation), x.position_m, _rvec(y.rotation), y.position_m]),
+    rms_px, residual_mm = _hand_eye_figures(views, intrinsics, x, y)
+    return HandEyeSolution(y, x, rms_px, residual_mm, intrinsics)
+
+
+def _turn_z(angle_rad: float) -> FloatArray:
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+#: The table sheet's frame in a frame level with the table, face up: its z axis (into the sheet) points down.
+_FACE_UP = np.diag([1.0, -1.0, -1.0])
+
+
+def solve_on_table_plane(
+    views: Sequence[BoardView],
+    intrinsics: CameraIntrinsics,
+    sheet: BoardObservation,
+    start: HandEyeSolution,
+    sheet_face_z_m: float = 0.0,
+) -> HandEyeSolution:
+    """Camera to base referenced to the table plane: the sheet fixes height and tilt, the arm the rest.
+
+    ``sheet`` is the view of the table sheet, a board lying flat on the table top, its face at
+    ``sheet_face_z_m`` in the base frame, its place and turn on the table unknown. Its pose in the
+    camera (``T_C_S``) gives the table plane in the camera frame; the camera to base is then
+    ``Y = S(psi, x, y) inv(T_C_S)`` with ``S`` the sheet on the table (turned by ``psi``, at ``x, y``,
+    face up at ``sheet_face_z_m``). ``psi``, ``x``, ``y`` and the board on the tool (6) are fitted to
+    the reprojection error of every corner of ``views`` through ``inv(Y) A_i X``, intrinsics held;
+    ``start`` (``solve_eye_to_hand``'s answer, or the nominal camera and mount when those views are
+    all level) starts it. The camera's height and tilt over the table, which the arm's kinematic
+    error would otherwise decide, then come from the camera alone; the arm gives what only it can:
+    where the base is in that plane.
+    """
+    check_view_count(len(views), minimum=3)
+    T_C_S = board_pose(sheet, intrinsics)
+    S0 = start.camera_to_base @ T_C_S
+    level = S0.rotation @ _FACE_UP
+    psi0 = math.atan2(level[1, 0], level[0, 0])
+
+    def camera_to_base(p: FloatArray) -> Pose:
+        on_table = Pose.from_rotation([p[1], p[2], sheet_face_z_m], _turn_z(float(p[0])) @ _FACE_UP)
+        return on_table @ T_C_S.inverse()
+
+    def unpack(p: FloatArray) -> tuple[Pose, Pose]:
+        return _pose(p[3:6], p[6:9]), camera_to_base(p)
+
+    def residuals(p: FloatArray) -> FloatArray:
+        x, y = unpack(p)
+        return _residuals(np.concatenate([_rvec(x.rotation), x.position_m, _rvec(y.rotation), y.position_m]),
                           views, intrinsics)  # fmt: skip
-    rms_px = float(math.sqrt(np.mean(residual.reshape(-1, 2) ** 2) * 2))
-    distances = []
-    for view, T_C_P in zip(views, board_poses, strict=True):
-        by_arm = (view.tcp_pose @ x).matrix
-        by_camera = (y @ T_C_P).matrix
-        points = np.c_[view.observation.board_points_m, np.ones(view.observation.count)].T
-        distances.append(np.linalg.norm((by_arm @ points - by_camera @ points)[:3], axis=0))
-    residual_mm = float(math.sqrt(np.mean(np.concatenate(distances) ** 2)) * 1000)
+
+    x0 = start.board_to_tool
+    p0 = np.concatenate([[psi0, S0.position_m[0], S0.position_m[1]], _rvec(x0.rotation), x0.position_m])
+    solved = _levenberg_marquardt(residuals, p0, np.full(9, 1e-7))
+    x, y = unpack(solved)
+    rms_px, residual_mm = _hand_eye_figures(views, intrinsics, x, y)
     return HandEyeSolution(y, x, rms_px, residual_mm, intrinsics)

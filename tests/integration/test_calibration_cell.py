@@ -26,10 +26,15 @@ def test_calibrate_in_the_ideal_cell_recovers_the_nominal_camera(tmp_path, capsy
     assert abs(k.cx_px - expected.cx_px) < 3.0 and abs(k.cy_px - expected.cy_px) < 3.0
     assert np.abs(k.distortion).max() < 0.01, "the ideal camera has no lens distortion"
     pose, true_pose = calibration.camera_to_base, nominal.pose_world()
-    assert np.linalg.norm(pose.position_m - true_pose.position_m) < 0.001
+    assert np.linalg.norm(pose.position_m[:2] - true_pose.position_m[:2]) < 0.001
+    # The table sheet sets the camera's height, which trades with the focal length (TinyRenderer's
+    # image gives fx about 0.1 % long): what the camera sees of the table, height over fx, is right.
+    scale, nominal_scale = pose.position_m[2] / k.fx_px, true_pose.position_m[2] / expected.fx_px
+    assert abs(scale / nominal_scale - 1) < 5e-4
+    assert abs(pose.position_m[2] - true_pose.position_m[2]) < 0.002
     relative = true_pose.rotation.T @ pose.rotation
     assert math.acos(min(1.0, (np.trace(relative) - 1) / 2)) < 0.003
-    assert result["truth"]["position_error_mm"] < 1.0
+    assert result["truth"]["position_error_mm"] < 2.0  # the height, as above
 
 
 def test_the_real_cells_short_calibration_finds_its_lens_and_pose(real_cell_calibration) -> None:
@@ -40,8 +45,12 @@ def test_the_real_cells_short_calibration_finds_its_lens_and_pose(real_cell_cali
     assert -0.14 < k1 < -0.10 and 0.03 < k2 < 0.09, "the lens's radial distortion (k1 -0.12, k2 0.06)"
     # The transition log of the procedure, as of any run: one move and one capture per view.
     folder = real_cell_calibration.parent
-    kinds = [json.loads(line)["kind"] for line in (folder / "transitions.jsonl").read_text().splitlines()]
-    assert "CaptureBoard" in kinds and "SolveCalibration" in kinds
+    records = [json.loads(line) for line in (folder / "transitions.jsonl").read_text().splitlines()]
+    kinds = [record["kind"] for record in records]
+    assert "CaptureSheet" in kinds and "CaptureBoard" in kinds and "SolveCalibration" in kinds
+    # The sheet was seen and the working-plane views were enough: camera to base is on the table plane.
+    solved = [r for r in records if r["kind"] == "SolveCalibration" and r["new"] == "SUCCESS"]
+    assert solved and "on the table plane" in solved[-1]["feedback"], solved
 
 
 def test_fewer_views_than_a_calibration_needs_is_one_line_before_anything_moves(tmp_path, capsys) -> None:
