@@ -1,0 +1,137 @@
+"""The MuJoCo backend (issue 25): the same trees, behaviours and perception in a second engine, headless.
+
+Skipped only where the engine cannot run: no ``mujoco`` package, or no OSMesa for headless
+rendering (``scripts/setup-system.sh`` installs Debian's ``libosmesa6``).
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import importlib.util
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bt_arrange_sim.mujoco  # noqa: F401 - chooses OSMesa before mujoco is imported
+
+if importlib.util.find_spec("mujoco") is None:
+    pytest.skip("the MuJoCo backend needs the mujoco package: pip install -e '.[mujoco]'", allow_module_level=True)
+if os.environ.get("MUJOCO_GL") == "osmesa" and ctypes.util.find_library("OSMesa") is None:
+    pytest.skip("MuJoCo renders headless through OSMesa: apt-get install libosmesa6", allow_module_level=True)
+
+from bt_arrange import cli  # noqa: E402
+from bt_arrange.geometry import Pose  # noqa: E402
+from bt_arrange.objects import CUBE, ObjectStart  # noqa: E402
+from bt_arrange.perception import CubeDetector  # noqa: E402
+from bt_arrange.robot import PixelWindow  # noqa: E402
+from bt_arrange.trees import Target, arrangement  # noqa: E402
+from bt_arrange_sim.mujoco.cell import MujocoCell  # noqa: E402
+from bt_arrange_sim.mujoco.runs import MujocoRun  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+TREES = ROOT / "trees"
+
+
+def test_the_single_cube_tree_ends_within_a_millimetre_by_ground_truth(capsys) -> None:
+    code = cli.main(["run", str(TREES / "single_cube.py"), "--backend", "mujoco", "--seed", "0", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert code == cli.EXIT_OK, report
+    (red,) = report["objects"]
+    assert report["tree_status"] == "SUCCESS"
+    assert red["status"] == "within"
+    assert red["final_offset_truth_mm"] < 1.0 and abs(red["final_yaw_error_truth_deg"]) < 1.0
+    # The camera and the engine's ground truth agree (the same pinhole rendered and measured).
+    assert abs(red["final_offset_mm"] - red["final_offset_truth_mm"]) < 0.2
+    assert report["sim_seconds"] < 60.0
+
+
+def test_one_pick_with_an_injected_translation_error_is_pushed_back_within_a_millimetre() -> None:
+    from bt_arrange_sim.injection import attach_all, make_injector
+
+    target = Target("red", 0.52, 0.06, 0.2)
+    start = ObjectStart("red", 0.42, -0.18, 0.3)
+    with MujocoRun(arrangement([target], threshold_mm=1.0, max_pushes=10), [start]) as run:
+        injector = make_injector("pick_translation")
+        attach_all(run, "red", [injector], 7)
+        report = run.run()
+    (red,) = report.objects
+    record = injector.record()
+    assert record["fired"], record
+    assert math.hypot(record["dx_mm"], record["dy_mm"]) > 1.0
+    assert red.placed_offset_truth_mm is not None and red.placed_offset_truth_mm > 1.0  # the grasp was off
+    assert red.pushes >= 1
+    assert red.status == "within" and red.final_offset_truth_mm is not None and red.final_offset_truth_mm < 1.0
+
+
+def test_the_camera_is_the_pybullet_cells_pinhole_and_its_windows_are_crops() -> None:
+    with MujocoCell() as cell:
+        cell.add_object(CUBE, "blue", 0.47, -0.09, 0.35)
+        cell.settle(0.2)
+        camera = cell.camera
+        assert camera is not None
+        from bt_arrange_sim.cell import CameraConfig
+
+        config = CameraConfig()
+        assert camera.intrinsics.fy_px == pytest.approx(config.calibrated_intrinsics().fy_px)
+        assert np.allclose(camera.pose_world.matrix, config.pose_world().matrix)
+        full = camera.capture(with_depth=True)
+        assert full.rgb.shape == (1080, 1920, 3) and full.depth_m is not None
+        # Depth on the table, straight below the camera: its height.
+        assert full.depth_m[540, 960] == pytest.approx(0.70, abs=1e-3)
+        found = CubeDetector().detect(full, "blue")
+        truth = cell.cube_pose_truth("blue")
+        assert found.pose_world is not None
+        assert math.hypot(found.pose_world.x_m - truth.x_m, found.pose_world.y_m - truth.y_m) < 2e-4
+        window = PixelWindow(600, 500, 320, 240)
+        part = camera.capture(window=window)
+        crop = full.rgb[500:740, 600:920].astype(int)
+        assert np.mean(np.abs(part.rgb.astype(int) - crop)) < 0.05  # the same pixels, a few edge samples aside
+        binned = camera.capture(window=PixelWindow(0, 0, 1920, 1080, 4))
+        found_binned = CubeDetector().detect(binned, "blue")
+        assert found_binned.pose_world is not None
+        assert math.hypot(found_binned.pose_world.x_m - truth.x_m, found_binned.pose_world.y_m - truth.y_m) < 1e-3
+
+
+def test_a_closed_gripper_holds_a_cube_by_friction_with_its_fingers_coupled() -> None:
+    with MujocoCell() as cell:
+        cell.add_object(CUBE, "red", 0.25, 0.0, 0.0)
+        model, data = cell.model, cell.data
+        # Put the open pads around the cube (set-up, not a task), close with 40 N, lift 10 cm.
+        q_home = cell.arm.joint_positions()
+        tcp = cell.arm.tcp_pose()
+        assert tcp.x_m == pytest.approx(0.25, abs=1e-3)
+        from bt_arrange.motion import ArmKinematics
+
+        kinematics = ArmKinematics()
+        down = Pose(np.array([0.25, 0.0, 0.025]), tcp.quaternion_xyzw)
+        q_grasp = kinematics.inverse(down, q_home)
+        cell.arm.reset(q_grasp)
+        cell.settle(0.2)
+        cell.gripper.close(40.0)
+        cell.settle(1.0)
+        assert cell.gripper.width() == pytest.approx(0.05, abs=1e-3)
+        left, right = (cell.finger_opening_m(f) for f in cell.finger_joint_indices)
+        assert abs(left - right) < 1e-4
+        assert cell.cube_in_gripper_truth("red")
+        lifted = Pose(np.array([0.25, 0.0, 0.125]), tcp.quaternion_xyzw)
+        q_lift = kinematics.inverse(lifted, q_grasp)
+        for s in np.linspace(0.0, 1.0, 125):
+            cell.arm.command(q_grasp + s * (q_lift - q_grasp))
+            cell.step()
+        cell.settle(0.5)
+        cube = cell.cube_pose_truth("red")
+        assert cube.z_m == pytest.approx(0.125, abs=1e-3)
+        assert model.nu == 8 and data.ncon > 0
+
+
+def test_an_experiment_runs_its_trials_in_mujoco(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "mujoco"
+    code = cli.main(["experiment", "--backend", "mujoco", "--rows", "system", "--trials", "1", "--out", str(out)])
+    assert code == cli.EXIT_OK, capsys.readouterr().err
+    (record,) = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+    assert record["engine"] == "mujoco" and record["status"] == "within"
+    assert record["pushed_truth_mm"] < 1.0
