@@ -183,3 +183,15 @@ def test_a_registered_backend_serves_the_command_line(capsys, tmp_path) -> None:
         assert "backend 'bench' cannot run the experiment" in capsys.readouterr().err
     finally:
         backends._registered.pop("bench")
+
+
+def test_the_experiments_backends_are_one_or_several_each_once(capsys, tmp_path) -> None:
+    from bt_arrange.cli_experiment import backend_names
+
+    assert backend_names("sim") == ["sim"] and backend_names(" sim, mujoco ") == ["sim", "mujoco"]
+    with pytest.raises(BtArrangeError, match="--backend names sim more than once"):
+        backend_names("sim,sim")
+    code = cli.main(["experiment", "--backend", "sim,ur5", "--out", str(tmp_path / "x")])
+    assert code == cli.EXIT_USAGE
+    assert capsys.readouterr().err.startswith("bt-arrange: error: no backend 'ur5'")
+    assert not (tmp_path / "x").exists()  # refused before anything ran or was made

@@ -128,10 +128,21 @@ def test_a_closed_gripper_holds_a_cube_by_friction_with_its_fingers_coupled() ->
         assert model.nu == 8 and data.ncon > 0
 
 
-def test_an_experiment_runs_its_trials_in_mujoco(tmp_path: Path, capsys) -> None:
-    out = tmp_path / "mujoco"
-    code = cli.main(["experiment", "--backend", "mujoco", "--rows", "system", "--trials", "1", "--out", str(out)])
-    assert code == cli.EXIT_OK, capsys.readouterr().err
-    (record,) = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
-    assert record["engine"] == "mujoco" and record["status"] == "within"
-    assert record["pushed_truth_mm"] < 1.0
+def test_an_experiment_on_both_engines_writes_a_folder_each_and_a_side_by_side_summary(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "both"
+    argv = ["experiment", "--backend", "sim,mujoco", "--rows", "system", "--trials", "1", "--out", str(out)]
+    code = cli.main(argv)
+    printed = capsys.readouterr().out
+    assert code == cli.EXIT_OK, printed
+    records = {}
+    for engine in ("sim", "mujoco"):
+        (record,) = [json.loads(line) for line in (out / engine / "trials.jsonl").read_text().splitlines()]
+        records[engine] = record
+        assert record["status"] == "within" and record["pushed_truth_mm"] < 1.0
+    assert records["mujoco"]["engine"] == "mujoco" and "engine" not in records["sim"]  # sim's records as before
+    assert records["mujoco"]["target"] == records["sim"]["target"]  # the same trial in both engines
+    (line,) = json.loads((out / "engines.json").read_text())
+    assert line["row"] == "system" and set(line["engines"]) == {"sim", "mujoco"}
+    table = (out / "engines.md").read_text()
+    assert "| 1) System accuracy | sim | 1 |" in table and "|  | mujoco | 1 |" in table
+    assert "## side by side" in printed and table.splitlines()[0] in printed
