@@ -10,9 +10,26 @@ convention): no half-pixel shift to calibrate, unlike TinyRenderer's.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from bt_arrange.robot import CameraIntrinsics, PixelWindow
+
+
+def _gl_context(width: int, height: int):  # noqa: ANN202 - a mujoco GLContext
+    """An offscreen GL context: OSMesa's when ``MUJOCO_GL=osmesa``, else the one mujoco chose at its import.
+
+    ``mujoco.GLContext`` is fixed when mujoco is first imported; asking for OSMesa's by name keeps
+    a process that imported mujoco before ``bt_arrange_sim.mujoco`` chose OSMesa working headless.
+    """
+    import mujoco
+
+    if os.environ.get("MUJOCO_GL") == "osmesa":
+        from mujoco.osmesa import GLContext
+
+        return GLContext(width, height)
+    return mujoco.GLContext(width, height)
 
 
 class OffscreenRenderer:
@@ -25,7 +42,7 @@ class OffscreenRenderer:
         self._nominal = nominal
         self._near, self._far = near_m, far_m
         width, height = nominal.width_px, nominal.height_px
-        self._gl = mujoco.GLContext(width, height)
+        self._gl = _gl_context(width, height)
         self._gl.make_current()
         self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
