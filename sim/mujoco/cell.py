@@ -99,6 +99,7 @@ class MujocoCell:
             model.actuator_biasprm[:] = carry["biasprm"]
             if mode is not None:
                 self.gripper._mode = mode
+            self.arm.command(*carry["arm_setpoint"])
             self._apply_pad_friction()
         self._fresh = False
 
@@ -120,6 +121,7 @@ class MujocoCell:
             "gainprm": model.actuator_gainprm.copy(),
             "biasprm": model.actuator_biasprm.copy(),
             "gripper_mode": self.gripper._mode,
+            "arm_setpoint": self.arm.setpoint,
         }
 
     def _rebuild(self) -> None:
@@ -145,7 +147,8 @@ class MujocoCell:
         model, data = self.model, self.data
         for _ in range(control_periods):
             self.gripper.update()
-            for _ in range(self._substeps):
+            for substep in range(self._substeps):
+                self.arm.interpolate(substep)
                 mujoco.mj_step(model, data)
         self._steps += control_periods * self._substeps
         self._fresh = False

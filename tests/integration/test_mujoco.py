@@ -146,3 +146,28 @@ def test_an_experiment_on_both_engines_writes_a_folder_each_and_a_side_by_side_s
     table = (out / "engines.md").read_text()
     assert "| 1) System accuracy | sim | 1 |" in table and "|  | mujoco | 1 |" in table
     assert "## side by side" in printed and table.splitlines()[0] in printed
+
+
+def test_a_non_convex_prism_is_its_convex_pieces_and_rests_where_it_was_put() -> None:
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.shapes import Prism
+    from bt_arrange_sim.objects import mass_of
+
+    ell = ObjectType(
+        "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
+    )
+    with MujocoCell() as cell:
+        cell.add_object(ell, "green", 0.5, 0.1, 0.4)
+        cell.settle(0.5)
+        pose = cell.cube_pose_truth("green")
+        x, y, yaw = cell.cube_planar_truth("green")
+        assert math.hypot(x - 0.5, y - 0.1) < 1e-4 and yaw == pytest.approx(0.4, abs=1e-3)
+        assert pose.z_m == pytest.approx(0.01, abs=1e-4)  # no mesh margin: it rests at its true height
+        body = cell.cubes["green"]
+        assert cell.model.body_mass[body] == pytest.approx(mass_of(ell), rel=1e-6)
+        pieces = [
+            g for g in range(cell.model.ngeom) if cell.model.geom_bodyid[g] == body and cell.model.geom_contype[g]
+        ]
+        assert len(pieces) == len(ell.shape.convex_pieces()) == 2
+        frame = cell.camera.capture()
+        assert frame.rgb.shape == (1080, 1920, 3)
