@@ -20,6 +20,7 @@ from bt_arrange.robot import (
     CameraIntrinsics,
     PixelWindow,
 )
+from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
 
 if TYPE_CHECKING:
     from bt_arrange_sim.mujoco.cell import MujocoCell
@@ -216,15 +217,13 @@ class MujocoCamera:
     """
 
     def __init__(self, cell: MujocoCell) -> None:
-        from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
-
         self._cell = cell
         config = cell.config.camera
         self._intrinsics = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
         self._pose_world = config.pose_world()
         self.true_intrinsics = self._intrinsics
         self._full_window = PixelWindow.full(self._intrinsics)
-        self._renderer = OffscreenRenderer(cell.model, "top", self._intrinsics, config.near_m, config.far_m)
+        self._renderer: OffscreenRenderer | None = None  # made at the first frame: a cell rebuilt before has none
         self._camera_id = cell.model.camera("top").id
         self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -286,10 +285,15 @@ class MujocoCamera:
         window = self._full_window if window is None else window
         intrinsics = self._intrinsics if window == self._full_window else self.window_intrinsics(window)
         self._cell.forward()
+        if self._renderer is None:
+            config = self._cell.config.camera
+            self._renderer = OffscreenRenderer(self._cell.model, "top", self._intrinsics, config.near_m, config.far_m)
         rgb, depth = self._renderer.render(self._cell.data, window, with_depth)
         rgb = self._cell.camera_noise.apply(rgb)
         return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
 
     def close(self) -> None:
         """Free the renderer."""
-        self._renderer.close()
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

@@ -10,26 +10,45 @@ convention): no half-pixel shift to calibrate, unlike TinyRenderer's.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import os
 
 import numpy as np
 
 from bt_arrange.robot import CameraIntrinsics, PixelWindow
 
+_GL_CONTEXTS: dict[tuple[int, int], object] = {}
+
 
 def _gl_context(width: int, height: int):  # noqa: ANN202 - a mujoco GLContext
-    """An offscreen GL context: OSMesa's when ``MUJOCO_GL=osmesa``, else the one mujoco chose at its import.
+    """The process's offscreen GL context of a size: OSMesa's when ``MUJOCO_GL=osmesa``, else mujoco's choice.
 
-    ``mujoco.GLContext`` is fixed when mujoco is first imported; asking for OSMesa's by name keeps
-    a process that imported mujoco before ``bt_arrange_sim.mujoco`` chose OSMesa working headless.
+    One per size and process, shared by every cell (one at a time renders, each making it current):
+    a freed OSMesa context did not give all its memory back (measured: 3 to 5 MB a cell).
+    ``mujoco.GLContext`` is fixed when mujoco is first imported; asking for OSMesa's by name keeps a
+    process that imported mujoco before ``bt_arrange_sim.mujoco`` chose OSMesa working headless.
     """
-    import mujoco
+    key = (width, height)
+    if key not in _GL_CONTEXTS:
+        import mujoco
 
-    if os.environ.get("MUJOCO_GL") == "osmesa":
-        from mujoco.osmesa import GLContext
+        if os.environ.get("MUJOCO_GL") == "osmesa":
+            from mujoco.osmesa import GLContext as base
+        else:
+            base = mujoco.GLContext
+        # Freed at exit while its libraries are still loaded, not by ``__del__`` during the
+        # interpreter's teardown (which printed a TypeError on stderr).
+        shared = type("SharedGLContext", (base,), {"__del__": lambda self: None})
+        context = shared(width, height)
+        atexit.register(_free_quietly, context)
+        _GL_CONTEXTS[key] = context
+    return _GL_CONTEXTS[key]
 
-        return GLContext(width, height)
-    return mujoco.GLContext(width, height)
+
+def _free_quietly(context) -> None:  # noqa: ANN001
+    with contextlib.suppress(Exception):
+        context.free()
 
 
 class OffscreenRenderer:
@@ -67,6 +86,7 @@ class OffscreenRenderer:
         if light_direction is not None:
             model.light_dir[0] = light_direction
         self._gl.make_current()
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
         mujoco.mjv_updateScene(model, data, self._option, None, self._camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
         left, right, bottom, top = self.frustum(window)
         for glcam in self._scene.camera:
@@ -108,10 +128,8 @@ class OffscreenRenderer:
         return (d_coef / (z.astype(np.float64) + c_coef)).astype(np.float32)
 
     def close(self) -> None:
-        """Free the GL context and its buffers."""
+        """Free the model's GL resources (the process's GL context stays for the next cell)."""
         if self._context is not None:
+            self._gl.make_current()
             self._context.free()
             self._context = None  # type: ignore[assignment]
-        if self._gl is not None:
-            self._gl.free()
-            self._gl = None  # type: ignore[assignment]

@@ -171,3 +171,15 @@ def test_a_non_convex_prism_is_its_convex_pieces_and_rests_where_it_was_put() ->
         assert len(pieces) == len(ell.shape.convex_pieces()) == 2
         frame = cell.camera.capture()
         assert frame.rgb.shape == (1080, 1920, 3)
+
+
+def test_a_run_in_a_fresh_process_prints_only_its_report_headless() -> None:
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
+    argv = [sys.executable, "-m", "bt_arrange.cli", "run", str(TREES / "single_cube.xml"), "--backend", "mujoco"]
+    result = subprocess.run([*argv, "--json"], capture_output=True, text=True, timeout=300, env=env, check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""  # no GL warning, no teardown message: OSMesa chosen before mujoco loads
+    assert json.loads(result.stdout)["objects"][0]["status"] == "within"
