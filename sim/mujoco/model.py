@@ -213,7 +213,7 @@ def _robot(spec, config: CellConfig, physics: MujocoPhysics) -> None:  # noqa: A
     tcp.add_site(name="tcp", size=[0.002, 0.0, 0.0], group=HIDDEN_GROUP)
 
 
-def _urdf_efforts() -> dict[str, float]:
+def urdf_efforts() -> dict[str, float]:
     """The joints' effort limits as the URDF states them (N m; N for the fingers)."""
     import xml.etree.ElementTree as ET
 
