@@ -2,8 +2,13 @@
 # System packages the test suite and the pictures use, installed when missing:
 #   graphviz  `dot` draws trees as PNG/SVG (bt-arrange show --format png|svg)
 #   chromium  a headless browser, for the replay page's test
-# Both are optional: when one cannot be installed this script says so on stderr and still exits 0,
+#   libosmesa6  OSMesa, MuJoCo's headless OpenGL (--backend mujoco renders through MUJOCO_GL=osmesa)
+# All are optional: when one cannot be installed this script says so on stderr and still exits 0,
 # so the test command goes on (the tests that need the tool skip, saying why).
+#
+# Each entry is "package:check": the check is a command found with `command -v`, or, for a
+# package of libraries only, "lib:NAME": a shared library whose file name starts with NAME, found
+# in `ldconfig -p` or in the library folders.
 #
 # It survives a busy package manager: apt-get waits for the dpkg lock itself
 # (-o DPkg::Lock::Timeout), and a run that still finds a lock held (exit 100 and a lock message;
@@ -17,29 +22,54 @@
 #   SETUP_APT_WAIT_S     seconds between attempts (default 15)
 #   SETUP_LOCK_TIMEOUT_S seconds apt-get itself waits for the dpkg lock (default 120)
 #   SETUP_APT_LISTS      the package lists folder (default /var/lib/apt/lists)
+#   SETUP_LIB_DIRS       folders searched for a "lib:NAME" check besides ldconfig's cache
+#   SETUP_LDCONFIG       the ldconfig to ask (default: the one on PATH, else /sbin/ldconfig)
 set -uo pipefail
 
-packages="${SETUP_PACKAGES:-graphviz:dot chromium:chromium}"
+packages="${SETUP_PACKAGES:-graphviz:dot chromium:chromium libosmesa6:lib:libOSMesa.so}"
 tries="${SETUP_APT_TRIES:-10}"
 wait_s="${SETUP_APT_WAIT_S:-15}"
 lock_timeout_s="${SETUP_LOCK_TIMEOUT_S:-120}"
 lists="${SETUP_APT_LISTS:-/var/lib/apt/lists}"
+lib_dirs="${SETUP_LIB_DIRS:-/usr/lib /usr/lib64 /usr/local/lib /lib /usr/lib/x86_64-linux-gnu /usr/lib/aarch64-linux-gnu}"
+ldconfig="${SETUP_LDCONFIG:-$(command -v ldconfig 2>/dev/null || echo /sbin/ldconfig)}"
 
 # Messages go to the caller's stderr (fd 3) even where apt-get's own output is silenced.
 exec 3>&2
 say() { echo "setup-system: $*" >&3; }
 
+# A "lib:NAME" check: a library file whose name starts with NAME, in ldconfig's cache or a library folder.
+library_present() {
+    local name="$1" dir
+    if [ -x "$ldconfig" ] && "$ldconfig" -p 2>/dev/null | grep -q "^[[:space:]]*$name"; then
+        return 0
+    fi
+    for dir in $lib_dirs; do
+        compgen -G "$dir/$name*" >/dev/null && return 0
+    done
+    return 1
+}
+
+present() {
+    case "$1" in
+        lib:*) library_present "${1#lib:}" ;;
+        *) command -v "$1" >/dev/null 2>&1 ;;
+    esac
+}
+
 missing=()
 for entry in $packages; do
     package="${entry%%:*}"
-    command="${entry#*:}"
-    command -v "$command" >/dev/null 2>&1 || missing+=("$package")
+    check="${entry#*:}"
+    present "$check" || missing+=("$package")
 done
 [ "${#missing[@]}" -eq 0 ] && exit 0
 
 if ! command -v apt-get >/dev/null 2>&1; then
     if command -v brew >/dev/null 2>&1; then
         for package in "${missing[@]}"; do
+            # OSMesa is Debian's way to render headless; macOS renders MuJoCo through CGL.
+            [ "$package" = libosmesa6 ] && continue
             [ "$package" = chromium ] && package="--cask chromium"
             # shellcheck disable=SC2086
             brew install $package || say "could not install $package with brew; the tests that need it will skip"

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from bt_arrange import backends, cli
-from bt_arrange.errors import BackendError
+from bt_arrange.errors import BackendError, BtArrangeError, PlanError
 
 PACKAGE = Path(__file__).resolve().parents[1] / "bt_arrange"
 
@@ -27,7 +27,7 @@ def test_no_module_of_the_framework_imports_the_simulator() -> None:
             offenders += [
                 f"{path.relative_to(PACKAGE)}:{node.lineno} {n}"
                 for n in names
-                if n.split(".")[0] in ("bt_arrange_sim", "pybullet")
+                if n.split(".")[0] in ("bt_arrange_sim", "pybullet", "mujoco")
             ]
     assert offenders == []
 
@@ -37,7 +37,7 @@ def test_importing_every_framework_module_loads_no_simulator_module() -> None:
         "import pkgutil, importlib, sys, bt_arrange, bt_arrange.cli\n"
         "for info in pkgutil.walk_packages(bt_arrange.__path__, 'bt_arrange.'):\n"
         "    importlib.import_module(info.name)\n"
-        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('bt_arrange_sim', 'pybullet')))\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('bt_arrange_sim', 'pybullet', 'mujoco')))\n"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert result.stdout.strip() == "[]", result.stdout
@@ -48,6 +48,101 @@ def test_the_default_backend_is_the_simulated_cell() -> None:
     assert isinstance(backend, backends.Backend)
     assert backend.name == backends.DEFAULT_BACKEND == "sim"
     assert backend.experiment is not None and "system" in backend.experiment.ROWS
+
+
+# -- the contract every engine's backend keeps (the pybullet cell and MuJoCo's) ---------------------
+
+#: The backends of a physics engine this project ships, by entry point name (a contract: keep the names).
+ENGINES = ("sim", "mujoco")
+
+
+def _engine(name: str) -> backends.Backend:
+    import importlib.util
+
+    if name == "mujoco" and importlib.util.find_spec("mujoco") is None:
+        pytest.skip("the mujoco backend needs the mujoco package (pip install -e '.[mujoco]')")
+    return backends.load(name)
+
+
+def test_every_engine_is_declared_as_an_entry_point() -> None:
+    from importlib import metadata
+
+    declared = {ep.name: ep.value for ep in metadata.entry_points(group=backends.ENTRY_POINT_GROUP)}
+    assert declared.get("sim") == "bt_arrange_sim.backend:SimBackend"
+    assert declared.get("mujoco") == "bt_arrange_sim.mujoco.backend:MujocoBackend"
+    assert set(ENGINES) <= set(backends.available())
+
+
+@pytest.mark.parametrize("name", ENGINES)
+def test_an_engine_is_a_backend_with_the_papers_experiment(name: str) -> None:
+    backend = _engine(name)
+    assert isinstance(backend, backends.Backend) and backend.name == name
+    experiment = backend.experiment
+    assert experiment is not None
+    assert experiment.ROWS[:3] == ("system", "translation", "orientation")
+    assert experiment.parse_rows("system, translation") == ["system", "translation"]
+    with pytest.raises(BtArrangeError, match="unknown row 'sytem'"):
+        experiment.parse_rows("sytem")
+
+
+@pytest.mark.parametrize("name", ENGINES)
+def test_an_engines_scenes_are_the_same_seeded_starts(name: str) -> None:
+    from bt_arrange.trees import Target
+
+    target = Target("red", 0.5, 0.0)
+    starts = _engine(name).scatter(["red", "green"], 3, avoid=[target])
+    assert [s.colour for s in starts] == ["red", "green"]
+    assert starts == backends.load("sim").scatter(["red", "green"], 3, avoid=[target])
+
+
+@pytest.mark.parametrize("name", ENGINES)
+def test_an_engine_refuses_a_bad_scene_before_building_its_world(name: str, monkeypatch) -> None:
+    from bt_arrange.objects import ObjectStart
+    from bt_arrange.trees import Target, arrangement
+
+    backend = _engine(name)
+    cell = "bt_arrange_sim.mujoco.cell.MujocoCell" if name == "mujoco" else "bt_arrange_sim.cell.WorkCell"
+
+    def never(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise AssertionError("the world was built")
+
+    monkeypatch.setattr(f"{cell}.__init__", never)
+    outside_the_view = [ObjectStart("red", 0.5, 0.62, 0.0)]
+    with pytest.raises(PlanError, match="red"):
+        backend.open_run(arrangement([Target("red", 0.5, 0.0)]), outside_the_view)
+
+
+@pytest.mark.parametrize("name", ENGINES)
+def test_an_engine_refuses_an_output_folder_that_is_a_file(name: str, tmp_path: Path) -> None:
+    path = tmp_path / "file"
+    path.write_text("")
+    with pytest.raises(PlanError, match="it is a file"):
+        _engine(name).prepare_out(path)
+
+
+def test_the_mujoco_backend_refuses_what_only_pybullet_has_in_one_line() -> None:
+    backend = _engine("mujoco")
+    from bt_arrange.trees import Target, arrangement
+
+    root = arrangement([Target("red", 0.5, 0.0)])
+    with pytest.raises(PlanError, match=r"^--cell real: the MuJoCo backend has the ideal cell only"):
+        backend.open_run(root, backend.scatter(["red"], 0), cell="real")
+    with pytest.raises(PlanError, match="^--gui: the MuJoCo backend renders headless only"):
+        backend.open_run(root, backend.scatter(["red"], 0), gui=True)
+    assert backend.experiment is not None
+    with pytest.raises(PlanError, match="^--cell real: the MuJoCo backend has the ideal cell only"):
+        backend.experiment.check_options(cell="real")  # type: ignore[attr-defined]
+
+
+def test_loading_the_mujoco_backend_imports_no_engine() -> None:
+    code = (
+        "import sys\n"
+        "from bt_arrange import backends\n"
+        "backends.load('mujoco')\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('pybullet', 'mujoco')))\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert result.stdout.strip() == "[]", result.stdout
 
 
 def test_an_unknown_backend_is_one_line_naming_the_known_ones(capsys) -> None:
@@ -88,3 +183,15 @@ def test_a_registered_backend_serves_the_command_line(capsys, tmp_path) -> None:
         assert "backend 'bench' cannot run the experiment" in capsys.readouterr().err
     finally:
         backends._registered.pop("bench")
+
+
+def test_the_experiments_backends_are_one_or_several_each_once(capsys, tmp_path) -> None:
+    from bt_arrange.cli_experiment import backend_names
+
+    assert backend_names("sim") == ["sim"] and backend_names(" sim, mujoco ") == ["sim", "mujoco"]
+    with pytest.raises(BtArrangeError, match="--backend names sim more than once"):
+        backend_names("sim,sim")
+    code = cli.main(["experiment", "--backend", "sim,ur5", "--out", str(tmp_path / "x")])
+    assert code == cli.EXIT_USAGE
+    assert capsys.readouterr().err.startswith("bt-arrange: error: no backend 'ur5'")
+    assert not (tmp_path / "x").exists()  # refused before anything ran or was made

@@ -25,6 +25,7 @@ if [ "$count" -le "$FAKE_LOCKED_CALLS" ]; then echo "$FAKE_LOCK_MESSAGE" >&2; ex
 if [ -n "$FAKE_UNKNOWN" ] && [ ! -e "$FAKE_LISTS/updated" ]; then
     echo "E: Unable to locate package bt-fake-tool" >&2; exit 100
 fi
+case " $* " in *" bt-fake-lib "*) touch "$FAKE_LIBS/libbtfake.so.1"; exit 0 ;; esac
 printf '#!/bin/sh\\n' > "$FAKE_BIN/bt-fake-tool"; chmod +x "$FAKE_BIN/bt-fake-tool"
 exit 0
 """
@@ -32,7 +33,15 @@ exit 0
 pytestmark = pytest.mark.skipif(shutil.which("bash") is None, reason="the set-up script is a bash script")
 
 
-def run_script(tmp_path: Path, *, locked_calls: int, lists: bool = True, unknown: bool = False, tries: int = 3):
+def run_script(
+    tmp_path: Path,
+    *,
+    locked_calls: int,
+    lists: bool = True,
+    unknown: bool = False,
+    tries: int = 3,
+    packages: str = "bt-fake-tool:bt-fake-tool",
+):
     fake_bin = tmp_path / "bin"
     fake_bin.mkdir(exist_ok=True)
     apt = fake_bin / "apt-get"
@@ -42,12 +51,18 @@ def run_script(tmp_path: Path, *, locked_calls: int, lists: bool = True, unknown
     (fake_bin / "sudo").chmod(0o755)
     lists_dir = tmp_path / "lists"
     lists_dir.mkdir(exist_ok=True)
+    libs_dir = tmp_path / "libs"
+    libs_dir.mkdir(exist_ok=True)
     if lists:
         (lists_dir / "deb.debian.org_debian_dists_bookworm_main_binary-amd64_Packages").write_text("")
     env = {
         "PATH": f"{fake_bin}:/usr/bin:/bin",
         "HOME": str(tmp_path),
-        "SETUP_PACKAGES": "bt-fake-tool:bt-fake-tool",
+        "SETUP_PACKAGES": packages,
+        # A library check looks in this folder only, and asks no real ldconfig.
+        "SETUP_LIB_DIRS": str(libs_dir),
+        "SETUP_LDCONFIG": str(tmp_path / "no-ldconfig"),
+        "FAKE_LIBS": str(libs_dir),
         "SETUP_APT_TRIES": str(tries),
         "SETUP_APT_WAIT_S": "0",
         "SETUP_APT_LISTS": str(lists_dir),
@@ -99,6 +114,37 @@ def test_a_package_missing_from_stale_lists_updates_once_then_installs(tmp_path:
         "update",
         "install",
     ]
+
+
+def test_a_missing_library_is_installed_by_its_package(tmp_path: Path) -> None:
+    # libosmesa6 has no command: its check is a library file (lib:NAME), found in ldconfig's cache or a folder.
+    result, log, _ = run_script(tmp_path, locked_calls=0, packages="bt-fake-lib:lib:libbtfake.so")
+    assert result.returncode == 0, result.stderr
+    assert [line.split()[-1] for line in log] == ["bt-fake-lib"]
+    assert (tmp_path / "libs" / "libbtfake.so.1").exists()
+    assert "installed bt-fake-lib" in result.stderr
+
+
+def test_a_library_already_there_is_not_installed_again(tmp_path: Path) -> None:
+    (tmp_path / "libs").mkdir()
+    (tmp_path / "libs" / "libbtfake.so.1").write_text("")
+    result, log, _ = run_script(tmp_path, locked_calls=0, packages="bt-fake-lib:lib:libbtfake.so")
+    assert result.returncode == 0 and result.stderr == ""
+    assert log == []
+
+
+def test_a_library_in_ldconfigs_cache_counts_as_there(tmp_path: Path) -> None:
+    fake = tmp_path / "ldconfig"
+    fake.write_text("#!/bin/sh\necho '\tlibbtfake.so.2 (libc6,x86-64) => /opt/libbtfake.so.2'\n")
+    fake.chmod(0o755)
+    env = {**os.environ, "SETUP_PACKAGES": "bt-fake-lib:lib:libbtfake.so", "SETUP_LDCONFIG": str(fake),
+           "SETUP_LIB_DIRS": str(tmp_path / "nowhere")}  # fmt: skip
+    result = subprocess.run(["bash", str(SCRIPT)], env=env, capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 0 and result.stderr == ""
+
+
+def test_the_default_list_installs_osmesa_for_mujoco() -> None:
+    assert "libosmesa6:lib:libOSMesa.so" in SCRIPT.read_text()
 
 
 def test_nothing_is_run_when_every_command_is_there(tmp_path: Path) -> None:

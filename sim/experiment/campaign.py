@@ -95,6 +95,7 @@ def run_experiment(
     object_name: str | Sequence[str] = "cube",
     calibration: str | Path | None = None,
     resume: bool = False,
+    engine: str = "sim",
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
@@ -111,6 +112,8 @@ def run_experiment(
       a ``LocalCluster`` of ``workers``, or the cluster at ``scheduler``), or any
       ``concurrent.futures.Executor``.
     - ``on_trial(record, done, total)`` reports progress.
+    - ``engine``: the physics engine of every trial's cell, ``sim`` (pybullet) or ``mujoco``
+      (the MuJoCo backend's experiment passes it).
     - ``resume`` (``--resume``): continue the campaign in ``out_dir``, refused (a ``PlanError``
       naming what differs) when its ``specification.json`` is another campaign's.
 
@@ -126,6 +129,8 @@ def run_experiment(
     calibration_file = check_calibration(calibration)
     if calibration_file is not None:
         combos = [dataclasses.replace(c, calibration=calibration_file) for c in combos]
+    if engine != "sim":
+        combos = [dataclasses.replace(c, engine=engine) for c in combos]
     rows = list(rows)
     check_object_rows(object_name, rows)
     if executor == "dask":
@@ -313,6 +318,8 @@ def specification(rows: Sequence[str], trials: int, seed: int, combos: Sequence[
         "objects": list(dict.fromkeys(c.object_name for c in combos)),
         # One folder (one threshold, cell and type, no --thresholds) or a folder per combination.
         "folder_per_combination": not flat,
+        # The engine, named only when not pybullet's (specifications of before a second engine read the same).
+        **({"engine": combos[0].engine} if combos and combos[0].engine != "sim" else {}),
     }
 
 
@@ -326,6 +333,7 @@ _SPEC_NAMES = {
     "strategies": "--strategy",
     "objects": "--object",
     "folder_per_combination": "a folder per combination (--thresholds)",
+    "engine": "--backend",
 }
 
 

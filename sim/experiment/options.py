@@ -36,6 +36,8 @@ class TrialSpec:
     object_name: str = "cube"
     #: A camera calibration file (``bt-arrange calibrate``) the detector uses; None: the cell's nominal camera.
     calibration: str | None = None
+    #: The physics engine the trial's cell runs in: ``sim`` (pybullet) or ``mujoco`` (``ENGINES``).
+    engine: str = "sim"
 
     def record_fields(self) -> dict[str, object]:
         """What names the trial in its record (``trials.jsonl``), in the records' order."""
@@ -48,7 +50,13 @@ class TrialSpec:
             "strategy": self.strategy,
             "object": self.object_name,
             **({"calibration": self.calibration} if self.calibration is not None else {}),
+            # Named only when not pybullet's, so the records of before a second engine read the same.
+            **({"engine": self.engine} if self.engine != "sim" else {}),
         }
+
+
+#: The engines a trial can run in: the backend names whose cells the trials build (``trial._open_run``).
+ENGINES = ("sim", "mujoco")
 
 
 @dataclass(frozen=True)
@@ -66,6 +74,8 @@ class Combination:
     object_name: str = "cube"
     #: The campaign's camera calibration file, or None (``--calibration``).
     calibration: str | None = None
+    #: The engine of the campaign's cells (``TrialSpec.engine``).
+    engine: str = "sim"
 
     @property
     def folder(self) -> str:
@@ -79,8 +89,9 @@ class Combination:
     def spec(self, row: str, index: int, seed: int) -> TrialSpec:
         """The trial ``index`` of ``row`` under this combination."""
         return TrialSpec(
-            row, index, seed, self.threshold_mm, self.cell, self.strategy, self.object_name, self.calibration
-        )
+            row, index, seed, self.threshold_mm, self.cell, self.strategy, self.object_name, self.calibration,
+            self.engine,
+        )  # fmt: skip
 
     def owns(self, record: dict) -> bool:
         """True when ``record`` is a trial of this combination (records before ``cell`` were the ideal cell's)."""
@@ -90,6 +101,7 @@ class Combination:
             and record.get("strategy", "paper") == self.strategy
             and record.get("object", "cube") == self.object_name
             and record.get("calibration") == self.calibration
+            and record.get("engine", "sim") == self.engine
         )
 
 

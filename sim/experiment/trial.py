@@ -35,7 +35,6 @@ def run_trial(spec: TrialSpec) -> dict:
 
 def _run_trial(spec: TrialSpec) -> dict:
     from bt_arrange.trees import Target, arrangement
-    from bt_arrange_sim.runs import SimulatedRun
     from bt_arrange_sim.scenes import scatter
 
     wall_start = time.perf_counter()
@@ -60,7 +59,7 @@ def _run_trial(spec: TrialSpec) -> dict:
         from bt_arrange.calibration import read_calibration
 
         calibration = read_calibration(spec.calibration)
-    with SimulatedRun(root, starts, cell_config=_cell_config(spec), calibration=calibration) as run:
+    with _open_run(spec, root, starts, calibration) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
@@ -88,6 +87,17 @@ def _run_trial(spec: TrialSpec) -> dict:
         "sim_seconds": round(report.sim_seconds, 3),
         "wall_seconds": round(time.perf_counter() - wall_start, 3),
     }
+
+
+def _open_run(spec: TrialSpec, root, starts, calibration):  # noqa: ANN001, ANN202 - a Session with ``cell``
+    """The trial's run in its engine's cell: the pybullet ``SimulatedRun`` or the ``MujocoRun``."""
+    if spec.engine == "mujoco":
+        from bt_arrange_sim.mujoco.runs import MujocoRun
+
+        return MujocoRun(root, starts, cell_config=_cell_config(spec), calibration=calibration)
+    from bt_arrange_sim.runs import SimulatedRun
+
+    return SimulatedRun(root, starts, cell_config=_cell_config(spec), calibration=calibration)
 
 
 def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazily: pybullet)

@@ -2,7 +2,9 @@
 
 Every injector acts on the simulated world only: a cube's true pose (``WorkCell.displace_cube``
 or pybullet's reset), the pads' friction, the camera's physical pose (``SimCamera.set_render_offset``)
-or an execution parameter of the robot (the release height). The robot learns of an error only
+or an execution parameter of the robot (the release height). It reaches the world through the cell's
+methods named in ``framework.InjectableCell``, which the pybullet cell and the MuJoCo cell
+(``bt_arrange_sim.mujoco``) both have: every injector runs in either engine. The robot learns of an error only
 through its camera; nothing the tree reports is touched, and no cube is ever fixed to the gripper.
 
 | name | error (paper, Fig. 2) | when | magnitude (default) |

@@ -1,8 +1,9 @@
 """The frame every injector shares: ``Parameter``, ``Injector``, finding nodes by type, sampling, units.
 
-An injector acts on the simulated world only, through ``WorkCell`` methods; it finds the
-behaviours it waits for by type and object, and their stages by the constants of
-``bt_arrange.behaviours.stages``.
+An injector acts on the simulated world only, through the cell's ground-truth and injection
+methods (``InjectableCell``: what the pybullet ``WorkCell`` and the ``MujocoCell`` both have, so
+every injector works in either engine); it finds the behaviours it waits for by type and object,
+and their stages by the constants of ``bt_arrange.behaviours.stages``.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
+from typing import Any, ClassVar, Protocol, TypeVar
 
 import numpy as np
 import py_trees
@@ -27,8 +28,109 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.runner import Transition
 from bt_arrange.shapes import preferred_grasp
 
-if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+
+class InjectableCamera(Protocol):
+    """What an injector uses of a cell's top camera."""
+
+    @property
+    def pose_world(self) -> Pose:
+        """The calibrated pose, as frames report it."""
+        ...
+
+    def set_render_offset(self, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+        """Render from a camera moved by (dx, dy) and turned by dyaw, frames still reporting ``pose_world``."""
+        ...
+
+
+class InjectableArm(Protocol):
+    """What an injector uses of the arm: where the TCP truly is."""
+
+    def tcp_pose(self) -> Pose:
+        """The TCP's pose in the world."""
+        ...
+
+
+class InjectableCell(Protocol):
+    """The seam between the injectors and a simulator: what they read and change of a cell, nothing else.
+
+    ``bt_arrange_sim.cell.WorkCell`` (pybullet) and ``bt_arrange_sim.mujoco.cell.MujocoCell`` have
+    these with the same meanings; ``config.physics.pad_contact.lateral_friction`` is the pads'
+    nominal coefficient (the cells share ``CellConfig``).
+    """
+
+    cubes: dict[str, int]
+    finger_joint_indices: tuple[int, ...]
+    config: Any
+
+    @property
+    def sim_time_s(self) -> float:
+        """World seconds since the cell was built."""
+        ...
+
+    @property
+    def arm(self) -> InjectableArm:
+        """The arm (its true TCP pose)."""
+        ...
+
+    @property
+    def camera(self) -> Any:
+        """The top camera (``InjectableCamera``)."""
+        ...
+
+    def cube_pose_truth(self, name: str) -> Pose:
+        """A part's true pose."""
+        ...
+
+    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+        """A part's true (x, y, yaw), yaw folded to its symmetry."""
+        ...
+
+    def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+        """Move a resting part by (dx, dy) and turn it by dyaw."""
+        ...
+
+    def place_cube_truth(self, name: str, pose: Pose) -> None:
+        """Put a part at ``pose``; physics moves it on."""
+        ...
+
+    def finger_opening_m(self, finger: int) -> float:
+        """One finger joint's true value: its pad's distance from the centre."""
+        ...
+
+    def finger_pad_position_m(self, finger: int) -> np.ndarray:
+        """One finger link's true world position."""
+        ...
+
+    def joint_name(self, index: int) -> str:
+        """A joint's name by its index."""
+        ...
+
+    def set_pad_friction(self, cube: str, lateral_friction: float) -> None:
+        """Give both pads a friction coefficient, effective at once for the held part."""
+        ...
+
+    def cube_in_gripper_truth(self, name: str) -> bool:
+        """True when both pads touch the part."""
+        ...
+
+
+class InjectableRun(Protocol):
+    """What an injector uses of a run: its cell, its hooks, its tree and context (``InjectableRun``, ``MujocoRun``)."""
+
+    transition_hooks: list[Any]
+    tick_hooks: list[Any]
+    root: py_trees.behaviour.Behaviour
+    context: Any
+
+    @property
+    def cell(self) -> InjectableCell:
+        """The cell the tree runs in."""
+        ...
+
+    def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour a transition is about."""
+        ...
+
 
 #: Stages (feedback messages of the running behaviour) the injectors wait for: the behaviours' own names.
 CLOSE_STAGE = stage.CLOSE_ON_CUBE
@@ -88,7 +190,7 @@ class Injector(ABC):
         self.obj: str | None = None
         self.fired = False
         self.details: dict[str, Any] = {}
-        self._run: SimulatedRun | None = None
+        self._run: InjectableRun | None = None
         self._rng: np.random.Generator | None = None
 
     @property
@@ -96,7 +198,7 @@ class Injector(ABC):
         """The injector's main parameter, in the unit of its spec (metres, degrees or seconds)."""
         return self.params[self.PARAMETERS[0].name]
 
-    def attach(self, run: SimulatedRun, obj: str, rng: np.random.Generator) -> None:
+    def attach(self, run: InjectableRun, obj: str, rng: np.random.Generator) -> None:
         """Register this injector's hooks on ``run`` for the cube ``obj``, drawing from ``rng``."""
         if self._run is not None:
             raise PlanError(f"{self.name} is already attached to a run: make one injector per run")
@@ -106,7 +208,7 @@ class Injector(ABC):
         self._attach(run, obj)
 
     @abstractmethod
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         """Register the hooks (``run.transition_hooks``, ``run.tick_hooks``)."""
 
     def record(self) -> dict[str, Any]:
@@ -120,7 +222,7 @@ class Injector(ABC):
     # -- helpers shared by the injectors ---------------------------------------------------
 
     @property
-    def run(self) -> SimulatedRun:
+    def run(self) -> InjectableRun:
         """The run attached to (after ``attach``)."""
         assert self._run is not None, "attach() first"
         return self._run

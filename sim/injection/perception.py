@@ -14,7 +14,7 @@ from bt_arrange.runner import Transition
 from bt_arrange_sim.injection.framework import MAX_DRAWS, Injector, Parameter, _deg, _mm, _sample, read_blackboard
 
 if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.injection.framework import InjectableRun
 
 
 class PerceptionOffset(Injector):
@@ -45,7 +45,7 @@ class PerceptionOffset(Injector):
     def __init__(self, max_m: float = 0.010, max_deg: float = 0.0) -> None:
         super().__init__(max_m=max_m, max_deg=max_deg)
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         camera = run.cell.camera
         cx, cy = camera.pose_world.x_m, camera.pose_world.y_m
         truth = run.cell.cube_pose_truth(obj)

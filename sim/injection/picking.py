@@ -20,7 +20,7 @@ from bt_arrange_sim.injection.framework import (
 )
 
 if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.injection.framework import InjectableRun
 
 
 class PickTranslation(Injector):
@@ -50,7 +50,7 @@ class PickTranslation(Injector):
     def __init__(self, max_m: float = 0.025) -> None:
         super().__init__(max_m=max_m)
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         self._on_first_detection(self._inject)
 
     def _draw(self) -> tuple[float, float]:
@@ -120,7 +120,7 @@ class PickRotation(Injector):
     def __init__(self, max_deg: float = 40.0) -> None:
         super().__init__(max_deg=max_deg)
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         self._on_first_detection(self._inject)
 
     def _inject(self) -> None:
@@ -154,7 +154,7 @@ class SurfaceShift(Injector):
     def __init__(self, max_m: float = 0.003) -> None:
         super().__init__(max_m=max_m)
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         self._on_stage(Pick, CLOSE_STAGE, self._inject)
 
     def _inject(self, node: py_trees.behaviour.Behaviour) -> bool:

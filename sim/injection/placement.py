@@ -27,7 +27,7 @@ from bt_arrange_sim.injection.framework import (
 )
 
 if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.injection.framework import InjectableRun
 
 
 class ReleaseStick(Injector):
@@ -48,7 +48,7 @@ class ReleaseStick(Injector):
         super().__init__(max_m=max_m)
         self._drag: dict[str, Any] | None = None
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
@@ -137,7 +137,7 @@ class ReleaseHeight(Injector):
         super().__init__(height_m=height_m)
         self._nominal_m: float | None = None
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         self._on_stage(Pick, LIFT_STAGE, self._apply)
 
         def restore(transition: Transition) -> None:
@@ -189,7 +189,7 @@ class ReleaseTilt(Injector):
         super().__init__(max_deg=max_deg)
         self._draw: tuple[float, float] | None = None
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:

@@ -17,7 +17,7 @@ from bt_arrange_sim.injection.placement import ReleaseHeight, ReleaseStick, Rele
 from bt_arrange_sim.injection.transport import TransportSlip
 
 if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.injection.framework import InjectableRun
 
 
 #: Every injector by its spec name.
@@ -78,7 +78,7 @@ def child_generator(seed: int, name: str, index: int = 0) -> np.random.Generator
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(zlib.crc32(name.encode()), index)))
 
 
-def attach_all(run: SimulatedRun, obj: str, injectors: Sequence[Injector], seed: int) -> None:
+def attach_all(run: InjectableRun, obj: str, injectors: Sequence[Injector], seed: int) -> None:
     """Attach several injectors to one run for the cube ``obj``, each with its own generator from ``seed``.
 
     The generator depends on the seed and the injector's name (and its rank among injectors of

@@ -12,7 +12,7 @@ from bt_arrange.behaviours import Place, keys
 from bt_arrange_sim.injection.framework import CARRY_STAGE, Injector, Parameter, _mm, _NodeFinder, read_blackboard
 
 if TYPE_CHECKING:
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.injection.framework import InjectableRun
 
 
 class TransportSlip(Injector):
@@ -45,7 +45,7 @@ class TransportSlip(Injector):
         self._start: tuple[float, np.ndarray] | None = None
         self._carry: dict[str, Any] | None = None
 
-    def _attach(self, run: SimulatedRun, obj: str) -> None:
+    def _attach(self, run: InjectableRun, obj: str) -> None:
         finder = _NodeFinder(Place, obj)
 
         def hook(root: py_trees.behaviour.Behaviour) -> None:
