@@ -9,6 +9,7 @@ counter-clockwise whatever the winding it was written in.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -190,6 +191,9 @@ class Prism:
         ``MIN_GRASP_OVERLAP_M``, or a corner within an edge's span), and the part is no wider there
         than the gripper closes across.
         """
+        return _grasps(self, gripper)
+
+    def _grasps(self, gripper: Gripper) -> tuple[Grasp, ...]:
         found: dict[tuple[float, float], tuple[float, float, Grasp]] = {}
         half_pad = gripper.pad_width_m / 2
         height_m = max(self.height / 2, gripper.lowest_tcp_m)
@@ -352,6 +356,16 @@ class Prism:
 
     def problems(self, gripper: Gripper) -> list[str]:
         """Too thin or too tall for the pads, a short edge at a corner, no grasp the gripper can take."""
+        found = self.size_problems()
+        if not self.grasps(gripper):
+            found.append(
+                f"no two edges the {gripper.name.split()[-1]} can close on (facing each other, overlapping "
+                f"{MIN_GRASP_OVERLAP_M * 1000:.0f} mm or more, at most {gripper.max_grasp_width_m * 1000:.0f} mm apart)"
+            )
+        return found
+
+    def size_problems(self) -> list[str]:
+        """Too thin or too tall for the pads, a short edge at a corner: the checks that need no grasp search."""
         found = []
         if self.height < MIN_EDGE_M:
             found.append(f"{self.height * 1000:g} mm tall, thinner than the pads' {MIN_EDGE_M * 1000:.0f} mm")
@@ -372,11 +386,6 @@ class Prism:
                     "the camera needs to measure a corner"
                 )
                 break
-        if not self.grasps(gripper):
-            found.append(
-                f"no two edges the {gripper.name.split()[-1]} can close on (facing each other, overlapping "
-                f"{MIN_GRASP_OVERLAP_M * 1000:.0f} mm or more, at most {gripper.max_grasp_width_m * 1000:.0f} mm apart)"
-            )
         return found
 
     def describe(self) -> str:
@@ -384,6 +393,12 @@ class Prism:
         x_m, y_m = self.extent_m
         size = f"{x_m * 1000:.0f} x {y_m * 1000:.0f} mm"
         return f"{len(self.outline)}-sided outline within {size}, {self.height * 1000:g} mm tall"
+
+
+@functools.lru_cache(maxsize=1024)
+def _grasps(prism: Prism, gripper: Gripper) -> tuple[Grasp, ...]:
+    """``Prism.grasps``, kept per prism and gripper (both frozen): every step asks, and the search scans the outline."""
+    return prism._grasps(gripper)
 
 
 def _facing(upper_low: float, upper_high: float, lower_low: float, lower_high: float) -> bool:
