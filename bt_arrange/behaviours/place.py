@@ -95,7 +95,10 @@ class Place(StagedBehaviour):
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])
             across = target.yaw_rad + axis_yaw_offset_rad(self.release.axis)
-            yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+            # The gripper's half turn is free only when the part looks the same turned so (a cuboid):
+            # an irregular part held turned by it would land turned by it.
+            symmetry_rad = max(GRIPPER_SYMMETRY_RAD, kind.shape.symmetry_rad)
+            yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), symmetry_rad)
             opening_m = self.release.opening_m
         return [
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw)),

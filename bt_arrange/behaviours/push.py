@@ -26,7 +26,8 @@ from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Prism
+from bt_arrange.shapes import ROBOTIQ_2F85, Prism
+from bt_arrange.shapes.prism import PRISM_PUSH_OPENING_M, SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
@@ -117,9 +118,15 @@ class Push(StagedBehaviour):
         #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
         #: width); default the paper's width minus a pad's thickness.
         self.opening_m = opening_m
-        if towards is not None and any(d not in DIRECTIONS for d in towards):
-            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
-        self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
+        shape = self.object_type.shape
+        #: An irregular part's square pushes by name (``Prism.named_pushes``); empty for a cuboid.
+        self.square_pushes: dict[str, SquarePush] = (
+            shape.named_pushes(ROBOTIQ_2F85) if isinstance(shape, Prism) else {}
+        )
+        known = tuple(self.square_pushes) if self.square_pushes else tuple(DIRECTIONS)
+        if towards is not None and any(d not in known for d in towards):
+            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(known)}")
+        self.towards = known if towards is None else tuple(towards)
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.OFFSET_XY_MM), written_by=f"Inspect of {obj}")
         self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if yaw_threshold_deg is not None:
@@ -142,6 +149,8 @@ class Push(StagedBehaviour):
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
+        if self.square_pushes:
+            return self._square_push_stages(context, pose, target, offset_xy_mm)
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
         self.across_m = 0.0
@@ -215,6 +224,81 @@ class Push(StagedBehaviour):
             MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
         ]
 
+    def _square_push_stages(
+        self, context: Context, pose: Pose, target: PlanarPose, offset_xy_mm: tuple[float, float]
+    ) -> list[Stage]:
+        """An irregular part's push: squarely onto one edge, the one whose push best closes the offset."""
+        s = context.settings
+        choice = self.choose_square_push(
+            offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned()
+        )
+        if isinstance(choice, Blocked):
+            self.pushed = None
+            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
+            blocked = choice
+            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+        if choice is None:
+            self.pushed = ("x", 0.0)
+            self.squaring = False
+            return []
+        name, distance_mm = choice
+        distance_m = distance_mm / 1000
+        self.pushed = (name, distance_m)
+        self.squaring = distance_m < s.min_push_m
+        heading = target.yaw_rad + self.square_pushes[name].heading_rad
+        direction = np.array([math.cos(heading), math.sin(heading)])
+        yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+        opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
+        _, approach_m, push_m = heights_m(s, self.object_type)
+        centre = np.array([pose.x_m, pose.y_m])
+        begin = centre - direction * (reach_m + s.push_clearance_m)
+        end = centre - direction * reach_m + direction * distance_m
+        back = end - direction * s.push_clearance_m
+        return [
+            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
+            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw)),
+            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
+            MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw)),
+            MoveStage(stage.push(distance_m, "x"), line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw)),
+            MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
+        ]
+
+    @staticmethod
+    def choose_square_push(
+        offset_xy_mm: tuple[float, float],
+        pushes: dict[str, SquarePush],
+        towards: tuple[str, ...],
+        min_push_mm: float,
+        turned: bool,
+    ) -> tuple[str, float] | Blocked | None:
+        """Which square push to make and how far (mm), what blocks the one needed, or None: nothing to push.
+
+        The offset (target minus pose, target frame) is projected on each push's heading: the
+        push that closes most of it, among the free ones (``towards``), is made by that
+        projection; what it leaves lies across it, for the next push. When the best push is
+        below ``min_push_mm`` a part ``turned`` past the yaw threshold is still pushed (by
+        what there is, at least nothing) on its longest free edge: the square contact turns it
+        back. When only blocked pushes close the offset: ``Blocked`` with the best of them.
+        """
+        offset = np.asarray(offset_xy_mm, dtype=float)
+        along = {
+            name: float(offset @ np.array([math.cos(p.heading_rad), math.sin(p.heading_rad)]))
+            for name, p in pushes.items()
+        }
+        free = [name for name in pushes if name in towards]
+        best = max(pushes, key=lambda name: along[name])
+        usable = [name for name in free if along[name] >= min_push_mm]
+        if usable:
+            chosen = max(usable, key=lambda name: along[name])
+            return chosen, along[chosen]
+        if along[best] >= min_push_mm:
+            return Blocked(best, along[best])
+        if turned and free:
+            longest = max(free, key=lambda name: pushes[name].edge_m)
+            return longest, max(0.0, along[longest])
+        return None
+
     def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
         """(opening, reach) for the face pushed along ``heading_rad``.
 
@@ -237,8 +321,10 @@ class Push(StagedBehaviour):
         reach_m = face.depth_m / 2 + gripper.pad_width_m / 2
         opening_m = max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m))
         if isinstance(shape, Prism):
-            # An irregular part: the pads stop where they first meet it, which need not be its
+            # An irregular part: pushed squarely onto an edge with the fingers nearly closed, so both
+            # pads land on it; the pads stop where they first meet it, which need not be its
             # back-most point (a corner beside the pads is never touched by them).
+            opening_m = min(opening_m, PRISM_PUSH_OPENING_M)
             half_span_m = opening_m / 2 + gripper.pad_thickness_m
             reach_m = shape.back_within_m(heading_rad, object_yaw_rad, half_span_m) + gripper.pad_width_m / 2
         return opening_m, reach_m
@@ -341,6 +427,13 @@ class Push(StagedBehaviour):
         """Feedback with the push made."""
         assert self.pushed is not None
         axis, distance_m = self.pushed
+        if self.square_pushes:
+            if axis not in self.square_pushes:
+                return "nothing to push"
+            edge = self.square_pushes[axis].edge + 1
+            if self.squaring:
+                return f"squared the part on its edge {edge} with a push of {fixed(distance_m * 1000, sign=True)} mm"
+            return f"pushed {fixed(distance_m * 1000, sign=True)} mm squarely onto its edge {edge} ({axis[1:]} deg)"
         if self.squaring:
             return f"squared the part with a push of {fixed(distance_m * 1000, sign=True)} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):

@@ -34,6 +34,11 @@ ANTIPODAL_HALF_ANGLE_RAD = math.atan(0.3)
 MIN_GRASP_OVERLAP_M = 0.008
 #: Points of the outline within this of the back-most line along a push are what the pads meet.
 PUSH_CONTACT_BAND_M = 0.001
+#: The fingers' opening for pushing an irregular part: nearly closed, so both pads land on the
+#: edge a square push meets (``Prism.named_pushes``) and the fingers stay clear of neighbours.
+PRISM_PUSH_OPENING_M = 0.004
+#: A square push needs an edge this long: the pads' span (two pads beside the opening) and 2 mm.
+MIN_PUSHED_EDGE_M = 0.022
 
 
 def _signed_area_m2(points: FloatArray) -> float:
@@ -111,6 +116,32 @@ def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
             if _segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
                 return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
     return None
+
+
+def push_name(heading_rad: float) -> str:
+    """A square push's name: its heading in the part's frame in degrees, ``"@-54.0"``."""
+    return f"@{math.degrees(heading_rad):.1f}"
+
+
+def push_heading_rad(name: str) -> float | None:
+    """The heading (part frame, radians) a push name says, or None when it is no square push's name."""
+    if not name.startswith("@"):
+        return None
+    try:
+        return math.radians(float(name[1:]))
+    except ValueError:
+        return None
+
+
+@dataclass(frozen=True)
+class SquarePush:
+    """A push that meets one edge squarely: its ``heading_rad`` in the part's frame (the edge's inward
+    normal), how far behind the centroid the edge lies (``back_m``), the edge's length and index."""
+
+    heading_rad: float
+    back_m: float
+    edge_m: float
+    edge: int
 
 
 @dataclass(frozen=True)
@@ -330,6 +361,46 @@ class Prism:
         along = points @ forward
         contact = points[along <= float(np.min(along)) + PUSH_CONTACT_BAND_M] @ across
         return float(np.min(contact)), float(np.max(contact))
+
+    def square_pushes(self, half_span_m: float, min_edge_m: float = 0.0) -> tuple[SquarePush, ...]:
+        """The pushes that meet an edge squarely, through the centroid, longest edge first.
+
+        A push along an edge's inward normal, its line through the centroid, meets that edge
+        squarely when the pads (``half_span_m`` each side of the line) land on it and nothing of
+        the outline lies further back within their span. Both pads then touch, so the push
+        neither turns the part nor slides it along the pads: it squares that edge to the push
+        (a part turned a little is turned back). ``min_edge_m`` leaves out shorter edges.
+        """
+        points = self.outline_m
+        count = len(points)
+        found: list[SquarePush] = []
+        for k in range(count):
+            a, b = points[k], points[(k + 1) % count]
+            edge = b - a
+            length = float(np.hypot(*edge))
+            if length < max(min_edge_m, 2 * half_span_m):
+                continue
+            tangent = edge / length
+            inward = np.array([-tangent[1], tangent[0]])  # counter-clockwise: the inside is on the left
+            # Where the line through the centroid along the normal crosses the edge, along it.
+            along_edge = float((-a) @ tangent)
+            if not half_span_m <= along_edge <= length - half_span_m:
+                continue
+            heading = math.atan2(float(inward[1]), float(inward[0]))
+            back_m = float(-(a @ inward))  # the edge lies this far behind the centroid along the push
+            if back_m <= 0 or abs(self.back_within_m(heading, 0.0, half_span_m) - back_m) > PUSH_CONTACT_BAND_M:
+                continue  # something else of the outline meets the pads first
+            found.append(SquarePush(heading, back_m, length, k))
+        return tuple(sorted(found, key=lambda push: -push.edge_m))
+
+    def named_pushes(self, gripper: Gripper) -> dict[str, SquarePush]:
+        """The square pushes of this part with the fingers ``PRISM_PUSH_OPENING_M`` apart, by name.
+
+        A push's name is its heading in the part's frame, ``"@123.4"`` (degrees): the layout lists
+        the ones a neighbour leaves free, and Push makes them.
+        """
+        half_span_m = PRISM_PUSH_OPENING_M / 2 + gripper.pad_thickness_m
+        return {push_name(push.heading_rad): push for push in self.square_pushes(half_span_m, MIN_PUSHED_EDGE_M)}
 
     def convex_pieces(self) -> list[FloatArray]:
         """The top face split into convex polygons (counter-clockwise), for engines whose bodies are convex hulls.

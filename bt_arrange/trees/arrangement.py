@@ -87,10 +87,11 @@ def arrange_one(
     pads = Pads.from_settings(settings)
     obj = target.obj
     dense = step is not None and _is_dense(step)
-    if dense and not isinstance(target.object_type.shape, Cuboid):
+    if dense and step is not None and not isinstance(target.object_type.shape, Cuboid) and step.part.prism is None:
         raise PlanError(
             f"target {target.obj}: a {target.object_type.shape.describe()} among neighbours (released off its "
-            "target, or with a side blocked): irregular parts are arranged only with room around them so far"
+            "target, or with a side blocked) needs a grasp across its own x or y axis, where the layout puts the "
+            "pads: write its outline turned so that two facing edges run along x or y"
         )
     release = step.release if dense and step is not None else None
     towards = step.push_towards if dense and step is not None else None
