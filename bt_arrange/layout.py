@@ -231,14 +231,13 @@ class PrismFit:
     ``pieces`` its top face's convex pieces; ``grasps`` per closing axis (``"x"``, ``"y"``) the
     width between the pads and where their centre stands; ``pushes`` its square pushes
     (``Prism.named_pushes``): name, heading, how far behind the origin the pushed edge lies, and
-    the fingers' opening. An irregular part is pushed only squarely onto an edge, so its push
+    the fingers' opening for it. An irregular part is pushed only squarely onto an edge, so its push
     directions are these names, not the target frame's ``+x`` ... ``-y``.
     """
 
     pieces: tuple[tuple[tuple[float, float], ...], ...]
     grasps: tuple[tuple[str, float, tuple[float, float]], ...]
-    pushes: tuple[tuple[str, float, float], ...]
-    push_opening_m: float
+    pushes: tuple[tuple[str, float, float, float], ...]
 
     def grasp(self, axis: str) -> tuple[float, tuple[float, float]]:
         """(width, centre) of the grasp closing across ``axis``."""
@@ -250,14 +249,23 @@ class PrismFit:
     @property
     def push_names(self) -> tuple[str, ...]:
         """The names of its square pushes."""
-        return tuple(name for name, _, _ in self.pushes)
+        return tuple(push[0] for push in self.pushes)
 
     def push(self, name: str) -> tuple[float, float]:
         """(heading, back) of the square push ``name``."""
-        for known, heading_rad, back_m in self.pushes:
+        for known, heading_rad, back_m, _ in self.pushes:
             if known == name:
                 return heading_rad, back_m
         raise KeyError(name)
+
+    def push_opening(self, name: str) -> float:
+        """The fingers' opening for the square push ``name``."""
+        return next(opening_m for known, _, _, opening_m in self.pushes if known == name)
+
+    @property
+    def push_opening_m(self) -> float:
+        """The narrowest opening of its pushes (what a push that has no name of its own uses)."""
+        return min((push[3] for push in self.pushes), default=0.0)
 
 
 @dataclass(frozen=True)
@@ -417,7 +425,7 @@ def _prism_push_pads(part: Part, at: Footprint, towards: str, distance_m: float,
     middle = -(near + far) / 2
     ux, uy = math.cos(heading_rad), math.sin(heading_rad)
     centre = at.local(middle * ux, middle * uy, 0.0, 0.0)
-    half_across = part.prism.push_opening_m / 2 + pads.finger_depth_m
+    half_across = part.prism.push_opening(towards) / 2 + pads.finger_depth_m
     return Rect(centre.x_m, centre.y_m, at.yaw_rad + heading_rad, (far - near) / 2, half_across)
 
 

@@ -88,3 +88,16 @@ def test_a_slab_no_draw_can_break_into_graspable_pieces_is_one_line() -> None:
     with pytest.raises(PlanError, match="no fracture of a 40 x 30 mm slab into 12 pieces") as caught:
         fracture((0.04, 0.03, 0.02), 12, 0.002, 0)
     assert "\n" not in str(caught.value)
+
+
+def test_every_piece_shows_its_yaw_and_a_near_rectangle_would_not() -> None:
+    from bt_arrange.shapes import Prism
+    from bt_arrange.shapes.fracture import MIN_YAW_CUE_M, yaw_cue_m
+
+    for piece in fracture(SLAB_M, 6, 0.002, 3):
+        assert yaw_cue_m(piece.prism) >= MIN_YAW_CUE_M
+    # A 60 x 40 mm rectangle with one corner 1 mm off looks the same turned by half a turn.
+    near_rectangle = Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.04], [0.001, 0.041]], 0.02)
+    assert yaw_cue_m(near_rectangle) < 0.5 * MIN_YAW_CUE_M
+    fragment = Prism.from_outline([[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.03, 0.05], [0.005, 0.04]], 0.02)
+    assert yaw_cue_m(fragment) > MIN_YAW_CUE_M

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from bt_arrange.behaviours.push import Blocked, Push
+from bt_arrange.behaviours.push import SQUARING_PRESS_MM, Blocked, Push
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism
 from bt_arrange.shapes.prism import push_heading_rad, push_name
 
@@ -71,11 +71,11 @@ def test_the_push_that_closes_most_of_the_offset_is_made_by_its_projection() -> 
     assert name == names[90] and distance == pytest.approx(2.0)
 
 
-def test_within_reach_but_turned_it_is_squared_on_its_longest_free_edge() -> None:
+def test_within_reach_but_turned_it_is_squared_where_the_pads_stand_widest() -> None:
     pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     assert Push.choose_square_push((0.05, 0.05), pushes, tuple(pushes), 0.2, False) is None
     name, distance = Push.choose_square_push((0.05, 0.05), pushes, tuple(pushes), 0.2, True)
-    assert name == names[-135] and distance == 0.0
+    assert name == names[-135] and distance == SQUARING_PRESS_MM
     name, _ = Push.choose_square_push((0.05, 0.05), pushes, (names[0], names[90]), 0.2, True)
     assert name in (names[0], names[90])

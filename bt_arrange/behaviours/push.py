@@ -27,7 +27,7 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism
-from bt_arrange.shapes.prism import PRISM_PUSH_OPENING_M, SquarePush
+from bt_arrange.shapes.prism import SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
@@ -36,6 +36,12 @@ PUSH_STRATEGIES = ("paper", "learned", "diagonal")
 #: The pads drag the cube sideways by friction (pads 1.2 on the cube: slipping only beyond about
 #: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the cube.
 DIAGONAL_ACROSS_RATIO = 0.6
+
+
+#: A squaring push of an irregular part presses its edge this far past where it belongs: a push
+#: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
+#: such pushes left a fresco piece 1.27 deg off).
+SQUARING_PRESS_MM = 0.3
 
 
 class Push(StagedBehaviour):
@@ -248,7 +254,13 @@ class Push(StagedBehaviour):
         heading = target.yaw_rad + self.square_pushes[name].heading_rad
         direction = np.array([math.cos(heading), math.sin(heading)])
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
-        opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
+        # The push's own opening (``Prism.named_pushes``): both pads on the edge, the fingers within
+        # its ends, so among neighbours too (the layout checked this opening).
+        opening_m = self.square_pushes[name].opening_m
+        half_span_m = opening_m / 2 + s.gripper.pad_thickness_m
+        shape = self.object_type.shape
+        assert isinstance(shape, Prism)
+        reach_m = shape.back_within_m(heading, pose.yaw_rad, half_span_m) + s.gripper.pad_width_m / 2
         _, approach_m, push_m = heights_m(s, self.object_type)
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
@@ -277,9 +289,9 @@ class Push(StagedBehaviour):
         The offset (target minus pose, target frame) is projected on each push's heading: the
         push that closes most of it, among the free ones (``towards``), is made by that
         projection; what it leaves lies across it, for the next push. When the best push is
-        below ``min_push_mm`` a part ``turned`` past the yaw threshold is still pushed (by
-        what there is, at least nothing) on its longest free edge: the square contact turns it
-        back. When only blocked pushes close the offset: ``Blocked`` with the best of them.
+        below ``min_push_mm`` a part ``turned`` past the yaw threshold is still pushed on the
+        free edge the pads stand widest on, ``SQUARING_PRESS_MM`` past where that edge belongs: the square contact
+        turns it back. When only blocked pushes close the offset: ``Blocked`` with the best of them.
         """
         offset = np.asarray(offset_xy_mm, dtype=float)
         along = {
@@ -295,8 +307,9 @@ class Push(StagedBehaviour):
         if along[best] >= min_push_mm:
             return Blocked(best, along[best])
         if turned and free:
-            longest = max(free, key=lambda name: pushes[name].edge_m)
-            return longest, max(0.0, along[longest])
+            widest = max(free, key=lambda name: (pushes[name].opening_m, pushes[name].edge_m))
+            # Pressed a little past where the edge belongs, so that the pads meet all of it there.
+            return widest, max(0.0, along[widest]) + SQUARING_PRESS_MM
         return None
 
     def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
@@ -321,10 +334,8 @@ class Push(StagedBehaviour):
         reach_m = face.depth_m / 2 + gripper.pad_width_m / 2
         opening_m = max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m))
         if isinstance(shape, Prism):
-            # An irregular part: pushed squarely onto an edge with the fingers nearly closed, so both
-            # pads land on it; the pads stop where they first meet it, which need not be its
+            # An irregular part: the pads stop where they first meet it, which need not be its
             # back-most point (a corner beside the pads is never touched by them).
-            opening_m = min(opening_m, PRISM_PUSH_OPENING_M)
             half_span_m = opening_m / 2 + gripper.pad_thickness_m
             reach_m = shape.back_within_m(heading_rad, object_yaw_rad, half_span_m) + gripper.pad_width_m / 2
         return opening_m, reach_m
@@ -456,6 +467,11 @@ class Blocked:
 
     def reason(self, obj: str) -> str:
         """The feedback: which side, and what happens next."""
+        if self.towards.startswith("@"):
+            return (
+                f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "
+                "frame), where a neighbour leaves the pads no room, and no free push closes it"
+            )
         side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
         return (
             f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "

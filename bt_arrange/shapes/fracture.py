@@ -38,6 +38,9 @@ MIN_GAP_M = 0.002
 MAX_DRAWS = 400
 #: Sites closer than this share of the mean spacing are redrawn at once: slivers are never graspable.
 SITE_SPACING_SHARE = 0.55
+#: A piece must misfit itself turned to any other yaw by this much (``yaw_cue_m``): 4 pixels of the
+#: top camera, where its registration tells two yaws apart within 1 pixel.
+MIN_YAW_CUE_M = 0.002
 #: Lloyd steps moving each site to its cell's centroid: rounder pieces, still irregular.
 LLOYD_STEPS = 2
 
@@ -128,6 +131,43 @@ def _area_centroid(points: FloatArray) -> FloatArray:
     )
 
 
+def _boundary_samples(points: FloatArray, count: int = 160) -> FloatArray:
+    """``count`` points spaced evenly along the closed outline."""
+    closed = np.vstack([points, points[:1]])
+    edges = np.diff(closed, axis=0)
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    start = np.concatenate([[0.0], np.cumsum(lengths)])
+    at = np.linspace(0.0, start[-1], count, endpoint=False)
+    k = np.searchsorted(start, at, side="right") - 1
+    return closed[k] + edges[k] * ((at - start[k]) / lengths[k])[:, None]
+
+
+def _distance_to_outline_m(queries: FloatArray, points: FloatArray) -> FloatArray:
+    """Each query point's distance to the closed outline (its nearest edge)."""
+    a, d = points, np.roll(points, -1, axis=0) - points
+    t = np.clip(np.einsum("qkj,kj->qk", queries[:, None, :] - a[None], d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
+    nearest = a[None] + t[..., None] * d[None]
+    return np.min(np.linalg.norm(queries[:, None, :] - nearest, axis=2), axis=1)
+
+
+def yaw_cue_m(prism: Prism) -> float:
+    """How clearly the outline shows its yaw: its least misfit, turned about its centroid to any other yaw.
+
+    The 80th percentile of the outline's distance to itself turned by 20 to 340 degrees (2 degree
+    steps), the least over the turns. A piece nearly symmetric under some turn (a near-rectangle
+    under a half turn) scores low: the camera's registration could not tell those two yaws apart.
+    """
+    points = prism.outline_m
+    samples = _boundary_samples(points)
+    best = math.inf
+    for degrees in range(20, 341, 2):
+        turn = math.radians(degrees)
+        c, s = math.cos(turn), math.sin(turn)
+        turned = samples @ np.array([[c, s], [-s, c]])
+        best = min(best, float(np.percentile(_distance_to_outline_m(turned, points), 80)))
+    return best
+
+
 def _in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper) -> tuple[Prism, float] | None:
     """The piece as a prism whose frame's x axis is its preferred grasp's closing axis, and that frame's turn.
 
@@ -136,7 +176,7 @@ def _in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper) -> t
     if outline_problem(outline) is not None:
         return None
     first = Prism.from_outline(outline, height_m)
-    if first.size_problems() or first.problems(gripper):
+    if first.size_problems() or yaw_cue_m(first) < MIN_YAW_CUE_M or first.problems(gripper):
         return None
     turn = first.grasps(gripper)[0].yaw_offset_rad
     c, s = math.cos(turn), math.sin(turn)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -34,8 +34,8 @@ ANTIPODAL_HALF_ANGLE_RAD = math.atan(0.3)
 MIN_GRASP_OVERLAP_M = 0.008
 #: Points of the outline within this of the back-most line along a push are what the pads meet.
 PUSH_CONTACT_BAND_M = 0.001
-#: The fingers' opening for pushing an irregular part: nearly closed, so both pads land on the
-#: edge a square push meets (``Prism.named_pushes``) and the fingers stay clear of neighbours.
+#: The least opening of the fingers for pushing an irregular part, nearly closed: both pads land on
+#: the edge a square push meets (``Prism.named_pushes`` opens them wider where the edge allows).
 PRISM_PUSH_OPENING_M = 0.004
 #: A square push needs an edge this long: the pads' span (two pads beside the opening) and 2 mm.
 MIN_PUSHED_EDGE_M = 0.022
@@ -136,12 +136,15 @@ def push_heading_rad(name: str) -> float | None:
 @dataclass(frozen=True)
 class SquarePush:
     """A push that meets one edge squarely: its ``heading_rad`` in the part's frame (the edge's inward
-    normal), how far behind the centroid the edge lies (``back_m``), the edge's length and index."""
+    normal), how far behind the centroid the edge lies (``back_m``), the edge's length and index,
+    and the fingers' opening."""
 
     heading_rad: float
     back_m: float
     edge_m: float
     edge: int
+    #: The fingers' opening for this push (``Prism.named_pushes``).
+    opening_m: float = PRISM_PUSH_OPENING_M
 
 
 @dataclass(frozen=True)
@@ -394,13 +397,33 @@ class Prism:
         return tuple(sorted(found, key=lambda push: -push.edge_m))
 
     def named_pushes(self, gripper: Gripper) -> dict[str, SquarePush]:
-        """The square pushes of this part with the fingers ``PRISM_PUSH_OPENING_M`` apart, by name.
+        """The square pushes of this part, by name, each with the widest opening its edge takes.
 
+        The fingers open as wide as keeps both pads on the edge and each finger
+        (``finger_depth_m`` beyond its pad, ``neighbour_clearance_m`` to spare) within the edge's
+        ends, so a neighbour in line with the edge is never touched; at least
+        ``PRISM_PUSH_OPENING_M``. The wider the pads stand, the harder a turned part is squared.
         A push's name is its heading in the part's frame, ``"@123.4"`` (degrees): the layout lists
         the ones a neighbour leaves free, and Push makes them.
         """
-        half_span_m = PRISM_PUSH_OPENING_M / 2 + gripper.pad_thickness_m
-        return {push_name(push.heading_rad): push for push in self.square_pushes(half_span_m, MIN_PUSHED_EDGE_M)}
+        least_half_span_m = PRISM_PUSH_OPENING_M / 2 + gripper.pad_thickness_m
+        points = self.outline_m
+        count = len(points)
+        named: dict[str, SquarePush] = {}
+        for push in self.square_pushes(least_half_span_m, MIN_PUSHED_EDGE_M):
+            a, b = points[push.edge], points[(push.edge + 1) % count]
+            tangent = (b - a) / push.edge_m
+            along_edge = float((-a) @ tangent)
+            room_m = min(along_edge, push.edge_m - along_edge)
+            reach_m = gripper.finger_depth_m + gripper.neighbour_clearance_m
+            opening_m = min(gripper.stroke_m, max(PRISM_PUSH_OPENING_M, 2 * (room_m - reach_m)))
+            while opening_m > PRISM_PUSH_OPENING_M:
+                half_span_m = opening_m / 2 + gripper.pad_thickness_m
+                if abs(self.back_within_m(push.heading_rad, 0.0, half_span_m) - push.back_m) <= PUSH_CONTACT_BAND_M:
+                    break
+                opening_m = max(PRISM_PUSH_OPENING_M, opening_m - 0.002)  # the outline rises beside the edge
+            named[push_name(push.heading_rad)] = replace(push, opening_m=opening_m)
+        return named
 
     def convex_pieces(self) -> list[FloatArray]:
         """The top face split into convex polygons (counter-clockwise), for engines whose bodies are convex hulls.

@@ -19,7 +19,6 @@ from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Gripper, Prism, told_apart
-from bt_arrange.shapes.prism import PRISM_PUSH_OPENING_M
 from bt_arrange.suggest import did_you_mean
 
 CORRECT_MODES = ("each", "after_all")
@@ -227,9 +226,11 @@ def prism_fit(shape: object, gripper: Gripper) -> PrismFit | None:
             grasps[grasp.axis] = (grasp.axis, grasp.width_m, grasp.centre_m)
     if not grasps:
         return None
-    pushes = tuple((name, push.heading_rad, push.back_m) for name, push in shape.named_pushes(gripper).items())
+    pushes = tuple(
+        (name, push.heading_rad, push.back_m, push.opening_m) for name, push in shape.named_pushes(gripper).items()
+    )
     pieces = tuple(tuple((float(x), float(y)) for x, y in piece) for piece in shape.convex_pieces())
-    return PrismFit(pieces, tuple(grasps.values()), pushes, PRISM_PUSH_OPENING_M)
+    return PrismFit(pieces, tuple(grasps.values()), pushes)
 
 
 def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
