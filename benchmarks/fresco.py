@@ -32,7 +32,7 @@ THRESHOLD_MM, YAW_THRESHOLD_DEG, MOVED_LIMIT_MM = 1.0, 1.0, 0.3
 
 
 def plan_text(seed: int, pieces: int, gap_mm: float) -> str:
-    """The example plan with the fracture drawn from ``seed``, ``pieces`` pieces and ``gap_mm``, scattered from ``seed``."""
+    """The example plan with its fracture from ``seed`` (``pieces``, ``gap_mm``), its pieces scattered from ``seed``."""
     text = PLAN.read_text()
     text = re.sub(r"(?m)^seed = \d+", f"seed = {seed}", text)
     text = re.sub(r"(?m)^pieces = \d+", f"pieces = {pieces}", text)

@@ -47,7 +47,9 @@ def test_it_breaks_into_the_pieces_asked_each_a_part_the_gripper_can_take(count:
 
 
 @pytest.mark.parametrize(("seed", "gap_m"), [(0, 0.002), (5, 0.002), (2, 0.004)])
-def test_neighbouring_pieces_are_the_gap_apart_and_the_pieces_fill_the_slab_less_the_gaps(seed: int, gap_m: float) -> None:
+def test_neighbouring_pieces_are_the_gap_apart_and_the_pieces_fill_the_slab_less_the_gaps(
+    seed: int, gap_m: float
+) -> None:
     pieces = fracture(SLAB_M, 6, gap_m, seed)
     gaps = _neighbour_gaps_m(pieces)
     # No two pieces nearer than the gap; along a shared fracture exactly the gap, and the pieces
@@ -99,5 +101,7 @@ def test_every_piece_shows_its_yaw_and_a_near_rectangle_would_not() -> None:
     # A 60 x 40 mm rectangle with one corner 1 mm off looks the same turned by half a turn.
     near_rectangle = Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.04], [0.001, 0.041]], 0.02)
     assert yaw_cue_m(near_rectangle) < 0.5 * MIN_YAW_CUE_M
-    fragment = Prism.from_outline([[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.03, 0.05], [0.005, 0.04]], 0.02)
+    fragment = Prism.from_outline(
+        [[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.03, 0.05], [0.005, 0.04]], 0.02
+    )
     assert yaw_cue_m(fragment) > MIN_YAW_CUE_M

@@ -41,7 +41,9 @@ def test_an_outline_is_tested_by_its_own_pieces_not_its_bounding_box() -> None:
 def test_fresco_pieces_have_the_fractures_gap_between_their_footprints() -> None:
     pieces = fracture((0.16, 0.12, 0.02), 6, 0.002, 0, (0.5, 0.0, 0.3))
     targets = [
-        Target("red", p.x_m, p.y_m, p.yaw_rad, name=f"tile {p.index}", object_type=ObjectType(f"t{p.index}", shape=p.prism))
+        Target(
+            "red", p.x_m, p.y_m, p.yaw_rad, name=f"tile {p.index}", object_type=ObjectType(f"t{p.index}", shape=p.prism)
+        )
         for p in pieces
     ]
     parts = parts_of(targets)
@@ -58,7 +60,9 @@ def _fresco_parts(count: int, seed: int) -> list[Part]:
     pieces = fracture((0.16, 0.12, 0.02), count, 0.002, seed, (0.5, 0.0, 0.0))
     return parts_of(
         [
-            Target("red", p.x_m, p.y_m, p.yaw_rad, name=f"t{p.index}", object_type=ObjectType(f"t{p.index}", shape=p.prism))
+            Target(
+                "red", p.x_m, p.y_m, p.yaw_rad, name=f"t{p.index}", object_type=ObjectType(f"t{p.index}", shape=p.prism)
+            )
             for p in pieces
         ]
     )

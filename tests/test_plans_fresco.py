@@ -77,7 +77,7 @@ def test_a_fresco_beside_other_targets_and_optional_keys(tmp_path) -> None:
         ("gap_mm", "1.5", "gap_mm = 1.5: the gap along a fracture must be at least 2 mm"),
         ("gap_mm", '"2"', 'gap_mm = "2" is not a number'),
         ("seed", "-1", "seed = -1 is not a whole number"),
-        ("colour", '"ocher"', "unknown colour \"ocher\".*ochre"),
+        ("colour", '"ocher"', 'unknown colour "ocher".*ochre'),
         ("size_mm", "[120, 80]", r"size_mm = \[120, 80\] is not three numbers"),
         ("size_mm", "[0.12, 0.08, 0.02]", "looks like metres"),
         ("size_mm", "[120, -80, 20]", "must be positive"),

@@ -31,7 +31,9 @@ def test_a_square_is_pushed_squarely_on_each_of_its_four_sides() -> None:
 def test_a_triangle_is_pushed_on_its_legs_and_hypotenuse_each_along_its_normal() -> None:
     # Its centroid (20, 20) mm projects onto every side well inside it: three square pushes.
     assert headings_deg(TRIANGLE) == {90.0, 0.0, -135.0}
-    hypotenuse = next(p for p in TRIANGLE.named_pushes(ROBOTIQ_2F85).values() if round(math.degrees(p.heading_rad)) == -135)
+    hypotenuse = next(
+        p for p in TRIANGLE.named_pushes(ROBOTIQ_2F85).values() if round(math.degrees(p.heading_rad)) == -135
+    )
     assert hypotenuse.back_m == pytest.approx(0.02 / math.sqrt(2), abs=1e-9)  # centroid (20, 20) to x + y = 60
     assert hypotenuse.edge_m == pytest.approx(0.06 * math.sqrt(2))
 
@@ -65,7 +67,9 @@ def test_the_push_that_closes_most_of_the_offset_is_made_by_its_projection() -> 
     assert name == names[-135] and distance == pytest.approx(2 * math.sqrt(2))
     # Blocked there, the best free one that still helps: none helps towards -x, -y but...
     free = (names[0], names[90])
-    assert Push.choose_square_push((-2.0, -2.0), pushes, free, 0.2, False) == Blocked(names[-135], pytest.approx(2 * math.sqrt(2)))
+    assert Push.choose_square_push((-2.0, -2.0), pushes, free, 0.2, False) == Blocked(
+        names[-135], pytest.approx(2 * math.sqrt(2))
+    )
     # ... towards -x a little and +y more, the +y push helps though the best is blocked.
     name, distance = Push.choose_square_push((-0.5, 2.0), pushes, free, 0.2, False)
     assert name == names[90] and distance == pytest.approx(2.0)

@@ -19,7 +19,7 @@ from bt_arrange.behaviours.moves import (
     wrist_yaw_rad,
 )
 from bt_arrange.errors import BtArrangeError
-from bt_arrange.geometry import PlanarPose, Pose, rotation_z
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
@@ -126,9 +126,7 @@ class Push(StagedBehaviour):
         self.opening_m = opening_m
         shape = self.object_type.shape
         #: An irregular part's square pushes by name (``Prism.named_pushes``); empty for a cuboid.
-        self.square_pushes: dict[str, SquarePush] = (
-            shape.named_pushes(ROBOTIQ_2F85) if isinstance(shape, Prism) else {}
-        )
+        self.square_pushes: dict[str, SquarePush] = shape.named_pushes(ROBOTIQ_2F85) if isinstance(shape, Prism) else {}
         known = tuple(self.square_pushes) if self.square_pushes else tuple(DIRECTIONS)
         if towards is not None and any(d not in known for d in towards):
             raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(known)}")
@@ -220,12 +218,26 @@ class Push(StagedBehaviour):
         if self.opening_m is not None:
             # Among neighbours: the fingers stay within the face's width (the layout's opening).
             opening_m = min(opening_m, self.opening_m)
+        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis))
+
+    @staticmethod
+    def _motion(
+        opening_m: float,
+        begin: FloatArray,
+        end: FloatArray,
+        back: FloatArray,
+        heights: tuple[float, float],
+        yaw: float,
+        push_stage: str,
+    ) -> list[Stage]:
+        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
+        approach_m, push_m = heights
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw)),
-            MoveStage(stage.push(distance_m, axis), line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw)),
             MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
         ]
@@ -266,15 +278,7 @@ class Push(StagedBehaviour):
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
         back = end - direction * s.push_clearance_m
-        return [
-            GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw)),
-            GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None),
-            MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw)),
-            MoveStage(stage.push(distance_m, "x"), line_to(end[0], end[1], push_m, yaw, pushing=True)),
-            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw)),
-            MoveStage(stage.LIFT_FINGERS, line_to(back[0], back[1], approach_m, yaw)),
-        ]
+        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name))
 
     @staticmethod
     def choose_square_push(

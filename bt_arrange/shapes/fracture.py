@@ -173,15 +173,15 @@ def _in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper) -> t
 
     None when the piece is no part the gripper handles.
     """
-    if outline_problem(outline) is not None:
+    if outline_problem(outline.tolist()) is not None:
         return None
-    first = Prism.from_outline(outline, height_m)
+    first = Prism.from_outline(outline.tolist(), height_m)
     if first.size_problems() or yaw_cue_m(first) < MIN_YAW_CUE_M or first.problems(gripper):
         return None
     turn = first.grasps(gripper)[0].yaw_offset_rad
     c, s = math.cos(turn), math.sin(turn)
     turned = first.outline_m @ np.array([[c, -s], [s, c]])  # each point turned by -turn
-    prism = Prism.from_outline(turned, height_m)
+    prism = Prism.from_outline(turned.tolist(), height_m)
     if prism.problems(gripper):
         return None
     grasp = prism.grasps(gripper)[0]
@@ -248,9 +248,7 @@ def fracture(
 
 def _numbered(pieces: list[Piece]) -> list[Piece]:
     ordered = sorted(pieces, key=lambda p: (round(float(np.mean(p.slab_outline_m[:, 0])), 4), p.index))
-    return [
-        Piece(k, p.prism, p.x_m, p.y_m, p.yaw_rad, p.slab_outline_m) for k, p in enumerate(ordered, start=1)
-    ]
+    return [Piece(k, p.prism, p.x_m, p.y_m, p.yaw_rad, p.slab_outline_m) for k, p in enumerate(ordered, start=1)]
 
 
 def polygon_gap_m(first: FloatArray, second: FloatArray) -> float:

@@ -135,9 +135,11 @@ def push_heading_rad(name: str) -> float | None:
 
 @dataclass(frozen=True)
 class SquarePush:
-    """A push that meets one edge squarely: its ``heading_rad`` in the part's frame (the edge's inward
-    normal), how far behind the centroid the edge lies (``back_m``), the edge's length and index,
-    and the fingers' opening."""
+    """A push that meets one edge squarely.
+
+    Its ``heading_rad`` in the part's frame (the edge's inward normal), how far behind the centroid
+    the edge lies (``back_m``), the edge's length and index, and the fingers' opening.
+    """
 
     heading_rad: float
     back_m: float

@@ -160,7 +160,7 @@ def _dense_release(step: Step) -> Release | None:
 
 def _is_dense(step: Step) -> bool:
     """A step among neighbours: released away from its target, near placed parts, or with a blocked side."""
-    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
+    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(step.part.push_directions)
 
 
 #: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]`` per target, read into ``Target``s.

@@ -198,34 +198,28 @@ def footprint_m(target: Target) -> tuple[float, float]:
 def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
     """The plan's targets as footprints for ``bt_arrange.layout``, each held only by the grasps its shape offers."""
     gripper = (settings or ManipulationSettings()).gripper
-    return [
-        Part(
-            t.obj,
-            t.x_m,
-            t.y_m,
-            t.yaw_rad,
-            *footprint_m(t),
-            grasp_axes=_grasp_axes(t.object_type, gripper),
-            prism=prism_fit(t.object_type.shape, gripper),
-        )
-        for t in targets
-    ]
+    parts = []
+    for t in targets:
+        fit = prism_fit(t.object_type.shape, gripper)
+        axes = tuple(axis for axis, _, _ in fit.grasps) if fit is not None else _grasp_axes(t.object_type, gripper)
+        parts.append(Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t), grasp_axes=axes, prism=fit))
+    return parts
 
 
 def prism_fit(shape: object, gripper: Gripper) -> PrismFit | None:
-    """What the layout needs of an irregular part with a grasp across its x or y axis; None for any other shape.
+    """What the layout needs of an irregular part whose preferred grasp closes along its x or y axis; else None.
 
     A prism without such a grasp keeps its bounding box in the layout (and is arranged only with
     room around it: ``arrange_one`` refuses it among neighbours).
     """
     if not isinstance(shape, Prism):
         return None
-    grasps: dict[str, tuple[str, float, tuple[float, float]]] = {}
-    for grasp in shape.grasps(gripper):
-        if grasp.axis in ("x", "y") and grasp.axis not in grasps:
-            grasps[grasp.axis] = (grasp.axis, grasp.width_m, grasp.centre_m)
-    if not grasps:
+    # The preferred grasp only: the part is picked by it (``Pick`` without a layout's grasp), so
+    # the pads are released across the same axis.
+    grasp = shape.grasps(gripper)[0]
+    if grasp.axis not in ("x", "y"):
         return None
+    grasps = {grasp.axis: (grasp.axis, grasp.width_m, grasp.centre_m)}
     pushes = tuple(
         (name, push.heading_rad, push.back_m, push.opening_m) for name, push in shape.named_pushes(gripper).items()
     )
