@@ -66,6 +66,13 @@ class Push(StagedBehaviour):
     needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
     pushed from.
 
+    An irregular part (a ``Prism``) is pushed squarely onto one of its edges instead
+    (``Prism.named_pushes``: along the edge's inward normal at the target's yaw, through the
+    centroid, both pads on the edge), the one that closes the most of the offset
+    (``choose_square_push``); that contact also turns it back to the target's yaw. Its
+    ``towards`` are those pushes' names (``"@-54.0"``). When no square push closes the offset and
+    none is blocked, the axis push above is made.
+
     ``strategy="diagonal"`` is "learned" whose push also corrects the other axis: the pads move
     across the push by that axis' offset (at most ``DIAGONAL_ACROSS_RATIO`` of the push's length)
     while they press on the face, and the cube follows them by friction, so one push can correct x
@@ -149,12 +156,28 @@ class Push(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
-        s = context.settings
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
         if self.square_pushes:
-            return self._square_push_stages(context, pose, target, offset_xy_mm)
+            planned = self._square_push_stages(context, pose, target, offset_xy_mm)
+            if planned is not None:
+                return planned
+            # No square push closes the offset (an L's few edges leave directions out), and nothing
+            # stands beside the part: the target frame's x and y pushes will do.
+            return self._axis_push_stages(context, pose, target, offset_xy_mm, tuple(DIRECTIONS))
+        return self._axis_push_stages(context, pose, target, offset_xy_mm, self.towards)
+
+    def _axis_push_stages(
+        self,
+        context: Context,
+        pose: Pose,
+        target: PlanarPose,
+        offset_xy_mm: tuple[float, float],
+        towards: tuple[str, ...],
+    ) -> list[Stage]:
+        """A push along the target frame's x or y axis (a cuboid's), by the strategy, towards a free side."""
+        s = context.settings
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
         self.across_m = 0.0
@@ -162,15 +185,15 @@ class Push(StagedBehaviour):
             axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
             needed = ("+" if distance_m >= 0 else "-") + axis
             choice: str | Blocked = axis
-            if abs(distance_m) >= s.min_push_m and needed not in self.towards:
+            if abs(distance_m) >= s.min_push_m and needed not in towards:
                 choice = Blocked(needed, distance_m * 1000)
             if self.strategy == "diagonal" and not isinstance(choice, Blocked):
                 across_mm = self.across_push_mm(offset_xy_mm, axis, distance_m * 1000, s.min_push_m * 1000)
                 # Sideways only towards a free side: a neighbour there is never shoved.
                 across_towards = ("+" if across_mm >= 0 else "-") + ("y" if axis == "x" else "x")
-                self.across_m = across_mm / 1000 if across_towards in self.towards else 0.0
+                self.across_m = across_mm / 1000 if across_towards in towards else 0.0
         else:
-            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
+            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, towards)
             if not isinstance(choice, Blocked):
                 distance_m = (offset_xy_mm[0] if choice == "x" else offset_xy_mm[1]) / 1000
         if isinstance(choice, Blocked):
@@ -190,7 +213,7 @@ class Push(StagedBehaviour):
         sign = math.copysign(1.0, distance_m)
         if self.squaring:
             # A squaring push barely moves the part: make it from a free side, whichever sign.
-            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in self.towards]
+            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in towards]
             if not free:
                 self.squaring = False
                 return []
@@ -244,12 +267,21 @@ class Push(StagedBehaviour):
 
     def _square_push_stages(
         self, context: Context, pose: Pose, target: PlanarPose, offset_xy_mm: tuple[float, float]
-    ) -> list[Stage]:
-        """An irregular part's push: squarely onto one edge, the one whose push best closes the offset."""
+    ) -> list[Stage] | None:
+        """An irregular part's push: squarely onto one edge, the one whose push best closes the offset.
+
+        None when no square push closes an offset of a push or more and every one is free (no
+        neighbour beside the part): an axis push is made instead.
+        """
         s = context.settings
         choice = self.choose_square_push(
             offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned()
         )
+        if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
+            if set(self.towards) >= set(self.square_pushes):
+                return None
+            best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
+            choice = Blocked(best, math.hypot(*offset_xy_mm))
         if isinstance(choice, Blocked):
             self.pushed = None
             self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
@@ -279,6 +311,10 @@ class Push(StagedBehaviour):
         end = centre - direction * reach_m + direction * distance_m
         back = end - direction * s.push_clearance_m
         return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name))
+
+    def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
+        heading = self.square_pushes[name].heading_rad
+        return float(offset_xy_mm[0] * math.cos(heading) + offset_xy_mm[1] * math.sin(heading))
 
     @staticmethod
     def choose_square_push(
@@ -442,9 +478,7 @@ class Push(StagedBehaviour):
         """Feedback with the push made."""
         assert self.pushed is not None
         axis, distance_m = self.pushed
-        if self.square_pushes:
-            if axis not in self.square_pushes:
-                return "nothing to push"
+        if axis in self.square_pushes:
             edge = self.square_pushes[axis].edge + 1
             if self.squaring:
                 return f"squared the part on its edge {edge} with a push of {fixed(distance_m * 1000, sign=True)} mm"

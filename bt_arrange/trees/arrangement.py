@@ -41,7 +41,7 @@ from bt_arrange.behaviours import (
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import DIRECTIONS, Pads, Release, Step, free_push_directions, restage_releases
+from bt_arrange.layout import Pads, Release, Step, free_push_directions, restage_releases
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
