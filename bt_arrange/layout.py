@@ -17,17 +17,20 @@ step by step against what is already on the table at that point:
 
 ``plan_layout(parts, settings, order=None)`` chooses an order (a depth-first search that keeps
 every remaining part placeable; the user's order when given) and returns the steps, or raises one
-``PlanError`` naming the parts in the way. No pybullet, no shapely: separating axes on rectangles.
+``PlanError`` naming the parts in the way. No pybullet, no shapely: separating axes on rectangles
+and on the convex pieces of an irregular part's outline (``bt_arrange.footprints``: ``Outline``, ``PrismFit``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bt_arrange.errors import PlanError
+from bt_arrange.footprints import Footprint, Outline, PrismFit, Rect, gap_m, overlap, radius_of
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 
 if TYPE_CHECKING:
@@ -35,89 +38,6 @@ if TYPE_CHECKING:
 
 #: Directions a part can be pushed towards, in its target's frame.
 DIRECTIONS: dict[str, tuple[float, float]] = {"+x": (1.0, 0.0), "-x": (-1.0, 0.0), "+y": (0.0, 1.0), "-y": (0.0, -1.0)}
-
-
-@dataclass(frozen=True)
-class Rect:
-    """An oriented rectangle on the table: centre ``(x_m, y_m)``, ``yaw_rad``, half sizes along its own x and y."""
-
-    x_m: float
-    y_m: float
-    yaw_rad: float
-    half_x_m: float
-    half_y_m: float
-
-    def axes(self) -> tuple[tuple[float, float], tuple[float, float]]:
-        """Its own x and y axes as world unit vectors."""
-        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
-        return (c, s), (-s, c)
-
-    def corners(self) -> list[tuple[float, float]]:
-        """The four corners, counter-clockwise."""
-        (ax, ay), (bx, by) = self.axes()
-        return [
-            (
-                self.x_m + i * self.half_x_m * ax + j * self.half_y_m * bx,
-                self.y_m + i * self.half_x_m * ay + j * self.half_y_m * by,
-            )
-            for i, j in ((1, 1), (-1, 1), (-1, -1), (1, -1))
-        ]
-
-    def local(self, dx_m: float, dy_m: float, half_x_m: float, half_y_m: float) -> Rect:
-        """A rectangle of the same yaw, centred ``(dx, dy)`` from this one's centre in its frame."""
-        (ax, ay), (bx, by) = self.axes()
-        return Rect(
-            self.x_m + dx_m * ax + dy_m * bx, self.y_m + dx_m * ay + dy_m * by, self.yaw_rad, half_x_m, half_y_m
-        )
-
-    def moved(self, dx_m: float, dy_m: float) -> Rect:
-        """The same rectangle moved by ``(dx, dy)`` in its own frame."""
-        return self.local(dx_m, dy_m, self.half_x_m, self.half_y_m)
-
-
-def _project(rect: Rect, axis: tuple[float, float]) -> tuple[float, float]:
-    values = [x * axis[0] + y * axis[1] for x, y in rect.corners()]
-    return min(values), max(values)
-
-
-def overlap(a: Rect, b: Rect, clearance_m: float = 0.0) -> bool:
-    """True when ``a`` and ``b`` come closer than ``clearance_m`` along some separating axis.
-
-    Separating axes on the four edge normals; with a clearance this is ``a`` grown by it on every
-    side (square corners: slightly conservative at the corners).
-    """
-    if (
-        math.hypot(a.x_m - b.x_m, a.y_m - b.y_m)
-        > math.hypot(a.half_x_m, a.half_y_m) + math.hypot(b.half_x_m, b.half_y_m) + clearance_m
-    ):
-        return False
-    for axis in (*a.axes(), *b.axes()):
-        low_a, high_a = _project(a, axis)
-        low_b, high_b = _project(b, axis)
-        if high_a + clearance_m <= low_b or high_b + clearance_m <= low_a:
-            return False
-    return True
-
-
-def gap_m(a: Rect, b: Rect) -> float:
-    """The distance between two rectangles (0 when they overlap)."""
-    if overlap(a, b):
-        return 0.0
-
-    def point_segment(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
-        dx, dy = r[0] - q[0], r[1] - q[1]
-        if dx == 0.0 and dy == 0.0:
-            return math.hypot(p[0] - q[0], p[1] - q[1])
-        t = max(0.0, min(1.0, ((p[0] - q[0]) * dx + (p[1] - q[1]) * dy) / (dx * dx + dy * dy)))
-        return math.hypot(p[0] - q[0] - t * dx, p[1] - q[1] - t * dy)
-
-    best = math.inf
-    for first, second in ((a, b), (b, a)):
-        corners = second.corners()
-        for p in first.corners():
-            for i in range(4):
-                best = min(best, point_segment(p, corners[i], corners[(i + 1) % 4]))
-    return best
 
 
 @dataclass(frozen=True)
@@ -132,15 +52,43 @@ class Part:
     size_y_m: float
     #: The axes of its frame the pads may close across (a bar only across the side the stroke spans).
     grasp_axes: tuple[str, ...] = ("x", "y")
+    #: An irregular part's outline, grasps and pushed faces (None: a cuboid, its size says all).
+    prism: PrismFit | None = None
 
     @property
-    def footprint(self) -> Rect:
+    def footprint(self) -> Footprint:
         """The part at its target."""
+        if self.prism is not None:
+            return Outline(self.x_m, self.y_m, self.yaw_rad, self.prism.pieces)
         return Rect(self.x_m, self.y_m, self.yaw_rad, self.size_x_m / 2, self.size_y_m / 2)
 
     def half(self, axis: str) -> float:
         """Half its size along its own ``axis``."""
         return (self.size_x_m if axis == "x" else self.size_y_m) / 2
+
+    def grasp_half(self, axis: str) -> float:
+        """Half the width between the pads closed across ``axis``."""
+        return self.prism.grasp(axis)[0] / 2 if self.prism is not None else self.half(axis)
+
+    def grasp_centre(self, axis: str) -> tuple[float, float]:
+        """Where the pads' centre stands, closed across ``axis`` (own frame; the origin for a cuboid)."""
+        return self.prism.grasp(axis)[1] if self.prism is not None else (0.0, 0.0)
+
+    @property
+    def push_directions(self) -> tuple[str, ...]:
+        """The directions it may be pushed towards: its target frame's four, an irregular part's square pushes."""
+        return self.prism.push_names if self.prism is not None else tuple(DIRECTIONS)
+
+    def push_vector(self, towards: str) -> tuple[float, float]:
+        """The unit vector (own frame) of a push ``towards``."""
+        if self.prism is None:
+            return DIRECTIONS[towards]
+        heading_rad, _ = self.prism.push(towards)
+        return math.cos(heading_rad), math.sin(heading_rad)
+
+    def back(self, towards: str) -> float:
+        """How far behind its origin the pads pushing it ``towards`` meet it (half its size for a cuboid)."""
+        return self.prism.push(towards)[1] if self.prism is not None else self.half(towards[1])
 
 
 @dataclass(frozen=True)
@@ -196,33 +144,38 @@ class Pads:
 
     def neighbour_push_opening_m(self, part: Part, along: str) -> float:
         """The opening for a push along ``along`` among neighbours (``Gripper.neighbour_push_opening_m``)."""
+        if part.prism is not None:
+            return part.prism.push_opening_m
         return self.gripper.neighbour_push_opening_m(2 * part.half("y" if along == "x" else "x"))
 
     def release_opening_m(self, part: Part, axis: str) -> float:
         """How far the pads open to release a part held across ``axis``."""
-        return min(self.max_opening_m, 2 * part.half(axis) + 2 * self.release_gap_m)
+        return min(self.max_opening_m, 2 * part.grasp_half(axis) + 2 * self.release_gap_m)
 
 
-def release_pads(part: Part, at: Rect, axis: str, pads: Pads) -> list[Rect]:
+def release_pads(part: Part, at: Footprint, axis: str, pads: Pads) -> list[Rect]:
     """The two rectangles the pads sweep holding, lowering and releasing ``part`` at ``at`` across ``axis``."""
-    half = part.half(axis)
+    half = part.grasp_half(axis)
+    cx, cy = part.grasp_centre(axis)
     depth = pads.release_gap_m + pads.finger_depth_m
     centre = half + depth / 2
     if axis == "x":
-        return [at.local(sign * centre, 0.0, depth / 2, pads.width_m / 2) for sign in (1, -1)]
-    return [at.local(0.0, sign * centre, pads.width_m / 2, depth / 2) for sign in (1, -1)]
+        return [at.local(cx + sign * centre, cy, depth / 2, pads.width_m / 2) for sign in (1, -1)]
+    return [at.local(cx, cy + sign * centre, pads.width_m / 2, depth / 2) for sign in (1, -1)]
 
 
-def push_pads(part: Part, at: Rect, towards: str, distance_m: float, pads: Pads) -> Rect:
+def push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: Pads) -> Rect:
     """The rectangle the pads sweep pushing ``part`` (at ``at``) ``distance_m`` towards ``towards``, then backing off.
 
     The pads stand side by side along the face behind it (opened to ``Pads.neighbour_push_opening_m``, so
     the fingers stay within the face's width), start ``push_clearance_m`` behind it, are a pad's
     width deep, and travel with the face.
     """
+    if part.prism is not None:
+        return _prism_push_pads(part, at, towards, distance_m, pads)
     ux, uy = DIRECTIONS[towards]
     along = "x" if ux else "y"
-    half_along = part.half(along)
+    half_along = part.back(towards)
     half_across = pads.neighbour_push_opening_m(part, along) / 2 + pads.finger_depth_m
     sign = ux + uy
     # Behind the face, from the face's final place back to the start of the pads.
@@ -235,7 +188,20 @@ def push_pads(part: Part, at: Rect, towards: str, distance_m: float, pads: Pads)
     return at.local(0.0, centre, half_across, depth)
 
 
-def blockers(volumes: Iterable[Rect], placed: Sequence[tuple[str, Rect]], clearance_m: float) -> list[str]:
+def _prism_push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: Pads) -> Rect:
+    """``push_pads`` for a square push of an irregular part: the pads behind its edge, along the push's heading."""
+    assert part.prism is not None
+    heading_rad, back_m = part.prism.push(towards)
+    near = back_m - distance_m
+    far = back_m + pads.push_clearance_m + pads.width_m
+    middle = -(near + far) / 2
+    ux, uy = math.cos(heading_rad), math.sin(heading_rad)
+    centre = at.local(middle * ux, middle * uy, 0.0, 0.0)
+    half_across = part.prism.push_opening(towards) / 2 + pads.finger_depth_m
+    return Rect(centre.x_m, centre.y_m, at.yaw_rad + heading_rad, (far - near) / 2, half_across)
+
+
+def blockers(volumes: Iterable[Footprint], placed: Sequence[tuple[str, Footprint]], clearance_m: float) -> list[str]:
     """Names of the placed parts that any of ``volumes`` meets."""
     names = []
     for volume in volumes:
@@ -245,13 +211,13 @@ def blockers(volumes: Iterable[Rect], placed: Sequence[tuple[str, Rect]], cleara
     return names
 
 
-def free_push_directions(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[str, ...]:
+def free_push_directions(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> tuple[str, ...]:
     """The directions ``part`` (at its target) can be pushed towards with nothing of ``placed`` in the pads' way."""
     at = part.footprint
     others = [(n, r) for n, r in placed if n != part.name]
     return tuple(
         towards
-        for towards in DIRECTIONS
+        for towards in part.push_directions
         if not blockers([push_pads(part, at, towards, 0.0, pads)], others, pads.pad_clearance_m)
     )
 
@@ -262,16 +228,25 @@ class Release:
 
     The pads close across ``axis`` of its target's frame and open to ``opening_m``, at ``offset_m``
     (target frame) from the target; a staged release (an offset) is pushed home from free sides.
+    ``centre_m`` is where the pads' centre stands from the part's origin (an irregular part's
+    grasp may be off its centroid): ``offset_m`` includes it, so the TCP goes to the target plus
+    ``offset_m`` and the part's origin lands ``offset_m - centre_m`` from its target.
     """
 
     axis: str
     opening_m: float
     offset_m: tuple[float, float] = (0.0, 0.0)
+    centre_m: tuple[float, float] = (0.0, 0.0)
 
     @property
     def staged(self) -> bool:
         """True when released away from the target, to be pushed home."""
-        return self.offset_m != (0.0, 0.0)
+        return self.offset_m != self.centre_m
+
+    @property
+    def staging_m(self) -> tuple[float, float]:
+        """How far from its target the part's origin is released (target frame)."""
+        return (self.offset_m[0] - self.centre_m[0], self.offset_m[1] - self.centre_m[1])
 
 
 @dataclass(frozen=True)
@@ -291,7 +266,7 @@ class Step:
 
 
 def _release_at(
-    part: Part, at: Rect, placed: Sequence[tuple[str, Rect]], pads: Pads, axes: Sequence[str] = ("x", "y")
+    part: Part, at: Footprint, placed: Sequence[tuple[str, Footprint]], pads: Pads, axes: Sequence[str] = ("x", "y")
 ) -> tuple[str | None, list[str]]:
     """An axis across which the pads fit releasing ``part`` at ``at`` (None) and who stands in the way."""
     if blockers([at], placed, pads.place_clearance_m):
@@ -307,13 +282,15 @@ def _release_at(
 
 def _staged_release(
     part: Part,
-    placed: Sequence[tuple[str, Rect]],
+    placed: Sequence[tuple[str, Footprint]],
     pads: Pads,
     directions: Sequence[tuple[int, int]] | None = None,
     axes: Sequence[str] = ("x", "y"),
 ) -> Release | None:
     """The smallest offset away from the neighbours where the pads fit and pushes home go from free sides."""
     free = free_push_directions(part, placed, pads)
+    if part.prism is not None:
+        return _staged_prism_release(part, placed, pads, free, axes)
     candidates = directions or [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1) if (sx, sy) != (0, 0)]
     best: tuple[float, Release] | None = None
     for distance in pads.staging_steps_m:
@@ -342,24 +319,63 @@ def _staged_release(
                 continue
             cost = math.hypot(*offset)
             if best is None or cost < best[0]:
-                best = (cost, Release(axis, pads.release_opening_m(part, axis), offset))
+                best = (cost, _release(part, axis, pads, offset))
         if best is not None:
             return best[1]
     return None
 
 
-def choose_release(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> tuple[Release | None, list[str]]:
+def _staged_prism_release(
+    part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads, free: Sequence[str], axes: Sequence[str]
+) -> Release | None:
+    """An irregular part's staging: back from its target against a free square push, which brings it home.
+
+    One push along the edge's normal, squarely, so that the way home neither turns it nor needs
+    a second side.
+    """
+    for distance in pads.staging_steps_m:
+        for towards in free:
+            ux, uy = part.push_vector(towards)
+            offset = (-ux * distance, -uy * distance)
+            staged = part.footprint.moved(*offset)
+            axis, _ = _release_at(part, staged, placed, pads, axes)
+            if axis is None:
+                continue
+            sweep = [
+                push_pads(part, staged, towards, distance, pads),
+                push_pads(part, part.footprint, towards, 0.0, pads),
+            ]
+            if blockers(sweep, placed, pads.pad_clearance_m):
+                continue
+            return _release(part, axis, pads, offset)
+    return None
+
+
+def _release(part: Part, axis: str, pads: Pads, staging_m: tuple[float, float] = (0.0, 0.0)) -> Release:
+    """The release across ``axis`` with the part's origin ``staging_m`` from its target (the TCP at its grasp)."""
+    opening_m = pads.release_opening_m(part, axis)
+    if part.prism is None:
+        return Release(axis, opening_m, staging_m)
+    cx, cy = part.grasp_centre(axis)
+    return Release(axis, opening_m, (staging_m[0] + cx, staging_m[1] + cy), (cx, cy))
+
+
+def choose_release(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> tuple[Release | None, list[str]]:
     """Release at the target across free faces, else at a staging pose; None and who is in the way if neither fits."""
     axis, in_way = _release_at(part, part.footprint, placed, pads, part.grasp_axes)
     if axis is not None:
-        return Release(axis, pads.release_opening_m(part, axis)), []
+        return _release(part, axis, pads), []
     staged = _staged_release(part, placed, pads, axes=part.grasp_axes)
     return staged, ([] if staged is not None else in_way)
 
 
-def restage_releases(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads) -> dict[str, Release]:
+def restage_releases(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> dict[str, Release]:
     """For each direction a push cannot go (its pads' side is blocked), a release past the target from which it can."""
     others = [(n, r) for n, r in placed if n != part.name]
+    if part.prism is not None:
+        # Picked up again across a grasp, Pick stands the pads' centre on the part's origin (a
+        # cuboid's grasp centre): an irregular part is pushed only from its free sides instead.
+        return {}
     free = free_push_directions(part, others, pads)
     # Picked up where it lies (near its target) across faces whose pads fit there, and held so.
     pick_axes = [
@@ -380,7 +396,7 @@ def restage_releases(part: Part, placed: Sequence[tuple[str, Rect]], pads: Pads)
     return out
 
 
-def neighbours_of(part: Part, placed: Sequence[tuple[str, Rect]], within_m: float = 0.03) -> tuple[str, ...]:
+def neighbours_of(part: Part, placed: Sequence[tuple[str, Footprint]], within_m: float = 0.03) -> tuple[str, ...]:
     """Placed parts within ``within_m`` of ``part``'s footprint: a push or a release there could move them."""
     return tuple(name for name, rect in placed if name != part.name and gap_m(part.footprint, rect) <= within_m)
 
@@ -415,10 +431,9 @@ def centre_distance_needed_m(first: Part, second: Part, pads: Pads) -> float:
     b = second.footprint
 
     def gap_at(distance_m: float) -> float:
-        moved = Rect(a.x_m + ux * distance_m, a.y_m + uy * distance_m, b.yaw_rad, b.half_x_m, b.half_y_m)
-        return gap_m(a, moved)
+        return gap_m(a, dataclasses.replace(b, x_m=a.x_m + ux * distance_m, y_m=a.y_m + uy * distance_m))
 
-    low, high = 0.0, math.hypot(a.half_x_m, a.half_y_m) + math.hypot(b.half_x_m, b.half_y_m) + pads.min_gap_m
+    low, high = 0.0, radius_of(a) + radius_of(b) + pads.min_gap_m
     for _ in range(40):  # the gap grows with the distance along the line: bisect
         middle = (low + high) / 2
         if gap_at(middle) >= pads.min_gap_m:
@@ -455,7 +470,7 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
         if sorted(names) != sorted(by_name):
             raise PlanError(f"order {names} must name each part once: {', '.join(by_name)}")
         sequence = [by_name[n] for n in names]
-        placed: list[tuple[str, Rect]] = []
+        placed: list[tuple[str, Footprint]] = []
         for part in sequence:
             release, in_way = choose_release(part, placed, pads)
             if release is None:
@@ -514,7 +529,7 @@ def _no_room(part: Part, in_way: Sequence[str], pads: Pads, after: bool) -> str:
 
 def _steps(sequence: Sequence[Part], pads: Pads) -> list[Step]:
     steps = []
-    placed: list[tuple[str, Rect]] = []
+    placed: list[tuple[str, Footprint]] = []
     for part in sequence:
         release, _ = choose_release(part, placed, pads)
         assert release is not None

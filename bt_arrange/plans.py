@@ -23,6 +23,16 @@
     yaw_deg = 30                # optional, default 0
     name = "orange bar"         # optional; default the colour, numbered for identical parts
 
+    [fresco.tile]               # a slab broken into pieces "tile 1" ... "tile N", each a target at its place
+    size_mm = [160, 120, 20]    # the whole slab: length, width, height
+    pieces = 6                  # 3 to 12
+    gap_mm = 2                  # optional, default 2: the gap along every fracture once reassembled, 2 or more
+    seed = 3                    # optional, default 0: the fracture pattern
+    colour = "ochre"            # a built-in or [colours.NAME]; every piece the same colour
+    x_mm = 500                  # where the whole goes (its centre)
+    y_mm = 0
+    yaw_deg = 0                 # optional, default 0
+
     [scene]                     # simulator only, optional: where the objects start
     seed = 0                    # scattered clear of each other and of the targets; --seed overrides
     # or [[scene.starts]] with object, colour, x_mm, y_mm, yaw_deg (name optional)
@@ -46,6 +56,7 @@ from bt_arrange.filelimits import MAX_COLOURS, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.shapes import Prism
+from bt_arrange.shapes.fracture import MAX_PIECES, MIN_GAP_M, MIN_PIECES, fracture
 from bt_arrange.suggest import did_you_mean
 
 if TYPE_CHECKING:
@@ -57,11 +68,22 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-TOP_KEYS = ("threshold_mm", "yaw_threshold_deg", "correct", "max_pushes", "objects", "colours", "targets", "scene")
+TOP_KEYS = (
+    "threshold_mm",
+    "yaw_threshold_deg",
+    "correct",
+    "max_pushes",
+    "objects",
+    "colours",
+    "targets",
+    "fresco",
+    "scene",
+)
 OBJECT_KEYS = ("size_mm", "outline_mm", "height_mm", "mass_kg", "friction")
 COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
 TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name")
 SCENE_KEYS = ("seed", "starts")
+FRESCO_KEYS = ("size_mm", "pieces", "gap_mm", "seed", "colour", "x_mm", "y_mm", "yaw_deg")
 START_KEYS = TARGET_KEYS
 #: A position or a size in an ``_mm`` field below this many millimetres looks like metres (0.45 for 450).
 LOOKS_LIKE_METRES_MM = 2.0
@@ -129,8 +151,19 @@ class Plan:
             entries[("start", start.name or start.colour)] = f"[[scene.starts]] {index}"
         for name in self.raw.get("colours", {}) if isinstance(self.raw.get("colours"), dict) else ():
             entries[("colour", name)] = f"[colours.{name}]"
+        frescoes = self.raw.get("fresco", {}) if isinstance(self.raw.get("fresco"), dict) else {}
+        pieces = {}
+        for fresco in frescoes:
+            for target in self.targets:
+                if target.obj.startswith(f"{fresco} ") and target.obj[len(fresco) + 1 :].isdigit():
+                    pieces[target.obj] = f"[fresco.{fresco}] piece {target.obj[len(fresco) + 1 :]}"
+        for target in self.targets:
+            if target.obj in pieces:
+                entries[("target", target.obj)] = pieces[target.obj]
         for name in self.object_types:
-            if name != "cube":
+            if name in pieces:
+                entries[("object", name)] = pieces[name]
+            elif name != "cube":
                 entries[("object", name)] = f"[objects.{name}]"
         return PlanSource(str(self.path), entries)
 
@@ -238,9 +271,12 @@ class _Reader:
             options["max_pushes"] = value
         types = self.object_types(data.get("objects", {}))
         colours = self.colour_table(data.get("colours", {}))
-        if "targets" not in data:
-            raise self.fail("the top level", "no [[targets]]: a plan needs at least one")
-        targets = self.targets(data["targets"], types, colours)
+        if "targets" not in data and "fresco" not in data:
+            raise self.fail("the top level", "no [[targets]] and no [fresco.NAME]: a plan needs at least one")
+        targets = self.targets(data["targets"], types, colours) if "targets" in data else []
+        for kind, target in self.frescoes(data.get("fresco", {}), types, colours, targets):
+            types[kind.name] = kind
+            targets.append(target)
         seed, starts = self.scene(data.get("scene", {}), types, colours, targets)
         return Plan(self.path, targets, colours, types, seed=seed, starts=starts, raw=data, **options)
 
@@ -296,6 +332,86 @@ class _Reader:
             return ObjectType(name, None, mass, friction, shape=Prism.from_outline(points, height_m))
         except PlanError as error:
             raise self.fail(where, str(error)) from None
+
+    def frescoes(
+        self, table: Any, types: dict[str, ObjectType], colours: ColourTable, targets: list[Any]
+    ) -> list[tuple[ObjectType, Any]]:
+        """Each ``[fresco.NAME]``'s pieces: a type and a target per piece, ``NAME 1`` ... ``NAME N``."""
+        from bt_arrange.trees import Target
+
+        if not isinstance(table, dict):
+            raise self.fail("[fresco]", f"must be a table of frescoes, got {_shown(table)}")
+        taken = {t.obj for t in targets}
+        out: list[tuple[ObjectType, Any]] = []
+        for name, entry in table.items():
+            where = f"[fresco.{name}]"
+            self.keys(entry, FRESCO_KEYS, where)
+            if not name.strip() or "/" in name:
+                raise self.fail(where, "a fresco's name must be a non-empty text without '/'")
+            for key in ("size_mm", "pieces", "colour", "x_mm", "y_mm"):
+                if key not in entry:
+                    raise self.fail(where, f"missing {key}")
+            size = entry["size_mm"]
+            if not isinstance(size, list) or len(size) != 3:
+                raise self.fail(where, f"size_mm = {_shown(size)} is not three numbers [length, width, height] in mm")
+            edges = [self.number(v, where, "size_mm", positive=True) for v in size]
+            if max(edges) < LOOKS_LIKE_METRES_MM:
+                raise self.fail(
+                    where,
+                    f"size_mm = {_shown(size)} looks like metres: the plan is in millimetres "
+                    f"(size_mm = [{', '.join(f'{v * 1000:g}' for v in edges)}])",
+                )
+            pieces = entry["pieces"]
+            if isinstance(pieces, bool) or not isinstance(pieces, int) or not MIN_PIECES <= pieces <= MAX_PIECES:
+                raise self.fail(where, f"pieces = {_shown(pieces)}: a fresco breaks into {MIN_PIECES} to {MAX_PIECES}")
+            gap_mm = self.number(entry.get("gap_mm", MIN_GAP_M * 1000), where, "gap_mm")
+            if gap_mm < MIN_GAP_M * 1000:
+                raise self.fail(
+                    where,
+                    f"gap_mm = {_shown(entry['gap_mm'])}: the gap along a fracture must be at least "
+                    f"{MIN_GAP_M * 1000:g} mm, what two parts need to lie within the threshold without touching",
+                )
+            seed = entry.get("seed", 0)
+            if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+                raise self.fail(where, f"seed = {_shown(seed)} is not a whole number, 0 or more")
+            colour = entry["colour"]
+            if not isinstance(colour, str) or colour not in colours:
+                raise self.fail(
+                    where,
+                    f"unknown colour {_shown(colour)}{did_you_mean(str(colour), colours.names)}: not in the table "
+                    f"({', '.join(colours.names)}) and no [colours.NAME] with rgb",
+                )
+            x_mm = self.number(entry["x_mm"], where, "x_mm")
+            y_mm = self.number(entry["y_mm"], where, "y_mm")
+            yaw_deg = self.number(entry.get("yaw_deg", 0.0), where, "yaw_deg")
+            if 0.0 < max(abs(x_mm), abs(y_mm)) < LOOKS_LIKE_METRES_MM:
+                raise self.fail(
+                    where,
+                    f"x_mm = {_shown(entry['x_mm'])}, y_mm = {_shown(entry['y_mm'])} look like metres: the plan is "
+                    f"in millimetres (x_mm = {x_mm * 1000:g}, y_mm = {y_mm * 1000:g})",
+                )
+            try:
+                broken = fracture(
+                    (edges[0] / 1000, edges[1] / 1000, edges[2] / 1000),
+                    pieces,
+                    gap_mm / 1000,
+                    seed,
+                    (x_mm / 1000, y_mm / 1000, math.radians(yaw_deg)),
+                )
+            except PlanError as error:
+                raise self.fail(where, str(error)) from None
+            for piece in broken:
+                piece_name = f"{name} {piece.index}"
+                if piece_name in types or piece_name in taken:
+                    raise self.fail(where, f"its piece {piece_name!r} has the name of another type or target")
+                try:
+                    kind = ObjectType(piece_name, shape=piece.prism)
+                except PlanError as error:
+                    raise self.fail(where, f"piece {piece.index}: {error}") from None
+                target = Target(colour, piece.x_m, piece.y_m, piece.yaw_rad, name=piece_name, object_type=kind)
+                out.append((kind, target))
+                taken.add(piece_name)
+        return out
 
     def colour_table(self, table: Any) -> ColourTable:
         colours = DEFAULT_COLOUR_TABLE

@@ -27,6 +27,7 @@ import pytest
 from py_trees.common import Status
 
 from bt_arrange import cli, treefile, xmltree
+from bt_arrange.errors import BtArrangeError
 from bt_arrange.groot2 import Groot2Publisher, GrootError, check_port, preorder, protocol
 from bt_arrange.runner import TransitionLog
 
@@ -38,6 +39,8 @@ TREES = ROOT / "trees"
 SHIPPED = sorted(
     [*TREES.glob("*.py"), *TREES.glob("*.xml"), *TREES.glob("*.toml"), *(ROOT / "bt_arrange/examples").glob("*.toml")]
 )
+#: Plans of irregular parts and frescoes: XML trees describe cuboids, so these are refused in one line instead.
+IRREGULAR = {"fresco.toml", "irregular_parts.toml"}
 
 
 def free_port_pair() -> int:
@@ -409,6 +412,11 @@ def _btcpp_factory(bt, categories: dict[str, str]):
 @pytest.mark.parametrize("path", SHIPPED, ids=[f"{p.parent.name}/{p.name}" for p in SHIPPED])
 def test_every_shipped_tree_as_xml_loads_and_ticks_in_bt_cpp_4(path):
     bt = pytest.importorskip("behaviortreepy")
+    if path.name in IRREGULAR:
+        with pytest.raises(BtArrangeError, match="XML trees describe cuboids") as caught:
+            xmltree.to_xml(treefile.build_root(treefile.load(path)), tree_id=path.stem)
+        assert "\n" not in str(caught.value)
+        return
     exported = xmltree.to_xml(treefile.build_root(treefile.load(path)), tree_id=path.stem)
     texts = [exported] + ([path.read_text()] if path.suffix == ".xml" else [])
     for text in texts:

@@ -69,11 +69,15 @@ def to_pose(
     return JointMovePlan(lambda context: pose, free=free, carrying=carrying)
 
 
-def line_nearly_done(remaining_m: float) -> Callable[[Context, Motion], bool]:
-    """A ``MoveStage`` hand-on: a line passes its last ``remaining_m`` at speed into the next (joint) move."""
+def line_nearly_done(remaining_m: float | None = None) -> Callable[[Context, Motion], bool]:
+    """A ``MoveStage`` hand-on: a line passes its last ``remaining_m`` at speed into the next (joint) move.
+
+    ``None``: the settings' ``hand_on_remaining_m``, read when the line runs.
+    """
 
     def hand_on(context: Context, motion: Motion) -> bool:
-        return isinstance(motion, LinearMotion) and motion.remaining_m <= remaining_m
+        distance_m = context.settings.hand_on_remaining_m if remaining_m is None else remaining_m
+        return isinstance(motion, LinearMotion) and motion.remaining_m <= distance_m
 
     return hand_on
 
@@ -144,6 +148,11 @@ def free_grasp_pose(
     c, s = math.cos(part_yaw), math.sin(part_yaw)
     cx, cy = grasp.centre_m
     return x_m + c * cx - s * cy, y_m + s * cx + c * cy, yaw
+
+
+def centred_grasp(settings: ManipulationSettings, object_type: ObjectType) -> bool:
+    """True when the pads hold the part through its centre (a cuboid's): its inertia puts no torque on the grip."""
+    return grasp_of(settings, object_type).centre_m == (0.0, 0.0)
 
 
 def min_held_width_m(settings: ManipulationSettings, object_type: ObjectType) -> float:

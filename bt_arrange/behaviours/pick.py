@@ -14,6 +14,7 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
+    centred_grasp,
     close_stage,
     free_grasp_pose,
     grasp_width_m,
@@ -144,7 +145,9 @@ class Pick(StagedBehaviour):
             MoveStage(stage.MOVE_ABOVE_CUBE, to_pose(x, y, approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw, free=True)),
-            close_stage(stage.CLOSE_ON_CUBE, s.grip_force_n),
+            # An irregular part is held off its centre: pads meeting its outline fast turn it, so they
+            # close at the squaring speed; a cuboid's centred grasp at the fingers' full speed.
+            close_stage(stage.CLOSE_ON_CUBE, s.grip_force_n, squaring=not centred_grasp(s, kind)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             *self._reclose_stages(s, opening_m),
             *squaring,

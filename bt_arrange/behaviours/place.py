@@ -11,6 +11,7 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
+    centred_grasp,
     free_grasp_pose,
     heights_m,
     line_nearly_done,
@@ -97,10 +98,15 @@ class Place(StagedBehaviour):
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])
             across = target.yaw_rad + axis_yaw_offset_rad(self.release.axis)
-            yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+            # The gripper's half turn is free only when the part looks the same turned so (a cuboid):
+            # an irregular part held turned by it would land turned by it.
+            symmetry_rad = max(GRIPPER_SYMMETRY_RAD, kind.shape.symmetry_rad)
+            yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), symmetry_rad)
             opening_m = self.release.opening_m
         return [
-            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=True)),
+            # Held through its centre of mass, a part takes the carry's speed; held off it (an irregular
+            # part's grasp), the inertia twists it in the pads: the planner's gentler limits.
+            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=centred_grasp(s, kind))),
             MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
             GripperStage(
                 stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)

@@ -20,14 +20,15 @@ from bt_arrange.behaviours.moves import (
     wrist_yaw_rad,
 )
 from bt_arrange.errors import BtArrangeError
-from bt_arrange.geometry import PlanarPose, Pose, rotation_z
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Prism
+from bt_arrange.shapes import ROBOTIQ_2F85, Prism
+from bt_arrange.shapes.prism import SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
@@ -36,6 +37,12 @@ PUSH_STRATEGIES = ("paper", "learned", "diagonal")
 #: The pads drag the cube sideways by friction (pads 1.2 on the cube: slipping only beyond about
 #: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the cube.
 DIAGONAL_ACROSS_RATIO = 0.6
+
+
+#: A squaring push of an irregular part presses its edge this far past where it belongs: a push
+#: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
+#: such pushes left a fresco piece 1.27 deg off).
+SQUARING_PRESS_MM = 0.3
 
 
 class Push(StagedBehaviour):
@@ -59,6 +66,13 @@ class Push(StagedBehaviour):
     can only be corrected from a blocked side, Push fails saying so and writes the direction it
     needed to ``/<obj>/blocked_towards``: the tree releases the part again on the side it can be
     pushed from.
+
+    An irregular part (a ``Prism``) is pushed squarely onto one of its edges instead
+    (``Prism.named_pushes``: along the edge's inward normal at the target's yaw, through the
+    centroid, both pads on the edge), the one that closes the most of the offset
+    (``choose_square_push``); that contact also turns it back to the target's yaw. Its
+    ``towards`` are those pushes' names (``"@-54.0"``). When no square push closes the offset and
+    none is blocked, the axis push above is made.
 
     ``strategy="diagonal"`` is "learned" whose push also corrects the other axis: the pads move
     across the push by that axis' offset (at most ``DIAGONAL_ACROSS_RATIO`` of the push's length)
@@ -118,9 +132,13 @@ class Push(StagedBehaviour):
         #: The opening among neighbours (``Pads.push_opening_m``: the fingers within the face's
         #: width); default the paper's width minus a pad's thickness.
         self.opening_m = opening_m
-        if towards is not None and any(d not in DIRECTIONS for d in towards):
-            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(DIRECTIONS)}")
-        self.towards = tuple(DIRECTIONS) if towards is None else tuple(towards)
+        shape = self.object_type.shape
+        #: An irregular part's square pushes by name (``Prism.named_pushes``); empty for a cuboid.
+        self.square_pushes: dict[str, SquarePush] = shape.named_pushes(ROBOTIQ_2F85) if isinstance(shape, Prism) else {}
+        known = tuple(self.square_pushes) if self.square_pushes else tuple(DIRECTIONS)
+        if towards is not None and any(d not in known for d in towards):
+            raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(known)}")
+        self.towards = known if towards is None else tuple(towards)
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.OFFSET_XY_MM), written_by=f"Inspect of {obj}")
         self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if yaw_threshold_deg is not None:
@@ -139,10 +157,28 @@ class Push(StagedBehaviour):
 
     def stages(self, context: Context) -> list[Stage]:
         """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
-        s = context.settings
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
+        if self.square_pushes:
+            planned = self._square_push_stages(context, pose, target, offset_xy_mm)
+            if planned is not None:
+                return planned
+            # No square push closes the offset (an L's few edges leave directions out), and nothing
+            # stands beside the part: the target frame's x and y pushes will do.
+            return self._axis_push_stages(context, pose, target, offset_xy_mm, tuple(DIRECTIONS))
+        return self._axis_push_stages(context, pose, target, offset_xy_mm, self.towards)
+
+    def _axis_push_stages(
+        self,
+        context: Context,
+        pose: Pose,
+        target: PlanarPose,
+        offset_xy_mm: tuple[float, float],
+        towards: tuple[str, ...],
+    ) -> list[Stage]:
+        """A push along the target frame's x or y axis (a cuboid's), by the strategy, towards a free side."""
+        s = context.settings
         axis_key = keys.key(self.obj, keys.PUSH_AXIS)
         preferred = self.blackboard.get(axis_key) if self.blackboard.exists(axis_key) else "x"
         self.across_m = 0.0
@@ -150,15 +186,15 @@ class Push(StagedBehaviour):
             axis, distance_m = self._learned_push(offset_xy_mm, s.min_push_m * 1000)
             needed = ("+" if distance_m >= 0 else "-") + axis
             choice: str | Blocked = axis
-            if abs(distance_m) >= s.min_push_m and needed not in self.towards:
+            if abs(distance_m) >= s.min_push_m and needed not in towards:
                 choice = Blocked(needed, distance_m * 1000)
             if self.strategy == "diagonal" and not isinstance(choice, Blocked):
                 across_mm = self.across_push_mm(offset_xy_mm, axis, distance_m * 1000, s.min_push_m * 1000)
                 # Sideways only towards a free side: a neighbour there is never shoved.
                 across_towards = ("+" if across_mm >= 0 else "-") + ("y" if axis == "x" else "x")
-                self.across_m = across_mm / 1000 if across_towards in self.towards else 0.0
+                self.across_m = across_mm / 1000 if across_towards in towards else 0.0
         else:
-            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, self.towards)
+            choice = self.choose_side(preferred, offset_xy_mm, s.min_push_m * 1000, towards)
             if not isinstance(choice, Blocked):
                 distance_m = (offset_xy_mm[0] if choice == "x" else offset_xy_mm[1]) / 1000
         if isinstance(choice, Blocked):
@@ -178,7 +214,7 @@ class Push(StagedBehaviour):
         sign = math.copysign(1.0, distance_m)
         if self.squaring:
             # A squaring push barely moves the part: make it from a free side, whichever sign.
-            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in self.towards]
+            free = [d for d in (sign, -sign) if ("+" if d > 0 else "-") + axis in towards]
             if not free:
                 self.squaring = False
                 return []
@@ -206,20 +242,121 @@ class Push(StagedBehaviour):
         if self.opening_m is not None:
             # Among neighbours: the fingers stay within the face's width (the layout's opening).
             opening_m = min(opening_m, self.opening_m)
+        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis))
+
+    @staticmethod
+    def _motion(
+        opening_m: float,
+        begin: FloatArray,
+        end: FloatArray,
+        back: FloatArray,
+        heights: tuple[float, float],
+        yaw: float,
+        push_stage: str,
+    ) -> list[Stage]:
+        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
+        approach_m, push_m = heights
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             # Only the push itself touches the part: the moves before and after it run at the free-space limits.
             MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
-            MoveStage(stage.push(distance_m, axis), line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
                 stage.LIFT_FINGERS,
                 line_to(back[0], back[1], approach_m, yaw, free=True),
-                hand_on=line_nearly_done(s.hand_on_remaining_m),
+                hand_on=line_nearly_done(),
             ),
         ]
+
+    def _square_push_stages(
+        self, context: Context, pose: Pose, target: PlanarPose, offset_xy_mm: tuple[float, float]
+    ) -> list[Stage] | None:
+        """An irregular part's push: squarely onto one edge, the one whose push best closes the offset.
+
+        None when no square push closes an offset of a push or more and every one is free (no
+        neighbour beside the part): an axis push is made instead.
+        """
+        s = context.settings
+        choice = self.choose_square_push(
+            offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned()
+        )
+        if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
+            if set(self.towards) >= set(self.square_pushes):
+                return None
+            best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
+            choice = Blocked(best, math.hypot(*offset_xy_mm))
+        if isinstance(choice, Blocked):
+            self.pushed = None
+            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
+            blocked = choice
+            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+        if choice is None:
+            self.pushed = ("x", 0.0)
+            self.squaring = False
+            return []
+        name, distance_mm = choice
+        distance_m = distance_mm / 1000
+        self.pushed = (name, distance_m)
+        self.squaring = distance_m < s.min_push_m
+        heading = target.yaw_rad + self.square_pushes[name].heading_rad
+        direction = np.array([math.cos(heading), math.sin(heading)])
+        yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+        # The push's own opening (``Prism.named_pushes``): both pads on the edge, the fingers within
+        # its ends, so among neighbours too (the layout checked this opening).
+        opening_m = self.square_pushes[name].opening_m
+        half_span_m = opening_m / 2 + s.gripper.pad_thickness_m
+        shape = self.object_type.shape
+        assert isinstance(shape, Prism)
+        reach_m = shape.back_within_m(heading, pose.yaw_rad, half_span_m) + s.gripper.pad_width_m / 2
+        _, approach_m, push_m = heights_m(s, self.object_type)
+        centre = np.array([pose.x_m, pose.y_m])
+        begin = centre - direction * (reach_m + s.push_clearance_m)
+        end = centre - direction * reach_m + direction * distance_m
+        back = end - direction * s.push_clearance_m
+        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name))
+
+    def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
+        heading = self.square_pushes[name].heading_rad
+        return float(offset_xy_mm[0] * math.cos(heading) + offset_xy_mm[1] * math.sin(heading))
+
+    @staticmethod
+    def choose_square_push(
+        offset_xy_mm: tuple[float, float],
+        pushes: dict[str, SquarePush],
+        towards: tuple[str, ...],
+        min_push_mm: float,
+        turned: bool,
+    ) -> tuple[str, float] | Blocked | None:
+        """Which square push to make and how far (mm), what blocks the one needed, or None: nothing to push.
+
+        The offset (target minus pose, target frame) is projected on each push's heading: the
+        push that closes most of it, among the free ones (``towards``), is made by that
+        projection; what it leaves lies across it, for the next push. When the best push is
+        below ``min_push_mm`` a part ``turned`` past the yaw threshold is still pushed on the
+        free edge the pads stand widest on, ``SQUARING_PRESS_MM`` past where that edge belongs: the square contact
+        turns it back. When only blocked pushes close the offset: ``Blocked`` with the best of them.
+        """
+        offset = np.asarray(offset_xy_mm, dtype=float)
+        along = {
+            name: float(offset @ np.array([math.cos(p.heading_rad), math.sin(p.heading_rad)]))
+            for name, p in pushes.items()
+        }
+        free = [name for name in pushes if name in towards]
+        best = max(pushes, key=lambda name: along[name])
+        usable = [name for name in free if along[name] >= min_push_mm]
+        if usable:
+            chosen = max(usable, key=lambda name: along[name])
+            return chosen, along[chosen]
+        if along[best] >= min_push_mm:
+            return Blocked(best, along[best])
+        if turned and free:
+            widest = max(free, key=lambda name: (pushes[name].opening_m, pushes[name].edge_m))
+            # Pressed a little past where the edge belongs, so that the pads meet all of it there.
+            return widest, max(0.0, along[widest]) + SQUARING_PRESS_MM
+        return None
 
     def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
         """(opening, reach) for the face pushed along ``heading_rad``.
@@ -347,6 +484,11 @@ class Push(StagedBehaviour):
         """Feedback with the push made."""
         assert self.pushed is not None
         axis, distance_m = self.pushed
+        if axis in self.square_pushes:
+            edge = self.square_pushes[axis].edge + 1
+            if self.squaring:
+                return f"squared the part on its edge {edge} with a push of {fixed(distance_m * 1000, sign=True)} mm"
+            return f"pushed {fixed(distance_m * 1000, sign=True)} mm squarely onto its edge {edge} ({axis[1:]} deg)"
         if self.squaring:
             return f"squared the part with a push of {fixed(distance_m * 1000, sign=True)} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
@@ -369,6 +511,11 @@ class Blocked:
 
     def reason(self, obj: str) -> str:
         """The feedback: which side, and what happens next."""
+        if self.towards.startswith("@"):
+            return (
+                f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "
+                "frame), where a neighbour leaves the pads no room, and no free push closes it"
+            )
         side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
         return (
             f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "

@@ -9,9 +9,10 @@ counter-clockwise whatever the winding it was written in.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,6 +34,11 @@ ANTIPODAL_HALF_ANGLE_RAD = math.atan(0.3)
 MIN_GRASP_OVERLAP_M = 0.008
 #: Points of the outline within this of the back-most line along a push are what the pads meet.
 PUSH_CONTACT_BAND_M = 0.001
+#: The least opening of the fingers for pushing an irregular part, nearly closed: both pads land on
+#: the edge a square push meets (``Prism.named_pushes`` opens them wider where the edge allows).
+PRISM_PUSH_OPENING_M = 0.004
+#: A square push needs an edge this long: the pads' span (two pads beside the opening) and 2 mm.
+MIN_PUSHED_EDGE_M = 0.022
 
 
 def _signed_area_m2(points: FloatArray) -> float:
@@ -110,6 +116,37 @@ def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
             if _segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
                 return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
     return None
+
+
+def push_name(heading_rad: float) -> str:
+    """A square push's name: its heading in the part's frame in degrees, ``"@-54.0"``."""
+    return f"@{math.degrees(heading_rad):.1f}"
+
+
+def push_heading_rad(name: str) -> float | None:
+    """The heading (part frame, radians) a push name says, or None when it is no square push's name."""
+    if not name.startswith("@"):
+        return None
+    try:
+        return math.radians(float(name[1:]))
+    except ValueError:
+        return None
+
+
+@dataclass(frozen=True)
+class SquarePush:
+    """A push that meets one edge squarely.
+
+    Its ``heading_rad`` in the part's frame (the edge's inward normal), how far behind the centroid
+    the edge lies (``back_m``), the edge's length and index, and the fingers' opening.
+    """
+
+    heading_rad: float
+    back_m: float
+    edge_m: float
+    edge: int
+    #: The fingers' opening for this push (``Prism.named_pushes``).
+    opening_m: float = PRISM_PUSH_OPENING_M
 
 
 @dataclass(frozen=True)
@@ -190,6 +227,9 @@ class Prism:
         ``MIN_GRASP_OVERLAP_M``, or a corner within an edge's span), and the part is no wider there
         than the gripper closes across.
         """
+        return _grasps(self, gripper)
+
+    def _grasps(self, gripper: Gripper) -> tuple[Grasp, ...]:
         found: dict[tuple[float, float], tuple[float, float, Grasp]] = {}
         half_pad = gripper.pad_width_m / 2
         height_m = max(self.height / 2, gripper.lowest_tcp_m)
@@ -327,6 +367,66 @@ class Prism:
         contact = points[along <= float(np.min(along)) + PUSH_CONTACT_BAND_M] @ across
         return float(np.min(contact)), float(np.max(contact))
 
+    def square_pushes(self, half_span_m: float, min_edge_m: float = 0.0) -> tuple[SquarePush, ...]:
+        """The pushes that meet an edge squarely, through the centroid, longest edge first.
+
+        A push along an edge's inward normal, its line through the centroid, meets that edge
+        squarely when the pads (``half_span_m`` each side of the line) land on it and nothing of
+        the outline lies further back within their span. Both pads then touch, so the push
+        neither turns the part nor slides it along the pads: it squares that edge to the push
+        (a part turned a little is turned back). ``min_edge_m`` leaves out shorter edges.
+        """
+        points = self.outline_m
+        count = len(points)
+        found: list[SquarePush] = []
+        for k in range(count):
+            a, b = points[k], points[(k + 1) % count]
+            edge = b - a
+            length = float(np.hypot(*edge))
+            if length < max(min_edge_m, 2 * half_span_m):
+                continue
+            tangent = edge / length
+            inward = np.array([-tangent[1], tangent[0]])  # counter-clockwise: the inside is on the left
+            # Where the line through the centroid along the normal crosses the edge, along it.
+            along_edge = float((-a) @ tangent)
+            if not half_span_m <= along_edge <= length - half_span_m:
+                continue
+            heading = math.atan2(float(inward[1]), float(inward[0]))
+            back_m = float(-(a @ inward))  # the edge lies this far behind the centroid along the push
+            if back_m <= 0 or abs(self.back_within_m(heading, 0.0, half_span_m) - back_m) > PUSH_CONTACT_BAND_M:
+                continue  # something else of the outline meets the pads first
+            found.append(SquarePush(heading, back_m, length, k))
+        return tuple(sorted(found, key=lambda push: -push.edge_m))
+
+    def named_pushes(self, gripper: Gripper) -> dict[str, SquarePush]:
+        """The square pushes of this part, by name, each with the widest opening its edge takes.
+
+        The fingers open as wide as keeps both pads on the edge and each finger
+        (``finger_depth_m`` beyond its pad, ``neighbour_clearance_m`` to spare) within the edge's
+        ends, so a neighbour in line with the edge is never touched; at least
+        ``PRISM_PUSH_OPENING_M``. The wider the pads stand, the harder a turned part is squared.
+        A push's name is its heading in the part's frame, ``"@123.4"`` (degrees): the layout lists
+        the ones a neighbour leaves free, and Push makes them.
+        """
+        least_half_span_m = PRISM_PUSH_OPENING_M / 2 + gripper.pad_thickness_m
+        points = self.outline_m
+        count = len(points)
+        named: dict[str, SquarePush] = {}
+        for push in self.square_pushes(least_half_span_m, MIN_PUSHED_EDGE_M):
+            a, b = points[push.edge], points[(push.edge + 1) % count]
+            tangent = (b - a) / push.edge_m
+            along_edge = float((-a) @ tangent)
+            room_m = min(along_edge, push.edge_m - along_edge)
+            reach_m = gripper.finger_depth_m + gripper.neighbour_clearance_m
+            opening_m = min(gripper.stroke_m, max(PRISM_PUSH_OPENING_M, 2 * (room_m - reach_m)))
+            while opening_m > PRISM_PUSH_OPENING_M:
+                half_span_m = opening_m / 2 + gripper.pad_thickness_m
+                if abs(self.back_within_m(push.heading_rad, 0.0, half_span_m) - push.back_m) <= PUSH_CONTACT_BAND_M:
+                    break
+                opening_m = max(PRISM_PUSH_OPENING_M, opening_m - 0.002)  # the outline rises beside the edge
+            named[push_name(push.heading_rad)] = replace(push, opening_m=opening_m)
+        return named
+
     def convex_pieces(self) -> list[FloatArray]:
         """The top face split into convex polygons (counter-clockwise), for engines whose bodies are convex hulls.
 
@@ -352,6 +452,16 @@ class Prism:
 
     def problems(self, gripper: Gripper) -> list[str]:
         """Too thin or too tall for the pads, a short edge at a corner, no grasp the gripper can take."""
+        found = self.size_problems()
+        if not self.grasps(gripper):
+            found.append(
+                f"no two edges the {gripper.name.split()[-1]} can close on (facing each other, overlapping "
+                f"{MIN_GRASP_OVERLAP_M * 1000:.0f} mm or more, at most {gripper.max_grasp_width_m * 1000:.0f} mm apart)"
+            )
+        return found
+
+    def size_problems(self) -> list[str]:
+        """Too thin or too tall for the pads, a short edge at a corner: the checks that need no grasp search."""
         found = []
         if self.height < MIN_EDGE_M:
             found.append(f"{self.height * 1000:g} mm tall, thinner than the pads' {MIN_EDGE_M * 1000:.0f} mm")
@@ -372,11 +482,6 @@ class Prism:
                     "the camera needs to measure a corner"
                 )
                 break
-        if not self.grasps(gripper):
-            found.append(
-                f"no two edges the {gripper.name.split()[-1]} can close on (facing each other, overlapping "
-                f"{MIN_GRASP_OVERLAP_M * 1000:.0f} mm or more, at most {gripper.max_grasp_width_m * 1000:.0f} mm apart)"
-            )
         return found
 
     def describe(self) -> str:
@@ -384,6 +489,12 @@ class Prism:
         x_m, y_m = self.extent_m
         size = f"{x_m * 1000:.0f} x {y_m * 1000:.0f} mm"
         return f"{len(self.outline)}-sided outline within {size}, {self.height * 1000:g} mm tall"
+
+
+@functools.lru_cache(maxsize=1024)
+def _grasps(prism: Prism, gripper: Gripper) -> tuple[Grasp, ...]:
+    """``Prism.grasps``, kept per prism and gripper (both frozen): every step asks, and the search scans the outline."""
+    return prism._grasps(gripper)
 
 
 def _facing(upper_low: float, upper_high: float, lower_low: float, lower_high: float) -> bool:

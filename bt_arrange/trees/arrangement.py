@@ -41,7 +41,7 @@ from bt_arrange.behaviours import (
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import DIRECTIONS, Pads, Release, Step, free_push_directions, restage_releases
+from bt_arrange.layout import Pads, Release, Step, free_push_directions, restage_releases
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
@@ -87,10 +87,11 @@ def arrange_one(
     pads = Pads.from_settings(settings)
     obj = target.obj
     dense = step is not None and _is_dense(step)
-    if dense and not isinstance(target.object_type.shape, Cuboid):
+    if dense and step is not None and not isinstance(target.object_type.shape, Cuboid) and step.part.prism is None:
         raise PlanError(
             f"target {target.obj}: a {target.object_type.shape.describe()} among neighbours (released off its "
-            "target, or with a side blocked): irregular parts are arranged only with room around them so far"
+            "target, or with a side blocked) needs a grasp across its own x or y axis, where the layout puts the "
+            "pads: write its outline turned so that two facing edges run along x or y"
         )
     release = step.release if dense and step is not None else None
     towards = step.push_towards if dense and step is not None else None
@@ -159,7 +160,7 @@ def _dense_release(step: Step) -> Release | None:
 
 def _is_dense(step: Step) -> bool:
     """A step among neighbours: released away from its target, near placed parts, or with a blocked side."""
-    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(DIRECTIONS)
+    return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(step.part.push_directions)
 
 
 #: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]`` per target, read into ``Target``s.

@@ -39,3 +39,42 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     np.testing.assert_allclose(release.position_m, [0.45, -0.1, expected_z_m], atol=1e-6)
     assert fold_yaw(release.yaw_rad - target.yaw_rad) == pytest.approx(0.0, abs=1e-4)
     np.testing.assert_allclose(arm.tcp_pose().position_m, [0.45, -0.1, SETTINGS.approach_height_m], atol=1e-6)
+
+
+def _release_yaw_rad(clock, object_type, target_yaw_rad: float) -> tuple[float, np.ndarray]:
+    from bt_arrange.layout import Release
+
+    context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
+    write({"/p/target": PlanarPose(0.45, -0.1, target_yaw_rad)})
+    place = Place("place p", "p", object_type, release=Release("x", 0.05, (0.003, -0.002), (0.003, -0.002)))
+    run = tick_until_done(set_up(place, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    arm, gripper = fake_arm(context), fake_gripper(context)
+    release = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[0].time_s).positions_rad)
+    return release.yaw_rad, release.position_m[:2]
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 180.0])
+def test_among_neighbours_an_irregular_part_is_released_at_its_targets_own_yaw_not_half_a_turn_off(
+    clock, turn_deg: float
+) -> None:
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.shapes import Prism
+
+    outline = [[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.005, 0.04]]
+    fragment = ObjectType("fragment", shape=Prism.from_outline(outline, 0.02))
+    target_yaw = math.radians(20.0 + turn_deg)
+    yaw, position = _release_yaw_rad(clock, fragment, target_yaw)
+    # The part has no half-turn symmetry: the gripper's half turn would land it turned by one.
+    assert fold_yaw(yaw - target_yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-4)
+    # The TCP stands at the grasp's centre, which the release's offset holds, turned with the target.
+    c, s = math.cos(target_yaw), math.sin(target_yaw)
+    np.testing.assert_allclose(position, [0.45 + c * 0.003 + s * 0.002, -0.1 + s * 0.003 - c * 0.002], atol=1e-6)
+
+
+def test_among_neighbours_a_cube_takes_the_gripper_half_turn_nearest_the_wrist(clock) -> None:
+    from bt_arrange.objects import CUBE
+
+    first, _ = _release_yaw_rad(clock, CUBE, math.radians(20.0))
+    turned, _ = _release_yaw_rad(clock, CUBE, math.radians(200.0))
+    assert fold_yaw(first - turned, 2 * math.pi) == pytest.approx(0.0, abs=1e-4)

@@ -1,0 +1,271 @@
+"""Frescoes: a rectangular slab broken into irregular pieces, each a :class:`Prism` at its place in the whole.
+
+The fracture is a Voronoi partition of the slab from sites drawn from the seed (irregular cuts,
+no grid), clipped to the slab's rectangle. Every piece is then shrunk by half the gap along each
+fracture, not along the slab's outer edge, so that the pieces reassembled leave exactly
+``gap_m`` between neighbours (any two points of different pieces are at least the gap apart: a
+segment between them leaves one cell and enters the other, each at least half the gap from its
+point). A Voronoi cell is convex, and so is a convex cell clipped by half-planes: every piece is
+a convex prism, which keeps the layout's separating-axis tests exact.
+
+A draw whose pieces are not all parts the 2F-85 can handle (``Prism.problems``: a side under the
+camera's 10 mm between two corners, no grasp, too wide) is redrawn from the next sub-seed
+(``numpy.random.default_rng([seed, draw])``), so a seed always gives the same fracture.
+
+Each piece's frame is its area centroid, its x axis along the closing axis of its preferred grasp
+(the pads close along x): the layout places and releases parts across their frame's x or y axis.
+Its target is the centroid's place in the whole and the turn of that frame, with the whole's pose
+applied. Everything is in metres and radians.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bt_arrange.errors import PlanError
+from bt_arrange.geometry import FloatArray
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
+from bt_arrange.shapes.prism import Prism, outline_problem
+
+#: A fresco is broken into this many pieces at least and at most.
+MIN_PIECES, MAX_PIECES = 3, 12
+#: The least gap along a fracture: the layout's least gap between two targets (``Pads.min_gap_m``).
+MIN_GAP_M = 0.002
+#: Draws tried before a fresco is refused (each from the next sub-seed).
+MAX_DRAWS = 400
+#: Sites closer than this share of the mean spacing are redrawn at once: slivers are never graspable.
+SITE_SPACING_SHARE = 0.55
+#: A piece must misfit itself turned to any other yaw by this much (``yaw_cue_m``): 4 pixels of the
+#: top camera, where its registration tells two yaws apart within 1 pixel.
+MIN_YAW_CUE_M = 0.002
+#: Lloyd steps moving each site to its cell's centroid: rounder pieces, still irregular.
+LLOYD_STEPS = 2
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One piece: its ``prism`` (own frame), and its target on the table ``(x_m, y_m, yaw_rad)``.
+
+    ``slab_outline_m`` is the piece's top face in the slab's frame (the slab centred on the origin,
+    its length along x), as cut: what the tests measure gaps and areas on.
+    """
+
+    index: int
+    prism: Prism
+    x_m: float
+    y_m: float
+    yaw_rad: float
+    slab_outline_m: FloatArray
+
+
+def _clip(polygon: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
+    """The part of a convex polygon where ``normal . p <= offset`` (Sutherland-Hodgman against one line)."""
+    out: list[FloatArray] = []
+    count = len(polygon)
+    for k in range(count):
+        a, b = polygon[k], polygon[(k + 1) % count]
+        da, db = float(normal @ a) - offset, float(normal @ b) - offset
+        if da <= 0:
+            out.append(a)
+        if da * db < 0:
+            out.append(a + (b - a) * (da / (da - db)))
+    return np.array(out) if out else np.zeros((0, 2))
+
+
+def _cells(sites: FloatArray, half_l: float, half_w: float, shrink_m: float) -> list[FloatArray]:
+    """Each site's Voronoi cell within the slab, moved ``shrink_m`` in from every bisector."""
+    slab = np.array([[-half_l, -half_w], [half_l, -half_w], [half_l, half_w], [-half_l, half_w]])
+    cells = []
+    for i, site in enumerate(sites):
+        cell = slab
+        for j, other in enumerate(sites):
+            if i == j or len(cell) == 0:
+                continue
+            normal = other - site
+            normal = normal / np.linalg.norm(normal)
+            cell = _clip(cell, normal, float(normal @ (site + other)) / 2 - shrink_m)
+        cells.append(_dedupe(cell))
+    return cells
+
+
+def _dedupe(points: FloatArray, tolerance_m: float = 1e-7) -> FloatArray:
+    """The polygon without repeated corners or corners on a straight line (clipping leaves both)."""
+    kept = [p for k, p in enumerate(points) if np.hypot(*(p - points[k - 1])) > tolerance_m]
+    array = np.array(kept) if kept else np.zeros((0, 2))
+    changed = True
+    while changed and len(array) > 3:
+        changed = False
+        for k in range(len(array)):
+            before, here, after = array[k - 1], array[k], array[(k + 1) % len(array)]
+            cross = (here[0] - before[0]) * (after[1] - here[1]) - (here[1] - before[1]) * (after[0] - here[0])
+            if abs(cross) < 1e-12:
+                array = np.delete(array, k, axis=0)
+                changed = True
+                break
+    return array
+
+
+def _sites(rng: np.random.Generator, pieces: int, half_l: float, half_w: float) -> FloatArray:
+    """``pieces`` sites in the slab, none nearer another than a share of the mean spacing."""
+    spacing = SITE_SPACING_SHARE * math.sqrt(4 * half_l * half_w / pieces)
+    sites: list[FloatArray] = []
+    while len(sites) < pieces:
+        candidate = np.array([rng.uniform(-half_l, half_l), rng.uniform(-half_w, half_w)])
+        if all(float(np.hypot(*(candidate - s))) >= spacing for s in sites):
+            sites.append(candidate)
+    array = np.array(sites)
+    for _ in range(LLOYD_STEPS):
+        array = np.array([_area_centroid(cell) for cell in _cells(array, half_l, half_w, 0.0)])
+    return array
+
+
+def _area_centroid(points: FloatArray) -> FloatArray:
+    x, y = points[:, 0], points[:, 1]
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = 0.5 * float(np.sum(cross))
+    return np.array([float(np.sum((x + np.roll(x, -1)) * cross)), float(np.sum((y + np.roll(y, -1)) * cross))]) / (
+        6.0 * area
+    )
+
+
+def _boundary_samples(points: FloatArray, count: int = 160) -> FloatArray:
+    """``count`` points spaced evenly along the closed outline."""
+    closed = np.vstack([points, points[:1]])
+    edges = np.diff(closed, axis=0)
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    start = np.concatenate([[0.0], np.cumsum(lengths)])
+    at = np.linspace(0.0, start[-1], count, endpoint=False)
+    k = np.searchsorted(start, at, side="right") - 1
+    return closed[k] + edges[k] * ((at - start[k]) / lengths[k])[:, None]
+
+
+def _distance_to_outline_m(queries: FloatArray, points: FloatArray) -> FloatArray:
+    """Each query point's distance to the closed outline (its nearest edge)."""
+    a, d = points, np.roll(points, -1, axis=0) - points
+    t = np.clip(np.einsum("qkj,kj->qk", queries[:, None, :] - a[None], d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
+    nearest = a[None] + t[..., None] * d[None]
+    return np.min(np.linalg.norm(queries[:, None, :] - nearest, axis=2), axis=1)
+
+
+def yaw_cue_m(prism: Prism) -> float:
+    """How clearly the outline shows its yaw: its least misfit, turned about its centroid to any other yaw.
+
+    The 80th percentile of the outline's distance to itself turned by 20 to 340 degrees (2 degree
+    steps), the least over the turns. A piece nearly symmetric under some turn (a near-rectangle
+    under a half turn) scores low: the camera's registration could not tell those two yaws apart.
+    """
+    points = prism.outline_m
+    samples = _boundary_samples(points)
+    best = math.inf
+    for degrees in range(20, 341, 2):
+        turn = math.radians(degrees)
+        c, s = math.cos(turn), math.sin(turn)
+        turned = samples @ np.array([[c, s], [-s, c]])
+        best = min(best, float(np.percentile(_distance_to_outline_m(turned, points), 80)))
+    return best
+
+
+def _in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper) -> tuple[Prism, float] | None:
+    """The piece as a prism whose frame's x axis is its preferred grasp's closing axis, and that frame's turn.
+
+    None when the piece is no part the gripper handles.
+    """
+    if outline_problem(outline.tolist()) is not None:
+        return None
+    first = Prism.from_outline(outline.tolist(), height_m)
+    if first.size_problems() or yaw_cue_m(first) < MIN_YAW_CUE_M or first.problems(gripper):
+        return None
+    turn = first.grasps(gripper)[0].yaw_offset_rad
+    c, s = math.cos(turn), math.sin(turn)
+    turned = first.outline_m @ np.array([[c, -s], [s, c]])  # each point turned by -turn
+    prism = Prism.from_outline(turned.tolist(), height_m)
+    if prism.problems(gripper):
+        return None
+    grasp = prism.grasps(gripper)[0]
+    if grasp.axis != "x":
+        return None
+    return prism, turn
+
+
+def fracture(
+    size_m: tuple[float, float, float],
+    pieces: int,
+    gap_m: float,
+    seed: int,
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    gripper: Gripper = ROBOTIQ_2F85,
+) -> list[Piece]:
+    """The slab ``size_m = (length, width, height)`` broken into ``pieces`` with ``gap_m`` along each fracture.
+
+    ``pose`` (x, y, yaw) is where the whole goes on the table. The same arguments give the same
+    pieces. A ``PlanError`` says why when no draw within ``MAX_DRAWS`` gives pieces the gripper
+    can all handle.
+    """
+    length, width, height = size_m
+    if not MIN_PIECES <= pieces <= MAX_PIECES:
+        raise PlanError(f"{pieces} pieces: a fresco breaks into {MIN_PIECES} to {MAX_PIECES}")
+    if gap_m < MIN_GAP_M - 1e-12:
+        raise PlanError(f"a gap of {gap_m * 1000:g} mm is under the {MIN_GAP_M * 1000:g} mm two parts need")
+    half_l, half_w = length / 2, width / 2
+    x0, y0, yaw0 = pose
+    c0, s0 = math.cos(yaw0), math.sin(yaw0)
+    for draw in range(MAX_DRAWS):
+        rng = np.random.default_rng([seed, draw])
+        sites = _sites(rng, pieces, half_l, half_w)
+        cells = _cells(sites, half_l, half_w, gap_m / 2)
+        framed = []
+        for cell in cells:  # cheapest first, and stop at the first piece that will not do
+            found = _in_grasp_frame(cell, height, gripper) if len(cell) >= 3 else None
+            if found is None:
+                break
+            framed.append(found)
+        if len(framed) < len(cells):
+            continue
+        result = []
+        for index, (cell, (prism, turn)) in enumerate(zip(cells, framed, strict=True), start=1):
+            cx, cy = _area_centroid(cell)
+            result.append(
+                Piece(
+                    index,
+                    prism,
+                    x0 + c0 * cx - s0 * cy,
+                    y0 + s0 * cx + c0 * cy,
+                    math.atan2(math.sin(yaw0 + turn), math.cos(yaw0 + turn)),
+                    cell,
+                )
+            )
+        # Pieces in a fixed order: along the slab's length, then across it.
+        return _numbered(result)
+    raise PlanError(
+        f"no fracture of a {length * 1000:g} x {width * 1000:g} mm slab into {pieces} pieces gives pieces the "
+        f"{gripper.name.split()[-1]} can all grasp (each at most {gripper.max_grasp_width_m * 1000:.0f} mm across "
+        f"its grasp, sides of 10 mm or more) in {MAX_DRAWS} draws: ask for fewer pieces or a larger slab"
+    )
+
+
+def _numbered(pieces: list[Piece]) -> list[Piece]:
+    ordered = sorted(pieces, key=lambda p: (round(float(np.mean(p.slab_outline_m[:, 0])), 4), p.index))
+    return [Piece(k, p.prism, p.x_m, p.y_m, p.yaw_rad, p.slab_outline_m) for k, p in enumerate(ordered, start=1)]
+
+
+def polygon_gap_m(first: FloatArray, second: FloatArray) -> float:
+    """The least distance between two polygons' boundaries (N x 2 each; 0 when their edges cross)."""
+
+    def point_segment(p: FloatArray, a: FloatArray, b: FloatArray) -> float:
+        d = b - a
+        t = max(0.0, min(1.0, float((p - a) @ d) / float(d @ d)))
+        return float(np.hypot(*(p - a - t * d)))
+
+    best = math.inf
+    for one, other in ((first, second), (second, first)):
+        count = len(other)
+        for p in one:
+            for k in range(count):
+                best = min(best, point_segment(p, other[k], other[(k + 1) % count]))
+    return best
+
+
+__all__ = ["MAX_PIECES", "MIN_GAP_M", "MIN_PIECES", "Piece", "fracture", "polygon_gap_m"]

@@ -1,0 +1,94 @@
+"""Push of an irregular part with fakes: squarely onto an edge, the pads' path, the fallback and the blocked case."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from behaviour_helpers import SETTINGS, set_up, write
+from fakes import fake_arm, fake_gripper, tick_until_done
+from py_trees.common import Status
+
+from bt_arrange.behaviours import Context, Push
+from bt_arrange.geometry import PlanarPose, Pose
+from bt_arrange.objects import ObjectType
+from bt_arrange.shapes import ROBOTIQ_2F85, Prism
+
+#: A right triangle, legs 60 mm along x and y: square pushes on the two legs and the hypotenuse.
+TRIANGLE = ObjectType("triangle", shape=Prism.from_outline([[0, 0], [0.06, 0], [0, 0.06]], 0.02))
+ELL = ObjectType(
+    "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
+)
+CENTRE = np.array([0.5, 0.05])
+
+
+def setup(context: Context, kind: ObjectType, offset_xy_mm: tuple[float, float], **options: object) -> Push:
+    write(
+        {
+            "/p/pose": Pose.from_planar(float(CENTRE[0]), float(CENTRE[1]), 0.0, kind.shape.height_m / 2),
+            "/p/target": PlanarPose(float(CENTRE[0]), float(CENTRE[1]), 0.0),
+            "/p/offset_xy_mm": offset_xy_mm,
+        }
+    )
+    return set_up(Push("push p", "p", object_type=kind, **options), context)  # type: ignore[arg-type]
+
+
+def tcp_path(context: Context) -> np.ndarray:
+    """The TCP's positions (x, y from the part's centroid) while the pads are lowered."""
+    arm = fake_arm(context)
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands])
+    low = tcp[:, 2] < SETTINGS.approach_height_m - 0.001
+    return tcp[low, :2] - CENTRE
+
+
+def test_an_offset_along_a_leg_is_pushed_squarely_onto_the_opposite_leg(context: Context) -> None:
+    push = setup(context, TRIANGLE, (3.0, 0.4))
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    name = next(n for n, p in push.square_pushes.items() if abs(p.heading_rad) < 1e-9)
+    assert run.feedback == f"pushed +3.00 mm squarely onto its edge 3 ({name[1:]} deg)"
+    path = tcp_path(context)
+    # On the line through the centroid along +x; the deepest point: the leg at x = -20 mm, moved 3 mm.
+    np.testing.assert_allclose(path[:, 1], 0.0, atol=1e-6)
+    assert path[:, 0].max() == pytest.approx(-0.020 - SETTINGS.gripper.pad_width_m / 2 + 0.003, abs=1e-6)
+    opening = push.square_pushes[name].opening_m
+    assert [(c.kind, c.value) for c in fake_gripper(context).commands] == [("open", pytest.approx(opening))]
+    # Both pads on the leg (60 mm, the centroid 20 mm from one end), each finger within its ends.
+    reach = opening / 2 + ROBOTIQ_2F85.finger_depth_m + ROBOTIQ_2F85.neighbour_clearance_m
+    assert reach <= 0.020 + 1e-9
+
+
+def test_an_offset_towards_the_hypotenuse_corner_is_one_push_along_its_normal(context: Context) -> None:
+    run = tick_until_done(setup(context, TRIANGLE, (-2.0, -2.0)), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    path = tcp_path(context)
+    direction = np.array([-1.0, -1.0]) / math.sqrt(2)
+    across = np.array([-direction[1], direction[0]])
+    np.testing.assert_allclose(path @ across, 0.0, atol=1e-6)
+    assert (path @ direction).max() == pytest.approx(
+        -0.02 / math.sqrt(2) - SETTINGS.gripper.pad_width_m / 2 + 0.002 * math.sqrt(2), abs=1e-6
+    )
+
+
+def test_with_that_push_blocked_it_fails_saying_so_and_writes_the_push_it_needed(context: Context) -> None:
+    names = {round(math.degrees(p.heading_rad)): n for n, p in TRIANGLE.shape.named_pushes(ROBOTIQ_2F85).items()}
+    push = setup(context, TRIANGLE, (-2.0, -2.0), towards=(names[0], names[90]))
+    run = tick_until_done(push, context)
+    assert run.status == Status.FAILURE
+    assert "squarely towards -135.0 deg" in run.feedback and "no free push closes it" in run.feedback
+    assert fake_arm(context).commands == []
+    from behaviour_helpers import read
+
+    assert read("/p/blocked_towards") == names[-135]
+
+
+def test_an_ell_whose_square_pushes_leave_the_offset_out_is_pushed_along_an_axis(context: Context) -> None:
+    # The L's square pushes: none has a heading within 90 deg of this offset (towards -x, -y).
+    push = setup(context, ELL, (-1.5, -1.5))
+    assert all(
+        -1.5 * math.cos(p.heading_rad) - 1.5 * math.sin(p.heading_rad) < 0.2 for p in push.square_pushes.values()
+    )
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == "pushed -1.50 mm along x"

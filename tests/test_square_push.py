@@ -1,0 +1,85 @@
+"""Square pushes of irregular parts: the edge a push meets squarely through the centroid, and which push to make."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bt_arrange.behaviours.push import SQUARING_PRESS_MM, Blocked, Push
+from bt_arrange.shapes import ROBOTIQ_2F85, Prism
+from bt_arrange.shapes.prism import push_heading_rad, push_name
+
+SQUARE = Prism.from_outline([[0, 0], [0.05, 0], [0.05, 0.05], [0, 0.05]], 0.02)
+#: A right triangle: legs along x and y, the hypotenuse facing up and to the right.
+TRIANGLE = Prism.from_outline([[0, 0], [0.06, 0], [0, 0.06]], 0.02)
+ELL = Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
+
+
+def headings_deg(prism: Prism) -> set[float]:
+    return {round(math.degrees(p.heading_rad), 1) for p in prism.named_pushes(ROBOTIQ_2F85).values()}
+
+
+def test_a_square_is_pushed_squarely_on_each_of_its_four_sides() -> None:
+    pushes = SQUARE.named_pushes(ROBOTIQ_2F85)
+    assert headings_deg(SQUARE) == {0.0, 90.0, -90.0, 180.0}
+    for push in pushes.values():
+        assert push.back_m == pytest.approx(0.025)
+        assert push.edge_m == pytest.approx(0.05)
+
+
+def test_a_triangle_is_pushed_on_its_legs_and_hypotenuse_each_along_its_normal() -> None:
+    # Its centroid (20, 20) mm projects onto every side well inside it: three square pushes.
+    assert headings_deg(TRIANGLE) == {90.0, 0.0, -135.0}
+    hypotenuse = next(
+        p for p in TRIANGLE.named_pushes(ROBOTIQ_2F85).values() if round(math.degrees(p.heading_rad)) == -135
+    )
+    assert hypotenuse.back_m == pytest.approx(0.02 / math.sqrt(2), abs=1e-9)  # centroid (20, 20) to x + y = 60
+    assert hypotenuse.edge_m == pytest.approx(0.06 * math.sqrt(2))
+
+
+def test_an_edge_the_centroids_line_misses_or_that_lies_behind_another_is_no_square_push() -> None:
+    headings = headings_deg(ELL)
+    # The L's centroid is at (22, 17) mm: its long sides (bottom, left) and the arm's end (x = 60)
+    # are met squarely; the inner edges are not (the line through the centroid misses them), and
+    # the top of the upright arm (y = 50) lies 2 mm beside the centroid's line: no room for the pads.
+    assert 90.0 in headings and 0.0 in headings
+    for push in ELL.named_pushes(ROBOTIQ_2F85).values():
+        contact = ELL.back_within_m(push.heading_rad, 0.0, 0.01)
+        assert contact == pytest.approx(push.back_m, abs=0.001)
+    assert len(headings) < len(ELL.outline)
+
+
+def test_names_carry_the_heading() -> None:
+    assert push_name(math.radians(-54.0)) == "@-54.0"
+    assert push_heading_rad("@-54.0") == pytest.approx(math.radians(-54.0))
+    assert push_heading_rad("+x") is None
+
+
+def test_the_push_that_closes_most_of_the_offset_is_made_by_its_projection() -> None:
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    # Offset (target minus pose) of 3 mm along +x: the push along +x (onto the leg at x = 0).
+    name, distance = Push.choose_square_push((3.0, 0.5), pushes, tuple(pushes), 0.2, False)
+    assert name == names[0] and distance == pytest.approx(3.0)
+    # Towards -x and -y together: the hypotenuse's push (-135 deg) closes most of it.
+    name, distance = Push.choose_square_push((-2.0, -2.0), pushes, tuple(pushes), 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(2 * math.sqrt(2))
+    # Blocked there, the best free one that still helps: none helps towards -x, -y but...
+    free = (names[0], names[90])
+    assert Push.choose_square_push((-2.0, -2.0), pushes, free, 0.2, False) == Blocked(
+        names[-135], pytest.approx(2 * math.sqrt(2))
+    )
+    # ... towards -x a little and +y more, the +y push helps though the best is blocked.
+    name, distance = Push.choose_square_push((-0.5, 2.0), pushes, free, 0.2, False)
+    assert name == names[90] and distance == pytest.approx(2.0)
+
+
+def test_within_reach_but_turned_it_is_squared_where_the_pads_stand_widest() -> None:
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    assert Push.choose_square_push((0.05, 0.05), pushes, tuple(pushes), 0.2, False) is None
+    name, distance = Push.choose_square_push((0.05, 0.05), pushes, tuple(pushes), 0.2, True)
+    assert name == names[-135] and distance == SQUARING_PRESS_MM
+    name, _ = Push.choose_square_push((0.05, 0.05), pushes, (names[0], names[90]), 0.2, True)
+    assert name in (names[0], names[90])
