@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -30,14 +29,13 @@ from ruckig import (
     Trajectory,
 )
 
-from bt_arrange.errors import MotionError, OutOfRangeError, PlanError, UnreachableError
+from bt_arrange.errors import MotionError, PlanError, UnreachableError
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.motion.kinematics import ArmKinematics, joint_vector, rotation_angle_rad
 from bt_arrange.motion.limits import CartesianLimits, JointLimits
+from bt_arrange.motion.setpoints import JointSetpoint, check_control_period
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES
 
-#: Longest control period accepted (s): beyond 10 Hz a setpoint stream is no longer a trajectory.
-MAX_CONTROL_PERIOD_S = 0.1
 #: A line's target orientation may differ this much from the start's (the line keeps the start's).
 DEFAULT_LINE_ORIENTATION_TOLERANCE_RAD = 0.02
 #: A line that would need to run more than this many times slower than its Cartesian limits to
@@ -61,22 +59,6 @@ LINE_ORIENTATION_DEVIATION_TOLERANCE_RAD = 2e-6
 _MIN_KNOT_SPACING_M = 1e-4
 
 _RUCKIG_OK = (Result.Working, Result.Finished)
-
-
-@dataclass(frozen=True)
-class JointSetpoint:
-    """What the arm should follow during the next control period: joint positions and velocities."""
-
-    positions_rad: FloatArray
-    velocities_rad_s: FloatArray
-
-
-def check_control_period(control_period_s: float) -> float:
-    """Return the control period, or raise ``OutOfRangeError`` if it is not in ``(0, 0.1]`` s."""
-    value = float(control_period_s)
-    if not math.isfinite(value) or not 0.0 < value <= MAX_CONTROL_PERIOD_S:
-        raise OutOfRangeError(f"control period {value:g} s must lie in (0, {MAX_CONTROL_PERIOD_S:g}] s")
-    return value
 
 
 def _per_joint_list(values: float | tuple[float, ...]) -> list[float]:
