@@ -6,20 +6,20 @@ for every backend is the session's (``bt_arrange.session``); here is only what i
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import py_trees
 
 from bt_arrange.calibration import CameraCalibration
-from bt_arrange.perception import ColourTable
 from bt_arrange.plancheck import CameraView
-from bt_arrange.robot import CameraFrame, CameraIntrinsics, Clock, Robot
-from bt_arrange.session import GroundTruth, Session, World
+from bt_arrange.robot import CameraIntrinsics
+from bt_arrange.session import Session, World
 from bt_arrange_sim.cell import CellConfig
 from bt_arrange_sim.mujoco.cell import MujocoCell
 from bt_arrange_sim.mujoco.model import MujocoPhysics
+from bt_arrange_sim.runs import SimWorld
 
 
 def camera_view(config: CellConfig) -> CameraView:
@@ -29,59 +29,22 @@ def camera_view(config: CellConfig) -> CameraView:
     return CameraView(intrinsics, camera.pose_world())
 
 
-class MujocoWorld:
-    """A ``MujocoCell`` as a ``World``: its robot, clock and camera, and the engine's ground truth.
+class MujocoWorld(SimWorld):
+    """A ``MujocoCell`` as a ``World``: ``SimWorld`` over the MuJoCo cell, which has the same methods.
 
     ``cell`` is the MuJoCo cell itself, for what only a simulator can do (the error injectors).
+    Only the scene's settling differs: the MuJoCo cell has no ``parts_at_rest``, so it settles the
+    whole ``seconds``.
     """
+
+    cell: MujocoCell  # type: ignore[assignment]
 
     def __init__(self, cell: MujocoCell) -> None:
         self.cell = cell
 
-    @property
-    def robot(self) -> Robot:
-        """The cell's arm, gripper, camera and clock."""
-        return self.cell.robot
-
-    @property
-    def clock(self) -> Clock:
-        """Simulated time, seconds: it advances only when the cell is stepped."""
-        return self.cell.clock
-
-    @property
-    def truth(self) -> GroundTruth:
-        """The engine knows where every part is: this world is its own ground truth."""
-        return self
-
-    def place(self, starts: Sequence[Any], colours: ColourTable) -> None:
-        """Paint with ``colours`` and put the parts on the table, resting, where they start."""
-        self.cell.colours = colours
-        self.cell.add_cubes(starts)
-
     def settle(self, seconds: float) -> None:
         """Run the physics for ``seconds`` of world time with the arm holding still."""
         self.cell.settle(seconds)
-
-    def step(self) -> None:
-        """One control period (several physics steps)."""
-        self.cell.step()
-
-    def capture_image(self) -> CameraFrame:
-        """A frame of the cell's top camera."""
-        assert self.cell.camera is not None
-        return self.cell.camera.capture()
-
-    def close(self) -> None:
-        """Free the renderer."""
-        self.cell.close()
-
-    def part_names(self) -> list[str]:
-        """Every part in the cell, by name."""
-        return list(self.cell.cubes)
-
-    def planar_pose(self, name: str) -> tuple[float, float, float]:
-        """The engine's true ``(x_m, y_m, yaw_rad)`` of a part (yaw folded to its symmetry)."""
-        return self.cell.cube_planar_truth(name)
 
 
 class MujocoRun(Session):
