@@ -23,9 +23,16 @@ from bt_arrange.errors import PerceptionError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.perception import Detection, DetectionStatus
-from bt_arrange.perception.depth_grasp import SOURCE, DepthGraspConfig, DepthGraspEstimator, scaled_intrinsics
+from bt_arrange.perception.depth_grasp import (
+    SEARCH_BINNING,
+    SOURCE,
+    DepthGraspConfig,
+    DepthGraspEstimator,
+    SensorGrid,
+    scaled_intrinsics,
+)
 from bt_arrange.perception.synthetic import sim_intrinsics, top_down_camera_pose
-from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.trees import Target, by_depth, transfer
 
 #: Rendered wider than the sensor's 1024 px, so the estimator resamples like it does the cell's frames.
@@ -249,25 +256,114 @@ def test_configuration_mistakes_raise():
         DepthGraspConfig(noise_sigma_m=-0.001)
 
 
+# -- looking only where something stands ----------------------------------------------------
+
+
+def test_the_sensor_grid_tiles_the_image_in_blocks_that_resample_to_whole_sensor_pixels():
+    grid = DepthGraspEstimator().sensor_grid(CameraIntrinsics.from_fov(1920, 1080, 70.0))
+    assert (grid.width_px, grid.height_px, grid.block_px, grid.block_sensor_px) == (1024, 576, 15, 8)
+    window = grid.window_covering(101, -20, 140, 44)
+    assert window == PixelWindow(90, 0, 60, 45)
+    assert grid.holds(window) and grid.sensor_pixels(window) == (48, 0, 32, 24)
+    assert not grid.holds(PixelWindow(91, 0, 60, 45)) and not grid.holds(PixelWindow(0, 0, 60, 60, 15))
+    narrow = DepthGraspEstimator().sensor_grid(sim_intrinsics(960, 540))
+    assert not narrow.resamples and narrow.block_px == 1
+    odd = SensorGrid(1000, 999, 500, 500)  # the axes scale differently: only the whole image tiles
+    assert odd.block_px == 1000 and odd.window_covering(10, 10, 20, 20) == PixelWindow(0, 0, 1000, 999)
+
+
+def test_a_window_off_the_sensor_blocks_is_refused():
+    estimator = DepthGraspEstimator(CLEAN)
+    window = PixelWindow(3, 0, 100, 100)
+    frame = frame_of([Box(0.5, 0.0)], INTRINSICS.windowed(window))
+    with pytest.raises(PerceptionError, match="whole 5 px blocks"):
+        estimator.sensor_view(frame, window=window, image=INTRINSICS)
+
+
+@pytest.mark.parametrize(
+    ("boxes", "hint"),
+    [
+        ([Box(0.62, -0.25, math.radians(12.0))], None),
+        ([Box(0.36, 0.25, math.radians(-33.0))], None),
+        ([Box(0.42, -0.15), Box(0.58, 0.18, 0.3)], (0.6, 0.2)),
+        ([Box(0.5, 0.0, 0.2, size_m=(0.05, 0.05), z0_m=0.03)], None),  # lifted: PARTIAL either way
+    ],
+    ids=["one", "near-left", "two-with-hint", "lifted"],
+)
+def test_looking_where_something_stands_gives_the_full_frames_estimate(boxes, hint):
+    """Resampled (1280 px onto 1024) and noisy: the windowed estimate is the full frame's, noise and all."""
+    estimator = DepthGraspEstimator()
+    camera = DepthCamera(boxes, INTRINSICS)
+    windowed = estimator.estimate_from(camera, hint, np.random.default_rng(11), name="red")
+    full = estimator.estimate(frame_of(boxes), hint, np.random.default_rng(11), name="red")
+    assert windowed.status is full.status and windowed.reason == full.reason
+    if full.pose_world is not None:
+        assert windowed.pose_world is not None
+        np.testing.assert_allclose(windowed.pose_world.position_m, full.pose_world.position_m, atol=1e-9)
+        assert windowed.pose_world.yaw_rad == pytest.approx(full.pose_world.yaw_rad, abs=1e-9)
+    search, measure = camera.windows
+    assert search is not None and search.binning == SEARCH_BINNING
+    assert measure is not None and measure.binning == 1
+    if len(boxes) == 1:
+        assert camera.rendered_px < 0.08 * INTRINSICS.width_px * INTRINSICS.height_px
+
+
+def test_an_empty_table_or_a_search_that_misses_looks_at_the_full_frame():
+    estimator = DepthGraspEstimator(CLEAN)
+    empty = DepthCamera([], INTRINSICS)
+    outcome = estimator.estimate_from(empty)
+    assert outcome.status is DetectionStatus.NOT_FOUND
+    assert empty.windows[-1] is None, "nothing stands in the search view: the full frame says so"
+    box = Box(0.55, 0.05, 0.4)
+    misled = DepthCamera([box], INTRINSICS, search_shift_m=(0.03, 0.0))  # the window cuts the cube
+    outcome = estimator.estimate_from(misled)
+    assert [w is None for w in misled.windows] == [False, False, True]
+    full = estimator.estimate(frame_of([box]))
+    assert outcome.pose_world is not None and full.pose_world is not None
+    np.testing.assert_allclose(outcome.pose_world.position_m, full.pose_world.position_m, atol=1e-9)
+
+
 # -- the behaviour and the tree builder, with fake devices -----------------------------------
 
 
 class DepthCamera:
-    """A fake top camera that renders synthetic depth of ``boxes`` (960 x 540 px)."""
+    """A fake top camera that renders synthetic depth of ``boxes`` (960 x 540 px), or a window of it.
 
-    def __init__(self, boxes: list[Box]) -> None:
+    ``search_shift_m`` moves the boxes in binned frames only: a search view that misplaces what stands.
+    """
+
+    def __init__(
+        self,
+        boxes: list[Box],
+        intrinsics: CameraIntrinsics | None = None,
+        search_shift_m: tuple[float, float] = (0.0, 0.0),
+    ) -> None:
         self.boxes = boxes
-        self._intrinsics = sim_intrinsics(960, 540)
+        self._intrinsics = intrinsics or sim_intrinsics(960, 540)
+        self.search_shift_m = search_shift_m
         self.with_depth: list[bool] = []
+        self.windows: list[PixelWindow | None] = []
 
     @property
     def intrinsics(self) -> CameraIntrinsics:
         return self._intrinsics
 
-    def capture(self, with_depth: bool = False) -> CameraFrame:
+    def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
         self.with_depth.append(with_depth)
-        frame = frame_of(self.boxes, self._intrinsics)
+        self.windows.append(window)
+        boxes = self.boxes
+        if window is not None and window.binning > 1:
+            dx, dy = self.search_shift_m
+            boxes = [dataclasses.replace(box, x_m=box.x_m + dx, y_m=box.y_m + dy) for box in boxes]
+        intrinsics = self._intrinsics if window is None else self._intrinsics.windowed(window)
+        frame = frame_of(boxes, intrinsics)
         return frame if with_depth else dataclasses.replace(frame, depth_m=None)
+
+    @property
+    def rendered_px(self) -> int:
+        """Pixels rendered so far, every capture counted."""
+        full = self._intrinsics.width_px * self._intrinsics.height_px
+        return sum(full if w is None else w.out_width_px * w.out_height_px for w in self.windows)
 
 
 def depth_context(boxes: list[Box], q: np.ndarray = DEFAULT_HOME_Q):
@@ -289,7 +385,7 @@ def test_the_behaviour_writes_the_estimated_pose_for_pick():
     behaviour = setup(EstimateGraspFromDepth("estimate red", "red", "red", seed=3), context)
     run = tick_until_done(behaviour, context)
     assert run.status == Status.SUCCESS, run.feedback
-    assert camera.with_depth == [True]
+    assert camera.with_depth == [True, True], "the search view, then the window around what stands"
     pose = py_trees.blackboard.Blackboard.get(keys.key("red", keys.POSE))
     assert math.hypot(pose.x_m - box.x_m, pose.y_m - box.y_m) < 4e-3
     assert "substitute for Berscheid et al." in run.feedback
@@ -310,7 +406,7 @@ def test_the_behaviour_parks_the_arm_before_looking():
     assert run.status == Status.SUCCESS, run.feedback
     assert len(run.running) > 10  # the move home
     assert np.max(np.abs(fake_arm(context).joint_positions() - DEFAULT_HOME_Q)) < 0.01
-    assert camera.with_depth == [True]
+    assert camera.with_depth == [True, True]
 
 
 def test_the_hint_is_used_and_the_seed_restarts_at_setup():

@@ -53,8 +53,9 @@ class EstimateGraspFromDepth(StagedBehaviour):
     """Estimate the object's grasp pose from the top camera's depth image and write ``/<obj>/pose``.
 
     A drop-in for :class:`~bt_arrange.behaviours.looking.Detect` before Pick: the arm first moves
-    out of the camera's view when it is not parked, then one frame is captured with depth and
-    handed to the estimator (a substitute for Berscheid et al.'s learned estimator). Nothing
+    out of the camera's view when it is not parked, then the camera's frame with depth is handed
+    to the estimator (a substitute for Berscheid et al.'s learned estimator), which renders only
+    the part of it where something stands (``DepthGraspEstimator.estimate_from``). Nothing
     found, an ambiguous or partial blob: FAILURE with the estimator's reason.
 
     The estimator is colour-blind: ``colour`` is accepted for symmetry with Detect and appears
@@ -94,8 +95,7 @@ class EstimateGraspFromDepth(StagedBehaviour):
         return [estimating] if is_parked(context) else [park_stage(), estimating]
 
     def _estimate(self, context: Context) -> str | None:
-        frame = context.robot.camera.capture(with_depth=True)
-        estimate = self.estimator.estimate(frame, self.near_xy_m, self.rng, name=self.obj)
+        estimate = self.estimator.estimate_from(context.robot.camera, self.near_xy_m, self.rng, name=self.obj)
         if not estimate.found or estimate.pose_world is None:
             return f"{self.obj} {estimate.status.value}: {estimate.reason}"
         self.found = estimate.pose_world

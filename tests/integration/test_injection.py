@@ -368,7 +368,9 @@ def test_pick_rotation_turns_the_cube_in_place_and_the_pads_square_it_up():
     picked = trial.probe.transitions[f"pick {OBJ}"]
     held_yaw_deg = math.degrees(fold_yaw(picked.cube.yaw_rad - picked.tcp.yaw_rad))
     assert abs(held_yaw_deg) < abs(record["dyaw_deg"]) - 10.0, "the closing pads turned it most of the way back"
-    assert trial.red.placed_offset_mm > 0.2, "and moved it doing so (0.002 to 0.02 mm without the error)"
+    # The squaring close (ManipulationSettings.square_grip_tolerance_m) leaves 0.1 to 0.3 mm, still
+    # several times the 0.002 to 0.02 mm of the same trial without the error.
+    assert trial.red.placed_offset_mm > 0.06, "and moved it doing so"
     _assert_recovered(trial)
     assert abs(trial.final_yaw_error_deg) < 2.0, "the pushes squared it up"
 
