@@ -206,7 +206,7 @@ class SensorGrid:
         return window.x_px // b * s, window.y_px // b * s, window.width_px // b * s, window.height_px // b * s
 
     def window_covering(self, u0_px: int, v0_px: int, u1_px: int, v1_px: int) -> PixelWindow:
-        """The smallest window on whole blocks holding image columns ``u0..u1-1`` and rows ``v0..v1-1``, in the image."""
+        """The smallest window on whole blocks holding columns ``u0..u1-1`` and rows ``v0..v1-1``, in the image."""
         b = self.block_px
         x0, y0 = max(0, u0_px // b * b), max(0, v0_px // b * b)
         x1 = min(self.image_width_px, -(-u1_px // b) * b)
