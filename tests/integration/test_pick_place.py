@@ -1,6 +1,7 @@
 """A headless pick and place in the pybullet cell, steered by ground truth."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -126,3 +127,32 @@ def test_a_cube_turned_33_degrees_either_way_is_squared_by_a_wrist_turn_and_held
         assert abs(math.degrees(fold_yaw(yaw - tcp.yaw_rad))) < 5.0, "held square to the pads at the turned wrist"
         # Squared about its centre, not pivoted about a corner ("shift" moves it 13-19 mm along the pads).
         assert math.hypot(held_x - tcp.position_m[0], held_y - tcp.position_m[1]) < 3e-3
+
+
+def test_a_blended_pick_grasps_and_a_blended_place_lands_within_a_third_of_a_millimetre(monkeypatch):
+    """Issue 23: motions handed on at speed (lift into carry, retreat into the way home) keep the grasp and the place.
+
+    The whole single-cube tree, steered by the camera; ground truth only measures the result.
+    """
+    from bt_arrange import treefile
+    from bt_arrange.behaviours.context import ArmBrake
+    from bt_arrange_sim.runs import SimulatedRun
+
+    handed_on = []
+    carry_on = ArmBrake.carry_on
+
+    def counting_carry_on(self, motion):  # noqa: ANN001, ANN202
+        if not motion.done:
+            handed_on.append(motion)
+        carry_on(self, motion)
+
+    monkeypatch.setattr(ArmBrake, "carry_on", counting_carry_on)
+    module = treefile.load(Path(__file__).resolve().parents[2] / "trees" / "single_cube.py")
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=0)) as run:
+        report = run.run()
+    (red,) = report.objects
+    picks = [t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS"]
+    assert picks and not [t for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
+    assert len(handed_on) >= 2, "the lift and the retreat were handed on at speed"
+    assert red.placed_offset_truth_mm is not None and red.placed_offset_truth_mm < 0.3
+    assert red.status == "within"
