@@ -1,0 +1,129 @@
+"""Wall time of a campaign against an earlier revision, measured back to back on this machine.
+
+    python benchmarks/campaign_wall.py --against f7bbbaf [--trials 100] [--rows ROWS] [--repeats 1] [--json]
+
+Runs ``bt-arrange experiment --workers 1`` with the same rows, trials and seed twice per repeat:
+once with the code of ``--against`` (a git revision, checked out into a temporary worktree) and
+once with this checkout, alternating, each in a fresh process. Prints each run's wall and CPU time
+(the child's user + system), the ratio this / reference of each, and how many trial records are
+identical (all fields but the wall time). The default revision ``f7bbbaf`` is the code before the
+cycle-time work of issue 23 (Table 1 wall time target: this / reference <= 0.6).
+
+Wall time depends on the machine and on what else runs on it: read the ratio of one run, and
+the CPU ratio beside it when the machine is shared.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: The last commit before issue 23's cycle-time work: Table 1's "today" of that issue.
+BEFORE_CYCLE_TIME = "f7bbbaf"
+#: Fields of a trial record that measure the machine, not the trial.
+MACHINE_FIELDS = ("wall_seconds",)
+
+
+def _packages(source: Path, into: Path) -> Path:
+    """A folder that imports ``bt_arrange`` and ``bt_arrange_sim`` from ``source`` (as the wheel maps them)."""
+    into.mkdir(parents=True, exist_ok=True)
+    (into / "bt_arrange").symlink_to(source / "bt_arrange")
+    (into / "bt_arrange_sim").symlink_to(source / "sim")
+    return into
+
+
+def _campaign(packages: Path, out: Path, args: argparse.Namespace) -> dict:
+    """One campaign in a fresh process; its wall and CPU seconds."""
+    command = [sys.executable, "-m", "bt_arrange.cli", "experiment", "--rows", args.rows, "--trials", str(args.trials)]
+    command += ["--seed", str(args.seed), "--workers", "1", "--out", str(out)]
+    env = {**os.environ, "PYTHONPATH": str(packages)}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    # From the packages' folder: ``python -m`` puts the working directory first on the import path.
+    subprocess.run(command, env=env, cwd=packages, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"wall_s": round(wall, 2), "cpu_s": round(cpu, 2), "out": str(out)}
+
+
+def _records(out: Path) -> dict[tuple[str, int], dict]:
+    records = {}
+    for line in (out / "trials.jsonl").read_text().splitlines():
+        record = json.loads(line)
+        records[(record["row"], record["trial"])] = {k: v for k, v in record.items() if k not in MACHINE_FIELDS}
+    return records
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", default=BEFORE_CYCLE_TIME, help="git revision to compare with")
+    parser.add_argument("--rows", default="system,translation,orientation,grasp-estimator")
+    parser.add_argument("--trials", type=int, default=100)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+
+    with tempfile.TemporaryDirectory(prefix="bt-arrange-wall-") as scratch:
+        base = Path(scratch)
+        reference = base / "reference"
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(reference), args.against],
+            check=True,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            sides = {
+                "reference": _packages(reference, base / "reference-packages"),
+                "this": _packages(ROOT, base / "this-packages"),
+            }
+            runs: dict[str, list[dict]] = {"reference": [], "this": []}
+            for repeat in range(args.repeats):
+                for side, packages in sides.items():
+                    runs[side].append(_campaign(packages, base / f"{side}-{repeat}", args))
+            ours, theirs = _records(Path(runs["this"][0]["out"])), _records(Path(runs["reference"][0]["out"]))
+            differing = sorted(key for key in ours if ours[key] != theirs.get(key))
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(reference)], check=False)
+
+    best = {side: min(r["wall_s"] for r in rs) for side, rs in runs.items()}
+    cpu = {side: min(r["cpu_s"] for r in rs) for side, rs in runs.items()}
+    result = {
+        "benchmark": "campaign_wall",
+        "note": "wall and CPU seconds on this machine, back to back; compare the ratios",
+        "against": args.against,
+        "rows": args.rows,
+        "trials_per_row": args.trials,
+        "seed": args.seed,
+        "runs": {side: [{k: v for k, v in r.items() if k != "out"} for r in rs] for side, rs in runs.items()},
+        "wall_ratio": round(best["this"] / best["reference"], 3),
+        "cpu_ratio": round(cpu["this"] / cpu["reference"], 3),
+        "records": len(ours),
+        "identical_records": len(ours) - len(differing),
+        "differing_records": [f"{row} #{trial}" for row, trial in differing],
+    }
+    if args.json:
+        print(json.dumps(result))
+        return
+    print(f"Campaign wall time against {args.against}: {args.rows}, {args.trials} trials per row, seed {args.seed}")
+    for side, rs in runs.items():
+        shown = ", ".join(f"{r['wall_s']:.1f} s wall / {r['cpu_s']:.1f} s CPU" for r in rs)
+        print(f"  {side:9s} {shown}")
+    print(f"  this / reference: wall {result['wall_ratio']:.3f}, CPU {result['cpu_ratio']:.3f}")
+    print(f"  trial records identical: {result['identical_records']} of {result['records']}")
+    if differing:
+        print(f"  differing: {', '.join(result['differing_records'][:20])}")
+
+
+if __name__ == "__main__":
+    main()
