@@ -63,6 +63,21 @@ def _records(out: Path) -> dict[tuple[str, int], dict]:
     return records
 
 
+def _by_row(records: dict[tuple[str, int], dict]) -> dict[str, dict]:
+    """Per row: trials, mean offset after pushing (camera, mm) and trials within the threshold."""
+    rows: dict[str, list[dict]] = {}
+    for (row, _), record in records.items():
+        rows.setdefault(row, []).append(record)
+    return {
+        row: {
+            "trials": len(rs),
+            "pushed_mean_mm": round(sum(r["pushed_mm"] for r in rs if r.get("pushed_mm") is not None) / len(rs), 3),
+            "within": sum(1 for r in rs if r.get("status") == "within"),
+        }
+        for row, rs in rows.items()
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", default=BEFORE_CYCLE_TIME, help="git revision to compare with")
@@ -110,7 +125,8 @@ def main() -> None:
         "cpu_ratio": round(cpu["this"] / cpu["reference"], 3),
         "records": len(ours),
         "identical_records": len(ours) - len(differing),
-        "differing_records": [f"{row} #{trial}" for row, trial in differing],
+        "differing_records": [f"{row} #{trial}" for row, trial in differing][:20],
+        "by_row": {"reference": _by_row(theirs), "this": _by_row(ours)},
     }
     if args.json:
         print(json.dumps(result))
@@ -122,7 +138,14 @@ def main() -> None:
     print(f"  this / reference: wall {result['wall_ratio']:.3f}, CPU {result['cpu_ratio']:.3f}")
     print(f"  trial records identical: {result['identical_records']} of {result['records']}")
     if differing:
-        print(f"  differing: {', '.join(result['differing_records'][:20])}")
+        print(f"  differing (first 20): {', '.join(result['differing_records'])}")
+    print("  after pushing, mean mm and trials within (reference / this):")
+    for row, theirs_row in result["by_row"]["reference"].items():
+        ours_row = result["by_row"]["this"][row]
+        print(
+            f"    {row:16s} {theirs_row['pushed_mean_mm']:.3f} / {ours_row['pushed_mean_mm']:.3f} mm, "
+            f"{theirs_row['within']} / {ours_row['within']} of {ours_row['trials']}"
+        )
 
 
 if __name__ == "__main__":
