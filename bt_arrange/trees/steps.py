@@ -153,7 +153,7 @@ def regrasp_while_turned(
     max_regrasps: int = MAX_TURNED_REGRASPS,
     kind_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
-    """Pick the part up again at its camera-measured pose and place it again while it lies turned ``yaw_limit_deg`` or more.
+    """Pick the part up again at its camera pose and place it again while it lies turned ``yaw_limit_deg`` or more.
 
     After the inspect after placing (which writes ``/<obj>/pose`` and ``/<obj>/yaw_error_deg``)::
 
