@@ -121,6 +121,7 @@ def test_a_part_turned_60_deg_is_picked_and_placed_again_until_it_lies_square() 
     node, script = scripted([-0.6])
     run(node)
     assert node.status == Status.SUCCESS and script.runs == 1
+    assert node.feedback_message == "offset 0.40 mm, yaw error -0.60 deg after 1 correction(s)"
 
 
 def test_the_sign_of_the_turn_does_not_matter() -> None:
