@@ -12,6 +12,7 @@ loop), with the offset checked before each run, not like ``Retry`` (which runs a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
 import py_trees
@@ -134,9 +135,12 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
         yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
         if offset < self.threshold_mm and yaw_within:
-            self.feedback_message = (
-                f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm{yaw_text} after {self.attempts} correction(s)"
+            under = (
+                f"offset {offset:.2f} mm"  # no offset threshold: the yaw alone decides (a regrasp)
+                if math.isinf(self.threshold_mm)
+                else f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm"
             )
+            self.feedback_message = f"{under}{yaw_text} after {self.attempts} correction(s)"
             return Status.SUCCESS
         if self.attempts >= self.max_attempts:
             what = f"offset still {offset:.2f} mm" + (

@@ -154,3 +154,66 @@ def test_pads_on_the_push_line_meet_the_outline_where_it_lies_within_their_span_
     assert triangle.back_within_m(0.0, 0.0, 0.008) == pytest.approx(0.025 - 0.007 / 3, abs=1e-9)
     # Wide enough to reach the corner, the pads meet it first.
     assert triangle.back_within_m(0.0, 0.0, 0.02) == pytest.approx(0.025)
+
+
+# The benchmark's non-convex fragment (benchmarks/plans/irregular_parts.toml), in metres.
+FRAGMENT = [[0, 0], [0.045, 0.004], [0.060, 0.030], [0.035, 0.028], [0.030, 0.050], [0.005, 0.040]]
+
+
+def contacts_mm(prism: Prism, grasp_index: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """Where the pads of one grasp touch the outline: the spans along the pads (mm, from the centroid) of the
+    two contacts, and the grasp centre's place along them.
+
+    The outline is sampled every 0.05 mm or finer; a contact is what lies within 0.1 mm of the part's
+    widest and narrowest under the pads (their 22 mm width about the grasp centre).
+    """
+    grasp = prism.grasps(ROBOTIQ_2F85)[grasp_index]
+    closing = np.array([math.cos(grasp.yaw_offset_rad), math.sin(grasp.yaw_offset_rad)])
+    along = np.array([-closing[1], closing[0]])
+    centre_t_m = float(np.array(grasp.centre_m) @ along)
+    points = prism.outline_m
+    ends = np.roll(points, -1, axis=0)
+    steps = np.linspace(0.0, 1.0, 1000, endpoint=False)[:, None, None]
+    samples = (points + steps * (ends - points)).reshape(-1, 2)
+    across_m, along_m = samples @ closing, samples @ along
+    under = np.abs(along_m - centre_t_m) <= ROBOTIQ_2F85.pad_width_m / 2
+    top, bottom = float(np.max(across_m[under])), float(np.min(across_m[under]))
+    upper = along_m[under & (across_m >= top - 1e-4)] * 1000
+    lower = along_m[under & (across_m <= bottom + 1e-4)] * 1000
+    return np.array([upper.min(), upper.max()]), np.array([lower.min(), lower.max()]), centre_t_m * 1000
+
+
+def is_corner(span_mm: np.ndarray) -> bool:
+    return float(span_mm[1] - span_mm[0]) < 1.0
+
+
+def test_the_fragment_is_held_across_an_edge_and_the_corner_facing_it_on_a_line_near_its_centroid() -> None:
+    fragment = Prism.from_outline(FRAGMENT, 0.02)
+    upper, lower, centre_mm = contacts_mm(fragment, 0)
+    edge, corner = (lower, upper) if is_corner(upper) else (upper, lower)
+    # An antipodal pair: one pad flat on an edge, the other on one corner lying well inside that edge's
+    # contact along the pads, so the squeeze itself has no lever to turn the part.
+    assert is_corner(corner) and not is_corner(edge)
+    assert edge[0] + 2 <= corner[0] <= edge[1] - 2
+    # The closing axis is that edge's normal: the edge written (45, 4) -> (60, 30), at -30 deg.
+    assert math.degrees(fragment.grasps(ROBOTIQ_2F85)[0].yaw_offset_rad) == pytest.approx(-30.0, abs=0.1)
+    # The contact line (through the corner, along the closing axis) passes 6.2 mm from the centroid,
+    # the nearest of any grasp the fragment has.
+    assert abs(float(np.mean(corner))) == pytest.approx(6.2, abs=0.3) and abs(centre_mm) == pytest.approx(6.2, abs=0.3)
+    levers_mm = [abs(contacts_mm(fragment, k)[2]) for k in range(len(fragment.grasps(ROBOTIQ_2F85)))]
+    assert len(levers_mm) >= 3 and min(levers_mm) == pytest.approx(levers_mm[0])
+
+
+def test_the_fragment_has_no_two_edges_flat_on_both_pads_so_no_grasp_choice_avoids_a_corner() -> None:
+    fragment = Prism.from_outline(FRAGMENT, 0.02)
+    for k in range(len(fragment.grasps(ROBOTIQ_2F85))):
+        upper, lower, _ = contacts_mm(fragment, k)
+        assert sorted((is_corner(upper), is_corner(lower))) == [False, True], k
+
+
+def test_a_trapezoid_is_held_across_its_two_parallel_edges_on_a_line_through_its_centroid() -> None:
+    trapezoid = Prism.from_outline([[0, 0], [0.07, 0], [0.05, 0.035], [0.015, 0.035]], 0.02)
+    upper, lower, centre_mm = contacts_mm(trapezoid, 0)
+    assert trapezoid.grasps(ROBOTIQ_2F85)[0].width_m == pytest.approx(0.035)
+    assert not is_corner(upper) and not is_corner(lower), "both pads flat on an edge"
+    assert abs(centre_mm) < 0.5, "the pads' centre lies on the line through the centroid"

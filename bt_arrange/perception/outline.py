@@ -62,6 +62,7 @@ from bt_arrange.perception.outline_fit import (
     resample,
     segment_distances,
 )
+from bt_arrange.perception.outline_merged import register_in_merged
 from bt_arrange.perception.segmentation import Blob, colour_mask
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 
@@ -344,8 +345,14 @@ def _judge(
     blob: Blob,
     blob_xy_m: tuple[float, float],
     models: Sequence[OutlineModel],
+    prior_xy_m: tuple[float, float] | None = None,
 ) -> dict[str, _Verdict]:
-    """Register every known outline to one blob: what the blob is, for each model by name."""
+    """Register every known outline to one blob: what the blob is, for each model by name.
+
+    With ``prior_xy_m`` (where the one model's part is expected), a blob cut by the frame's border or
+    as large as two faces may be that part merged with another of its colour: it is registered on
+    its free edges (``outline_merged``) before it is called partial or ambiguous.
+    """
     config = detector.config
     name = colour.name
     verdicts: dict[str, _Verdict] = {}
@@ -360,17 +367,29 @@ def _judge(
                 blob_xy_m, None, DetectionStatus.PARTIAL, f"{name} blob vanished at full resolution"
             )
             continue
-        if face.touches_border:
-            verdicts[model.name] = _Verdict(
-                blob_xy_m, None, DetectionStatus.PARTIAL, f"{name} face is cut by the image border", face.area_px
-            )
-            continue
         centre = np.array([face.centroid_m[0], face.centroid_m[1], plane_z_m])
         expected_px = replace(config, part=model.part).face_area_px(view.intrinsics, view.T_W_C, centre)
         px_per_m = math.sqrt(expected_px / model.area_m2)
         ratio = face.area_px / expected_px
         low, high = config.face_area_fraction_range
-        if ratio > config.ambiguous_area_fraction:
+        if prior_xy_m is not None and (face.touches_border or ratio > config.ambiguous_area_fraction):
+            fit = register_in_merged(view, face, model, plane_z_m, px_per_m, prior_xy_m)
+            if fit is not None and fit.rms_px is not None and fit.rms_px <= config.max_reprojection_error_px:
+                verdicts[model.name] = _Verdict(
+                    blob_xy_m,
+                    fit,
+                    DetectionStatus.FOUND,
+                    f"{name} {model.name} at x={fit.x_m:.4f} m, y={fit.y_m:.4f} m, yaw={math.degrees(fit.yaw_rad):.2f} "
+                    "deg, on its free edges (its face merged with another of its colour)",
+                    face.area_px,
+                    expected_px,
+                )
+                continue
+        if face.touches_border:
+            verdicts[model.name] = _Verdict(
+                blob_xy_m, None, DetectionStatus.PARTIAL, f"{name} face is cut by the image border", face.area_px
+            )
+        elif ratio > config.ambiguous_area_fraction:
             verdicts[model.name] = _Verdict(
                 blob_xy_m,
                 None,
@@ -494,10 +513,13 @@ def detect_outlines(
         reason = f"no {name} blob of at least {detector.config.min_area_fraction:.0%} of a face {where}"
         return {m.name: Detection(name, DetectionStatus.NOT_FOUND, reason) for m in models}
     judged: list[dict[str, _Verdict]] = []
+    # Where the one part looked for is expected (the region's centre): a face merged with another of its
+    # colour is registered on its free edges there. Several parts have no one expected place.
+    prior_xy_m = None if roi is None or len(models) != 1 else roi.centre_m
     for blob, on_plane, _ in candidates:
         blob_xy = (float(on_plane[0]), float(on_plane[1]))
         try:
-            judged.append(_judge(detector, view, colour, blob, blob_xy, models))
+            judged.append(_judge(detector, view, colour, blob, blob_xy, models, prior_xy_m))
         except (cv2.error, ValueError, np.linalg.LinAlgError) as error:
             failed = _Verdict(
                 blob_xy,

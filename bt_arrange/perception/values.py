@@ -58,6 +58,11 @@ class WorldRegion:
         """A square region of ``2 * half_size_m`` centred at ``(x, y)``."""
         return cls(x_m - half_size_m, x_m + half_size_m, y_m - half_size_m, y_m + half_size_m)
 
+    @property
+    def centre_m(self) -> tuple[float, float]:
+        """The region's centre (x, y): where a part looked for around a place is expected."""
+        return (0.5 * (self.x_min_m + self.x_max_m), 0.5 * (self.y_min_m + self.y_max_m))
+
     def contains(self, x_m: float, y_m: float) -> bool:
         """True when ``(x, y)`` lies inside the region (borders included)."""
         return self.x_min_m <= x_m <= self.x_max_m and self.y_min_m <= y_m <= self.y_max_m

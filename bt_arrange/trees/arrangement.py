@@ -46,7 +46,15 @@ from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Cuboid
-from bt_arrange.trees.steps import Locate, check_strategy, correction, inspect, set_target, transfer
+from bt_arrange.trees.steps import (
+    Locate,
+    check_strategy,
+    correction,
+    inspect,
+    regrasp_while_turned,
+    set_target,
+    transfer,
+)
 from bt_arrange.trees.targets import (
     CORRECT_MODES,
     DEFAULT_YAW_THRESHOLD_DEG,
@@ -100,6 +108,9 @@ def arrange_one(
         set_target(target),
         transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
+        # An irregular part turned in the pads by more than pushes correct is picked up again (a cuboid's
+        # grasp squares it, so its tree is the paper's). Among neighbours there is no room for a free pick.
+        *([] if dense or isinstance(target.object_type.shape, Cuboid) else [regrasp_while_turned(target)]),
         correction(
             target,
             threshold_mm,

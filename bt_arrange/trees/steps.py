@@ -8,6 +8,7 @@ Table 1's row 4, ``EstimateGraspFromDepth``); any ``Callable[[Target], Behaviour
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Callable, Sequence
 
@@ -136,6 +137,60 @@ def transfer(
     whole_number("max_regrasps", max_regrasps)
     # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
+
+
+#: A part placed turned this far or more from its target's yaw (deg, measured by the camera) is picked
+#: up again rather than pushed: a square push turns a part back by a degree or two, not tens of degrees.
+REGRASP_YAW_DEG = 12.0
+#: The most times a turned part is picked up again before its correction is left to fail.
+MAX_TURNED_REGRASPS = 2
+
+
+def regrasp_while_turned(
+    target: Target,
+    *,
+    yaw_limit_deg: float = REGRASP_YAW_DEG,
+    max_regrasps: int = MAX_TURNED_REGRASPS,
+    kind_targets: Sequence[PlanarPose] = (),
+) -> py_trees.behaviour.Behaviour:
+    """Pick the part up again at its camera pose and place it again while it lies turned ``yaw_limit_deg`` or more.
+
+    After the inspect after placing (which writes ``/<obj>/pose`` and ``/<obj>/yaw_error_deg``)::
+
+        RepeatUntilWithin "regrasp <obj> while turned 12 deg or more"   (yaw only: any offset will do)
+        └── Sequence "pick and place <obj> again"
+            ├── Pick "pick <obj> again"                  at /<obj>/pose, from the camera
+            ├── GraspGuard "while holding <obj> again"
+            │   └── Place "place <obj> again"
+            └── Inspect "inspect <obj> after placing again"
+
+    A part turned less than the limit passes at once, in the same tick: nothing moves. An irregular
+    part held across an edge and a corner can turn in the pads (the close, the carry, the release)
+    by tens of degrees; pushes correct a few. ``max_regrasps`` attempts, then it fails with the yaw.
+    """
+    positive_number("yaw_limit_deg", yaw_limit_deg, "deg")
+    whole_number("max_regrasps", max_regrasps)
+    obj = target.obj
+    kind = target.object_type
+    again = py_trees.composites.Sequence(
+        name=f"pick and place {obj} again",
+        memory=True,
+        children=[
+            Pick(f"pick {obj} again", obj, kind),
+            GraspGuard(f"while holding {obj} again", Place(f"place {obj} again", obj, kind)),
+            inspect(target, f"inspect {obj} after placing again", after_placing=True, kind_targets=kind_targets),
+        ],
+    )
+    return RepeatUntilWithin(
+        name=f"regrasp {obj} while turned {yaw_limit_deg:g} deg or more",
+        child=again,
+        offset_key=keys.key(obj, keys.OFFSET_MM),
+        threshold_mm=math.inf,  # the offset is the pushes' business: only the yaw decides
+        max_attempts=max_regrasps,
+        obj=obj,
+        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+        yaw_threshold_deg=yaw_limit_deg,
+    )
 
 
 def inspect(

@@ -74,3 +74,34 @@ def test_two_red_parts_of_different_outlines_are_told_apart_and_arranged_by_the_
     for outcome in report.objects:
         assert outcome.status == "within", (outcome.name, outcome.reason)
         assert outcome.final_offset_truth_mm < 1.0 and abs(outcome.final_yaw_error_truth_deg) < 1.0
+
+
+def test_a_part_turned_50_deg_after_its_release_is_picked_again_at_its_camera_pose_and_ends_within(tmp_path) -> None:
+    from bt_arrange import treefile
+    from bt_arrange.geometry import Pose
+    from bt_arrange_sim.runs import SimulatedRun
+
+    path = tmp_path / "one_ell.toml"
+    path.write_text(
+        "[objects.ell]\noutline_mm = [[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]]\nheight_mm = 20\n"
+        '[[targets]]\nobject = "ell"\ncolour = "green"\nx_mm = 450\ny_mm = 0\nyaw_deg = -60\n'
+    )
+    module = treefile.load(path)
+    turned: list[float] = []
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=1)) as run:
+
+        def turn_after_release(transition) -> None:  # noqa: ANN001 - a Transition
+            # An injected error, as a part turning in the pads would leave it: the tree learns of it by camera.
+            if transition.behaviour == "place green" and transition.new == "SUCCESS" and not turned:
+                x, y, yaw = run.cell.cube_planar_truth("green")
+                turned.append(yaw)
+                run.cell.place_cube_truth("green", Pose.from_planar(x, y, yaw + math.radians(50), z_m=0.01))
+
+        run.transition_hooks.append(turn_after_release)
+        report = run.run()
+    regrasps = [t for t in report.transitions if t.behaviour == "pick green again" and t.new == "SUCCESS"]
+    assert turned, "the error was injected"
+    assert len(regrasps) == 1, "picked up again once"
+    (outcome,) = report.objects
+    assert outcome.status == "within", outcome.reason
+    assert outcome.final_offset_truth_mm < 1.0 and abs(outcome.final_yaw_error_truth_deg) < 1.0
