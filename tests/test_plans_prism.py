@@ -55,6 +55,7 @@ def test_an_outline_type_is_a_prism_about_its_centroid_and_its_target_says_where
     ("entry", "message"),
     [
         ("outline_mm = [[0, 0], [60, 60], [60, 0], [0, 40]]\nheight_mm = 20", "crosses itself"),
+        ("outline_mm = [[0, 0], [60, 40], [60, 0], [0, 40]]\nheight_mm = 20", "crosses itself"),
         ("outline_mm = [[0, 0], [60, 0]]\nheight_mm = 20", "at least three points"),
         ("outline_mm = [[0, 0], [30, 0], [60, 0]]\nheight_mm = 20", "encloses no area"),
         ("outline_mm = [[0, 0], [60, 0], [60, 40], [55, 45], [0, 45]]\nheight_mm = 20", "under the 10 mm the camera"),

@@ -29,6 +29,7 @@ def regular(sides: int, radius_m: float) -> list[list[float]]:
         ([[0, 0], [0.05, 0], [0.05, 0], [0, 0.05]], "repeats point 2"),
         ([[0, 0], [0.02, 0], [0.05, 0]], "encloses no area"),
         ([[0, 0], [0.05, 0.05], [0.05, 0], [0, 0.03]], "crosses itself"),
+        ([[0, 0], [0.06, 0.04], [0.06, 0], [0, 0.04]], "crosses itself"),  # a bow tie: no signed area either
         ([[0, 0], [0.05, float("nan")], [0, 0.05]], "finite"),
     ],
 )

@@ -106,7 +106,8 @@ def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
     if np.any(lengths < 1e-6):
         index = int(np.argmin(lengths))
         return f"the outline repeats point {index + 1} (an edge of no length)"
-    if abs(_signed_area_m2(array)) < 1e-8:
+    # Points on one line first: a symmetric bow tie also has no signed area, but it crosses itself.
+    if np.linalg.svd(array - array.mean(axis=0), compute_uv=False)[1] < 1e-6:
         return "the outline encloses no area (its points lie on a line)"
     count = len(array)
     for i in range(count):
@@ -115,6 +116,8 @@ def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
                 continue  # neighbours share a point
             if _segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
                 return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
+    if abs(_signed_area_m2(array)) < 1e-8:
+        return "the outline encloses no area"
     return None
 
 
