@@ -88,6 +88,7 @@ def test_an_outline_plan_shown_as_xml_says_why_it_cannot_be_in_one_line(tmp_path
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "XML trees describe cuboids" in lines[0], result.stderr
+    assert len(lines[0]) < 400, "the targets' repr is cut short, not printed whole"
 
 
 TWO_RED = """

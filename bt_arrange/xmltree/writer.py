@@ -13,6 +13,7 @@ ports (a user's Python tree can be watched even where it cannot be saved as XML)
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Mapping
 from xml.sax.saxutils import escape, quoteattr
 
@@ -21,6 +22,10 @@ import py_trees
 from bt_arrange.errors import PortValueError, XmlTreeError
 from bt_arrange.ports import Port
 from bt_arrange.xmltree.registry import NodeModel, generic_model, model_of
+
+#: Values in messages: a few items, each cut short (``reprlib.Repr`` takes keywords from Python 3.12 only).
+_SHORT = reprlib.Repr()
+_SHORT.maxlist, _SHORT.maxother, _SHORT.maxstring = 2, 40, 40
 
 FORMAT_VERSION = "4"
 
@@ -118,8 +123,9 @@ def _port_texts(node: py_trees.behaviour.Behaviour, model: NodeModel) -> list[tu
         try:
             texts.append((port, port.type.format(values[port.name])))
         except PortValueError as error:
+            # A value's repr can run to thousands of characters (a plan's targets): the reason names it.
             raise XmlTreeError(
-                f"cannot write {node.name!r} as XML: <{model.tag}> {port.name}={values[port.name]!r} "
+                f"cannot write {node.name!r} as XML: <{model.tag}> {port.name}={_SHORT.repr(values[port.name])} "
                 f"is not a {port.type.name}: {error.reason}"
             ) from error
     return texts
