@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -36,6 +35,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.geometry import FloatArray, fold_yaw
 from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median
+from bt_arrange.perception.outline_face import Face, edge_points, spans_two_directions
 from bt_arrange.perception.outline_fit import (
     COARSE_POINTS,
     EDGE_PASSES,
@@ -49,9 +49,6 @@ from bt_arrange.perception.outline_fit import (
     segment_distances,
 )
 from bt_arrange.perception.values import PreparedView
-
-if TYPE_CHECKING:
-    from bt_arrange.perception.outline import _Face
 
 #: The coarse yaw grid (degrees) with the centroid at the expected place, and the score's cap (m).
 MERGED_STEP_DEG = 2.0
@@ -146,15 +143,13 @@ def free_edges(
 
 def register_in_merged(
     view: PreparedView,
-    face: _Face,
+    face: Face,
     model: OutlineModel,
     plane_z_m: float,
     px_per_m: float,
     prior_xy_m: tuple[float, float],
 ) -> OutlineFit | None:
     """The part's pose from its free edges in a blob merged with another part's face, or None (see the module)."""
-    from bt_arrange.perception.outline import _edge_points, _spans_two_directions
-
     px_m = 1.0 / px_per_m
     best: tuple[float, tuple[float, float, float], np.ndarray] | None = None
     for yaw in _coarse(face.contour_m, model, prior_xy_m)[:3]:
@@ -168,17 +163,17 @@ def register_in_merged(
     if best is None or best[0] < MIN_FREE_PERIMETER_SHARE:
         return None
     _, pose, free = best
-    if not _spans_two_directions(model, np.flatnonzero(free)):
+    if not spans_two_directions(model, np.flatnonzero(free)):
         return None
     near_outside_px: float | None = None
     residual = np.empty(0)
     for half_width_px, margin_px in EDGE_PASSES:
-        points_m, edges, spread = _edge_points(
+        points_m, edges, spread = edge_points(
             view, face, model, pose, plane_z_m, half_width_px, margin_px, near_outside_px
         )
         keep = free[edges] if len(edges) else np.zeros(0, dtype=bool)
         points_m, edges, spread = points_m[keep], edges[keep], spread[keep]
-        if len(points_m) < 3 * MIN_EDGE_POINTS or not _spans_two_directions(model, edges):
+        if len(points_m) < 3 * MIN_EDGE_POINTS or not spans_two_directions(model, edges):
             return None
         pose, residual = gauss_newton(points_m, edges, model, pose, 0.05 * px_m)
         near_outside_px = 1.0 + 4.0 * max(0.0, float(_median(spread)) - SHARP_EDGE_SPREAD)
