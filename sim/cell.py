@@ -28,6 +28,7 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics, Robot
+from bt_arrange.shapes import Prism
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
@@ -77,6 +78,10 @@ class PhysicsConfig:
     gear_max_force_n: float = 200.0
     gear_erp: float = 0.8
     cube_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001)
+    #: Prisms (a compound of convex hulls) without friction anchors: a hull's table contact points
+    #: outlive a push, so anchored ones pulled a pushed prism back to where it lay
+    #: (docs/irregular.md, Limits, "Sub-millimetre pushes"); the pads' anchors still pin it.
+    prism_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001, friction_anchor=False)
     pad_contact: Contact = Contact(lateral_friction=1.2, spinning_friction=0.002)
     table_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001, friction_anchor=False)
 
@@ -416,7 +421,7 @@ class WorkCell:
             colour,
             pose.position_m,
             pose.quaternion_xyzw,
-            self.config.physics.cube_contact,
+            self.config.physics.prism_contact if isinstance(built.shape, Prism) else self.config.physics.cube_contact,
             self.colours,
         )
         self.object_types[name] = object_type

@@ -9,6 +9,7 @@ camera's.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import py_trees
@@ -94,6 +95,22 @@ class ScriptedPickPlace:
         self._write(keys.OFFSET_XY_MM, (dx_m * 1000, dy_m * 1000))
         self._write(keys.PUSH_AXIS, axis)
         return self._expect_success(Push("push", OBJ))
+
+    def push_along(self, x_m: float, y_m: float, yaw_rad: float, heading_rad: float, distance_m: float) -> str:
+        """Push a part of ``object_type`` resting at (x, y, yaw) by ``distance_m`` along ``heading_rad``.
+
+        The heading is in the part's frame (the target keeps its yaw); a prism is pushed squarely
+        onto the edge whose push best closes it (``Push``). Returns the push's feedback.
+        """
+        c, s = math.cos(yaw_rad + heading_rad), math.sin(yaw_rad + heading_rad)
+        self._write(keys.POSE, Pose.from_planar(x_m, y_m, yaw_rad, z_m=self.object_type.shape.height_m / 2))
+        self._write(keys.TARGET, PlanarPose(x_m + distance_m * c, y_m + distance_m * s, yaw_rad))
+        offset_mm = (distance_m * 1000 * math.cos(heading_rad), distance_m * 1000 * math.sin(heading_rad))
+        self._write(keys.OFFSET_XY_MM, offset_mm)
+        self._write(keys.PUSH_AXIS, "x")
+        push = Push("push", OBJ, object_type=self.object_type)
+        self._expect_success(push)
+        return push.feedback_message
 
     def move_to(self, pose: Pose) -> float:
         """A joint-space move of the TCP to ``pose``; returns sim seconds."""

@@ -56,6 +56,31 @@ def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> N
         assert abs(math.degrees(fold_yaw(yaw - target[2], 2 * math.pi))) < 1.0
 
 
+TRIANGLE = ObjectType("triangle", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.015, 0.045]], 0.02))
+
+
+@pytest.mark.parametrize(("part", "push"), [(TRIANGLE, "@-18.4"), (TRIANGLE, "@90.0"), (ELL, "@0.0")])
+@pytest.mark.parametrize("distance_m", [0.0005, 0.0008])
+def test_a_prism_pushed_under_a_millimetre_stays_where_the_pads_left_it(part, push, distance_m) -> None:
+    """With friction anchors on a hull's table contacts, the triangle's -18.4 deg push sprang all the way back."""
+    with WorkCell() as cell:
+        cell.add_object(part, "red", 0.45, 0.1, 0.0, name="part")
+        cell.settle(0.5)
+        start = cell.cube_pose_truth("part")
+        heading = part.shape.named_pushes(ROBOTIQ_2F85)[push].heading_rad
+        feedback = ScriptedPickPlace(cell, object_type=part).push_along(
+            start.x_m, start.y_m, start.yaw_rad, heading, distance_m
+        )
+        assert f"({push[1:]} deg)" in feedback, feedback
+        cell.settle(1.0)
+        pose = cell.cube_pose_truth("part")
+        c, s = math.cos(start.yaw_rad + heading), math.sin(start.yaw_rad + heading)
+        dx, dy = pose.x_m - start.x_m, pose.y_m - start.y_m
+        assert dx * c + dy * s == pytest.approx(distance_m, abs=1e-4), "moved by the push, along it"
+        assert abs(dy * c - dx * s) < 1e-4, "not across it"
+        assert abs(math.degrees(pose.yaw_rad - start.yaw_rad)) < 0.05
+
+
 def test_two_red_parts_of_different_outlines_are_told_apart_and_arranged_by_the_camera(tmp_path) -> None:
     from bt_arrange import treefile
     from bt_arrange_sim.runs import SimulatedRun
