@@ -56,11 +56,13 @@ def _campaign(packages: Path, out: Path, args: argparse.Namespace) -> dict:
 
 
 def _records(out: Path) -> dict[tuple[str, int], dict]:
-    records = {}
-    for line in (out / "trials.jsonl").read_text().splitlines():
-        record = json.loads(line)
-        records[(record["row"], record["trial"])] = {k: v for k, v in record.items() if k not in MACHINE_FIELDS}
-    return records
+    """The campaign's trial records by (row, trial), without the fields that measure the machine."""
+    from bt_arrange_sim.experiment.campaign import read_trials
+
+    return {
+        (record["row"], record["trial"]): {k: v for k, v in record.items() if k not in MACHINE_FIELDS}
+        for record in read_trials(out / "trials.jsonl")
+    }
 
 
 def _by_row(records: dict[tuple[str, int], dict]) -> dict[str, dict]:

@@ -187,11 +187,15 @@ class SensorGrid:
         scale = self._scale
         return max(self.width_px, self.height_px) if scale is None else scale.denominator
 
+    @property
+    def whole(self) -> PixelWindow:
+        """The whole image at full resolution."""
+        return PixelWindow(0, 0, self.image_width_px, self.image_height_px)
+
     def holds(self, window: PixelWindow) -> bool:
         """True for a full-resolution window inside the image with its edges on whole blocks."""
         b = self.block_px
-        whole = window == PixelWindow(0, 0, self.image_width_px, self.image_height_px)
-        return whole or (
+        return window == self.whole or (
             window.binning == 1
             and all(v % b == 0 for v in (window.x_px, window.y_px, window.width_px, window.height_px))
             and window.x_px + window.width_px <= self.image_width_px
@@ -200,7 +204,7 @@ class SensorGrid:
 
     def sensor_pixels(self, window: PixelWindow) -> tuple[int, int, int, int]:
         """The window's first sensor column and row, and its width and height in sensor pixels."""
-        if window == PixelWindow(0, 0, self.image_width_px, self.image_height_px):
+        if window == self.whole:
             return 0, 0, self.width_px, self.height_px
         b, s = self.block_px, self.block_sensor_px
         return window.x_px // b * s, window.y_px // b * s, window.width_px // b * s, window.height_px // b * s
@@ -307,7 +311,7 @@ class DepthGraspEstimator:
             )
         grid = self.sensor_grid(intrinsics if image is None else image)
         if window is None:
-            window = PixelWindow(0, 0, intrinsics.width_px, intrinsics.height_px)
+            window = grid.whole
         elif image is None or not grid.holds(window) or depth.shape != (window.height_px, window.width_px):
             raise PerceptionError(
                 f"depth window {window} is not a full-resolution window on whole {grid.block_px} px blocks "
