@@ -1,7 +1,8 @@
 """Dense layouts by geometry: where the pads go, in which order the parts are placed, from which sides they are pushed.
 
-Everything is planar and in metres: a part is an oriented rectangle on the table (its footprint,
-size x by y), the pads are the rectangles they sweep while grasping, releasing, pushing and
+Everything is planar and in metres: a part is its shape's footprint on the table
+(``bt_arrange.layout_part.Part``: a box's oriented rectangle, another outline's convex pieces),
+the pads are the rectangles they sweep while grasping, releasing, pushing and
 backing off. The pads reach below a resting part's top face (they hold a 5 cm cube at mid
 height), so a pad volume that meets a neighbour's footprint means a collision. A plan is checked
 step by step against what is already on the table at that point:
@@ -18,7 +19,8 @@ step by step against what is already on the table at that point:
 ``plan_layout(parts, settings, order=None)`` chooses an order (a depth-first search that keeps
 every remaining part placeable; the user's order when given) and returns the steps, or raises one
 ``PlanError`` naming the parts in the way. No pybullet, no shapely: separating axes on rectangles
-and on the convex pieces of an irregular part's outline (``bt_arrange.footprints``: ``Outline``, ``PrismFit``).
+and on the convex pieces of an irregular part's outline (``bt_arrange.footprints.Outline``, from
+``Shape.convex_pieces``).
 """
 
 from __future__ import annotations
@@ -30,65 +32,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bt_arrange.errors import PlanError
-from bt_arrange.footprints import Footprint, Outline, PrismFit, Rect, gap_m, overlap, radius_of
+from bt_arrange.footprints import Footprint, Outline, Rect, gap_m, overlap, radius_of
+from bt_arrange.layout_part import DIRECTIONS, Part
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 
 if TYPE_CHECKING:
     from bt_arrange.settings import ManipulationSettings
-
-#: Directions a part can be pushed towards, in its target's frame.
-DIRECTIONS: dict[str, tuple[float, float]] = {"+x": (1.0, 0.0), "-x": (-1.0, 0.0), "+y": (0.0, 1.0), "-y": (0.0, -1.0)}
-
-
-@dataclass(frozen=True)
-class Part:
-    """One part at its target: ``name``, target ``(x_m, y_m, yaw_rad)`` and footprint ``size_x_m`` by ``size_y_m``."""
-
-    name: str
-    x_m: float
-    y_m: float
-    yaw_rad: float
-    size_x_m: float
-    size_y_m: float
-    #: The axes of its frame the pads may close across (a bar only across the side the stroke spans).
-    grasp_axes: tuple[str, ...] = ("x", "y")
-    #: An irregular part's outline, grasps and pushed faces (None: a cuboid, its size says all).
-    prism: PrismFit | None = None
-
-    @property
-    def footprint(self) -> Footprint:
-        """The part at its target."""
-        if self.prism is not None:
-            return Outline(self.x_m, self.y_m, self.yaw_rad, self.prism.pieces)
-        return Rect(self.x_m, self.y_m, self.yaw_rad, self.size_x_m / 2, self.size_y_m / 2)
-
-    def half(self, axis: str) -> float:
-        """Half its size along its own ``axis``."""
-        return (self.size_x_m if axis == "x" else self.size_y_m) / 2
-
-    def grasp_half(self, axis: str) -> float:
-        """Half the width between the pads closed across ``axis``."""
-        return self.prism.grasp(axis)[0] / 2 if self.prism is not None else self.half(axis)
-
-    def grasp_centre(self, axis: str) -> tuple[float, float]:
-        """Where the pads' centre stands, closed across ``axis`` (own frame; the origin for a cuboid)."""
-        return self.prism.grasp(axis)[1] if self.prism is not None else (0.0, 0.0)
-
-    @property
-    def push_directions(self) -> tuple[str, ...]:
-        """The directions it may be pushed towards: its target frame's four, an irregular part's square pushes."""
-        return self.prism.push_names if self.prism is not None else tuple(DIRECTIONS)
-
-    def push_vector(self, towards: str) -> tuple[float, float]:
-        """The unit vector (own frame) of a push ``towards``."""
-        if self.prism is None:
-            return DIRECTIONS[towards]
-        heading_rad, _ = self.prism.push(towards)
-        return math.cos(heading_rad), math.sin(heading_rad)
-
-    def back(self, towards: str) -> float:
-        """How far behind its origin the pads pushing it ``towards`` meet it (half its size for a cuboid)."""
-        return self.prism.push(towards)[1] if self.prism is not None else self.half(towards[1])
 
 
 @dataclass(frozen=True)
@@ -144,8 +93,8 @@ class Pads:
 
     def neighbour_push_opening_m(self, part: Part, along: str) -> float:
         """The opening for a push along ``along`` among neighbours (``Gripper.neighbour_push_opening_m``)."""
-        if part.prism is not None:
-            return part.prism.push_opening_m
+        if part.by_outline:
+            return part.push_opening_m
         return self.gripper.neighbour_push_opening_m(2 * part.half("y" if along == "x" else "x"))
 
     def release_opening_m(self, part: Part, axis: str) -> float:
@@ -171,8 +120,8 @@ def push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: 
     the fingers stay within the face's width), start ``push_clearance_m`` behind it, are a pad's
     width deep, and travel with the face.
     """
-    if part.prism is not None:
-        return _prism_push_pads(part, at, towards, distance_m, pads)
+    if part.by_outline:
+        return _square_push_pads(part, at, towards, distance_m, pads)
     ux, uy = DIRECTIONS[towards]
     along = "x" if ux else "y"
     half_along = part.back(towards)
@@ -188,16 +137,15 @@ def push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: 
     return at.local(0.0, centre, half_across, depth)
 
 
-def _prism_push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: Pads) -> Rect:
+def _square_push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: Pads) -> Rect:
     """``push_pads`` for a square push of an irregular part: the pads behind its edge, along the push's heading."""
-    assert part.prism is not None
-    heading_rad, back_m = part.prism.push(towards)
+    heading_rad, back_m = part.push_heading_rad(towards), part.back(towards)
     near = back_m - distance_m
     far = back_m + pads.push_clearance_m + pads.width_m
     middle = -(near + far) / 2
     ux, uy = math.cos(heading_rad), math.sin(heading_rad)
     centre = at.local(middle * ux, middle * uy, 0.0, 0.0)
-    half_across = part.prism.push_opening(towards) / 2 + pads.finger_depth_m
+    half_across = part.push_opening(towards) / 2 + pads.finger_depth_m
     return Rect(centre.x_m, centre.y_m, at.yaw_rad + heading_rad, (far - near) / 2, half_across)
 
 
@@ -289,7 +237,7 @@ def _staged_release(
 ) -> Release | None:
     """The smallest offset away from the neighbours where the pads fit and pushes home go from free sides."""
     free = free_push_directions(part, placed, pads)
-    if part.prism is not None:
+    if part.by_outline:
         return _staged_prism_release(part, placed, pads, free, axes)
     candidates = directions or [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1) if (sx, sy) != (0, 0)]
     best: tuple[float, Release] | None = None
@@ -354,7 +302,7 @@ def _staged_prism_release(
 def _release(part: Part, axis: str, pads: Pads, staging_m: tuple[float, float] = (0.0, 0.0)) -> Release:
     """The release across ``axis`` with the part's origin ``staging_m`` from its target (the TCP at its grasp)."""
     opening_m = pads.release_opening_m(part, axis)
-    if part.prism is None:
+    if not part.by_outline:
         return Release(axis, opening_m, staging_m)
     cx, cy = part.grasp_centre(axis)
     return Release(axis, opening_m, (staging_m[0] + cx, staging_m[1] + cy), (cx, cy))
@@ -372,7 +320,7 @@ def choose_release(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pa
 def restage_releases(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> dict[str, Release]:
     """For each direction a push cannot go (its pads' side is blocked), a release past the target from which it can."""
     others = [(n, r) for n, r in placed if n != part.name]
-    if part.prism is not None:
+    if part.by_outline:
         # Picked up again across a grasp, Pick stands the pads' centre on the part's origin (a
         # cuboid's grasp centre): an irregular part is pushed only from its free sides instead.
         return {}
@@ -557,3 +505,27 @@ def start_clearance_m(start_half_diagonal_m: float, pads: Pads) -> float:
     picking = math.hypot(pads.max_opening_m / 2 + pads.thickness_m, pads.width_m / 2)
     working = start_half_diagonal_m + pads.push_clearance_m + pads.width_m
     return max(picking, working) + pads.pad_clearance_m
+
+
+__all__ = [
+    "DIRECTIONS",
+    "Footprint",
+    "Outline",
+    "Pads",
+    "Part",
+    "Rect",
+    "Release",
+    "Step",
+    "blockers",
+    "check_gaps",
+    "choose_release",
+    "free_push_directions",
+    "gap_m",
+    "neighbours_of",
+    "overlap",
+    "plan_layout",
+    "push_pads",
+    "release_pads",
+    "restage_releases",
+    "start_clearance_m",
+]

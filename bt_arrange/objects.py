@@ -1,8 +1,9 @@
 """Object types: what a user brings to the table, a named shape with the simulator's physics.
 
-An :class:`ObjectType` is a name and a :class:`~bt_arrange.shapes.Shape` (today a
-:class:`~bt_arrange.shapes.Cuboid` of ``size_m = (x, y, z)`` metres; z is its height on the
-table). The paper's 5 cm cube is the built-in default, :data:`CUBE`. Mass and friction are
+An :class:`ObjectType` is a name and a :class:`~bt_arrange.shapes.Shape`: a
+:class:`~bt_arrange.shapes.Prism` of any outline, or the box ``Prism.box(x, y, z)`` that
+``ObjectType(name, size_m)`` makes (metres; z is its height on the table). The paper's 5 cm
+cube is the built-in default, :data:`CUBE`. Mass and friction are
 settings of the simulator (``mass_kg``, ``lateral_friction``); the framework never reads them.
 
 The geometry (top face, footprint, symmetry, grasps, pushed faces) is the shape's
@@ -17,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from bt_arrange.errors import PlanError
-from bt_arrange.shapes import ROBOTIQ_2F85, Cuboid, Shape
+from bt_arrange.shapes import ROBOTIQ_2F85, Prism, Shape
 from bt_arrange.suggest import did_you_mean
 
 
@@ -25,7 +26,7 @@ from bt_arrange.suggest import did_you_mean
 class ObjectType:
     """A named part type: its ``shape``, and the simulator's ``mass_kg`` and ``lateral_friction`` (None: the cell's).
 
-    ``ObjectType(name, size_m)`` is a cuboid of ``size_m = (x, y, z)`` metres; ``shape=`` takes
+    ``ObjectType(name, size_m)`` is the box prism of ``size_m = (x, y, z)`` metres; ``shape=`` takes
     any :class:`~bt_arrange.shapes.Shape`. A type's checks (positive size, one grasp the 2F-85 can
     take) run when it is made, so a bad type is a ``PlanError`` naming it.
     """
@@ -53,7 +54,7 @@ class ObjectType:
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in size_m)
             ):
                 raise PlanError(f"object type {name!r}: size must be three numbers (x, y, z in metres), got {size_m!r}")
-            shape = Cuboid((float(size_m[0]), float(size_m[1]), float(size_m[2])))
+            shape = Prism.box(float(size_m[0]), float(size_m[1]), float(size_m[2]))
         elif size_m is not None:
             raise PlanError(f"object type {name!r}: give a size or a shape, not both")
         problems = shape.problems(ROBOTIQ_2F85)
@@ -104,10 +105,11 @@ class ObjectType:
         return self.shape.describe()
 
     def resized(self, grown_m: float) -> ObjectType:
-        """The same type with every edge ``grown_m`` longer (a real cell's machining error); cuboids only."""
-        if not isinstance(self.shape, Cuboid):
+        """The same type with every edge ``grown_m`` longer (a real cell's machining error); boxes only."""
+        if not self.shape.rectangular:
             return self
-        grown = Cuboid(tuple(v + grown_m for v in self.shape.size_m))  # type: ignore[arg-type]
+        x_m, y_m, z_m = self.shape.size_m
+        grown = Prism.box(x_m + grown_m, y_m + grown_m, z_m + grown_m)
         return ObjectType(self.name, None, self.mass_kg, self.lateral_friction, shape=grown)
 
 

@@ -40,7 +40,7 @@ from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.perception.pose import pixel_on_plane, project_world
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Cuboid, folded_yaw, footprint_m, grown, min_centre_distance_m, told_apart
+from bt_arrange.shapes import folded_yaw, footprint_m, grown, min_centre_distance_m, told_apart
 from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 from bt_arrange.trees.targets import reach_text
@@ -232,7 +232,7 @@ def check_scene(
             other_shape = object_type_of(other).shape
             least_m = min_centre_distance_m(kind.shape, other_shape)
             if distance_m < least_m:
-                cubes = kind.shape == other_shape and isinstance(other_shape, Cuboid) and other_shape.is_cube
+                cubes = kind.shape == other_shape and other_shape.is_cube
                 what = "a cube's diagonal" if cubes else "their half diagonals"
                 raise PlanError(
                     f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "

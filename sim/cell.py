@@ -28,7 +28,6 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics, Robot
-from bt_arrange.shapes import Prism
 from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
@@ -421,7 +420,7 @@ class WorkCell:
             colour,
             pose.position_m,
             pose.quaternion_xyzw,
-            self.config.physics.prism_contact if isinstance(built.shape, Prism) else self.config.physics.cube_contact,
+            self.config.physics.cube_contact if built.shape.rectangular else self.config.physics.prism_contact,
             self.colours,
         )
         self.object_types[name] = object_type

@@ -22,7 +22,6 @@ from bt_arrange.robot import (
     CameraIntrinsics,
     PixelWindow,
 )
-from bt_arrange.shapes import Prism
 
 if TYPE_CHECKING:
     from bt_arrange_sim.cell import WorkCell
@@ -205,7 +204,7 @@ class SimGripper:
         cell = self._cell
         if cell.config.physics.prism_contact.friction_anchor:
             return False
-        unanchored = [cell.cubes[n] for n, t in cell.object_types.items() if isinstance(t.shape, Prism)]
+        unanchored = [cell.cubes[n] for n, t in cell.object_types.items() if not t.shape.rectangular]
         return any(
             self._client.getContactPoints(self._body, body, linkIndexA=finger)
             for body in unanchored

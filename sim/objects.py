@@ -10,7 +10,7 @@ from bt_arrange.errors import PlanError
 from bt_arrange.files import shared_temp_file
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, PAINT_RGB, SIDE_RGB, ColourRange, ColourTable
-from bt_arrange.shapes import Cuboid, Prism
+from bt_arrange.shapes import Prism
 
 __all__ = ["PAINT_RGB", "Contact", "create_cube", "create_object"]
 
@@ -77,7 +77,7 @@ def mass_of(object_type: ObjectType) -> float:
     if object_type.mass_kg is not None:
         return object_type.mass_kg
     shape = object_type.shape
-    if isinstance(shape, Prism):
+    if not shape.rectangular:
         return WOOD_DENSITY_KG_M3 * shape.area_m2 * shape.height_m
     return DEFAULT_MASS_KG
 
@@ -165,7 +165,7 @@ def create_object(  # noqa: PLR0913
 
     rgb = paint_of(colour, colours)
     shape = object_type.shape
-    if isinstance(shape, Cuboid):
+    if shape.rectangular:
         hx, hy, hz = (v / 2 for v in shape.size_m)
         collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[hx, hy, hz])
         visual = client.createVisualShapeArray(
@@ -173,14 +173,12 @@ def create_object(  # noqa: PLR0913
             halfExtents=[[hx, hy, hz - TOP_PLATE_M / 2], [hx, hy, TOP_PLATE_M / 2]],
             visualFramePositions=[[0, 0, -TOP_PLATE_M / 2], [0, 0, hz - TOP_PLATE_M / 2]],
         )
-    elif isinstance(shape, Prism):
+    else:
         collision_obj, sides_obj, top_obj = prism_mesh_files(shape)
         collision = client.createCollisionShape(pybullet.GEOM_MESH, fileName=collision_obj)
         visual = client.createVisualShapeArray(
             shapeTypes=[pybullet.GEOM_MESH, pybullet.GEOM_MESH], fileNames=[sides_obj, top_obj]
         )
-    else:
-        raise PlanError(f"object type {object_type.name!r}: the pybullet cell builds cuboids and prisms, not {shape!r}")
     body = client.createMultiBody(
         baseMass=mass_of(object_type),
         baseCollisionShapeIndex=collision,

@@ -7,6 +7,7 @@ import math
 import pytest
 
 from bt_arrange.errors import PlanError
+from bt_arrange.shapes import Prism
 from bt_arrange.layout import (
     Pads,
     Part,
@@ -25,7 +26,7 @@ PADS = Pads()
 
 
 def cube(name: str, x_mm: float, y_mm: float, yaw_deg: float = 0.0) -> Part:
-    return Part(name, 0.45 + x_mm / 1000, y_mm / 1000, math.radians(yaw_deg), EDGE, EDGE)
+    return Part(name, 0.45 + x_mm / 1000, y_mm / 1000, math.radians(yaw_deg), Prism.box(EDGE, EDGE, EDGE))
 
 
 def grid(columns: int, rows: int, gap_mm: float) -> list[Part]:

@@ -11,16 +11,16 @@ from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism
 from bt_arrange.shapes.fracture import fracture, polygon_gap_m
 from bt_arrange.trees import Target
-from bt_arrange.trees.targets import parts_of, prism_fit
+from bt_arrange.trees.targets import parts_of
 
 PADS = Pads()
 ELL = Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
 
 
 def ell_at(x_m: float, y_m: float, yaw_rad: float = 0.0) -> Outline:
-    fit = prism_fit(ELL, ROBOTIQ_2F85)
-    assert fit is not None
-    return Outline(x_m, y_m, yaw_rad, fit.pieces)
+    part = Part("ell", x_m, y_m, yaw_rad, ELL, ROBOTIQ_2F85)
+    assert part.by_outline
+    return part.footprint
 
 
 def test_an_outline_is_tested_by_its_own_pieces_not_its_bounding_box() -> None:
@@ -93,8 +93,8 @@ def test_a_fresco_is_built_piece_by_piece_each_released_where_its_pads_miss_the_
 
 def test_a_prism_grasped_off_its_centroid_has_its_pads_about_the_grasp() -> None:
     (part,) = _fresco_parts(3, 0)[:1]
-    assert part.prism is not None
-    width, centre = part.prism.grasp("x")
+    assert part.by_outline and part.grasp_axes == ("x",)
+    width, centre = 2 * part.grasp_half("x"), part.grasp_centre("x")
     left, right = release_pads(part, part.footprint, "x", PADS)
     middle = ((left.x_m + right.x_m) / 2, (left.y_m + right.y_m) / 2)
     c, s = math.cos(part.yaw_rad), math.sin(part.yaw_rad)

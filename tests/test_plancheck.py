@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.layout import Part, gap_m
-from bt_arrange.objects import ObjectType
+from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import PAINT_RGB
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import ManipulationSettings
@@ -153,8 +153,8 @@ def assert_valid(plan: list[Target], scene: list[CubeStart] | None) -> None:
     for i, first in enumerate(plan):
         for second in plan[i + 1 :]:
             # Parts never overlap or come closer than the 2 mm the layout demands.
-            a = Part("a", first.x_m, first.y_m, first.yaw_rad, 0.05, 0.05).footprint
-            b = Part("b", second.x_m, second.y_m, second.yaw_rad, 0.05, 0.05).footprint
+            a = Part("a", first.x_m, first.y_m, first.yaw_rad, CUBE.shape).footprint
+            b = Part("b", second.x_m, second.y_m, second.yaw_rad, CUBE.shape).footprint
             assert gap_m(a, b) >= 0.002 - 1e-9
 
 

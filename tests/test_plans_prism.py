@@ -59,7 +59,15 @@ def test_an_outline_type_is_a_prism_about_its_centroid_and_its_target_says_where
         ("outline_mm = [[0, 0], [60, 0]]\nheight_mm = 20", "at least three points"),
         ("outline_mm = [[0, 0], [30, 0], [60, 0]]\nheight_mm = 20", "encloses no area"),
         ("outline_mm = [[0, 0], [60, 0], [60, 40], [55, 45], [0, 45]]\nheight_mm = 20", "under the 10 mm the camera"),
-        ("outline_mm = [[0, 0], [100, 0], [100, 90], [0, 90]]\nheight_mm = 20", "no two edges the 2F-85 can close on"),
+        (
+            "outline_mm = [[0, 0], [100, 0], [100, 90], [50, 100], [0, 90]]\nheight_mm = 20",
+            "no two edges the 2F-85 can close on",
+        ),
+        # A rectangle along its axes is the box of that size, refused as a box is.
+        (
+            "outline_mm = [[0, 0], [100, 0], [100, 90], [0, 90]]\nheight_mm = 20",
+            "no horizontal side the gripper can span",
+        ),
         ("outline_mm = [[0, 0], [60, 0], [0, 50]]\nheight_mm = 8", "thinner than the pads"),
         ("outline_mm = [[0, 0], [60, 0], [0, 50]]\nheight_mm = 120", "taller than 100 mm"),
         ("outline_mm = [[0, 0], [60, 0], [0, 50]]", "missing height_mm"),

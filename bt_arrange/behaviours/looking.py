@@ -19,7 +19,7 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
 from bt_arrange.ports import BOOL, STRING, Port
 from bt_arrange.robot import PixelWindow
-from bt_arrange.shapes import Prism, yaw_error_rad
+from bt_arrange.shapes import yaw_error_rad
 
 #: A part counts as "at a target" (placed already) when its centre lies within this fraction of
 #: its shorter top edge from a target of its kind: a placed part lies within millimetres of its
@@ -135,7 +135,7 @@ def look(
             chosen, reason = choose(located)
             if chosen is None:
                 return Detection(colour, DetectionStatus.NOT_FOUND, reason, candidates_xy_m=located)
-        elif len(located) > 1 and isinstance(kind.shape, Prism):
+        elif len(located) > 1 and not kind.shape.rectangular:
             # Parts of one colour told apart by outline: each blob measured at full resolution, where
             # only this part's outline registers (another outline is WRONG_OUTLINE there).
             spot_m = identical_roi_half_m(kind)

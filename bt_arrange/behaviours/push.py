@@ -27,8 +27,7 @@ from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import ROBOTIQ_2F85, Prism
-from bt_arrange.shapes.prism import SquarePush
+from bt_arrange.shapes import ROBOTIQ_2F85, SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
@@ -133,8 +132,9 @@ class Push(StagedBehaviour):
         #: width); default the paper's width minus a pad's thickness.
         self.opening_m = opening_m
         shape = self.object_type.shape
-        #: An irregular part's square pushes by name (``Prism.named_pushes``); empty for a cuboid.
-        self.square_pushes: dict[str, SquarePush] = shape.named_pushes(ROBOTIQ_2F85) if isinstance(shape, Prism) else {}
+        #: An irregular part's square pushes by name (``Shape.named_pushes``); empty for a box, which is
+        #: pushed along its target frame's axes (the paper's Algorithm 1).
+        self.square_pushes: dict[str, SquarePush] = {} if shape.rectangular else shape.named_pushes(ROBOTIQ_2F85)
         known = tuple(self.square_pushes) if self.square_pushes else tuple(DIRECTIONS)
         if towards is not None and any(d not in known for d in towards):
             raise BtArrangeError(f"push {name!r}: directions {towards} must be among {', '.join(known)}")
@@ -309,7 +309,6 @@ class Push(StagedBehaviour):
         opening_m = self.square_pushes[name].opening_m
         half_span_m = opening_m / 2 + s.gripper.pad_thickness_m
         shape = self.object_type.shape
-        assert isinstance(shape, Prism)
         reach_m = shape.back_within_m(heading, pose.yaw_rad, half_span_m) + s.gripper.pad_width_m / 2
         _, approach_m, push_m = heights_m(s, self.object_type)
         centre = np.array([pose.x_m, pose.y_m])
@@ -379,7 +378,7 @@ class Push(StagedBehaviour):
         opening_m = min(gripper.free_push_opening_m(face.width_m), s.open_width_m)
         reach_m = face.depth_m / 2 + gripper.pad_width_m / 2
         opening_m = max(0.0, min(opening_m, face.leading_width_m - gripper.pad_thickness_m))
-        if isinstance(shape, Prism):
+        if not shape.rectangular:
             # An irregular part: the pads stop where they first meet it, which need not be its
             # back-most point (a corner beside the pads is never touched by them).
             half_span_m = opening_m / 2 + gripper.pad_thickness_m

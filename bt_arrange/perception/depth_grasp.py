@@ -62,7 +62,6 @@ from bt_arrange.geometry import FloatArray, Pose, fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.detection import Detection, DetectionStatus
 from bt_arrange.robot import Camera, CameraFrame, CameraIntrinsics, PixelWindow
-from bt_arrange.shapes import Cuboid
 
 #: Every outcome's reason starts with this label: the estimator is a stand-in, not the paper's.
 SOURCE = "depth-only grasp estimator (substitute for Berscheid et al.)"
@@ -75,7 +74,9 @@ L515_DEPTH_WIDTH_PX = 1024
 class DepthGraspConfig:
     """What the estimator assumes about the sensor, the table and the parts (metres, pixels).
 
-    ``part`` is the one type it knows (the paper's 5 cm cube): a cuboid with a square top.
+    ``part`` is the type it looks for (the paper's 5 cm cube by default): a box, the shape whose
+    top face ``cv2.minAreaRect`` fits (``Shape.rectangular``); its height and top face set what a
+    blob must measure.
 
     Sensor model: the depth image is resampled (area averaging) to ``depth_width_px`` columns,
     keeping the frame's aspect ratio and field of view (a 1920 x 1080 frame becomes
@@ -118,16 +119,17 @@ class DepthGraspConfig:
             if not getattr(self, name) >= 0.0:
                 raise PerceptionError(f"{name}={getattr(self, name)!r} must be 0 or more")
         shape = self.part.shape
-        if not (isinstance(shape, Cuboid) and shape.is_cube):
+        if not shape.rectangular:
             raise PerceptionError(
-                f"the depth-only estimator knows cubes only, not {self.part.name} ({shape.describe()})"
+                f"the depth-only estimator fits rectangles, so it finds boxes only, not {self.part.name} "
+                f"({shape.describe()})"
             )
-        if not 0.0 < self.min_height_m < self.cube_edge_m:
-            raise PerceptionError(f"min_height_m={self.min_height_m} must lie between 0 and the cube's edge")
+        if not 0.0 < self.min_height_m < self.part_height_m:
+            raise PerceptionError(f"min_height_m={self.min_height_m} must lie between 0 and the part's height")
 
     @property
-    def cube_edge_m(self) -> float:
-        """The edge of the cube it knows."""
+    def part_height_m(self) -> float:
+        """The height of the part's top face above the table."""
         return self.part.shape.height_m
 
     @property
@@ -138,7 +140,7 @@ class DepthGraspConfig:
     @property
     def face_area_m2(self) -> float:
         """Area of one top face in square metres."""
-        return self.cube_edge_m**2
+        return self.part.shape.area_m2
 
 
 #: Binning of the depth frame that searches the whole view for what stands on the table (4 mm per pixel).
@@ -503,11 +505,13 @@ class DepthGraspEstimator:
             return outcome(
                 DetectionStatus.AMBIGUOUS, f"{where}: as large as {faces:.1f} faces, touching cubes?", **measured
             )
-        if abs(top_m - config.cube_edge_m) > config.top_height_tolerance_m:
+        shape = config.part.shape
+        if abs(top_m - config.part_height_m) > config.top_height_tolerance_m:
             return outcome(
                 DetectionStatus.PARTIAL,
                 f"{where}: its top stands {top_m * 1000:.0f} mm above the table, not "
-                f"{config.cube_edge_m * 1000:.0f} mm: not a cube resting on the table (lifted, stacked)?",
+                f"{config.part_height_m * 1000:.0f} mm: not a {config.part.name} resting on the table (lifted, "
+                "stacked)?",
                 **measured,
             )
         if len(points) < 5:
@@ -516,16 +520,20 @@ class DepthGraspEstimator:
         sides_m = (w_mm / 1000.0, h_mm / 1000.0)
         edge_m = (sides_m[0] + sides_m[1]) / 2.0
         low, high = config.side_fraction_range
-        if not (low * config.cube_edge_m <= min(sides_m) and max(sides_m) <= high * config.cube_edge_m):
+        x_m, y_m = shape.extent_m
+        if not (low * min(x_m, y_m) <= min(sides_m) and max(sides_m) <= high * max(x_m, y_m)):
             return outcome(
                 DetectionStatus.PARTIAL,
-                f"{where}: its top measures {sides_m[0] * 1000:.0f} x {sides_m[1] * 1000:.0f} mm, not a "
-                f"{config.cube_edge_m * 1000:.0f} mm square: covered, tipped, or not a cube?",
+                f"{where}: its top measures {sides_m[0] * 1000:.0f} x {sides_m[1] * 1000:.0f} mm, not "
+                f"{shape.describe()}: covered, tipped, or not a {config.part.name}?",
                 edge_m=edge_m,
                 **measured,
             )
-        yaw = fold_yaw(math.radians(angle_deg))
-        pose = Pose.from_planar(cx_mm / 1000.0, cy_mm / 1000.0, yaw, config.table_z_m + config.cube_edge_m / 2.0)
+        yaw_rad = math.radians(angle_deg)
+        if not shape.square_top and abs(sides_m[0] - y_m) < abs(sides_m[0] - x_m):
+            yaw_rad += math.pi / 2  # the rectangle's first side is the part's y edge
+        yaw = fold_yaw(yaw_rad, shape.symmetry_rad)
+        pose = Pose.from_planar(cx_mm / 1000.0, cy_mm / 1000.0, yaw, config.table_z_m + config.part_height_m / 2.0)
         return outcome(
             DetectionStatus.FOUND,
             f"grasp at x={pose.x_m:.4f} m, y={pose.y_m:.4f} m, yaw={math.degrees(yaw):.2f} deg from {how}",

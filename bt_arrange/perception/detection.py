@@ -51,7 +51,6 @@ from bt_arrange.perception.segmentation import (
 )
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
-from bt_arrange.shapes import Prism
 
 
 def _format_xy(points: Iterable[tuple[float, float]]) -> str:
@@ -248,8 +247,8 @@ class CubeDetector:
         return split
 
     def _detect(self, view: PreparedView, colour: ColourRange, roi: WorldRegion | None) -> Detection:
-        if isinstance(self.config.part.shape, Prism):
-            # A prism's face is registered to its outline (bt_arrange.perception.outline), not cornered.
+        if not self.config.part.shape.rectangular:
+            # An outline that is no box is registered (bt_arrange.perception.outline), not cornered.
             from bt_arrange.perception.outline import detect_outline
 
             return detect_outline(self, view, colour, roi)

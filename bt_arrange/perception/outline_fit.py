@@ -12,12 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception.corners import _median
 from bt_arrange.robot import CameraIntrinsics
-from bt_arrange.shapes import Prism
 
 #: The coarse yaw grid (degrees) and how many contour points it scores.
 COARSE_STEP_DEG = 2.0
@@ -55,10 +53,8 @@ class OutlineModel:
 
     @classmethod
     def of(cls, part: ObjectType) -> OutlineModel:
-        """The model of a prism part; a ``PerceptionError`` for any other shape."""
+        """The model of a part's outline, any shape."""
         prism = part.shape
-        if not isinstance(prism, Prism):
-            raise PerceptionError(f"{part.name} is no prism ({prism.describe()})")
         outline = np.asarray(prism.outline_m, dtype=float)
         vectors = np.roll(outline, -1, axis=0) - outline
         lengths = np.hypot(vectors[:, 0], vectors[:, 1])

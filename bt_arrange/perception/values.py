@@ -21,7 +21,6 @@ from bt_arrange.perception.corners import CornerRefinement, Undistort
 from bt_arrange.perception.pose import PoseModel, expected_face_area_px, expected_outline_area_px
 from bt_arrange.perception.segmentation import PAPER_KERNEL_PX
 from bt_arrange.robot import CameraIntrinsics
-from bt_arrange.shapes import Cuboid, Prism
 
 
 class DetectionStatus(str, enum.Enum):
@@ -106,13 +105,6 @@ class DetectorConfig:
     #: The blob search runs on the image downscaled so that a face is about this wide.
     coarse_face_edge_px: float = 24.0
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.part.shape, (Cuboid, Prism)):
-            raise PerceptionError(
-                f"the detector finds cuboids' and prisms' top faces, "
-                f"not {self.part.name} ({self.part.shape.describe()})"
-            )
-
     @property
     def size_m(self) -> tuple[float, float, float]:
         """The part's size (x, y, z)."""
@@ -121,8 +113,7 @@ class DetectorConfig:
     @property
     def square_top(self) -> bool:
         """True when the top face is a square (within 0.5 mm)."""
-        shape = self.part.shape
-        return isinstance(shape, Cuboid) and shape.square_top
+        return self.part.shape.square_top
 
     @property
     def symmetry_rad(self) -> float:
@@ -132,7 +123,7 @@ class DetectorConfig:
     @property
     def face_text(self) -> str:
         """The top face in words: ``5.0 cm square`` or ``8.0 x 4.0 cm rectangle``."""
-        if isinstance(self.part.shape, Prism):
+        if not self.part.shape.rectangular:
             return f"{self.part.name} outline"
         x, y, _ = self.size_m
         return f"{x * 100:.0f} cm square" if self.square_top else f"{x * 100:.1f} x {y * 100:.1f} cm rectangle"
@@ -140,7 +131,7 @@ class DetectorConfig:
     def face_area_px(self, intrinsics: CameraIntrinsics, T_W_C: Pose, centre_world: FloatArray) -> float:
         """Image area of one top face centred at ``centre_world`` (level, axis-aligned), pixels."""
         shape = self.part.shape
-        if isinstance(shape, Prism):
+        if not shape.rectangular:
             return expected_outline_area_px(intrinsics, T_W_C, centre_world, shape.outline_m)
         x, y, _ = self.size_m
         return expected_face_area_px(intrinsics, T_W_C, centre_world, x, y)

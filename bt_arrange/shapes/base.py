@@ -55,6 +55,27 @@ class PushedFace:
     leading_width_m: float
 
 
+#: The least opening of the fingers for pushing an irregular part, nearly closed: both pads land on
+#: the edge a square push meets (``Prism.named_pushes`` opens them wider where the edge allows).
+PRISM_PUSH_OPENING_M = 0.004
+
+
+@dataclass(frozen=True)
+class SquarePush:
+    """A push that meets one edge squarely.
+
+    Its ``heading_rad`` in the part's frame (the edge's inward normal), how far behind the centroid
+    the edge lies (``back_m``), the edge's length and index, and the fingers' opening.
+    """
+
+    heading_rad: float
+    back_m: float
+    edge_m: float
+    edge: int
+    #: The fingers' opening for this push (``Prism.named_pushes``).
+    opening_m: float = PRISM_PUSH_OPENING_M
+
+
 class Shape(Protocol):
     """A rigid part standing on the table, as every step of an arrangement sees it (metres, radians)."""
 
@@ -83,8 +104,53 @@ class Shape(Protocol):
         """The radius of the circle the top face sweeps as the part turns about its origin."""
         ...
 
+    @property
+    def size_m(self) -> tuple[float, float, float]:
+        """The part's bounding box in its own frame: ``extent_m`` and the height (a box's edges)."""
+        ...
+
+    @property
+    def area_m2(self) -> float:
+        """The top face's area."""
+        ...
+
+    @property
+    def rectangular(self) -> bool:
+        """The trait of a box: the top face is a rectangle along the part's axes (the faster paths ask it)."""
+        ...
+
+    @property
+    def square_top(self) -> bool:
+        """The trait of a box with a square top face (within 0.5 mm)."""
+        ...
+
+    @property
+    def is_cube(self) -> bool:
+        """The trait of a cube: a square top as tall as it is wide."""
+        ...
+
+    def support_m(self, direction: FloatArray) -> float:
+        """How far the part reaches from its mid-height centre along a unit ``direction`` of its frame (3-vector)."""
+        ...
+
     def grasps(self, gripper: Gripper) -> tuple[Grasp, ...]:
         """The grasps ``gripper`` can take on the part, the preferred first (none: it cannot hold it)."""
+        ...
+
+    def named_pushes(self, gripper: Gripper) -> dict[str, SquarePush]:
+        """The pushes that meet one edge squarely, by name (``"@-54.0"``), with the fingers' opening for each."""
+        ...
+
+    def back_within_m(self, heading_rad: float, yaw_rad: float, half_span_m: float) -> float:
+        """How far back from the origin, along a push, the outline reaches within ``half_span_m`` of its line."""
+        ...
+
+    def push_contact_m(self, heading_rad: float, yaw_rad: float) -> tuple[float, float]:
+        """The span (low, high) across a push, from the line through the origin, of what the pads meet."""
+        ...
+
+    def convex_pieces(self) -> list[FloatArray]:
+        """The top face as convex polygons (counter-clockwise): the engines' bodies, the layout's footprints."""
         ...
 
     def pushed_face(self, heading_rad: float, yaw_rad: float) -> PushedFace:
@@ -93,6 +159,10 @@ class Shape(Protocol):
 
     def problems(self, gripper: Gripper) -> list[str]:
         """What makes the part one the camera or ``gripper`` cannot handle (empty: none)."""
+        ...
+
+    def size_problems(self) -> list[str]:
+        """The part's own problems, those that need no gripper (too thin, too tall, an edge too short)."""
         ...
 
     def describe(self) -> str:
@@ -153,7 +223,9 @@ __all__ = [
     "MAX_HEIGHT_M",
     "MIN_EDGE_M",
     "Grasp",
+    "PRISM_PUSH_OPENING_M",
     "PushedFace",
+    "SquarePush",
     "Shape",
     "folded_yaw",
     "footprint_m",

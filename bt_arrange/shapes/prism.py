@@ -1,6 +1,13 @@
-"""The prism: a flat part whose top face is any simple polygon, convex or not (an L, a fresco piece).
+"""The prism, *the* shape of a part: a flat part whose top face is any simple polygon (a box, an L, a fresco piece).
 
-Its frame is the outline's area centroid, its x axis the outline's x axis as written, z up from
+Every part is a :class:`Prism`. A box, the paper's cube among them, is the prism :class:`Cuboid`
+(made by :meth:`Prism.box`, or by :meth:`Prism.from_outline` of an outline that is a rectangle
+along its axes): it declares the trait ``rectangular``, which the steps with a faster path for
+boxes ask (the corner detector, the tilt check, the depth-only estimator, the layout's
+rectangles), and answers the protocol with the box arithmetic the paper's results were measured
+with. A step never asks which class a shape is.
+
+A prism's frame is the outline's area centroid, its x axis the outline's x axis as written, z up from
 the table. The pads grasp it at antipodal pairs of edges (parallel or nearly so, within the pads'
 friction cone, the width within the stroke), nearest the centroid first; a push meets the part's
 back-most points along the push. Everything is in metres and radians; the outline is stored
@@ -9,17 +16,19 @@ counter-clockwise whatever the winding it was written in.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 
 from bt_arrange.errors import PlanError
-from bt_arrange.geometry import FloatArray
-from bt_arrange.shapes.base import MAX_HEIGHT_M, MIN_EDGE_M, Grasp, PushedFace
+from bt_arrange.geometry import FloatArray, fold_yaw
+from bt_arrange.shapes.antipodal import MIN_GRASP_OVERLAP_M, antipodal_grasps
+from bt_arrange.shapes.base import MAX_HEIGHT_M, MIN_EDGE_M, PRISM_PUSH_OPENING_M, Grasp, PushedFace, SquarePush
 from bt_arrange.shapes.gripper import Gripper
+from bt_arrange.shapes.polygon import centroid_m, convex_pieces, outline_problem, signed_area_m2, turn_rad
 
 #: A side between two corners shorter than this is one the camera cannot measure.
 MIN_PERCEIVED_EDGE_M = 0.010
@@ -27,62 +36,19 @@ MIN_PERCEIVED_EDGE_M = 0.010
 CORNER_TURN_RAD = math.radians(10.0)
 #: Two outlines whose vertices lie this close after a turn are the same: the turn is a symmetry.
 SYMMETRY_TOLERANCE_M = 0.0005
-#: The pads hold where edges face each other within this angle of antipodal (a cone of friction 0.3,
-#: well inside the pads' measured 1.2 on wood, so a part never slips out turning).
-ANTIPODAL_HALF_ANGLE_RAD = math.atan(0.3)
-#: A grasp needs the two edges to overlap this much along the pads (a third of a 22 mm pad).
-MIN_GRASP_OVERLAP_M = 0.008
 #: Points of the outline within this of the back-most line along a push are what the pads meet.
 PUSH_CONTACT_BAND_M = 0.001
-#: The least opening of the fingers for pushing an irregular part, nearly closed: both pads land on
-#: the edge a square push meets (``Prism.named_pushes`` opens them wider where the edge allows).
-PRISM_PUSH_OPENING_M = 0.004
 #: A square push needs an edge this long: the pads' span (two pads beside the opening) and 2 mm.
 MIN_PUSHED_EDGE_M = 0.022
 
 
-def _signed_area_m2(points: FloatArray) -> float:
-    x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-
-
-def _centroid_m(points: FloatArray) -> FloatArray:
-    x, y = points[:, 0], points[:, 1]
-    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
-    area = 0.5 * float(np.sum(cross))
-    cx = float(np.sum((x + np.roll(x, -1)) * cross)) / (6.0 * area)
-    cy = float(np.sum((y + np.roll(y, -1)) * cross)) / (6.0 * area)
-    return np.array([cx, cy])
-
-
-def _segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
-    """True when the closed segments p1-p2 and q1-q2 meet (touching counts)."""
-
-    def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
-        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-
-    def on(a: FloatArray, b: FloatArray, c: FloatArray) -> bool:
-        return min(a[0], b[0]) - 1e-12 <= c[0] <= max(a[0], b[0]) + 1e-12 and (
-            min(a[1], b[1]) - 1e-12 <= c[1] <= max(a[1], b[1]) + 1e-12
-        )
-
-    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
-    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
-    if ((d1 > 0 > d2) or (d1 < 0 < d2)) and ((d3 > 0 > d4) or (d3 < 0 < d4)):
-        return True
-    return any(
-        abs(d) <= 1e-18 and on(a, b, c)
-        for d, a, b, c in ((d1, q1, q2, p1), (d2, q1, q2, p2), (d3, p1, p2, q1), (d4, p1, p2, q2))
-    )
-
-
-def told_apart(first: object, second: object) -> bool:
+def told_apart(first: Prism, second: Prism) -> bool:
     """True when the camera tells parts of these two shapes apart by outline alone: two prisms not congruent.
 
     Congruent outlines (the same vertices up to a turn and a mirror, within half a millimetre)
     register onto each other, so parts of one colour must differ in outline to share it.
     """
-    if not (isinstance(first, Prism) and isinstance(second, Prism)):
+    if first.rectangular or second.rectangular:  # boxes are found by their corners, not their outlines
         return False
     a, b = first.outline_m, second.outline_m
     if len(a) != len(b) or abs(first.area_m2 - second.area_m2) > 0.01 * max(first.area_m2, second.area_m2):
@@ -92,33 +58,6 @@ def told_apart(first: object, second: object) -> bool:
         return np.sort(np.hypot(*(np.roll(points, -1, axis=0) - points).T))
 
     return not np.allclose(sides(a), sides(b), atol=SYMMETRY_TOLERANCE_M)
-
-
-def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
-    """Why ``points`` (N x 2, metres) is no simple polygon: too few points, degenerate, self-intersecting."""
-    array = np.asarray(points, dtype=float)
-    if array.ndim != 2 or array.shape[1] != 2 or len(array) < 3:
-        return f"an outline needs at least three points [x, y], got {len(array) if array.ndim == 2 else 0}"
-    if not np.all(np.isfinite(array)):
-        return "an outline's points must be finite numbers"
-    edges = np.roll(array, -1, axis=0) - array
-    lengths = np.hypot(edges[:, 0], edges[:, 1])
-    if np.any(lengths < 1e-6):
-        index = int(np.argmin(lengths))
-        return f"the outline repeats point {index + 1} (an edge of no length)"
-    # Points on one line first: a symmetric bow tie also has no signed area, but it crosses itself.
-    if np.linalg.svd(array - array.mean(axis=0), compute_uv=False)[1] < 1e-6:
-        return "the outline encloses no area (its points lie on a line)"
-    count = len(array)
-    for i in range(count):
-        for j in range(i + 1, count):
-            if j == i + 1 or (i == 0 and j == count - 1):
-                continue  # neighbours share a point
-            if _segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
-                return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
-    if abs(_signed_area_m2(array)) < 1e-8:
-        return "the outline encloses no area"
-    return None
 
 
 def push_name(heading_rad: float) -> str:
@@ -137,22 +76,6 @@ def push_heading_rad(name: str) -> float | None:
 
 
 @dataclass(frozen=True)
-class SquarePush:
-    """A push that meets one edge squarely.
-
-    Its ``heading_rad`` in the part's frame (the edge's inward normal), how far behind the centroid
-    the edge lies (``back_m``), the edge's length and index, and the fingers' opening.
-    """
-
-    heading_rad: float
-    back_m: float
-    edge_m: float
-    edge: int
-    #: The fingers' opening for this push (``Prism.named_pushes``).
-    opening_m: float = PRISM_PUSH_OPENING_M
-
-
-@dataclass(frozen=True)
 class Prism:
     """A flat part: the top face ``outline_m`` (counter-clockwise about the area centroid) extruded ``height_m``.
 
@@ -162,19 +85,35 @@ class Prism:
     outline: tuple[tuple[float, float], ...]
     height: float
 
+    #: The top face is a rectangle along the part's own axes (a :class:`Cuboid`): its steps may take
+    #: the boxes' faster paths (corners, tilt, depth-only grasps, the layout's rectangles).
+    rectangular: ClassVar[bool] = False
+
     @classmethod
     def from_outline(cls, points_m: Sequence[Sequence[float]], height_m: float) -> Prism:
-        """The prism of an outline written in any frame and winding (metres); a ``PlanError`` if it is no polygon."""
+        """The prism of an outline written in any frame and winding (metres); a ``PlanError`` if it is no polygon.
+
+        An outline that is a rectangle along its own x and y axes is the box of that size (a
+        :class:`Cuboid`, centred on the rectangle): the same part however it was written.
+        """
         problem = outline_problem(points_m)
         if problem is not None:
             raise PlanError(problem)
         if not (isinstance(height_m, (int, float)) and math.isfinite(height_m) and height_m > 0):
             raise PlanError(f"a prism's height must be a positive number, got {height_m!r}")
         array = np.asarray(points_m, dtype=float)
-        if _signed_area_m2(array) < 0:
+        box = _box_size_m(array)
+        if box is not None:
+            return Cuboid((box[0], box[1], float(height_m)))
+        if signed_area_m2(array) < 0:
             array = array[::-1]
-        centred = array - _centroid_m(array)
+        centred = array - centroid_m(array)
         return cls(tuple((float(x), float(y)) for x, y in centred), float(height_m))
+
+    @staticmethod
+    def box(x_m: float, y_m: float, z_m: float) -> Cuboid:
+        """The box prism of edges ``x_m`` by ``y_m`` on the table, ``z_m`` tall (the paper's cube: all 0.05)."""
+        return Cuboid((float(x_m), float(y_m), float(z_m)))
 
     # -- the Shape protocol ---------------------------------------------------------------------
 
@@ -195,9 +134,32 @@ class Prism:
         return 2.0 * float(np.max(np.abs(points[:, 0]))), 2.0 * float(np.max(np.abs(points[:, 1])))
 
     @property
+    def size_m(self) -> tuple[float, float, float]:
+        """The part's bounding box: ``extent_m`` and the height (a box's edges)."""
+        x_m, y_m = self.extent_m
+        return float(x_m), float(y_m), float(self.height)
+
+    @property
+    def square_top(self) -> bool:
+        """True for a square top face along the part's axes (a box's trait; a prism's outline is registered)."""
+        return False
+
+    @property
+    def is_cube(self) -> bool:
+        """True for a cube (a box's trait)."""
+        return False
+
+    @property
     def area_m2(self) -> float:
         """The top face's area."""
-        return _signed_area_m2(self.outline_m)
+        return signed_area_m2(self.outline_m)
+
+    def support_m(self, direction: FloatArray) -> float:
+        """How far the part reaches from its mid-height centroid along a unit ``direction`` (own frame, 3-vector)."""
+        along = np.asarray(direction, dtype=float)
+        outline = self.outline_m
+        top = outline @ along[:2]
+        return float(np.max(top)) + abs(float(along[2])) * self.height / 2
 
     @property
     def symmetry_rad(self) -> float:
@@ -230,96 +192,7 @@ class Prism:
         ``MIN_GRASP_OVERLAP_M``, or a corner within an edge's span), and the part is no wider there
         than the gripper closes across.
         """
-        return _grasps(self, gripper)
-
-    def _grasps(self, gripper: Gripper) -> tuple[Grasp, ...]:
-        found: dict[tuple[float, float], tuple[float, float, Grasp]] = {}
-        half_pad = gripper.pad_width_m / 2
-        height_m = max(self.height / 2, gripper.lowest_tcp_m)
-        for closing in self._closing_axes():
-            along = np.array([-closing[1], closing[0]])
-            grasp = self._grasp_along(closing, along, half_pad, height_m, gripper.max_grasp_width_m)
-            if grasp is None:
-                continue
-            key = (round(grasp.yaw_offset_rad, 6), round(grasp.centre_m[0], 4))
-            distance = float(np.hypot(*grasp.centre_m))
-            if key not in found or distance < found[key][0]:
-                found[key] = (distance, grasp.width_m, grasp)
-        ordered = sorted(found.values(), key=lambda item: (round(item[0], 6), item[1]))
-        return tuple(grasp for _, _, grasp in ordered)
-
-    def _closing_axes(self) -> list[FloatArray]:
-        """Unit closing directions, one per half-turn class: edge normals and antipodal bisectors."""
-        points = self.outline_m
-        directions = np.roll(points, -1, axis=0) - points
-        normals = np.column_stack([directions[:, 1], -directions[:, 0]])
-        normals /= np.linalg.norm(normals, axis=1)[:, None]
-        axes = list(normals)
-        count = len(normals)
-        for i in range(count):
-            for j in range(i + 1, count):
-                if float(normals[i] @ normals[j]) < -math.cos(2 * ANTIPODAL_HALF_ANGLE_RAD):
-                    bisector = normals[i] - normals[j]
-                    axes.append(bisector / np.linalg.norm(bisector))
-        unique: list[FloatArray] = []
-        for axis in axes:
-            if axis[0] < -1e-12 or (abs(axis[0]) <= 1e-12 and axis[1] < 0):
-                axis = -axis  # the pads are symmetric under a half turn
-            if not any(float(axis @ other) > math.cos(math.radians(1.0)) for other in unique):
-                unique.append(axis)
-        return unique
-
-    def _grasp_along(
-        self, closing: FloatArray, along: FloatArray, half_pad: float, height_m: float, max_width_m: float
-    ) -> Grasp | None:
-        """The grasp closing along ``closing`` nearest the centroid, or None."""
-        points = self.outline_m
-        t_values = points @ along
-        low, high = float(np.min(t_values)), float(np.max(t_values))
-        if high - low < MIN_GRASP_OVERLAP_M:
-            return None
-        step = 0.0005
-        centres = np.arange(low, high + step / 2, step)
-        for centre_t in sorted((float(t) for t in centres), key=lambda t: (abs(t), t)):
-            band = half_pad
-            slab = self._slab(closing, along, centre_t, band)
-            if slab is None:
-                continue
-            top, bottom = float(np.max(slab[:, 0])), float(np.min(slab[:, 0]))
-            if top - bottom > max_width_m:
-                continue
-            wider = self._slab(closing, along, centre_t, band + 0.003)
-            assert wider is not None
-            if float(np.max(wider[:, 0])) > top + 2e-4 or float(np.min(wider[:, 0])) < bottom - 2e-4:
-                continue  # the outline rises beyond the pads: their edges would meet it, not their faces
-            upper = slab[slab[:, 0] >= top - 5e-4, 1]
-            lower = slab[slab[:, 0] <= bottom + 5e-4, 1]
-            if not _facing(float(upper.min()), float(upper.max()), float(lower.min()), float(lower.max())):
-                continue
-            middle_t = (max(upper.min(), lower.min()) + min(upper.max(), lower.max())) / 2
-            centre = closing * (top + bottom) / 2 + along * float(middle_t)
-            yaw = math.atan2(float(closing[1]), float(closing[0]))
-            axis = (
-                "x" if abs(math.sin(yaw)) < 1e-9 else "y" if abs(math.cos(yaw)) < 1e-9 else f"{math.degrees(yaw):.1f}"
-            )
-            return Grasp(axis, yaw, top - bottom, height_m, (float(centre[0]), float(centre[1])))
-        return None
-
-    def _slab(self, closing: FloatArray, along: FloatArray, centre_t: float, half_m: float) -> FloatArray | None:
-        """The outline's points (as ``[across, t]``) within ``|t - centre_t| <= half_m``, cut where its edges cross."""
-        points = self.outline_m
-        count = len(points)
-        out: list[tuple[float, float]] = []
-        for k in range(count):
-            a, b = points[k], points[(k + 1) % count]
-            ta, tb = float(a @ along), float(b @ along)
-            if abs(ta - centre_t) <= half_m:
-                out.append((float(a @ closing), ta))
-            for t in (centre_t - half_m, centre_t + half_m):
-                if (ta - t) * (tb - t) < 0:
-                    s = (t - ta) / (tb - ta)
-                    out.append((float((a + s * (b - a)) @ closing), t))
-        return np.array(out) if out else None
+        return antipodal_grasps(self.outline, self.height, gripper)
 
     def pushed_face(self, heading_rad: float, yaw_rad: float) -> PushedFace:
         """What a push along ``heading_rad`` meets on the part turned to ``yaw_rad``.
@@ -431,27 +304,8 @@ class Prism:
         return named
 
     def convex_pieces(self) -> list[FloatArray]:
-        """The top face split into convex polygons (counter-clockwise), for engines whose bodies are convex hulls.
-
-        Ear clipping gives triangles; neighbouring pieces are then merged while the union stays
-        convex (Hertel and Mehlhorn), so a convex outline is one piece and an L two.
-        """
-        points = self.outline_m
-        pieces = [list(triangle) for triangle in _ear_clip(points)]
-        merged = True
-        while merged:
-            merged = False
-            for i in range(len(pieces)):
-                for j in range(i + 1, len(pieces)):
-                    union = _merge_if_convex(points, pieces[i], pieces[j])
-                    if union is not None:
-                        pieces[i] = union
-                        del pieces[j]
-                        merged = True
-                        break
-                if merged:
-                    break
-        return [points[piece] for piece in pieces]
+        """The top face split into convex polygons (counter-clockwise): engines' bodies, the layout's footprints."""
+        return convex_pieces(self.outline_m)
 
     def problems(self, gripper: Gripper) -> list[str]:
         """Too thin or too tall for the pads, a short edge at a corner, no grasp the gripper can take."""
@@ -477,8 +331,8 @@ class Prism:
             length = float(np.hypot(*(after - here)))
             if length >= MIN_PERCEIVED_EDGE_M:
                 continue
-            turn_in = _turn_rad(before, here, after)
-            turn_out = _turn_rad(here, after, points[(k + 2) % count])
+            turn_in = turn_rad(before, here, after)
+            turn_out = turn_rad(here, after, points[(k + 2) % count])
             if min(abs(turn_in), abs(turn_out)) >= CORNER_TURN_RAD:  # a side between two corners
                 found.append(
                     f"edge {k + 1} is {length * 1000:.1f} mm long, under the {MIN_PERCEIVED_EDGE_M * 1000:.0f} mm "
@@ -494,76 +348,162 @@ class Prism:
         return f"{len(self.outline)}-sided outline within {size}, {self.height * 1000:g} mm tall"
 
 
-@functools.lru_cache(maxsize=1024)
-def _grasps(prism: Prism, gripper: Gripper) -> tuple[Grasp, ...]:
-    """``Prism.grasps``, kept per prism and gripper (both frozen): every step asks, and the search scans the outline."""
-    return prism._grasps(gripper)
+#: Corners of a written rectangle within this of the box's (metres) make the outline that box.
+BOX_TOLERANCE_M = 1e-9
 
 
-def _facing(upper_low: float, upper_high: float, lower_low: float, lower_high: float) -> bool:
-    """True when the two pads' contacts face each other across the part: their spans along the pads overlap.
+def _box_size_m(points: FloatArray) -> tuple[float, float] | None:
+    """(x, y) of the box an outline is, when it is a rectangle along its own axes; else None."""
+    if len(points) != 4:
+        return None
+    low, high = points.min(axis=0), points.max(axis=0)
+    corners = {(float(x), float(y)) for x in (low[0], high[0]) for y in (low[1], high[1])}
+    if (
+        not all(
+            any(abs(px - cx) <= BOX_TOLERANCE_M and abs(py - cy) <= BOX_TOLERANCE_M for cx, cy in corners)
+            for px, py in points
+        )
+        or len({(round(px / BOX_TOLERANCE_M), round(py / BOX_TOLERANCE_M)) for px, py in points}) != 4
+    ):
+        return None
+    return float(high[0] - low[0]), float(high[1] - low[1])
 
-    Two edges must overlap ``MIN_GRASP_OVERLAP_M``; a corner (a span of no length) must lie 2 mm
-    or more inside the other side's span.
+
+#: Two edges closer than this (metres) make a square top.
+SQUARE_TOLERANCE_M = 0.0005
+
+
+class Cuboid(Prism):
+    """The box prism: ``x`` and ``y`` across its top face, ``z`` its height on the table (metres).
+
+    ``Cuboid((x, y, z))`` or :meth:`Prism.box`. Its frame is the box's centre, axes along its
+    edges; its outline the four corners counter-clockwise from ``(-x/2, -y/2)``. It declares the
+    trait ``rectangular`` and answers with the box arithmetic: the pads close across the narrower
+    side of the top face (either side of a square top) through the centre; a push meets the face
+    square to its heading.
     """
-    corner_m, margin_m = 5e-4, 0.002
-    if upper_high - upper_low < corner_m or lower_high - lower_low < corner_m:
-        if upper_high - upper_low < corner_m and lower_high - lower_low < corner_m:
-            return False  # two corners: the part would turn between the pads
-        point = upper_low if upper_high - upper_low < corner_m else lower_low
-        span = (lower_low, lower_high) if upper_high - upper_low < corner_m else (upper_low, upper_high)
-        return span[0] + margin_m <= point <= span[1] - margin_m
-    return min(upper_high, lower_high) - max(upper_low, lower_low) >= MIN_GRASP_OVERLAP_M
 
+    rectangular: ClassVar[bool] = True
 
-def _cross_z(o: FloatArray, a: FloatArray, b: FloatArray) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+    def __init__(self, size_m: tuple[float, float, float]) -> None:
+        size = (float(size_m[0]), float(size_m[1]), float(size_m[2]))
+        hx, hy = size[0] / 2, size[1] / 2
+        object.__setattr__(self, "outline", ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)))
+        object.__setattr__(self, "height", size[2])
+        object.__setattr__(self, "_size_m", size)
 
+    def __repr__(self) -> str:
+        return f"Cuboid(size_m={self.size_m!r})"
 
-def _ear_clip(points: FloatArray) -> list[tuple[int, int, int]]:
-    """Triangles (vertex indices, counter-clockwise) covering a simple counter-clockwise polygon."""
-    remaining = list(range(len(points)))
-    triangles: list[tuple[int, int, int]] = []
-    while len(remaining) > 3:
-        for k in range(len(remaining)):
-            i, j, n = remaining[k - 1], remaining[k], remaining[(k + 1) % len(remaining)]
-            a, b, c = points[i], points[j], points[n]
-            if _cross_z(a, b, c) <= 1e-14:
-                continue  # a reflex or flat corner is no ear
-            inside = any(
-                _cross_z(a, b, points[m]) >= 0 and _cross_z(b, c, points[m]) >= 0 and _cross_z(c, a, points[m]) >= 0
-                for m in remaining
-                if m not in (i, j, n)
+    @property
+    def size_m(self) -> tuple[float, float, float]:
+        """The box's edges (x, y, z)."""
+        size: tuple[float, float, float] = self.__dict__["_size_m"]
+        return size
+
+    def __reduce__(self) -> tuple[type[Cuboid], tuple[tuple[float, float, float]]]:
+        return (Cuboid, (self.size_m,))
+
+    @property
+    def extent_m(self) -> tuple[float, float]:
+        """The top face's edges (x, y)."""
+        return self.size_m[0], self.size_m[1]
+
+    @property
+    def outline_m(self) -> FloatArray:
+        """The top face's four corners, counter-clockwise from (-x/2, -y/2)."""
+        hx, hy = self.size_m[0] / 2, self.size_m[1] / 2
+        return np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+
+    @property
+    def area_m2(self) -> float:
+        """The top face's area."""
+        return self.size_m[0] * self.size_m[1]
+
+    @property
+    def square_top(self) -> bool:
+        """True when the top face is a square (within 0.5 mm)."""
+        return abs(self.size_m[0] - self.size_m[1]) < SQUARE_TOLERANCE_M
+
+    @property
+    def is_cube(self) -> bool:
+        """True for a cube: a square top as tall as it is wide (within 0.5 mm)."""
+        return self.square_top and abs(self.size_m[0] - self.size_m[2]) < SQUARE_TOLERANCE_M
+
+    @property
+    def symmetry_rad(self) -> float:
+        """90 degrees for a square top, 180 otherwise."""
+        return math.pi / 2 if self.square_top else math.pi
+
+    @property
+    def sweep_radius_m(self) -> float:
+        """Half the top face's diagonal."""
+        return 0.5 * math.hypot(self.size_m[0], self.size_m[1])
+
+    def support_m(self, direction: FloatArray) -> float:
+        """How far the box reaches from its centre along a unit ``direction`` of its own frame (3-vector)."""
+        half = [v / 2 for v in self.size_m]
+        along = np.abs(np.asarray(direction, dtype=float))
+        if half[0] == half[1] == half[2]:
+            # A cube's in one product, the arithmetic the injectors were measured with.
+            return half[0] * float(np.sum(along))
+        return float(along @ np.array(half))
+
+    def grasps(self, gripper: Gripper) -> tuple[Grasp, ...]:
+        """Across the narrower side (``x`` first when they are equal), and across the other too on a square top.
+
+        None when the narrower side is wider than the gripper closes across.
+        """
+        x_m, y_m, z_m = self.size_m
+        height_m = max(z_m / 2, gripper.lowest_tcp_m)
+        across_x = Grasp("x", 0.0, x_m, height_m)
+        across_y = Grasp("y", math.pi / 2, y_m, height_m)
+        preferred, other = (across_x, across_y) if x_m <= y_m else (across_y, across_x)
+        if preferred.width_m > gripper.max_grasp_width_m:
+            return ()
+        return (preferred, other) if self.square_top else (preferred,)
+
+    def pushed_face(self, heading_rad: float, yaw_rad: float) -> PushedFace:
+        """The face square to the push, and its leading width at the part's turn from square."""
+        relative = fold_yaw(heading_rad - yaw_rad, math.pi)
+        along_x = abs(math.cos(relative)) >= abs(math.sin(relative))
+        # Pushing along the part's x axis meets the face that spans its y edge.
+        width_m, depth_m = (self.size_m[1], self.size_m[0]) if along_x else (self.size_m[0], self.size_m[1])
+        turn_rad = abs(fold_yaw(heading_rad - yaw_rad, math.pi / 2))
+        return PushedFace(width_m, depth_m, width_m * math.cos(turn_rad) - depth_m * math.sin(turn_rad))
+
+    def convex_pieces(self) -> list[FloatArray]:
+        """The top face, one convex piece."""
+        return [self.outline_m]
+
+    def problems(self, gripper: Gripper) -> list[str]:
+        """An edge not positive or under 15 mm, taller than 100 mm, no side the gripper spans."""
+        found = self.size_problems()
+        if min(self.size_m) <= 0:
+            return found
+        size = self.describe()
+        if not self.grasps(gripper):
+            found.append(
+                f"size {size} has no horizontal side the gripper can span (the {gripper.name.split()[-1]} closes "
+                f"across at most {gripper.max_grasp_width_m * 1000:.0f} mm: its {gripper.stroke_m * 1000:.0f} mm "
+                f"stroke less {gripper.grasp_clearance_m * 1000:.0f} mm of clearance)"
             )
-            if not inside:
-                triangles.append((i, j, n))
-                del remaining[k]
-                break
-        else:  # numerically degenerate: fan out what is left
-            break
-    for k in range(1, len(remaining) - 1):
-        triangles.append((remaining[0], remaining[k], remaining[k + 1]))
-    return triangles
+        return found
 
+    def size_problems(self) -> list[str]:
+        """An edge not positive, under 15 mm, or taller than 100 mm: the checks that need no gripper."""
+        size = self.describe()
+        if min(self.size_m) <= 0:
+            return [f"size {size} has an edge that is not positive"]
+        found = []
+        if min(self.size_m) < MIN_EDGE_M:
+            found.append(
+                f"size {size} has an edge under {MIN_EDGE_M * 1000:.0f} mm, too thin for the pads and the camera"
+            )
+        if self.size_m[2] > MAX_HEIGHT_M:
+            found.append(f"{self.size_m[2] * 1000:g} mm tall, taller than {MAX_HEIGHT_M * 1000:.0f} mm")
+        return found
 
-def _merge_if_convex(points: FloatArray, first: list[int], second: list[int]) -> list[int] | None:
-    """The union of two convex pieces sharing an edge (vertex indices), if it is convex; else None."""
-    for a in range(len(first)):
-        u, v = first[a], first[(a + 1) % len(first)]
-        if v in second and second[(second.index(v) + 1) % len(second)] == u:
-            start = second.index(u)
-            rest = [second[(start + k) % len(second)] for k in range(1, len(second) - 1)]
-            union = first[: a + 1] + rest + first[a + 1 :]
-            return union if _is_convex(points[union]) else None
-    return None
-
-
-def _is_convex(points: FloatArray) -> bool:
-    count = len(points)
-    return all(_cross_z(points[k - 1], points[k], points[(k + 1) % count]) >= -1e-14 for k in range(count))
-
-
-def _turn_rad(before: FloatArray, here: FloatArray, after: FloatArray) -> float:
-    """How far the outline turns at ``here`` (signed, radians)."""
-    a, b = here - before, after - here
-    return math.atan2(float(a[0] * b[1] - a[1] * b[0]), float(a @ b))
+    def describe(self) -> str:
+        """The size in millimetres, e.g. ``80 x 40 x 40 mm``."""
+        return " x ".join(f"{v * 1000:g}" for v in self.size_m) + " mm"

@@ -45,7 +45,6 @@ from bt_arrange.layout import Pads, Release, Step, free_push_directions, restage
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Cuboid
 from bt_arrange.trees.steps import (
     Locate,
     check_strategy,
@@ -95,7 +94,7 @@ def arrange_one(
     pads = Pads.from_settings(settings)
     obj = target.obj
     dense = step is not None and _is_dense(step)
-    if dense and step is not None and not isinstance(target.object_type.shape, Cuboid) and step.part.prism is None:
+    if dense and step is not None and not target.object_type.shape.rectangular and not step.part.by_outline:
         raise PlanError(
             f"target {target.obj}: a {target.object_type.shape.describe()} among neighbours (released off its "
             "target, or with a side blocked) needs a grasp across its own x or y axis, where the layout puts the "
@@ -108,9 +107,9 @@ def arrange_one(
         set_target(target),
         transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
-        # An irregular part turned in the pads by more than pushes correct is picked up again (a cuboid's
+        # An irregular part turned in the pads by more than pushes correct is picked up again (a box's
         # grasp squares it, so its tree is the paper's). Among neighbours there is no room for a free pick.
-        *([] if dense or isinstance(target.object_type.shape, Cuboid) else [regrasp_while_turned(target)]),
+        *([] if dense or target.object_type.shape.rectangular else [regrasp_while_turned(target)]),
         correction(
             target,
             threshold_mm,

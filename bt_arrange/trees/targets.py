@@ -13,12 +13,12 @@ from dataclasses import dataclass
 from bt_arrange.checks import at_mm, finite_number, positive_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import Pads, Part, PrismFit, Step, plan_layout
+from bt_arrange.layout import Pads, Part, Step, plan_layout
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.objects import ObjectType, PartOnTable, kind_of, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.shapes import Gripper, Prism, told_apart
+from bt_arrange.shapes import told_apart
 from bt_arrange.suggest import did_you_mean
 
 CORRECT_MODES = ("each", "after_all")
@@ -196,46 +196,9 @@ def footprint_m(target: Target) -> tuple[float, float]:
 
 
 def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = None) -> list[Part]:
-    """The plan's targets as footprints for ``bt_arrange.layout``, each held only by the grasps its shape offers."""
+    """The plan's targets as parts for ``bt_arrange.layout``, each asked of its shape, held by the settings' gripper."""
     gripper = (settings or ManipulationSettings()).gripper
-    parts = []
-    for t in targets:
-        fit = prism_fit(t.object_type.shape, gripper)
-        axes = tuple(axis for axis, _, _ in fit.grasps) if fit is not None else _grasp_axes(t.object_type, gripper)
-        parts.append(Part(t.obj, t.x_m, t.y_m, t.yaw_rad, *footprint_m(t), grasp_axes=axes, prism=fit))
-    return parts
-
-
-def prism_fit(shape: object, gripper: Gripper) -> PrismFit | None:
-    """What the layout needs of an irregular part whose preferred grasp closes along its x or y axis; else None.
-
-    A prism without such a grasp keeps its bounding box in the layout (and is arranged only with
-    room around it: ``arrange_one`` refuses it among neighbours).
-    """
-    if not isinstance(shape, Prism):
-        return None
-    # The preferred grasp only: the part is picked by it (``Pick`` without a layout's grasp), so
-    # the pads are released across the same axis.
-    grasp = shape.grasps(gripper)[0]
-    if grasp.axis not in ("x", "y"):
-        return None
-    grasps = {grasp.axis: (grasp.axis, grasp.width_m, grasp.centre_m)}
-    pushes = tuple(
-        (name, push.heading_rad, push.back_m, push.opening_m) for name, push in shape.named_pushes(gripper).items()
-    )
-    pieces = tuple(tuple((float(x), float(y)) for x, y in piece) for piece in shape.convex_pieces())
-    return PrismFit(pieces, tuple(grasps.values()), pushes)
-
-
-def _grasp_axes(kind: ObjectType, gripper: Gripper) -> tuple[str, ...]:
-    """The axes of the part's frame the pads may close across among neighbours: those of its shape's grasps.
-
-    The layout models the pads beside a part's x or y faces only; a part with no grasp along
-    either (an irregular part) is given both, which serve its spacing checks: such a part is
-    never placed among neighbours (``arrange_one`` refuses it).
-    """
-    axes = tuple(grasp.axis for grasp in kind.shape.grasps(gripper) if grasp.axis in ("x", "y"))
-    return axes or ("x", "y")
+    return [Part(t.obj, t.x_m, t.y_m, t.yaw_rad, t.object_type.shape, gripper) for t in targets]
 
 
 def plan_steps(

@@ -14,7 +14,7 @@ from bt_arrange.behaviours import Pick, Place
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose, quaternion_to_matrix
 from bt_arrange.runner import Transition
-from bt_arrange.shapes import Cuboid
+from bt_arrange.shapes import Shape
 from bt_arrange_sim.injection.framework import (
     LIFT_STAGE,
     RELEASE_STAGE,
@@ -216,11 +216,11 @@ class ReleaseTilt(Injector):
         axis = np.array([math.cos(axis_rad), math.sin(axis_rad), 0.0])
         return _axis_angle(axis, tilt_rad) @ quaternion_to_matrix(truth.quaternion_xyzw), truth.position_m.copy()
 
-    def _box(self) -> Cuboid:
-        """The tilted part's shape: a box (the tilt row's parts are cuboids)."""
+    def _box(self) -> Shape:
+        """The tilted part's shape: a box (the tilt row's parts are; the detector's tilt check is a box's)."""
         shape = self.object_type.shape
-        if not isinstance(shape, Cuboid):
-            raise PlanError(f"the tilt error tilts cuboids only, not a {self.object_type.name}")
+        if not shape.rectangular:
+            raise PlanError(f"the tilt error tilts boxes only, not a {self.object_type.name}")
         return shape
 
     def _pads_clear(self) -> bool:

@@ -43,7 +43,6 @@ import numpy as np
 from bt_arrange.geometry import Pose
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.objects import DEFAULT_PART_FRICTION, ObjectType
-from bt_arrange.shapes import Cuboid, Prism
 from bt_arrange_sim.cell import CellConfig
 from bt_arrange_sim.objects import SIDE_RGB, TABLE_RGB, TOP_PLATE_M, mass_of
 
@@ -299,7 +298,7 @@ def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_
     }
     visual = {"contype": 0, "conaffinity": 0, "group": VISUAL_GROUP, "density": 0.0}
     collision_geoms = []
-    if isinstance(shape, Cuboid):
+    if shape.rectangular:
         hx, hy, hz = (v / 2 for v in shape.size_m)
         collision_geoms.append(
             body.add_geom(
@@ -314,7 +313,7 @@ def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_
             type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, TOP_PLATE_M / 2], pos=[0, 0, hz - TOP_PLATE_M / 2],
             rgba=[*part.rgb, 1.0], **visual,
         )  # fmt: skip
-    elif isinstance(shape, Prism):
+    else:
         half = shape.height_m / 2
         pieces = shape.convex_pieces()
         areas = [abs(_area(piece)) for piece in pieces]
@@ -339,12 +338,6 @@ def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_
             mesh.uservert = _prism_vertices(outline, low, high)
             mesh.userface = _prism_faces(outline, pieces)
             body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name, rgba=[*rgb, 1.0], **visual)
-    else:
-        from bt_arrange.errors import PlanError
-
-        raise PlanError(
-            f"object type {part.object_type.name!r}: the MuJoCo cell builds cuboids and prisms, not {shape!r}"
-        )
     # The pads meet the part through explicit pairs (Bullet's product of coefficients).
     for finger in FINGER_BODIES:
         spec.add_exclude(bodyname1=finger, bodyname2=part.name)

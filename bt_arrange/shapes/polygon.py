@@ -1,0 +1,153 @@
+"""Plane polygons in metres: area, centroid, the simple-polygon check, convex pieces and turns.
+
+The arithmetic under :class:`~bt_arrange.shapes.Prism`; nothing here knows of parts or grippers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from bt_arrange.geometry import FloatArray
+
+
+def signed_area_m2(points: FloatArray) -> float:
+    """The polygon's area, positive when it runs counter-clockwise (N x 2 points)."""
+    x, y = points[:, 0], points[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def centroid_m(points: FloatArray) -> FloatArray:
+    """The polygon's area centroid (x, y)."""
+    x, y = points[:, 0], points[:, 1]
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = 0.5 * float(np.sum(cross))
+    cx = float(np.sum((x + np.roll(x, -1)) * cross)) / (6.0 * area)
+    cy = float(np.sum((y + np.roll(y, -1)) * cross)) / (6.0 * area)
+    return np.array([cx, cy])
+
+
+def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
+    """True when the closed segments p1-p2 and q1-q2 meet (touching counts)."""
+
+    def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
+        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+    def on(a: FloatArray, b: FloatArray, c: FloatArray) -> bool:
+        return min(a[0], b[0]) - 1e-12 <= c[0] <= max(a[0], b[0]) + 1e-12 and (
+            min(a[1], b[1]) - 1e-12 <= c[1] <= max(a[1], b[1]) + 1e-12
+        )
+
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    if ((d1 > 0 > d2) or (d1 < 0 < d2)) and ((d3 > 0 > d4) or (d3 < 0 < d4)):
+        return True
+    return any(
+        abs(d) <= 1e-18 and on(a, b, c)
+        for d, a, b, c in ((d1, q1, q2, p1), (d2, q1, q2, p2), (d3, p1, p2, q1), (d4, p1, p2, q2))
+    )
+
+
+def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
+    """Why ``points`` (N x 2, metres) is no simple polygon: too few points, degenerate, self-intersecting."""
+    array = np.asarray(points, dtype=float)
+    if array.ndim != 2 or array.shape[1] != 2 or len(array) < 3:
+        return f"an outline needs at least three points [x, y], got {len(array) if array.ndim == 2 else 0}"
+    if not np.all(np.isfinite(array)):
+        return "an outline's points must be finite numbers"
+    edges = np.roll(array, -1, axis=0) - array
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    if np.any(lengths < 1e-6):
+        index = int(np.argmin(lengths))
+        return f"the outline repeats point {index + 1} (an edge of no length)"
+    # Points on one line first: a symmetric bow tie also has no signed area, but it crosses itself.
+    if np.linalg.svd(array - array.mean(axis=0), compute_uv=False)[1] < 1e-6:
+        return "the outline encloses no area (its points lie on a line)"
+    count = len(array)
+    for i in range(count):
+        for j in range(i + 1, count):
+            if j == i + 1 or (i == 0 and j == count - 1):
+                continue  # neighbours share a point
+            if segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
+                return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
+    if abs(signed_area_m2(array)) < 1e-8:
+        return "the outline encloses no area"
+    return None
+
+
+def _cross_z(o: FloatArray, a: FloatArray, b: FloatArray) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+def ear_clip(points: FloatArray) -> list[tuple[int, int, int]]:
+    """Triangles (vertex indices, counter-clockwise) covering a simple counter-clockwise polygon."""
+    remaining = list(range(len(points)))
+    triangles: list[tuple[int, int, int]] = []
+    while len(remaining) > 3:
+        for k in range(len(remaining)):
+            i, j, n = remaining[k - 1], remaining[k], remaining[(k + 1) % len(remaining)]
+            a, b, c = points[i], points[j], points[n]
+            if _cross_z(a, b, c) <= 1e-14:
+                continue  # a reflex or flat corner is no ear
+            inside = any(
+                _cross_z(a, b, points[m]) >= 0 and _cross_z(b, c, points[m]) >= 0 and _cross_z(c, a, points[m]) >= 0
+                for m in remaining
+                if m not in (i, j, n)
+            )
+            if not inside:
+                triangles.append((i, j, n))
+                del remaining[k]
+                break
+        else:  # numerically degenerate: fan out what is left
+            break
+    for k in range(1, len(remaining) - 1):
+        triangles.append((remaining[0], remaining[k], remaining[k + 1]))
+    return triangles
+
+
+def merge_if_convex(points: FloatArray, first: list[int], second: list[int]) -> list[int] | None:
+    """The union of two convex pieces sharing an edge (vertex indices), if it is convex; else None."""
+    for a in range(len(first)):
+        u, v = first[a], first[(a + 1) % len(first)]
+        if v in second and second[(second.index(v) + 1) % len(second)] == u:
+            start = second.index(u)
+            rest = [second[(start + k) % len(second)] for k in range(1, len(second) - 1)]
+            union = first[: a + 1] + rest + first[a + 1 :]
+            return union if _is_convex(points[union]) else None
+    return None
+
+
+def _is_convex(points: FloatArray) -> bool:
+    count = len(points)
+    return all(_cross_z(points[k - 1], points[k], points[(k + 1) % count]) >= -1e-14 for k in range(count))
+
+
+def turn_rad(before: FloatArray, here: FloatArray, after: FloatArray) -> float:
+    """How far the outline turns at ``here`` (signed, radians)."""
+    a, b = here - before, after - here
+    return math.atan2(float(a[0] * b[1] - a[1] * b[0]), float(a @ b))
+
+
+def convex_pieces(points: FloatArray) -> list[FloatArray]:
+    """A simple counter-clockwise polygon split into convex polygons (counter-clockwise).
+
+    Ear clipping gives triangles; neighbouring pieces are then merged while the union stays
+    convex (Hertel and Mehlhorn), so a convex outline is one piece and an L two.
+    """
+    pieces = [list(triangle) for triangle in ear_clip(points)]
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(pieces)):
+            for j in range(i + 1, len(pieces)):
+                union = merge_if_convex(points, pieces[i], pieces[j])
+                if union is not None:
+                    pieces[i] = union
+                    del pieces[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return [points[piece] for piece in pieces]
