@@ -22,6 +22,7 @@ from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.errors import PerceptionError, PlanError
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.motion import DEFAULT_HOME_Q
+from bt_arrange.objects import ObjectType
 from bt_arrange.perception import Detection, DetectionStatus
 from bt_arrange.perception.depth_grasp import (
     SEARCH_BINNING,
@@ -33,6 +34,7 @@ from bt_arrange.perception.depth_grasp import (
 )
 from bt_arrange.perception.synthetic import sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange.shapes import Prism
 from bt_arrange.trees import Target, by_depth, transfer
 
 #: Rendered wider than the sensor's 1024 px, so the estimator resamples like it does the cell's frames.
@@ -194,7 +196,27 @@ def test_a_lifted_cube_and_a_cube_cut_by_the_image_border_are_partial():
 def test_a_box_that_is_not_a_cube_is_partial():
     detection = DepthGraspEstimator(CLEAN).estimate(frame_of([Box(0.5, 0.0, size_m=(0.05, 0.075))]))
     assert detection.status is DetectionStatus.PARTIAL
-    assert "not a 50 mm square" in detection.reason
+    assert "not 50 x 50 x 50 mm" in detection.reason
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 30.0, 75.0, -60.0])
+def test_a_box_is_found_by_its_own_size_and_its_long_edge_along_x(yaw_deg):
+    # Any box, not only the cube: the estimator asks the shape (rectangular) and reads its extent and height.
+    bar = ObjectType("bar", (0.08, 0.04, 0.04))
+    box = Box(0.5, 0.02, math.radians(yaw_deg), size_m=(0.08, 0.04), height_m=0.04)
+    detection = DepthGraspEstimator(dataclasses.replace(CLEAN, part=bar)).estimate(frame_of([box]))
+    assert detection.status is DetectionStatus.FOUND, detection.reason
+    assert error_mm(detection, box) < 1.5
+    assert abs(math.degrees(fold_yaw(detection.pose_world.yaw_rad - box.yaw_rad, math.pi))) < 1.0
+    assert detection.pose_world.position_m[2] == pytest.approx(0.02)
+
+
+def test_an_outline_that_is_no_box_is_refused_in_one_line():
+    ell = ObjectType(
+        "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
+    )
+    with pytest.raises(PerceptionError, match="finds boxes only, not ell"):
+        DepthGraspConfig(part=ell)
 
 
 # -- the sensor model ---------------------------------------------------------------------

@@ -366,7 +366,8 @@ def _box_size_m(points: FloatArray) -> tuple[float, float] | None:
         or len({(round(px / BOX_TOLERANCE_M), round(py / BOX_TOLERANCE_M)) for px, py in points}) != 4
     ):
         return None
-    return float(high[0] - low[0]), float(high[1] - low[1])
+    # Rounded to a picometre: an offset rectangle's edges come out of the subtraction an ulp short.
+    return round(float(high[0] - low[0]), 12), round(float(high[1] - low[1]), 12)
 
 
 #: Two edges closer than this (metres) make a square top.
