@@ -26,7 +26,7 @@ import numpy as np
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import FloatArray, fold_yaw
 from bt_arrange.shapes.antipodal import MIN_GRASP_OVERLAP_M, antipodal_grasps
-from bt_arrange.shapes.base import MAX_HEIGHT_M, MIN_EDGE_M, PRISM_PUSH_OPENING_M, Grasp, PushedFace, SquarePush
+from bt_arrange.shapes.base import MAX_HEIGHT_M, MIN_EDGE_M, PRISM_PUSH_OPENING_M, Grasp, PushedFace, Shape, SquarePush
 from bt_arrange.shapes.gripper import Gripper
 from bt_arrange.shapes.polygon import centroid_m, convex_pieces, outline_problem, signed_area_m2, turn_rad
 
@@ -42,7 +42,7 @@ PUSH_CONTACT_BAND_M = 0.001
 MIN_PUSHED_EDGE_M = 0.022
 
 
-def told_apart(first: Prism, second: Prism) -> bool:
+def told_apart(first: Shape, second: Shape) -> bool:
     """True when the camera tells parts of these two shapes apart by outline alone: two prisms not congruent.
 
     Congruent outlines (the same vertices up to a turn and a mirror, within half a millimetre)
