@@ -13,6 +13,7 @@ the exact polygon.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -96,16 +97,6 @@ class SyntheticCube:
         """The top face's corners (4x3)."""
         return self.corners_world(self.table_z_m + self.edge_m)
 
-    def visible_faces(
-        self,
-        intrinsics: CameraIntrinsics,
-        camera_pose_world: Pose,
-        side_rgb: tuple[float, float, float],
-        light: FloatArray,
-    ) -> tuple[list[_Face], _Face]:
-        """Its sides that face the camera, shaded, and its top face."""
-        return _visible_faces(self, intrinsics, camera_pose_world, side_rgb, light)
-
 
 def _top_rgb(rgb: tuple[float, float, float] | None, colour: str, brightness: float) -> FloatArray:
     """A top face's rendered colour (0..1): ``rgb``, else the simulator's paint of ``colour``, lit by ``brightness``."""
@@ -139,16 +130,6 @@ class SyntheticPrism:
         """Pose of the part's frame in the world: the area centroid, half the height above the table."""
         return Pose.from_planar(self.x_m, self.y_m, self.yaw_rad, self.table_z_m + self.prism.height_m / 2)
 
-    def visible_faces(
-        self,
-        intrinsics: CameraIntrinsics,
-        camera_pose_world: Pose,
-        side_rgb: tuple[float, float, float],
-        light: FloatArray,
-    ) -> tuple[list[_Face], _Face]:
-        """Its sides that face the camera (farthest first), shaded, and its top face."""
-        return _visible_prism_faces(self, intrinsics, camera_pose_world, side_rgb, light)
-
     def outline_world(self, z_m: float) -> FloatArray:
         """The outline at height ``z_m`` (N x 3), counter-clockwise seen from above."""
         local = np.column_stack([self.prism.outline_m, np.zeros(len(self.prism.outline_m))])
@@ -176,6 +157,19 @@ class _Face:
     convex: bool = True
 
 
+@functools.singledispatch
+def _visible(
+    part: object,
+    intrinsics: CameraIntrinsics,
+    camera_pose_world: Pose,
+    side_rgb: tuple[float, float, float],
+    light_direction: FloatArray,
+) -> tuple[list[_Face], _Face]:
+    """A rendered part's sides that face the camera, shaded, and its top face (one function per kind of part)."""
+    raise TypeError(f"cannot render {part!r}")
+
+
+@_visible.register
 def _visible_faces(
     cube: SyntheticCube,
     intrinsics: CameraIntrinsics,
@@ -208,6 +202,7 @@ def _visible_faces(
     return sides, top_face
 
 
+@_visible.register
 def _visible_prism_faces(
     part: SyntheticPrism,
     intrinsics: CameraIntrinsics,
@@ -313,7 +308,7 @@ def render_frame(
     image[:] = np.asarray(table_rgb, dtype=np.float32)
     light = np.asarray(light_direction, dtype=float) / np.linalg.norm(light_direction)
 
-    faces = [part.visible_faces(intrinsics, camera_pose_world, side_rgb, light) for part in cubes]
+    faces = [_visible(part, intrinsics, camera_pose_world, side_rgb, light) for part in cubes]
     # Tiles: the cubes' pixel boxes, merged where they overlap so that shared edges mix the two
     # colours that meet there (and not the table's).
     boxes: list[list[int]] = []
