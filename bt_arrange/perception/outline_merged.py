@@ -32,6 +32,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from bt_arrange.geometry import FloatArray, fold_yaw
 from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median
@@ -74,13 +75,14 @@ def _outline_samples(model: OutlineModel, spacing_m: float, corner_m: float) -> 
     return np.vstack(points), np.concatenate(edges)
 
 
-def _nearest_m(points: FloatArray, contour: FloatArray) -> FloatArray:
-    """Each point's distance to the nearest contour point (the contour's pixels lie about a pixel apart)."""
-    nearest = np.full(len(points), np.inf)
-    for chunk in np.array_split(contour, max(1, len(contour) // 256)):
-        gap = points[:, None, :] - chunk[None, :, :]
-        nearest = np.minimum(nearest, np.einsum("ijk,ijk->ij", gap, gap).min(axis=1))
-    return np.sqrt(nearest)
+def _nearest_m(points: FloatArray, contour: cKDTree, cap_m: float = math.inf) -> FloatArray:
+    """Each point's distance to the nearest contour point (pixels about a pixel apart), at most ``cap_m``.
+
+    A k-d tree of the contour answers in log time what a brute-force search answered in the
+    contour's length (9.9 s of a 29 s fresco run; issue 36).
+    """
+    distances, _ = contour.query(points, distance_upper_bound=cap_m)
+    return np.minimum(distances, cap_m)
 
 
 def _posed(points: FloatArray, pose: tuple[float, float, float]) -> FloatArray:
@@ -91,15 +93,12 @@ def _posed(points: FloatArray, pose: tuple[float, float, float]) -> FloatArray:
 def _coarse(contour_m: FloatArray, model: OutlineModel, prior_xy_m: tuple[float, float]) -> list[float]:
     """Yaws on the grid, best first (local minima of the capped distance of the outline's samples to the contour)."""
     samples, _ = _outline_samples(model, 0.002, 0.0)
-    contour = resample(contour_m, COARSE_POINTS * 2)
+    contour = cKDTree(resample(contour_m, COARSE_POINTS * 2))
     turn = min(model.symmetry_rad, 2 * math.pi)
     count = max(1, int(round(math.degrees(turn) / MERGED_STEP_DEG)))
     yaws = np.arange(count) * (turn / count)
     scores = np.array(
-        [
-            np.mean(np.minimum(_nearest_m(_posed(samples, (*prior_xy_m, float(y))), contour), MERGED_CAP_M) ** 2)
-            for y in yaws
-        ]
+        [np.mean(_nearest_m(_posed(samples, (*prior_xy_m, float(y))), contour, MERGED_CAP_M) ** 2) for y in yaws]
     )
     minima = [k for k in range(count) if scores[k] <= scores[k - 1] and scores[k] <= scores[(k + 1) % count]]
     return [float(yaws[k]) for k in sorted(minima, key=lambda k: scores[k])]
@@ -129,7 +128,7 @@ def free_edges(
     """Which edges of the posed outline the contour follows; None when the outline does not lie inside the blob."""
     samples, edge_of = _outline_samples(model, 0.5 * px_m, 3.0 * px_m)
     world = _posed(samples, pose)
-    on_contour = _nearest_m(world, contour_m) <= FREE_EDGE_PX * px_m
+    on_contour = _nearest_m(world, cKDTree(contour_m)) <= FREE_EDGE_PX * px_m
     scale = 1.0 / px_m  # pointPolygonTest on a contour scaled to pixels on the plane
     polygon = (contour_m * scale).astype(np.float32).reshape(-1, 1, 2)
     inside = np.array([cv2.pointPolygonTest(polygon, (float(p[0]), float(p[1])), True) for p in world * scale])
