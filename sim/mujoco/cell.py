@@ -1,7 +1,7 @@
 """The work cell in MuJoCo: the pybullet cell's table, robot, parts, camera and clock in a second engine.
 
-``MujocoCell`` takes the pybullet cell's ``CellConfig`` (time step and control period, gravity,
-the table, the camera's intrinsics and pose, the friction coefficients, the gripper's speeds and
+``MujocoCell`` takes the engine-neutral ``CellConfig`` (``bt_arrange_sim.config``: time step and control
+period, gravity, the table, the camera's intrinsics and pose, the friction coefficients, the gripper's speeds and
 forces) and MuJoCo's own ``MujocoPhysics`` (the contact model and the servos, ``model``). Its
 methods for ground truth and error injection have the names and meanings of ``WorkCell``'s, so
 the injectors of ``bt_arrange_sim.injection`` act on either (``injection.framework.InjectableCell``).
@@ -25,12 +25,12 @@ from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAM
 from bt_arrange.objects import CUBE, DEFAULT_PART_FRICTION, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.robot import Robot
-from bt_arrange_sim.cell import HOME_Q, CellConfig
+from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.mujoco import model as cell_model
 from bt_arrange_sim.mujoco.devices import MujocoArm, MujocoCamera, MujocoClock, MujocoGripper, _xyzw
 from bt_arrange_sim.mujoco.model import FINGER_BODIES, MujocoPhysics, PartSpec
 from bt_arrange_sim.noise import CameraNoise
-from bt_arrange_sim.objects import paint_of
+from bt_arrange_sim.parts import paint_of
 
 
 class MujocoCell:

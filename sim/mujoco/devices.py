@@ -6,24 +6,25 @@ period at a time (``MujocoCell.step``). Commands only set the actuators' control
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import (
-    GRIPPER_FORCE_RANGE_N,
-    GRIPPER_MAX_WIDTH_M,
-    GRIPPER_SPEED_RANGE_M_S,
-    CameraFrame,
-    CameraIntrinsics,
-    PixelWindow,
-)
+from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange_sim.mujoco.model import camera_quat_wxyz
 from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
+from bt_arrange_sim.ranges import (
+    checked_grip_force_n,
+    checked_gripper_speed_m_s,
+    checked_gripper_width_m,
+    checked_joint_setpoint,
+    checked_render_offset,
+)
 
-if TYPE_CHECKING:
-    from bt_arrange_sim.mujoco.cell import MujocoCell
+#: The cell the devices belong to (``cell.MujocoCell``, which builds them): named by what they read of it,
+#: so that the devices need not import the module that imports them.
+MujocoCell = Any
 
 
 def _xyzw(wxyz: np.ndarray) -> np.ndarray:
@@ -87,6 +88,7 @@ class MujocoArm:
 
     def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
+        checked_joint_setpoint(positions_rad, velocities_rad_s)
         self._q_ref = np.asarray(positions_rad, dtype=float).copy()
         self._qd_ref = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float).copy()
         self.interpolate(0)
@@ -143,10 +145,7 @@ class MujocoGripper:
 
     def open(self, width_m: float, speed_m_s: float | None = None) -> None:
         """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
-        if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
-            raise OutOfRangeError(
-                f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
-            )
+        checked_gripper_width_m(width_m)
         physics = self._cell.config.physics
         speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
         self._cell.end_grasp(width_m)
@@ -156,9 +155,7 @@ class MujocoGripper:
 
     def close(self, force_n: float, speed_m_s: float | None = None) -> None:
         """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
-        low, high = GRIPPER_FORCE_RANGE_N
-        if not low <= force_n <= high:
-            raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
+        checked_grip_force_n(force_n)
         speed = self._checked_speed(speed_m_s)
         self._cell.begin_grasp()
         self._set_force(force_n, speed / 2)
@@ -199,13 +196,9 @@ class MujocoGripper:
         self.open(width_m)
 
     def _checked_speed(self, speed_m_s: float | None) -> float:
-        speed = self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
-        low, high = GRIPPER_SPEED_RANGE_M_S
-        if not low <= speed <= high:
-            raise OutOfRangeError(
-                f"gripper speed {speed * 1000:.0f} mm/s is outside {low * 1000:.0f} to {high * 1000:.0f} mm/s"
-            )
-        return speed
+        return checked_gripper_speed_m_s(
+            self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
+        )
 
 
 class MujocoCamera:
@@ -252,14 +245,7 @@ class MujocoCamera:
 
         Frames still report the calibrated ``pose_world`` (``SimCamera.set_render_offset``).
         """
-        import math
-
-        from bt_arrange_sim.mujoco.model import camera_quat_wxyz
-
-        offset = (float(dx_m), float(dy_m), float(dyaw_rad))
-        if not all(math.isfinite(v) for v in offset):
-            raise OutOfRangeError(f"camera render offset {offset} is not finite")
-        self._render_offset = offset
+        self._render_offset = checked_render_offset(dx_m, dy_m, dyaw_rad)
         pose = self._rendered_pose()
         model = self._cell.model
         model.cam_pos[self._camera_id] = pose.position_m

@@ -8,24 +8,24 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import (
-    GRIPPER_FORCE_RANGE_N,
-    GRIPPER_MAX_WIDTH_M,
-    GRIPPER_SPEED_RANGE_M_S,
-    CameraFrame,
-    CameraIntrinsics,
-    PixelWindow,
-)
+from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
+from bt_arrange_sim.ranges import (
+    checked_grip_force_n,
+    checked_gripper_speed_m_s,
+    checked_gripper_width_m,
+    checked_joint_setpoint,
+    checked_render_offset,
+)
 
-if TYPE_CHECKING:
-    from bt_arrange_sim.cell import WorkCell
+#: The cell the devices belong to (``cell.WorkCell``, which builds them): named by what they read of it,
+#: so that the devices need not import the module that imports them.
+WorkCell = Any
 
 
 class SimClock:
@@ -87,6 +87,7 @@ class SimArm:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
         import pybullet
 
+        checked_joint_setpoint(positions_rad, velocities_rad_s)
         positions = np.asarray(positions_rad, dtype=float)
         if self._joint_sigma_rad:
             velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
@@ -145,10 +146,7 @@ class SimGripper:
         """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
         import pybullet
 
-        if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
-            raise OutOfRangeError(
-                f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
-            )
+        checked_gripper_width_m(width_m)
         physics = self._cell.config.physics
         speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
         self._cell.end_grasp(width_m)
@@ -167,9 +165,7 @@ class SimGripper:
         """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
         import pybullet
 
-        low, high = GRIPPER_FORCE_RANGE_N
-        if not low <= force_n <= high:
-            raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
+        checked_grip_force_n(force_n)
         speed = self._checked_speed(speed_m_s)
         self._cell.begin_grasp()
         for finger in self._fingers:
@@ -219,13 +215,9 @@ class SimGripper:
         self.open(width_m)
 
     def _checked_speed(self, speed_m_s: float | None) -> float:
-        speed = self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
-        low, high = GRIPPER_SPEED_RANGE_M_S
-        if not low <= speed <= high:
-            raise OutOfRangeError(
-                f"gripper speed {speed * 1000:.0f} mm/s is outside {low * 1000:.0f} to {high * 1000:.0f} mm/s"
-            )
-        return speed
+        return checked_gripper_speed_m_s(
+            self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
+        )
 
 
 class SimCamera:
@@ -297,9 +289,7 @@ class SimCamera:
         about the point below the camera. Off by default; call with no arguments (all zeros) to
         render from the calibrated pose again.
         """
-        offset = (float(dx_m), float(dy_m), float(dyaw_rad))
-        if not all(math.isfinite(v) for v in offset):
-            raise OutOfRangeError(f"camera render offset {offset} is not finite")
+        offset = checked_render_offset(dx_m, dy_m, dyaw_rad)
         self._render_offset = offset
         if offset == (0.0, 0.0, 0.0):
             self._render_view_matrix = self._view_matrix
