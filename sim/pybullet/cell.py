@@ -18,12 +18,12 @@ from collections.abc import Iterable, Iterator
 import numpy as np
 
 from bt_arrange.errors import PlanError
-from bt_arrange.geometry import Pose, fold_yaw
+from bt_arrange.geometry import Pose
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.robot import Robot
 from bt_arrange.shapes import Prism
+from bt_arrange_sim.cell_base import CellBase
 from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
 from bt_arrange_sim.parts import TABLE_RGB
@@ -87,7 +87,7 @@ def _cached_hand_eye(urdf_path: os.PathLike[str] | str) -> tuple[np.ndarray, flo
     return _HAND_EYE[key]
 
 
-class WorkCell:
+class WorkCell(CellBase):
     """One simulated work cell with its own physics world.
 
     ``gui=True`` opens the pybullet window (needs a display); the default is DIRECT, headless.
@@ -182,16 +182,6 @@ class WorkCell:
 
     # -- world -----------------------------------------------------------------------------
 
-    @property
-    def sim_time_s(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._steps * self.config.physics.time_step_s
-
-    @property
-    def robot(self) -> Robot:
-        """The cell's devices behind the interfaces behaviours use."""
-        return Robot(arm=self.arm, gripper=self.gripper, camera=self.camera, clock=self.clock)
-
     def step(self, control_periods: int = 1) -> None:
         """Advance the world by whole control periods (each several physics steps)."""
         friction = self.config.errors.friction.enabled
@@ -212,10 +202,6 @@ class WorkCell:
             (x, y, _), _ = self.client.getBasePositionAndOrientation(body)
             self.client.changeDynamics(body, -1, lateralFriction=nominal * self.config.errors.friction_scale(x, y))
 
-    def settle(self, seconds: float = 0.5) -> None:
-        """Let the world run with the current commands, e.g. after adding cubes."""
-        self.step(max(1, round(seconds / self.config.physics.control_period_s)))
-
     def parts_at_rest(self, speed_m_s: float = 0.001, speed_rad_s: float = 0.01) -> bool:
         """True when every part moves slower than ``speed_m_s`` and turns slower than ``speed_rad_s``."""
         for body in self.cubes.values():
@@ -234,17 +220,7 @@ class WorkCell:
             self.client.disconnect()
             self.client = None  # type: ignore[assignment]
 
-    def __enter__(self) -> WorkCell:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
     # -- cubes -----------------------------------------------------------------------------
-
-    def add_cube(self, colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0, name: str | None = None) -> str:
-        """Put a 5 cm cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
-        return self.add_object(CUBE, colour, x_m, y_m, yaw_rad, name=name)
 
     def add_object(
         self,
@@ -303,11 +279,6 @@ class WorkCell:
         """The simulator's true pose of a cube's centre. Never steer the robot with it."""
         position, orientation = self.client.getBasePositionAndOrientation(self.cubes[name])
         return Pose(np.array(position), np.array(orientation))
-
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
-        """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry (90 degrees for a square top, else 180)."""
-        pose = self.cube_pose_truth(name)
-        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).shape.symmetry_rad)
 
     def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.

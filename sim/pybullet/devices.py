@@ -13,12 +13,10 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
+from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
 from bt_arrange_sim.ranges import (
-    checked_grip_force_n,
-    checked_gripper_speed_m_s,
-    checked_gripper_width_m,
     checked_joint_setpoint,
     checked_render_offset,
 )
@@ -28,18 +26,11 @@ from bt_arrange_sim.ranges import (
 WorkCell = Any
 
 
-class SimClock:
-    """World time of one cell: advances only when the cell is stepped."""
-
-    def __init__(self, cell: WorkCell) -> None:
-        self._cell = cell
-
-    def now(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._cell.sim_time_s
+class SimClock(CellClock):
+    """World time of one pybullet cell: advances only when the cell is stepped."""
 
 
-class SimArm:
+class SimArm(CellArm):
     """The UR5's six joints under pybullet position control, fed one setpoint per control period."""
 
     def __init__(self, cell: WorkCell) -> None:
@@ -63,16 +54,6 @@ class SimArm:
         self._position_gains = [physics.arm_position_gain] * 6
         self._velocity_gains = [physics.arm_velocity_gain] * 6
         self._zero_velocities = [0.0] * 6
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The six arm joints, base to wrist."""
-        return self._names
-
-    @property
-    def control_period_s(self) -> float:
-        """Seconds between two setpoints."""
-        return self._cell.config.physics.control_period_s
 
     def joint_positions(self) -> FloatArray:
         """Measured joint positions in radians."""
@@ -123,7 +104,7 @@ class SimArm:
         self.command(np.asarray(positions_rad, dtype=float))
 
 
-class SimGripper:
+class SimGripper(CellGripper):
     """Two mirrored, force-limited prismatic fingers kept centred by a gear constraint.
 
     Each finger joint is the distance of its pad from the centre, so the opening is their sum.
@@ -137,40 +118,27 @@ class SimGripper:
         #: The world times and finger positions of the last two ``is_moving`` polls of different times.
         self._polls: tuple[tuple[float, list[float]], ...] = ((-1.0, []), (-1.0, []))
 
-    @property
-    def max_width_m(self) -> float:
-        """The 2F-85 stroke in metres."""
-        return GRIPPER_MAX_WIDTH_M
-
-    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
-        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
+    def _drive_open(self, width_m: float, speed_m_s: float) -> None:
         import pybullet
 
-        checked_gripper_width_m(width_m)
         physics = self._cell.config.physics
-        speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
-        self._cell.end_grasp(width_m)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
                 finger,
                 pybullet.POSITION_CONTROL,
                 targetPosition=width_m / 2,
-                maxVelocity=speed / 2,
+                maxVelocity=speed_m_s / 2,
                 force=physics.finger_open_force_n,
                 positionGain=physics.finger_position_gain,
             )
 
-    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
-        """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
+    def _drive_close(self, force_n: float, speed_m_s: float) -> None:
         import pybullet
 
-        checked_grip_force_n(force_n)
-        speed = self._checked_speed(speed_m_s)
-        self._cell.begin_grasp()
         for finger in self._fingers:
             self._client.setJointMotorControl2(
-                self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed / 2, force=force_n
+                self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed_m_s / 2, force=force_n
             )
 
     def width(self) -> float:
@@ -214,13 +182,8 @@ class SimGripper:
             self._client.resetJointState(self._body, finger, width_m / 2, 0.0)
         self.open(width_m)
 
-    def _checked_speed(self, speed_m_s: float | None) -> float:
-        return checked_gripper_speed_m_s(
-            self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
-        )
 
-
-class SimCamera:
+class SimCamera(CellCamera):
     """The top RGB-D camera, rendered with pybullet's TinyRenderer (CPU, no display needed).
 
     The ideal cell's camera is its nominal pinhole, and its frames say so (``calibrated_intrinsics``,
@@ -275,11 +238,6 @@ class SimCamera:
         """The true camera pose ``T_W_C`` (evaluation only: never hand it to the robot's software)."""
         return self._true_pose_world
 
-    @property
-    def render_offset(self) -> tuple[float, float, float]:
-        """The physical displacement rendered from: (dx_m, dy_m, dyaw_rad); zeros when calibrated (the default)."""
-        return self._render_offset
-
     def set_render_offset(self, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: render from a camera displaced as if its mount had been bumped.
 
@@ -302,16 +260,6 @@ class SimCamera:
         )
         flip = np.diag([1.0, -1.0, -1.0, 1.0])  # as in __init__: OpenGL view from the OpenCV optical frame
         self._render_view_matrix = list(np.linalg.inv(moved.matrix @ flip).flatten(order="F"))
-
-    @property
-    def intrinsics(self) -> CameraIntrinsics:
-        """Pinhole intrinsics the camera reports (a real cell's: the nominal ones)."""
-        return self._intrinsics
-
-    @property
-    def pose_world(self) -> Pose:
-        """``T_W_C``, optical frame (x right, y down, z forward), as the camera reports it."""
-        return self._pose_world
 
     def projection_matrix(self, window: PixelWindow) -> list[float]:
         """OpenGL projection (column-major, as pybullet takes it) of the nominal frustum through ``window``.
@@ -453,8 +401,7 @@ class SimCamera:
                 projection = self.projection_matrix(window)
                 width, height = window.out_width_px, window.out_height_px
             rgb, depth = self._render(width, height, projection, with_depth)
-        rgb = self._cell.camera_noise.apply(rgb)
-        return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
+        return self._frame(rgb, depth, intrinsics)
 
 
 def _frustum(left: float, right: float, bottom: float, top: float, near: float, far: float) -> list[float]:

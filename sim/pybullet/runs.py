@@ -13,12 +13,10 @@ The names other modules import from here (``ObjectOutcome``, ``SimulationReport`
 from __future__ import annotations
 
 from collections.abc import Iterable
-from pathlib import Path
 from typing import Any
 
 import py_trees
 
-from bt_arrange.calibration import CameraCalibration
 from bt_arrange.plancheck import CameraView
 from bt_arrange.session import (
     REASON_TYPES,
@@ -85,7 +83,10 @@ def camera_view(config: CellConfig) -> CameraView:
 
 
 class SimulatedRun(CellRun):
-    """One tree in one freshly built pybullet cell: a ``CellRun`` on a ``SimWorld`` (in a window with ``gui``)."""
+    """One tree in one freshly built pybullet cell: a ``CellRun`` on a ``SimWorld`` (in a window with ``gui``).
+
+    ``session_options`` are ``CellRun``'s (``record_dir``, ``time_limit_s``, ``title``, ``calibration``).
+    """
 
     world: SimWorld
 
@@ -96,22 +97,12 @@ class SimulatedRun(CellRun):
         *,
         cell_config: CellConfig | None = None,
         gui: bool = False,
-        record_dir: Path | None = None,
-        time_limit_s: float = 1800.0,
-        title: str | None = None,
-        calibration: CameraCalibration | None = None,
+        **session_options: Any,
     ) -> None:
-        super().__init__(
-            root,
-            starts,
-            lambda config: open_world(config, gui),
-            camera_view,
-            cell_config=cell_config,
-            record_dir=record_dir,
-            time_limit_s=time_limit_s,
-            title=title,
-            calibration=calibration,
-        )
+        def open_gui_world(config: CellConfig) -> SimWorld:
+            return open_world(config, gui)
+
+        super().__init__(root, starts, open_gui_world, camera_view, cell_config=cell_config, **session_options)
 
     @property
     def cell(self) -> WorkCell:
