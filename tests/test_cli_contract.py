@@ -19,9 +19,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import bt_arrange_sim.pybullet.cell
 import bt_arrange_sim.executors
 import bt_arrange_sim.experiment
+import bt_arrange_sim.pybullet.cell
 import bt_arrange_sim.pybullet.runs
 from bt_arrange import cli
 

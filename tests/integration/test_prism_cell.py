@@ -13,8 +13,8 @@ import pytest
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism, preferred_grasp
-from bt_arrange_sim.pybullet.cell import WorkCell
 from bt_arrange_sim.parts import WOOD_DENSITY_KG_M3, mass_of
+from bt_arrange_sim.pybullet.cell import WorkCell
 from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
 
 ELL = ObjectType(

@@ -8,6 +8,7 @@ import pytest
 
 from bt_arrange import treefile
 from bt_arrange.behaviours import holding, stages
+from bt_arrange_sim.pybullet.objects import apply_contact
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = sorted((Path(__file__).resolve().parents[2] / "trees").glob("*.py"))
