@@ -3,19 +3,18 @@
 ``CellWorld`` puts any engine's cell behind the ``World`` protocol (its robot, clock and camera,
 and the engine's ground truth); ``CellRun`` is a ``Session`` on one, built from a ``CellConfig``,
 with the attributes the experiment, the injectors and the tests use (``cell``, ``context``, the
-hooks). An engine subclasses both: its world says how its scene settles, its run how its cell
-is built and what its camera sees (``bt_arrange_sim.pybullet.runs``, ``bt_arrange_sim.mujoco.runs``).
+hooks). An engine subclasses both: its world may say how its scene settles, its run says how its
+cell is built and what its camera sees (``bt_arrange_sim.pybullet.runs``, ``bt_arrange_sim.mujoco.runs``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
-from pathlib import Path
+import inspect
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import py_trees
 
-from bt_arrange.calibration import CameraCalibration
 from bt_arrange.perception import ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraFrame, Clock, Robot
@@ -86,39 +85,42 @@ class CellRun(Session):
     the cell's ground-truth access at the moment the paper names); ``tick_hooks`` after every tick.
     The plan, the scene and the options are checked before the cell is built. ``calibration``
     (``bt_arrange.calibration.read_calibration``) makes the detector use a calibration file's camera.
-    ``open_world`` builds the engine's world from the configuration; ``view`` is what its camera sees.
+
+    Of ``options``, ``SESSION_OPTIONS`` are the session's; the others are the engine's, for its
+    world (``open_world``: pybullet's ``gui``, MuJoCo's ``physics``), checked before anything runs.
+    An engine's run says only how it builds its world and what its camera sees (``camera_view``).
     """
 
     world: CellWorld
+    SESSION_OPTIONS = ("record_dir", "time_limit_s", "title", "calibration")
 
     def __init__(
         self,
         root: py_trees.behaviour.Behaviour,
         starts: Iterable[Any],
-        open_world: Callable[[CellConfig], CellWorld],
-        view: Callable[[CellConfig], CameraView],
         *,
         cell_config: CellConfig | None = None,
-        record_dir: Path | None = None,
-        time_limit_s: float = 1800.0,
-        title: str | None = None,
-        calibration: CameraCalibration | None = None,
+        **options: Any,
     ) -> None:
         config = cell_config or CellConfig()
+        session = {key: options.pop(key) for key in self.SESSION_OPTIONS if key in options}
+        # An unknown option is refused now, not when the world is built after the plan's checks.
+        inspect.signature(self.open_world).bind(config, **options)
 
         def open_configured_world() -> World:
-            return open_world(config)
+            return self.open_world(config, **options)
 
-        super().__init__(
-            root,
-            starts,
-            open_configured_world,
-            view=view(config),
-            record_dir=record_dir,
-            time_limit_s=time_limit_s,
-            title=title,
-            calibration=calibration,
-        )
+        super().__init__(root, starts, open_configured_world, view=self.camera_view(config), **session)
+
+    @staticmethod
+    def open_world(config: CellConfig) -> CellWorld:
+        """A fresh world of the engine's cell built from ``config``."""
+        raise NotImplementedError
+
+    @staticmethod
+    def camera_view(config: CellConfig) -> CameraView:
+        """What the engine's camera sees, for the plan check."""
+        raise NotImplementedError
 
     @property
     def cell(self) -> Any:

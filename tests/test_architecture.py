@@ -124,3 +124,16 @@ def test_every_module_of_sim_stays_under_600_lines() -> None:
         if (n := len(p.read_text().splitlines())) >= MAX_MODULE_LINES
     }
     assert long == {}
+
+
+def test_the_names_that_moved_to_the_pybullet_engine_still_resolve_with_a_deprecation_warning() -> None:
+    import pytest
+
+    import bt_arrange_sim
+    from bt_arrange_sim.pybullet.cell import WorkCell
+    from bt_arrange_sim.pybullet.runs import SimulatedRun
+
+    with pytest.warns(DeprecationWarning, match="bt_arrange_sim.pybullet.cell"):
+        assert bt_arrange_sim.WorkCell is WorkCell
+    with pytest.warns(DeprecationWarning, match="bt_arrange_sim.pybullet.runs"):
+        assert bt_arrange_sim.SimulatedRun is SimulatedRun

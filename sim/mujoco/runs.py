@@ -7,11 +7,6 @@ cell it builds and the nominal pinhole its camera renders.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from typing import Any
-
-import py_trees
-
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange_sim.config import CellConfig
@@ -33,33 +28,19 @@ class MujocoWorld(CellWorld):
     cell: MujocoCell
 
 
+def open_world(config: CellConfig, physics: MujocoPhysics | None = None) -> MujocoWorld:
+    """A fresh MuJoCo cell of ``config`` (and MuJoCo's own ``physics``, the sensitivity study's variants) as a world."""
+    return MujocoWorld(MujocoCell(config, physics))
+
+
 class MujocoRun(CellRun):
     """One tree in one freshly built MuJoCo cell: a ``CellRun`` on a ``MujocoWorld``.
 
-    ``physics`` are MuJoCo's own settings (``MujocoPhysics``, the sensitivity study's variants);
-    ``session_options`` are ``CellRun``'s (``record_dir``, ``time_limit_s``, ``title``, ``calibration``).
+    ``MujocoRun(root, starts, cell_config=..., physics=..., record_dir=..., ...)``: ``physics`` are
+    MuJoCo's own settings (``MujocoPhysics``), the rest is ``CellRun``'s.
     """
 
     world: MujocoWorld
-
-    def __init__(
-        self,
-        root: py_trees.behaviour.Behaviour,
-        starts: Iterable[Any],
-        *,
-        cell_config: CellConfig | None = None,
-        physics: MujocoPhysics | None = None,
-        **session_options: Any,
-    ) -> None:
-        def open_world(config: CellConfig) -> MujocoWorld:
-            return MujocoWorld(MujocoCell(config, physics))
-
-        super().__init__(root, starts, open_world, camera_view, cell_config=cell_config, **session_options)
-
-    @property
-    def cell(self) -> MujocoCell:
-        """The MuJoCo cell the tree runs in (ground truth and error injection go through it)."""
-        return self.world.cell
-
-    def __enter__(self) -> MujocoRun:
-        return self
+    cell: MujocoCell
+    open_world = staticmethod(open_world)
+    camera_view = staticmethod(camera_view)

@@ -12,11 +12,6 @@ The names other modules import from here (``ObjectOutcome``, ``SimulationReport`
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from typing import Any
-
-import py_trees
-
 from bt_arrange.plancheck import CameraView
 from bt_arrange.session import (
     REASON_TYPES,
@@ -83,31 +78,13 @@ def camera_view(config: CellConfig) -> CameraView:
 
 
 class SimulatedRun(CellRun):
-    """One tree in one freshly built pybullet cell: a ``CellRun`` on a ``SimWorld`` (in a window with ``gui``).
+    """One tree in one freshly built pybullet cell: a ``CellRun`` on a ``SimWorld``.
 
-    ``session_options`` are ``CellRun``'s (``record_dir``, ``time_limit_s``, ``title``, ``calibration``).
+    ``SimulatedRun(root, starts, cell_config=..., gui=..., record_dir=..., time_limit_s=..., title=...,
+    calibration=...)``: ``gui`` opens the pybullet window, the rest is ``CellRun``'s.
     """
 
     world: SimWorld
-
-    def __init__(
-        self,
-        root: py_trees.behaviour.Behaviour,
-        starts: Iterable[Any],
-        *,
-        cell_config: CellConfig | None = None,
-        gui: bool = False,
-        **session_options: Any,
-    ) -> None:
-        def open_gui_world(config: CellConfig) -> SimWorld:
-            return open_world(config, gui)
-
-        super().__init__(root, starts, open_gui_world, camera_view, cell_config=cell_config, **session_options)
-
-    @property
-    def cell(self) -> WorkCell:
-        """The pybullet cell the tree runs in (ground truth and error injection go through it)."""
-        return self.world.cell
-
-    def __enter__(self) -> SimulatedRun:
-        return self
+    cell: WorkCell
+    open_world = staticmethod(open_world)
+    camera_view = staticmethod(camera_view)
