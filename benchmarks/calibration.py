@@ -23,8 +23,9 @@ import numpy as np
 
 from bt_arrange.calibration import CalibratedCamera, write_calibration
 from bt_arrange.perception import CubeDetector
-from bt_arrange_sim.backend import SimBackend
-from bt_arrange_sim.cell import CellConfig, WorkCell
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.pybullet.backend import SimBackend
+from bt_arrange_sim.pybullet.cell import WorkCell
 from bt_arrange_sim.realcell import WORKSPACE_X_M, WORKSPACE_Y_M, parse_cell
 
 COLOURS = ("red", "yellow", "green", "blue")

@@ -36,10 +36,11 @@ from bt_arrange.calibration.procedure import working_plane_poses
 from bt_arrange.calibration.solve import solve_on_table_plane
 from bt_arrange.geometry import Pose
 from bt_arrange.robot import CameraIntrinsics
-from bt_arrange_sim.calibration import SimCalibrationRun
-from bt_arrange_sim.cell import CellConfig, WorkCell
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.pybullet.calibration import SimCalibrationRun
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.runs import SimWorld
 from bt_arrange_sim.realcell import WORKSPACE_X_M, WORKSPACE_Y_M, parse_cell
-from bt_arrange_sim.runs import SimWorld
 
 #: The height of a cube's top face: where the detector measures.
 CUBE_TOP_M = 0.05

@@ -33,11 +33,30 @@ MACHINE_FIELDS = ("wall_seconds",)
 
 
 def _packages(source: Path, into: Path) -> Path:
-    """A folder that imports ``bt_arrange`` and ``bt_arrange_sim`` from ``source`` (as the wheel maps them)."""
+    """A folder that imports ``bt_arrange`` and ``bt_arrange_sim`` from ``source`` (as the wheel maps them).
+
+    It also holds the distribution's metadata with ``source``'s own backend entry points: first on
+    the import path, it hides the installed checkout's, whose modules may be elsewhere in ``source``.
+    """
     into.mkdir(parents=True, exist_ok=True)
     (into / "bt_arrange").symlink_to(source / "bt_arrange")
     (into / "bt_arrange_sim").symlink_to(source / "sim")
+    info = into / "bt_arrange-0.0.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: bt-arrange\nVersion: 0.0.0\n")
+    (info / "entry_points.txt").write_text(_entry_points(source / "pyproject.toml"))
     return into
+
+
+def _entry_points(pyproject: Path) -> str:
+    """The ``[project.entry-points.*]`` tables of ``pyproject`` as an ``entry_points.txt``."""
+    import tomllib
+
+    tables = tomllib.loads(pyproject.read_text()).get("project", {}).get("entry-points", {})
+    lines = []
+    for group, points in tables.items():
+        lines += [f"[{group}]", *(f"{name} = {value}" for name, value in points.items()), ""]
+    return "\n".join(lines)
 
 
 def _campaign(packages: Path, out: Path, args: argparse.Namespace) -> dict:

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange.geometry import fold_yaw
-from bt_arrange_sim import WorkCell
-from bt_arrange_sim.scripted import ScriptedPickPlace
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
 
 #: Where cubes start and land: in the top camera's view, within comfortable reach of the UR5.
 X_RANGE_M = (0.32, 0.68)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from bt_arrange import treefile
 from bt_arrange.layout import Rect, gap_m
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 
 def run_once(path: Path, seed: int, inject: str | None, inject_seed: int) -> dict:

@@ -24,7 +24,7 @@ from pathlib import Path
 from bt_arrange import treefile
 from bt_arrange.layout import Outline, gap_m
 from bt_arrange.shapes import Prism
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 PLAN = Path(__file__).resolve().parents[1] / "bt_arrange" / "examples" / "fresco.toml"
 #: The issue's targets.

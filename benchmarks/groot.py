@@ -29,7 +29,7 @@ import zmq
 
 from bt_arrange import treefile
 from bt_arrange.groot2 import Groot2Publisher, protocol
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 ROOT = Path(__file__).resolve().parent.parent
 

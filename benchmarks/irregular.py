@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 
 from bt_arrange import treefile
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 PLAN = Path(__file__).resolve().parent / "plans" / "irregular_parts.toml"
 

@@ -10,7 +10,7 @@ yaw), yaw over the full circle, 45..100 % light, and renders it three ways with
 pixel), aliased (pixel centres only, like pybullet's TinyRenderer) and noisy (4 grey levels of
 noise after a 0.8 px blur). ``--cell`` also renders scenes in the pybullet cell's top camera
 (TinyRenderer, 1920 x 1080): four of the five parts each, in different colours, as the cell's
-bodies (``bt_arrange_sim.objects.create_object``), about ``--poses`` of each outline in all; the
+bodies (``bt_arrange_sim.pybullet.objects.create_object``), about ``--poses`` of each outline in all; the
 truth is the simulator's pose after the parts settle. ``ms_per_detection`` is the median CPU
 time of one ``detect`` (the machine is shared). ``--method`` compares the fine registrations
 (``edge_lines``, the default; ``corner_subpix``; ``contour_lines``; ``none``).
@@ -114,7 +114,8 @@ def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
     Each part is ``create_object``'s exact prism (a 0.1 mm coloured top plate on near-white
     sides), settled on the table; the truth is the simulator's pose of the body after settling.
     """
-    from bt_arrange_sim import CellConfig, WorkCell
+    from bt_arrange_sim.config import CellConfig
+    from bt_arrange_sim.pybullet.cell import WorkCell
 
     rng = np.random.default_rng(seed + 1)
     results = []

@@ -26,7 +26,10 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import CubeDetector
 from bt_arrange.plancheck import CameraView
-from bt_arrange_sim import PAINT_RGB, CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
+from bt_arrange_sim.config import CameraConfig, CellConfig
+from bt_arrange_sim.noise import CameraNoiseConfig
+from bt_arrange_sim.parts import PAINT_RGB
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 #: Cube centres: fully inside the image at 70 cm (the view spans about x 0.24..0.76 m and
 #: y -0.45..0.45 m at the height of the top faces) and within the UR5's reach.

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange import treefile
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREE = Path(__file__).resolve().parents[1] / "trees" / "single_cube.py"
 DISPLACEMENT_M = 0.02

@@ -49,8 +49,8 @@ from bt_arrange.motion import LinearMotion
 from bt_arrange.motion.bounds import finger_bound_s, joint_move_bound_s, line_bound_s
 from bt_arrange.runner import Runner
 from bt_arrange.timing import SectionTimers
-from bt_arrange_sim import WorkCell
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = Path(__file__).resolve().parent.parent / "trees"
 SECTIONS = ("render", "physics", "perception", "planning", "tree", "rest")

@@ -6,7 +6,7 @@ UR5. A backend is found through the ``bt_arrange.backends`` entry-point group, w
 declares in its ``pyproject.toml``::
 
     [project.entry-points."bt_arrange.backends"]
-    sim = "bt_arrange_sim.backend:SimBackend"
+    sim = "bt_arrange_sim.pybullet.backend:SimBackend"
 
 or registered at run time with ``register(name, factory)``. The framework names no backend
 module in its code: ``load("sim")`` imports whatever the entry point says, only when a command
@@ -33,7 +33,7 @@ ENTRY_POINT_GROUP = "bt_arrange.backends"
 #: The backend the command line uses unless told otherwise: the simulated work cell.
 DEFAULT_BACKEND = "sim"
 #: Where the default backend lives when no installed entry point declares it (stale metadata).
-FALLBACK = {DEFAULT_BACKEND: "bt_arrange_sim.backend:SimBackend"}
+FALLBACK = {DEFAULT_BACKEND: "bt_arrange_sim.pybullet.backend:SimBackend"}
 
 
 class ObjectReport(Protocol):

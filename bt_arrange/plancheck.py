@@ -17,7 +17,7 @@ and what the cell is (the top camera's view, the colours it can tell apart) and 
 
 The camera's view is data: a ``CameraView`` is the camera's intrinsics and pose, which the backend
 hands in (the simulated cell builds one from its camera configuration without starting a world; a
-real cell would from its calibration). Tree files, the Python API (``bt_arrange_sim.SimulatedRun``)
+real cell would from its calibration). Tree files, the Python API (``bt_arrange_sim.pybullet.runs.SimulatedRun``)
 and plan files all call this one function.
 """
 

@@ -12,8 +12,8 @@ has one); a ``Session`` does the rest:
   truth, labelled as such; a world without ground truth gives a camera-only report (every
   ``*_truth_*`` field None, ``SessionReport.ground_truth`` False).
 
-``bt_arrange`` never imports a simulator: ``bt_arrange_sim.runs.SimWorld`` is the pybullet cell as
-a ``World``, and ``bt_arrange_sim.runs.SimulatedRun`` a ``Session`` on it.
+``bt_arrange`` never imports a simulator: ``bt_arrange_sim.pybullet.runs.SimWorld`` is the pybullet cell as
+a ``World``, and ``bt_arrange_sim.pybullet.runs.SimulatedRun`` a ``Session`` on it.
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import ROBOTIQ_2F85
 from bt_arrange.shapes.cuboid import MAX_HEIGHT_M, MIN_EDGE_M
-from bt_arrange_sim.cell import CameraConfig
+from bt_arrange_sim.config import CameraConfig
 
 STEP_MM = 25
 

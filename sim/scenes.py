@@ -51,7 +51,7 @@ def scatter(
     """
     whole_number("seed", seed, style="unit")
     if view is None:
-        from bt_arrange_sim.cell import CameraConfig
+        from bt_arrange_sim.config import CameraConfig
 
         view = CameraConfig().view()
     rng = np.random.default_rng(seed)

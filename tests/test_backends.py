@@ -68,7 +68,7 @@ def test_every_engine_is_declared_as_an_entry_point() -> None:
     from importlib import metadata
 
     declared = {ep.name: ep.value for ep in metadata.entry_points(group=backends.ENTRY_POINT_GROUP)}
-    assert declared.get("sim") == "bt_arrange_sim.backend:SimBackend"
+    assert declared.get("sim") == "bt_arrange_sim.pybullet.backend:SimBackend"
     assert declared.get("mujoco") == "bt_arrange_sim.mujoco.backend:MujocoBackend"
     assert set(ENGINES) <= set(backends.available())
 
@@ -101,7 +101,7 @@ def test_an_engine_refuses_a_bad_scene_before_building_its_world(name: str, monk
     from bt_arrange.trees import Target, arrangement
 
     backend = _engine(name)
-    cell = "bt_arrange_sim.mujoco.cell.MujocoCell" if name == "mujoco" else "bt_arrange_sim.cell.WorkCell"
+    cell = "bt_arrange_sim.mujoco.cell.MujocoCell" if name == "mujoco" else "bt_arrange_sim.pybullet.cell.WorkCell"
 
     def never(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
         raise AssertionError("the world was built")

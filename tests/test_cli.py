@@ -157,7 +157,7 @@ def test_experiment_options_are_checked_before_any_trial_runs(capsys, tmp_path, 
 
 
 def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(capsys) -> None:  # item 2
-    from bt_arrange_sim.runs import ObjectOutcome, SimulationReport
+    from bt_arrange_sim.pybullet.runs import ObjectOutcome, SimulationReport
 
     def outcome(name: str, status: str) -> ObjectOutcome:
         return ObjectOutcome(name, (0.5, 0.0, 0.0), 0.5, 0.5, 0.5, 0.5, 0, status, "" if status == "within" else "x")
@@ -179,7 +179,7 @@ def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(caps
 
 
 def test_json_gives_the_target_yaw_in_degrees_too() -> None:  # item 9
-    from bt_arrange_sim.runs import ObjectOutcome, SimulationReport
+    from bt_arrange_sim.pybullet.runs import ObjectOutcome, SimulationReport
 
     red = ObjectOutcome("red", (0.5, 0.0, math.pi / 6), 0.5, 0.5, 0.5, 0.5, 0, "within")
     (entry,) = SimulationReport([red], "SUCCESS", 1.0, 1.0, 1.0, False).to_dict()["objects"]
@@ -189,7 +189,7 @@ def test_json_gives_the_target_yaw_in_degrees_too() -> None:  # item 9
 
 
 def test_the_table_speaks_mm_and_degrees_and_the_last_line_names_the_yaw_threshold(capsys) -> None:
-    from bt_arrange_sim.runs import ObjectOutcome, SimulationReport
+    from bt_arrange_sim.pybullet.runs import ObjectOutcome, SimulationReport
 
     red = ObjectOutcome("red", (0.45, -0.05, math.pi / 6), 0.5, 0.5, 0.5, 0.5, 0, "within")
     report = SimulationReport([red], "SUCCESS", 1.0, 10.0, 1.0, False, yaw_threshold_deg=1.0)
@@ -257,6 +257,6 @@ def test_building_the_help_starts_no_simulator() -> None:
 
 
 def test_a_work_cell_starts_without_pybullet_s_banner_on_stderr() -> None:  # item 9
-    code = "from bt_arrange_sim import WorkCell; WorkCell().close()"
+    code = "from bt_arrange_sim.pybullet.cell import WorkCell; WorkCell().close()"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert result.stderr == ""

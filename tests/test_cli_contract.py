@@ -19,10 +19,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import bt_arrange_sim.cell
 import bt_arrange_sim.executors
 import bt_arrange_sim.experiment
-import bt_arrange_sim.runs
+import bt_arrange_sim.pybullet.cell
+import bt_arrange_sim.pybullet.runs
 from bt_arrange import cli
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
@@ -42,9 +42,8 @@ def spy(*_: object, **__: object) -> None:
 
 @pytest.fixture(autouse=True)
 def no_world(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(bt_arrange_sim.runs, "WorkCell", spy)
-    monkeypatch.setattr(bt_arrange_sim.cell, "WorkCell", spy)
-    monkeypatch.setattr(bt_arrange_sim, "WorkCell", spy)
+    monkeypatch.setattr(bt_arrange_sim.pybullet.runs, "WorkCell", spy)
+    monkeypatch.setattr(bt_arrange_sim.pybullet.cell, "WorkCell", spy)
     monkeypatch.setattr(bt_arrange_sim.experiment.campaign, "run_trial", spy)
     monkeypatch.setattr(bt_arrange_sim.experiment.campaign, "ProcessPoolExecutor", spy)
     monkeypatch.setattr(bt_arrange_sim.executors, "open_executor", spy)

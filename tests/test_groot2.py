@@ -509,7 +509,7 @@ def test_a_port_in_use_is_one_line_before_anything_moves(capsys, monkeypatch):
     context = zmq.Context()
     taken = context.socket(zmq.REP)
     taken.bind(f"tcp://127.0.0.1:{port}")
-    from bt_arrange_sim.backend import SimBackend
+    from bt_arrange_sim.pybullet.backend import SimBackend
 
     monkeypatch.setattr(SimBackend, "open_run", lambda *a, **k: pytest.fail("the world was built"))
     try:

@@ -336,8 +336,8 @@ def test_a_heavier_part_lifts_with_more_grip_or_friction() -> None:
 def test_the_framework_s_pad_friction_is_the_cell_s() -> None:
     from bt_arrange.objects import DEFAULT_PART_FRICTION, DEFAULT_PART_MASS_KG
     from bt_arrange.shapes import ROBOTIQ_2F85
-    from bt_arrange_sim.cell import PhysicsConfig
-    from bt_arrange_sim.objects import CUBE_MASS_KG
+    from bt_arrange_sim.config import PhysicsConfig
+    from bt_arrange_sim.parts import CUBE_MASS_KG
 
     physics = PhysicsConfig()
     assert ROBOTIQ_2F85.pad_friction == physics.pad_contact.lateral_friction

@@ -31,7 +31,7 @@ def test_the_wheel_ships_the_cell_under_the_projects_name_with_its_robot(tmp_pat
     )
     (wheel,) = tmp_path.glob("bt_arrange-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
-    assert "bt_arrange_sim/cell.py" in names
+    assert "bt_arrange_sim/pybullet/cell.py" in names and "bt_arrange_sim/config.py" in names, "both layers"
     assert "bt_arrange_sim/experiment/campaign.py" in names, "the experiment package (pyproject's packages)"
     assert "bt_arrange/descriptions/ur5_2f85.urdf" in names
     assert "bt_arrange/py.typed" in names

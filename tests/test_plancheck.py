@@ -19,7 +19,7 @@ from bt_arrange.perception.colours import PAINT_RGB
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
-from bt_arrange_sim.cell import CameraConfig
+from bt_arrange_sim.config import CameraConfig
 from bt_arrange_sim.scenes import CubeStart, scatter
 
 VIEW: CameraView = CameraConfig().view()

@@ -12,7 +12,7 @@ from bt_arrange.errors import PlanError
 from bt_arrange.motion import ArmKinematics, default_urdf_path
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES
 from bt_arrange_sim import perturbed_robot, realcell
-from bt_arrange_sim.cell import CellConfig
+from bt_arrange_sim.config import CellConfig
 
 
 def test_the_ideal_cell_is_todays_cell_with_every_term_off() -> None:

@@ -17,7 +17,7 @@ from bt_arrange import session
 from bt_arrange.errors import PlanError
 from bt_arrange.session import Session, SessionReport, World
 from bt_arrange.trees import Target, arrangement
-from bt_arrange_sim import runs
+from bt_arrange_sim.pybullet import runs
 from bt_arrange_sim.scenes import CubeStart
 
 RED = Target("red", 0.50, 0.0)

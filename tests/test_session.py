@@ -241,7 +241,7 @@ def test_plans_and_xml_trees_run_on_the_chosen_backend_without_a_simulator() -> 
     assert summary["scattered"] == [[["red", "green", "blue", "yellow"], 0], [["red"], 0]]
     # The parser reads the default backend's experiment rows for --help (bt_arrange_sim.experiment,
     # which imports no pybullet); the run itself needs none of the simulator.
-    assert "pybullet" not in summary["simulator"] and "bt_arrange_sim.runs" not in summary["simulator"]
+    assert "pybullet" not in summary["simulator"] and "bt_arrange_sim.pybullet.runs" not in summary["simulator"]
     assert summary["codes"] == [0, 0]
     plan_report = json.loads(lines[0])
     assert plan_report["ground_truth"] is False and plan_report["objects_within"] == 4

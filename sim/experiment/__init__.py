@@ -14,10 +14,12 @@ process pool, or a Dask cluster through ``Client.get_executor()``). A trial is a
 its ``TrialSpec``, so the records are the same (order and wall times aside) whatever runs them.
 
 The package's rooms, each importing only those above it: ``rows`` (the rows, their labels and
-injectors), ``options`` (a trial's spec, the combinations, the options' parsing and checks),
-``trial`` (one trial), ``summaries`` (Table 1, the summary files, Fig. 4, the threshold figure)
-and ``campaign`` (many trials on an executor, ``trials.jsonl``, resuming). The names the command
-line, the executors, the benchmarks and the tests use are importable from here.
+injectors), ``engines`` (a trial's engine, found by its backend's entry point), ``options`` (a
+trial's spec, the combinations, the options' parsing and checks), ``trial`` (one trial),
+``summaries`` (Table 1, the summary files, Fig. 4, the threshold figure), ``campaign`` (many
+trials on an executor, ``trials.jsonl``, resuming) and ``engine_experiment`` (a backend's
+``experiment``: the campaign in its engine). The names the command line, the executors, the
+benchmarks and the tests use are importable from here.
 """
 
 from bt_arrange_sim.experiment.campaign import CampaignIncompleteError, read_trials, run_campaign, run_experiment

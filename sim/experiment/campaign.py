@@ -30,6 +30,7 @@ from bt_arrange import files
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import BtArrangeError, PlanError, RecordError
 from bt_arrange.trees import check_threshold
+from bt_arrange_sim.experiment.engines import DEFAULT_ENGINE, trial_engine
 from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_calibration, check_object_rows
 from bt_arrange_sim.experiment.summaries import campaign_rows, plot_fig4, summarise, write_campaign, write_summary
 from bt_arrange_sim.experiment.trial import run_trial
@@ -95,7 +96,7 @@ def run_experiment(
     object_name: str | Sequence[str] = "cube",
     calibration: str | Path | None = None,
     resume: bool = False,
-    engine: str = "sim",
+    engine: str = DEFAULT_ENGINE,
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
@@ -112,8 +113,8 @@ def run_experiment(
       a ``LocalCluster`` of ``workers``, or the cluster at ``scheduler``), or any
       ``concurrent.futures.Executor``.
     - ``on_trial(record, done, total)`` reports progress.
-    - ``engine``: the physics engine of every trial's cell, ``sim`` (pybullet) or ``mujoco``
-      (the MuJoCo backend's experiment passes it).
+    - ``engine``: the physics engine of every trial's cell, a backend's entry point name
+      (``engines.trial_engine``; a backend's ``experiment`` passes its own).
     - ``resume`` (``--resume``): continue the campaign in ``out_dir``, refused (a ``PlanError``
       naming what differs) when its ``specification.json`` is another campaign's.
 
@@ -129,7 +130,8 @@ def run_experiment(
     calibration_file = check_calibration(calibration)
     if calibration_file is not None:
         combos = [dataclasses.replace(c, calibration=calibration_file) for c in combos]
-    if engine != "sim":
+    if engine != DEFAULT_ENGINE:
+        trial_engine(engine).check_cells(list(dict.fromkeys(c.cell for c in combos)))
         combos = [dataclasses.replace(c, engine=engine) for c in combos]
     rows = list(rows)
     check_object_rows(object_name, rows)
@@ -319,7 +321,7 @@ def specification(rows: Sequence[str], trials: int, seed: int, combos: Sequence[
         # One folder (one threshold, cell and type, no --thresholds) or a folder per combination.
         "folder_per_combination": not flat,
         # The engine, named only when not pybullet's (specifications of before a second engine read the same).
-        **({"engine": combos[0].engine} if combos and combos[0].engine != "sim" else {}),
+        **({"engine": combos[0].engine} if combos and combos[0].engine != DEFAULT_ENGINE else {}),
     }
 
 

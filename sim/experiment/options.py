@@ -17,6 +17,7 @@ from bt_arrange.errors import PlanError
 from bt_arrange.objects import ObjectType, built_in_type
 from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import check_threshold
+from bt_arrange_sim.experiment.engines import DEFAULT_ENGINE
 from bt_arrange_sim.experiment.rows import ROWS
 
 
@@ -36,8 +37,8 @@ class TrialSpec:
     object_name: str = "cube"
     #: A camera calibration file (``bt-arrange calibrate``) the detector uses; None: the cell's nominal camera.
     calibration: str | None = None
-    #: The physics engine the trial's cell runs in: ``sim`` (pybullet) or ``mujoco`` (``ENGINES``).
-    engine: str = "sim"
+    #: The physics engine the trial's cell runs in: a backend's entry point name (``engines.trial_engine``).
+    engine: str = DEFAULT_ENGINE
 
     def record_fields(self) -> dict[str, object]:
         """What names the trial in its record (``trials.jsonl``), in the records' order."""
@@ -51,12 +52,8 @@ class TrialSpec:
             "object": self.object_name,
             **({"calibration": self.calibration} if self.calibration is not None else {}),
             # Named only when not pybullet's, so the records of before a second engine read the same.
-            **({"engine": self.engine} if self.engine != "sim" else {}),
+            **({"engine": self.engine} if self.engine != DEFAULT_ENGINE else {}),
         }
-
-
-#: The engines a trial can run in: the backend names whose cells the trials build (``trial._open_run``).
-ENGINES = ("sim", "mujoco")
 
 
 @dataclass(frozen=True)
@@ -75,7 +72,7 @@ class Combination:
     #: The campaign's camera calibration file, or None (``--calibration``).
     calibration: str | None = None
     #: The engine of the campaign's cells (``TrialSpec.engine``).
-    engine: str = "sim"
+    engine: str = DEFAULT_ENGINE
 
     @property
     def folder(self) -> str:
@@ -101,7 +98,7 @@ class Combination:
             and record.get("strategy", "paper") == self.strategy
             and record.get("object", "cube") == self.object_name
             and record.get("calibration") == self.calibration
-            and record.get("engine", "sim") == self.engine
+            and record.get("engine", DEFAULT_ENGINE) == self.engine
         )
 
 

@@ -12,8 +12,11 @@ import time
 
 import numpy as np
 
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.experiment.engines import trial_engine
 from bt_arrange_sim.experiment.options import TrialSpec, parse_object
 from bt_arrange_sim.experiment.rows import ROWS, row_injectors
+from bt_arrange_sim.realcell import parse_cell
 
 #: Targets of the trials: inside the camera's view and the arm's comfortable reach.
 TARGET_X_RANGE_M = (0.38, 0.62)
@@ -59,7 +62,8 @@ def _run_trial(spec: TrialSpec) -> dict:
         from bt_arrange.calibration import read_calibration
 
         calibration = read_calibration(spec.calibration)
-    with _open_run(spec, root, starts, calibration) as run:
+    engine = trial_engine(spec.engine)
+    with engine.open_trial_run(root, starts, cell_config=_cell_config(spec), calibration=calibration) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
@@ -89,22 +93,8 @@ def _run_trial(spec: TrialSpec) -> dict:
     }
 
 
-def _open_run(spec: TrialSpec, root, starts, calibration):  # noqa: ANN001, ANN202 - a Session with ``cell``
-    """The trial's run in its engine's cell: the pybullet ``SimulatedRun`` or the ``MujocoRun``."""
-    if spec.engine == "mujoco":
-        from bt_arrange_sim.mujoco.runs import MujocoRun
-
-        return MujocoRun(root, starts, cell_config=_cell_config(spec), calibration=calibration)
-    from bt_arrange_sim.runs import SimulatedRun
-
-    return SimulatedRun(root, starts, cell_config=_cell_config(spec), calibration=calibration)
-
-
-def _cell_config(spec: TrialSpec):  # noqa: ANN202 - a CellConfig (imported lazily: pybullet)
+def _cell_config(spec: TrialSpec) -> CellConfig:
     """The trial's cell; a real cell's per-run errors are seeded from the trial, apart from its draws."""
-    from bt_arrange_sim.cell import CellConfig
-    from bt_arrange_sim.realcell import parse_cell
-
     errors = parse_cell(spec.cell)
     if not errors.enabled:
         return CellConfig()

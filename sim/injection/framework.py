@@ -53,7 +53,7 @@ class InjectableArm(Protocol):
 class InjectableCell(Protocol):
     """The seam between the injectors and a simulator: what they read and change of a cell, nothing else.
 
-    ``bt_arrange_sim.cell.WorkCell`` (pybullet) and ``bt_arrange_sim.mujoco.cell.MujocoCell`` have
+    ``bt_arrange_sim.pybullet.cell.WorkCell`` and ``bt_arrange_sim.mujoco.cell.MujocoCell`` have
     these with the same meanings; ``config.physics.pad_contact.lateral_friction`` is the pads'
     nominal coefficient (the cells share ``CellConfig``).
     """

@@ -1,7 +1,7 @@
 """The work cell in MuJoCo: the pybullet cell's table, robot, parts, camera and clock in a second engine.
 
-``MujocoCell`` takes the pybullet cell's ``CellConfig`` (time step and control period, gravity,
-the table, the camera's intrinsics and pose, the friction coefficients, the gripper's speeds and
+``MujocoCell`` takes the engine-neutral ``CellConfig`` (``bt_arrange_sim.config``: time step and control
+period, gravity, the table, the camera's intrinsics and pose, the friction coefficients, the gripper's speeds and
 forces) and MuJoCo's own ``MujocoPhysics`` (the contact model and the servos, ``model``). Its
 methods for ground truth and error injection have the names and meanings of ``WorkCell``'s, so
 the injectors of ``bt_arrange_sim.injection`` act on either (``injection.framework.InjectableCell``).
@@ -20,20 +20,21 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.errors import PlanError
-from bt_arrange.geometry import Pose, fold_yaw
+from bt_arrange.geometry import Pose
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME
 from bt_arrange.objects import CUBE, DEFAULT_PART_FRICTION, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.robot import Robot
-from bt_arrange_sim.cell import HOME_Q, CellConfig
+from bt_arrange_sim.cell_base import CellBase
+from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.mujoco import model as cell_model
 from bt_arrange_sim.mujoco.devices import MujocoArm, MujocoCamera, MujocoClock, MujocoGripper, _xyzw
 from bt_arrange_sim.mujoco.model import FINGER_BODIES, MujocoPhysics, PartSpec
 from bt_arrange_sim.noise import CameraNoise
-from bt_arrange_sim.objects import paint_of
+from bt_arrange_sim.parts import paint_of
 
 
-class MujocoCell:
+class MujocoCell(CellBase):
     """One MuJoCo work cell: model, data, devices and parts. Headless; ``close`` frees the renderer."""
 
     ARM_JOINTS = ARM_JOINT_NAMES
@@ -130,11 +131,6 @@ class MujocoCell:
     # -- world -----------------------------------------------------------------------------
 
     @property
-    def sim_time_s(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._steps * self.config.physics.time_step_s
-
-    @property
     def robot(self) -> Robot:
         """The cell's devices behind the interfaces behaviours use."""
         assert self.camera is not None
@@ -165,10 +161,6 @@ class MujocoCell:
         """The state was set by hand: recompute what depends on it before it is read."""
         self._fresh = False
 
-    def settle(self, seconds: float = 0.5) -> None:
-        """Let the world run with the current commands, e.g. after adding parts."""
-        self.step(max(1, round(seconds / self.config.physics.control_period_s)))
-
     def joint_name(self, index: int) -> str:
         """Name of a joint of the model by its id."""
         return str(self.model.joint(index).name)
@@ -179,17 +171,7 @@ class MujocoCell:
             self.camera.close()
             self.camera = None
 
-    def __enter__(self) -> MujocoCell:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
     # -- parts -----------------------------------------------------------------------------
-
-    def add_cube(self, colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0, name: str | None = None) -> str:
-        """Put a 5 cm cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
-        return self.add_object(CUBE, colour, x_m, y_m, yaw_rad, name=name)
 
     def add_object(
         self, object_type: ObjectType, colour: str | ColourRange, x_m: float, y_m: float, yaw_rad: float = 0.0,
@@ -239,11 +221,6 @@ class MujocoCell:
         qadr, _ = self._free(name)
         qpos = self.data.qpos
         return Pose(qpos[qadr : qadr + 3].copy(), _xyzw(qpos[qadr + 3 : qadr + 7]))
-
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
-        """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry."""
-        pose = self.cube_pose_truth(name)
-        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).shape.symmetry_rad)
 
     def place_cube_truth(self, name: str, pose: Pose) -> None:
         """Error injection: put a part at ``pose``; it moves on by physics (``WorkCell.place_cube_truth``)."""

@@ -6,24 +6,23 @@ period at a time (``MujocoCell.step``). Commands only set the actuators' control
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import (
-    GRIPPER_FORCE_RANGE_N,
-    GRIPPER_MAX_WIDTH_M,
-    GRIPPER_SPEED_RANGE_M_S,
-    CameraFrame,
-    CameraIntrinsics,
-    PixelWindow,
-)
+from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
+from bt_arrange_sim.mujoco.model import camera_quat_wxyz
 from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
+from bt_arrange_sim.ranges import (
+    checked_joint_setpoint,
+    checked_render_offset,
+)
 
-if TYPE_CHECKING:
-    from bt_arrange_sim.mujoco.cell import MujocoCell
+#: The cell the devices belong to (``cell.MujocoCell``, which builds them): named by what they read of it,
+#: so that the devices need not import the module that imports them.
+MujocoCell = Any
 
 
 def _xyzw(wxyz: np.ndarray) -> np.ndarray:
@@ -31,18 +30,11 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
     return np.array([x, y, z, w])
 
 
-class MujocoClock:
-    """World time of one cell: advances only when the cell is stepped."""
-
-    def __init__(self, cell: MujocoCell) -> None:
-        self._cell = cell
-
-    def now(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._cell.sim_time_s
+class MujocoClock(CellClock):
+    """World time of one MuJoCo cell: advances only when the cell is stepped."""
 
 
-class MujocoArm:
+class MujocoArm(CellArm):
     """The UR5's six joints under MuJoCo position servos with velocity feed-forward, one setpoint per period.
 
     A ``general`` actuator's force is ``kp u - kp q - kv qd`` (``model.set_arm_gains``); with
@@ -67,16 +59,6 @@ class MujocoArm:
         self._qd_ref = np.zeros(6)
         self._time_step_s = cell.config.physics.time_step_s
 
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The six arm joints, base to wrist."""
-        return self._names
-
-    @property
-    def control_period_s(self) -> float:
-        """Seconds between two setpoints."""
-        return self._cell.config.physics.control_period_s
-
     def joint_positions(self) -> FloatArray:
         """Measured joint positions in radians."""
         return self._cell.data.qpos[self._qpos].copy()
@@ -87,6 +69,7 @@ class MujocoArm:
 
     def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
+        checked_joint_setpoint(positions_rad, velocities_rad_s)
         self._q_ref = np.asarray(positions_rad, dtype=float).copy()
         self._qd_ref = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float).copy()
         self.interpolate(0)
@@ -116,7 +99,7 @@ class MujocoArm:
         self._cell.invalidate()
 
 
-class MujocoGripper:
+class MujocoGripper(CellGripper):
     """Two mirrored, force-limited prismatic fingers coupled by an equality constraint (the linkage).
 
     Each finger joint is the distance of its pad from the centre, so the opening is their sum.
@@ -136,33 +119,14 @@ class MujocoGripper:
         #: ("open", target per finger, speed per finger) or ("close", velocity per finger).
         self._mode: tuple[str, float, float] = ("open", GRIPPER_MAX_WIDTH_M / 2, 0.075)
 
-    @property
-    def max_width_m(self) -> float:
-        """The 2F-85 stroke in metres."""
-        return GRIPPER_MAX_WIDTH_M
-
-    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
-        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
-        if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
-            raise OutOfRangeError(
-                f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
-            )
-        physics = self._cell.config.physics
-        speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
-        self._cell.end_grasp(width_m)
-        self._set_force(physics.finger_open_force_n, speed / 2)
-        self._mode = ("open", width_m / 2, speed / 2)
+    def _drive_open(self, width_m: float, speed_m_s: float) -> None:
+        self._set_force(self._cell.config.physics.finger_open_force_n, speed_m_s / 2)
+        self._mode = ("open", width_m / 2, speed_m_s / 2)
         self.update()
 
-    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
-        """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
-        low, high = GRIPPER_FORCE_RANGE_N
-        if not low <= force_n <= high:
-            raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
-        speed = self._checked_speed(speed_m_s)
-        self._cell.begin_grasp()
-        self._set_force(force_n, speed / 2)
-        self._mode = ("close", -speed / 2, 0.0)
+    def _drive_close(self, force_n: float, speed_m_s: float) -> None:
+        self._set_force(force_n, speed_m_s / 2)
+        self._mode = ("close", -speed_m_s / 2, 0.0)
         self.update()
 
     def update(self) -> None:
@@ -198,17 +162,8 @@ class MujocoGripper:
         self._cell.invalidate()
         self.open(width_m)
 
-    def _checked_speed(self, speed_m_s: float | None) -> float:
-        speed = self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
-        low, high = GRIPPER_SPEED_RANGE_M_S
-        if not low <= speed <= high:
-            raise OutOfRangeError(
-                f"gripper speed {speed * 1000:.0f} mm/s is outside {low * 1000:.0f} to {high * 1000:.0f} mm/s"
-            )
-        return speed
 
-
-class MujocoCamera:
+class MujocoCamera(CellCamera):
     """The top RGB-D camera, rendered by MuJoCo (OpenGL, offscreen): the pybullet cell's intrinsics and pose.
 
     The ideal cell's camera is its nominal pinhole (``CameraIntrinsics.from_fov``), which is what
@@ -228,38 +183,16 @@ class MujocoCamera:
         self._render_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
-    def intrinsics(self) -> CameraIntrinsics:
-        """Pinhole intrinsics of the full image."""
-        return self._intrinsics
-
-    @property
-    def pose_world(self) -> Pose:
-        """``T_W_C``, optical frame (x right, y down, z forward)."""
-        return self._pose_world
-
-    @property
     def true_pose_world(self) -> Pose:
         """The pose the camera renders from (evaluation only)."""
         return self._rendered_pose()
-
-    @property
-    def render_offset(self) -> tuple[float, float, float]:
-        """The physical displacement rendered from: (dx_m, dy_m, dyaw_rad); zeros when calibrated."""
-        return self._render_offset
 
     def set_render_offset(self, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: render from a camera moved by (dx, dy) and turned by dyaw about the vertical.
 
         Frames still report the calibrated ``pose_world`` (``SimCamera.set_render_offset``).
         """
-        import math
-
-        from bt_arrange_sim.mujoco.model import camera_quat_wxyz
-
-        offset = (float(dx_m), float(dy_m), float(dyaw_rad))
-        if not all(math.isfinite(v) for v in offset):
-            raise OutOfRangeError(f"camera render offset {offset} is not finite")
-        self._render_offset = offset
+        self._render_offset = checked_render_offset(dx_m, dy_m, dyaw_rad)
         pose = self._rendered_pose()
         model = self._cell.model
         model.cam_pos[self._camera_id] = pose.position_m
@@ -289,8 +222,7 @@ class MujocoCamera:
             config = self._cell.config.camera
             self._renderer = OffscreenRenderer(self._cell.model, "top", self._intrinsics, config.near_m, config.far_m)
         rgb, depth = self._renderer.render(self._cell.data, window, with_depth)
-        rgb = self._cell.camera_noise.apply(rgb)
-        return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
+        return self._frame(rgb, depth, intrinsics)
 
     def close(self) -> None:
         """Free the renderer."""

@@ -43,8 +43,8 @@ import numpy as np
 from bt_arrange.geometry import Pose
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.objects import DEFAULT_PART_FRICTION, ObjectType
-from bt_arrange_sim.cell import CellConfig
-from bt_arrange_sim.objects import SIDE_RGB, TABLE_RGB, TOP_PLATE_M, mass_of
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.parts import SIDE_RGB, TABLE_RGB, TOP_PLATE_M, mass_of
 
 #: Contact groups: robot geoms touch the world's (table, parts) but not each other, as in the
 #: pybullet cell (loaded without self-collision); parts and the table touch everything.

@@ -1,25 +1,18 @@
 """The MuJoCo cell as a ``bt_arrange.session.World``, and ``MujocoRun``: a session in a fresh MuJoCo cell.
 
-The twins of ``bt_arrange_sim.runs``' ``SimWorld`` and ``SimulatedRun``: everything that is the same
-for every backend is the session's (``bt_arrange.session``); here is only what is MuJoCo's.
+Everything that is the same for every backend is the session's (``bt_arrange.session``), and what
+every simulated engine shares is ``bt_arrange_sim.world``'s; here is only what is MuJoCo's: the
+cell it builds and the nominal pinhole its camera renders.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from pathlib import Path
-from typing import Any
-
-import py_trees
-
-from bt_arrange.calibration import CameraCalibration
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics
-from bt_arrange.session import Session, World
-from bt_arrange_sim.cell import CellConfig
+from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.mujoco.cell import MujocoCell
 from bt_arrange_sim.mujoco.model import MujocoPhysics
-from bt_arrange_sim.runs import SimWorld
+from bt_arrange_sim.world import CellRun, CellWorld
 
 
 def camera_view(config: CellConfig) -> CameraView:
@@ -29,61 +22,25 @@ def camera_view(config: CellConfig) -> CameraView:
     return CameraView(intrinsics, camera.pose_world())
 
 
-class MujocoWorld(SimWorld):
-    """A ``MujocoCell`` as a ``World``: ``SimWorld`` over the MuJoCo cell, which has the same methods.
+class MujocoWorld(CellWorld):
+    """A ``MujocoCell`` as a ``World`` (``CellWorld``). It has no ``parts_at_rest``: it settles the whole time asked."""
 
-    ``cell`` is the MuJoCo cell itself, for what only a simulator can do (the error injectors).
-    Only the scene's settling differs: the MuJoCo cell has no ``parts_at_rest``, so it settles the
-    whole ``seconds``.
+    cell: MujocoCell
+
+
+def open_world(config: CellConfig, physics: MujocoPhysics | None = None) -> MujocoWorld:
+    """A fresh MuJoCo cell of ``config`` (and MuJoCo's own ``physics``, the sensitivity study's variants) as a world."""
+    return MujocoWorld(MujocoCell(config, physics))
+
+
+class MujocoRun(CellRun):
+    """One tree in one freshly built MuJoCo cell: a ``CellRun`` on a ``MujocoWorld``.
+
+    ``MujocoRun(root, starts, cell_config=..., physics=..., record_dir=..., ...)``: ``physics`` are
+    MuJoCo's own settings (``MujocoPhysics``), the rest is ``CellRun``'s.
     """
 
-    cell: MujocoCell  # type: ignore[assignment]
-
-    def __init__(self, cell: MujocoCell) -> None:
-        self.cell = cell
-
-    def settle(self, seconds: float) -> None:
-        """Run the physics for ``seconds`` of world time with the arm holding still."""
-        self.cell.settle(seconds)
-
-
-class MujocoRun(Session):
-    """One tree in one freshly built MuJoCo cell: a ``Session`` on a ``MujocoWorld`` (``SimulatedRun``'s twin)."""
-
     world: MujocoWorld
-
-    def __init__(
-        self,
-        root: py_trees.behaviour.Behaviour,
-        starts: Iterable[Any],
-        *,
-        cell_config: CellConfig | None = None,
-        physics: MujocoPhysics | None = None,
-        record_dir: Path | None = None,
-        time_limit_s: float = 1800.0,
-        title: str | None = None,
-        calibration: CameraCalibration | None = None,
-    ) -> None:
-        config = cell_config or CellConfig()
-
-        def open_world() -> World:
-            return MujocoWorld(MujocoCell(config, physics))
-
-        super().__init__(
-            root,
-            starts,
-            open_world,
-            view=camera_view(config),
-            record_dir=record_dir,
-            time_limit_s=time_limit_s,
-            title=title,
-            calibration=calibration,
-        )
-
-    @property
-    def cell(self) -> MujocoCell:
-        """The MuJoCo cell the tree runs in (ground truth and error injection go through it)."""
-        return self.world.cell
-
-    def __enter__(self) -> MujocoRun:
-        return self
+    cell: MujocoCell
+    open_world = staticmethod(open_world)
+    camera_view = staticmethod(camera_view)

@@ -10,7 +10,7 @@ import pytest
 
 from bt_arrange import cli
 from bt_arrange.calibration import read_calibration
-from bt_arrange_sim.cell import CameraConfig
+from bt_arrange_sim.config import CameraConfig
 
 
 def test_calibrate_in_the_ideal_cell_recovers_the_nominal_camera(tmp_path, capsys) -> None:

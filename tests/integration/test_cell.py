@@ -8,7 +8,9 @@ import pytest
 from bt_arrange.errors import BtArrangeError, OutOfRangeError
 from bt_arrange.objects import CUBE
 from bt_arrange.robot import Arm, Camera, Clock, Gripper
-from bt_arrange_sim import CameraConfig, CameraNoiseConfig, CellConfig, WorkCell
+from bt_arrange_sim.config import CameraConfig, CellConfig
+from bt_arrange_sim.noise import CameraNoiseConfig
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 CUBE_EDGE_M = CUBE.size_m[0]
 

@@ -9,8 +9,9 @@ from bt_arrange.objects import CUBE
 from bt_arrange.perception import CubeDetector
 from bt_arrange.perception.detection import WorldRegion
 from bt_arrange.trees import Target, arrangement
-from bt_arrange_sim.cell import CellConfig, WorkCell
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 from bt_arrange_sim.scenes import scatter
 
 CUBE_EDGE_M = CUBE.size_m[0]

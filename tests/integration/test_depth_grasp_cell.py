@@ -18,8 +18,8 @@ from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception.depth_grasp import DepthGraspEstimator
 from bt_arrange.trees import Arrangement, Target, by_depth, correction, set_target, transfer
-from bt_arrange_sim import WorkCell
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 from bt_arrange_sim.scenes import scatter
 
 COLOURS = ["red", "green", "blue", "yellow"]

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from bt_arrange import examples, treefile
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
 

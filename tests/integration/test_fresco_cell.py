@@ -6,7 +6,7 @@ from pathlib import Path
 
 from bt_arrange import treefile
 from bt_arrange.layout import Outline, gap_m
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 FRESCO = """
 threshold_mm = 1.0

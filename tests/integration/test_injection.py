@@ -32,7 +32,7 @@ from bt_arrange_sim.injection import (
     grasp_fits,
     make_injector,
 )
-from bt_arrange_sim.runs import SimulatedRun, SimulationReport
+from bt_arrange_sim.pybullet.runs import SimulatedRun, SimulationReport
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "single_cube.py"
 SCENE_SEED = 0

@@ -14,7 +14,7 @@ from merged_pieces import moved_towards, neighbours
 
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception import CubeDetector, DetectionStatus, WorldRegion
-from bt_arrange_sim import WorkCell
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 
 @pytest.mark.parametrize(("seed", "gap_mm"), [(0, 0.5), (2, 0.6)])

@@ -73,7 +73,7 @@ def test_the_camera_is_the_pybullet_cells_pinhole_and_its_windows_are_crops() ->
         cell.settle(0.2)
         camera = cell.camera
         assert camera is not None
-        from bt_arrange_sim.cell import CameraConfig
+        from bt_arrange_sim.config import CameraConfig
 
         config = CameraConfig()
         assert camera.intrinsics.fy_px == pytest.approx(config.calibrated_intrinsics().fy_px)
@@ -161,7 +161,7 @@ def test_an_experiment_on_both_engines_writes_a_folder_each_and_a_side_by_side_s
 def test_a_non_convex_prism_is_its_convex_pieces_and_rests_where_it_was_put() -> None:
     from bt_arrange.objects import ObjectType
     from bt_arrange.shapes import Prism
-    from bt_arrange_sim.objects import mass_of
+    from bt_arrange_sim.parts import mass_of
 
     ell = ObjectType(
         "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)

@@ -11,7 +11,7 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception import CubeDetector, DetectionStatus
 from bt_arrange.shapes import Prism
-from bt_arrange_sim import WorkCell
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 
 def part(name: str, points_mm: list[list[float]]) -> ObjectType:

@@ -9,8 +9,10 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.motion import gripper_down_pose
 from bt_arrange.perception import CubeDetector, DetectionStatus
 from bt_arrange.robot import PixelWindow
-from bt_arrange_sim import CameraNoiseConfig, CellConfig, WorkCell
-from bt_arrange_sim.scripted import ScriptedPickPlace
+from bt_arrange_sim.config import CellConfig
+from bt_arrange_sim.noise import CameraNoiseConfig
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
 
 SCENE = [
     ("red", 0.40, 0.20, 0.3),

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from bt_arrange.objects import CUBE
-from bt_arrange_sim import WorkCell
-from bt_arrange_sim.scripted import ScriptedPickPlace
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
 
 CUBE_EDGE_M = CUBE.size_m[0]
 
@@ -136,7 +136,7 @@ def test_a_blended_pick_grasps_and_a_blended_place_lands_within_a_third_of_a_mil
     """
     from bt_arrange import treefile
     from bt_arrange.behaviours.context import ArmBrake
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.pybullet.runs import SimulatedRun
 
     handed_on = []
     carry_on = ArmBrake.carry_on

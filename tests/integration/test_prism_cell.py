@@ -13,9 +13,9 @@ import pytest
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism, preferred_grasp
-from bt_arrange_sim import WorkCell
-from bt_arrange_sim.objects import WOOD_DENSITY_KG_M3, mass_of
-from bt_arrange_sim.scripted import ScriptedPickPlace
+from bt_arrange_sim.parts import WOOD_DENSITY_KG_M3, mass_of
+from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
 
 ELL = ObjectType(
     "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
@@ -83,7 +83,7 @@ def test_a_prism_pushed_under_a_millimetre_stays_where_the_pads_left_it(part, pu
 
 def test_two_red_parts_of_different_outlines_are_told_apart_and_arranged_by_the_camera(tmp_path) -> None:
     from bt_arrange import treefile
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.pybullet.runs import SimulatedRun
 
     path = tmp_path / "two_red.toml"
     path.write_text(
@@ -104,7 +104,7 @@ def test_two_red_parts_of_different_outlines_are_told_apart_and_arranged_by_the_
 def test_a_part_turned_50_deg_after_its_release_is_picked_again_at_its_camera_pose_and_ends_within(tmp_path) -> None:
     from bt_arrange import treefile
     from bt_arrange.geometry import Pose
-    from bt_arrange_sim.runs import SimulatedRun
+    from bt_arrange_sim.pybullet.runs import SimulatedRun
 
     path = tmp_path / "one_ell.toml"
     path.write_text(

@@ -6,7 +6,8 @@ import numpy as np
 
 from bt_arrange.motion import ArmKinematics
 from bt_arrange.perception import CubeDetector
-from bt_arrange_sim.cell import HOME_Q, CellConfig, WorkCell
+from bt_arrange_sim.config import HOME_Q, CellConfig
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 
 def _camera_error_mm(config: CellConfig, calibration=None) -> float | None:  # noqa: ANN001

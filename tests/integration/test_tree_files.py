@@ -8,7 +8,8 @@ import pytest
 
 from bt_arrange import treefile
 from bt_arrange.behaviours import holding, stages
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.objects import apply_contact
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = sorted((Path(__file__).resolve().parents[2] / "trees").glob("*.py"))
 
@@ -73,7 +74,7 @@ def test_a_cube_that_slips_out_on_the_way_is_picked_again():
             if state["slippery"] and guard.status.value == "FAILURE":
                 state["slippery"] = False  # grip restored for the second attempt
                 for finger in cell.finger_joint_indices:
-                    cell.config.physics.pad_contact.apply(cell.client, cell.robot_id, finger)
+                    apply_contact(cell.config.physics.pad_contact, cell.client, cell.robot_id, finger)
 
         run.tick_hooks.append(slip_during_carry)
         report = run.run()

@@ -12,7 +12,7 @@ import pytest
 
 from bt_arrange.behaviours import Inspect, MoveHome
 from bt_arrange.trees import Arrangement, Target, correction, set_target
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 from bt_arrange_sim.scenes import CubeStart
 
 

@@ -8,37 +8,28 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import (
-    GRIPPER_FORCE_RANGE_N,
-    GRIPPER_MAX_WIDTH_M,
-    GRIPPER_SPEED_RANGE_M_S,
-    CameraFrame,
-    CameraIntrinsics,
-    PixelWindow,
+from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
+from bt_arrange_sim.ranges import (
+    checked_joint_setpoint,
+    checked_render_offset,
 )
 
-if TYPE_CHECKING:
-    from bt_arrange_sim.cell import WorkCell
+#: The cell the devices belong to (``cell.WorkCell``, which builds them): named by what they read of it,
+#: so that the devices need not import the module that imports them.
+WorkCell = Any
 
 
-class SimClock:
-    """World time of one cell: advances only when the cell is stepped."""
-
-    def __init__(self, cell: WorkCell) -> None:
-        self._cell = cell
-
-    def now(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._cell.sim_time_s
+class SimClock(CellClock):
+    """World time of one pybullet cell: advances only when the cell is stepped."""
 
 
-class SimArm:
+class SimArm(CellArm):
     """The UR5's six joints under pybullet position control, fed one setpoint per control period."""
 
     def __init__(self, cell: WorkCell) -> None:
@@ -63,16 +54,6 @@ class SimArm:
         self._velocity_gains = [physics.arm_velocity_gain] * 6
         self._zero_velocities = [0.0] * 6
 
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The six arm joints, base to wrist."""
-        return self._names
-
-    @property
-    def control_period_s(self) -> float:
-        """Seconds between two setpoints."""
-        return self._cell.config.physics.control_period_s
-
     def joint_positions(self) -> FloatArray:
         """Measured joint positions in radians."""
         measured = np.array([s[0] for s in self._client.getJointStates(self._body, self._indices)])
@@ -86,6 +67,7 @@ class SimArm:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
         import pybullet
 
+        checked_joint_setpoint(positions_rad, velocities_rad_s)
         positions = np.asarray(positions_rad, dtype=float)
         if self._joint_sigma_rad:
             velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
@@ -121,7 +103,7 @@ class SimArm:
         self.command(np.asarray(positions_rad, dtype=float))
 
 
-class SimGripper:
+class SimGripper(CellGripper):
     """Two mirrored, force-limited prismatic fingers kept centred by a gear constraint.
 
     Each finger joint is the distance of its pad from the centre, so the opening is their sum.
@@ -135,45 +117,27 @@ class SimGripper:
         #: The world times and finger positions of the last two ``is_moving`` polls of different times.
         self._polls: tuple[tuple[float, list[float]], ...] = ((-1.0, []), (-1.0, []))
 
-    @property
-    def max_width_m(self) -> float:
-        """The 2F-85 stroke in metres."""
-        return GRIPPER_MAX_WIDTH_M
-
-    def open(self, width_m: float, speed_m_s: float | None = None) -> None:
-        """Move to an opening of ``width_m`` at ``speed_m_s`` (defaults to the cell's opening speed)."""
+    def _drive_open(self, width_m: float, speed_m_s: float) -> None:
         import pybullet
 
-        if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
-            raise OutOfRangeError(
-                f"gripper width {width_m * 1000:.1f} mm is outside 0 to {GRIPPER_MAX_WIDTH_M * 1000:.0f} mm"
-            )
         physics = self._cell.config.physics
-        speed = self._checked_speed(physics.gripper_open_speed_m_s if speed_m_s is None else speed_m_s)
-        self._cell.end_grasp(width_m)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
                 finger,
                 pybullet.POSITION_CONTROL,
                 targetPosition=width_m / 2,
-                maxVelocity=speed / 2,
+                maxVelocity=speed_m_s / 2,
                 force=physics.finger_open_force_n,
                 positionGain=physics.finger_position_gain,
             )
 
-    def close(self, force_n: float, speed_m_s: float | None = None) -> None:
-        """Close at ``speed_m_s`` until each pad presses with at most ``force_n``."""
+    def _drive_close(self, force_n: float, speed_m_s: float) -> None:
         import pybullet
 
-        low, high = GRIPPER_FORCE_RANGE_N
-        if not low <= force_n <= high:
-            raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
-        speed = self._checked_speed(speed_m_s)
-        self._cell.begin_grasp()
         for finger in self._fingers:
             self._client.setJointMotorControl2(
-                self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed / 2, force=force_n
+                self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed_m_s / 2, force=force_n
             )
 
     def width(self) -> float:
@@ -217,17 +181,8 @@ class SimGripper:
             self._client.resetJointState(self._body, finger, width_m / 2, 0.0)
         self.open(width_m)
 
-    def _checked_speed(self, speed_m_s: float | None) -> float:
-        speed = self._cell.config.physics.gripper_speed_m_s if speed_m_s is None else speed_m_s
-        low, high = GRIPPER_SPEED_RANGE_M_S
-        if not low <= speed <= high:
-            raise OutOfRangeError(
-                f"gripper speed {speed * 1000:.0f} mm/s is outside {low * 1000:.0f} to {high * 1000:.0f} mm/s"
-            )
-        return speed
 
-
-class SimCamera:
+class SimCamera(CellCamera):
     """The top RGB-D camera, rendered with pybullet's TinyRenderer (CPU, no display needed).
 
     The ideal cell's camera is its nominal pinhole, and its frames say so (``calibrated_intrinsics``,
@@ -282,11 +237,6 @@ class SimCamera:
         """The true camera pose ``T_W_C`` (evaluation only: never hand it to the robot's software)."""
         return self._true_pose_world
 
-    @property
-    def render_offset(self) -> tuple[float, float, float]:
-        """The physical displacement rendered from: (dx_m, dy_m, dyaw_rad); zeros when calibrated (the default)."""
-        return self._render_offset
-
     def set_render_offset(self, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: render from a camera displaced as if its mount had been bumped.
 
@@ -296,9 +246,7 @@ class SimCamera:
         about the point below the camera. Off by default; call with no arguments (all zeros) to
         render from the calibrated pose again.
         """
-        offset = (float(dx_m), float(dy_m), float(dyaw_rad))
-        if not all(math.isfinite(v) for v in offset):
-            raise OutOfRangeError(f"camera render offset {offset} is not finite")
+        offset = checked_render_offset(dx_m, dy_m, dyaw_rad)
         self._render_offset = offset
         if offset == (0.0, 0.0, 0.0):
             self._render_view_matrix = self._view_matrix
@@ -311,16 +259,6 @@ class SimCamera:
         )
         flip = np.diag([1.0, -1.0, -1.0, 1.0])  # as in __init__: OpenGL view from the OpenCV optical frame
         self._render_view_matrix = list(np.linalg.inv(moved.matrix @ flip).flatten(order="F"))
-
-    @property
-    def intrinsics(self) -> CameraIntrinsics:
-        """Pinhole intrinsics the camera reports (a real cell's: the nominal ones)."""
-        return self._intrinsics
-
-    @property
-    def pose_world(self) -> Pose:
-        """``T_W_C``, optical frame (x right, y down, z forward), as the camera reports it."""
-        return self._pose_world
 
     def projection_matrix(self, window: PixelWindow) -> list[float]:
         """OpenGL projection (column-major, as pybullet takes it) of the nominal frustum through ``window``.
@@ -462,8 +400,7 @@ class SimCamera:
                 projection = self.projection_matrix(window)
                 width, height = window.out_width_px, window.out_height_px
             rgb, depth = self._render(width, height, projection, with_depth)
-        rgb = self._cell.camera_noise.apply(rgb)
-        return CameraFrame(rgb, depth, intrinsics, self._pose_world, self._cell.sim_time_s)
+        return self._frame(rgb, depth, intrinsics)
 
 
 def _frustum(left: float, right: float, bottom: float, top: float, near: float, far: float) -> list[float]:

@@ -22,7 +22,7 @@ from bt_arrange.motion import CartesianLimits, JointLimits
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.runner import Runner
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange_sim.cell import WorkCell
+from bt_arrange_sim.pybullet.cell import WorkCell
 
 #: The blackboard namespace of the cube the script handles.
 OBJ = "cube"

@@ -1,85 +1,39 @@
-"""The things on the table: coloured cuboids, painted from the one colour table perception reads."""
+"""The parts as pybullet bodies: a cuboid's box or a prism's compound of hulls, painted from the colour table."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from bt_arrange.errors import PlanError
 from bt_arrange.files import shared_temp_file
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, PAINT_RGB, SIDE_RGB, ColourRange, ColourTable
+from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, SIDE_RGB, ColourRange, ColourTable
 from bt_arrange.shapes import Prism
+from bt_arrange_sim.config import Contact
+from bt_arrange_sim.parts import TOP_PLATE_M, mass_of, paint_of
 
-__all__ = ["PAINT_RGB", "Contact", "create_cube", "create_object"]
+__all__ = ["apply_contact", "create_cube", "create_object"]
 
-TABLE_RGB = (0.45, 0.45, 0.47)
-
-#: A 5 cm cube of hard wood; light enough for the 2F-85, heavy enough to rest firmly.
-CUBE_MASS_KG = 0.1
-#: Types of no stated mass weigh as much as the cube: a 30 mm cube of wood (22 g) chattered
-#: between the 40 N pads (the fingers never came to rest, measured), one of 0.1 kg was held still.
-DEFAULT_MASS_KG = CUBE_MASS_KG
-#: Thickness of the coloured top plate, part of the cube's visual only: thin, because a 0.5 mm
-#: plate showed its coloured sides below the face edge and biased detections by up to 0.15 mm.
-TOP_PLATE_M = 0.0001
-#: Parts of no stated mass whose volume is known (prisms) weigh as hard wood: the paper's 5 cm
-#: cube of 0.1 kg is 800 kg/m3.
-WOOD_DENSITY_KG_M3 = 800.0
 #: The collision margin Bullet puts around a mesh's convex hull (pybullet's default, measured: an L
 #: of unshrunk hulls rested 0.99 mm above its true height).
 HULL_MARGIN_M = 0.001
 
 
-@dataclass(frozen=True)
-class Contact:
-    """Friction and contact parameters of one body (pybullet ``changeDynamics``)."""
-
-    lateral_friction: float
-    spinning_friction: float = 0.0
-    rolling_friction: float = 0.0
-    restitution: float = 0.0
-    #: Bullet's friction anchors pin a sticking contact point instead of letting it drift a
-    #: little every step; without them a held cube crept 1 to 3 mm down and along the pads.
-    friction_anchor: bool = True
-
-    def apply(self, client, body: int, link: int = -1) -> None:  # noqa: ANN001
-        """Set these parameters on one link of a body (``-1`` is the base)."""
-        client.changeDynamics(
-            body,
-            link,
-            lateralFriction=self.lateral_friction,
-            spinningFriction=self.spinning_friction,
-            rollingFriction=self.rolling_friction,
-            restitution=self.restitution,
-            frictionAnchor=int(self.friction_anchor),
-        )
+def apply_contact(contact: Contact, client, body: int, link: int = -1) -> None:  # noqa: ANN001
+    """Set a contact's figures on one link of a body (``-1`` is the base): pybullet's ``changeDynamics``."""
+    client.changeDynamics(
+        body,
+        link,
+        lateralFriction=contact.lateral_friction,
+        spinningFriction=contact.spinning_friction,
+        rollingFriction=contact.rolling_friction,
+        restitution=contact.restitution,
+        frictionAnchor=int(contact.friction_anchor),
+    )
 
 
 def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Contact) -> int:  # noqa: ANN001
     """Add a 5 cm cube with a top face of a colour of the default table; returns its body id."""
     return create_object(client, CUBE, colour, position_m, orientation_xyzw, contact)
-
-
-def paint_of(colour: str | ColourRange, colours: ColourTable = DEFAULT_COLOUR_TABLE) -> tuple[float, float, float]:
-    """The RGB a top face of ``colour`` (a name of ``colours``, or a range) is painted with."""
-    if isinstance(colour, ColourRange):
-        return colour.paint_rgb
-    found = colours.get(colour)
-    if found is None:
-        raise PlanError(f"unknown cube colour {colour!r}; known: {', '.join(sorted(colours.names))}")
-    return found.paint_rgb
-
-
-def mass_of(object_type: ObjectType) -> float:
-    """The type's ``mass_kg``; else a prism's volume at ``WOOD_DENSITY_KG_M3``, a cuboid's ``DEFAULT_MASS_KG``."""
-    if object_type.mass_kg is not None:
-        return object_type.mass_kg
-    shape = object_type.shape
-    if not shape.rectangular:
-        return WOOD_DENSITY_KG_M3 * shape.area_m2 * shape.height_m
-    return DEFAULT_MASS_KG
 
 
 def prism_mesh_files(shape: Prism) -> tuple[str, str, str]:
@@ -191,5 +145,5 @@ def create_object(  # noqa: PLR0913
     client.changeVisualShape(body, -1, shapeIndex=1, rgbaColor=[*rgb, 1.0])
     if object_type.lateral_friction is not None:
         contact = dataclasses.replace(contact, lateral_friction=object_type.lateral_friction)
-    contact.apply(client, body)
+    apply_contact(contact, client, body)
     return int(body)

@@ -11,171 +11,25 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import math
 import os
 import sys
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from bt_arrange.calibration import BoardMount, CharucoBoard
 from bt_arrange.errors import PlanError
-from bt_arrange.geometry import Pose, fold_yaw, rotation_z
-from bt_arrange.motion import DEFAULT_HOME_Q
+from bt_arrange.geometry import Pose
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.plancheck import CameraView
-from bt_arrange.robot import CameraIntrinsics, Robot
-from bt_arrange_sim.devices import SimArm, SimCamera, SimClock, SimGripper
+from bt_arrange_sim.cell_base import CellBase
+from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
-from bt_arrange_sim.objects import TABLE_RGB, Contact, create_object
+from bt_arrange_sim.parts import TABLE_RGB
 from bt_arrange_sim.perturbed_robot import hand_eye_base_pose, write_perturbed_urdf
-from bt_arrange_sim.realcell import RealCellErrors
+from bt_arrange_sim.pybullet.devices import SimArm, SimCamera, SimClock, SimGripper
+from bt_arrange_sim.pybullet.objects import apply_contact, create_object
 from bt_arrange_sim.scenes import CubeStart
-
-#: Joint vector the arm starts in: gripper straight down, out of the top camera's view.
-HOME_Q = DEFAULT_HOME_Q
-
-
-@dataclass(frozen=True)
-class PhysicsConfig:
-    """Integration and contact settings, tuned so a 5 cm cube is held by friction alone.
-
-    The arm follows setpoints through pybullet's position motors; ``control_period_s`` must be a
-    whole number of ``time_step_s``.
-
-    Measured with ``benchmarks/cell.py`` (10 trials): 50 solver iterations place a cube 0.10 mm
-    from its target on average at about 23x real time; 100 iterations place it 0.03 mm off but
-    run at 17x, because a held cube brings the whole arm into the contact solve. A 4 ms step
-    placed cubes 0.65 mm off. The gear constraint that mirrors the fingers needs a high
-    ``gear_erp``: at 0.2 the fingers drifted 0.45 mm apart while closing and the cube sat 0.2 mm
-    off the TCP; at 0.0 (velocity coupling only) 8 mm.
-    """
-
-    time_step_s: float = 1.0 / 500.0
-    solver_iterations: int = 50
-    control_period_s: float = 0.008
-    gravity_m_s2: float = 9.81
-    arm_position_gain: float = 0.3
-    arm_velocity_gain: float = 1.0
-    finger_position_gain: float = 0.2
-    finger_open_force_n: float = 40.0
-    #: Closing speed: faster closes (0.1 m/s) left the force-limited fingers trembling on the cube
-    #: for longer than the grasp's timeout in one trial of four.
-    gripper_speed_m_s: float = 0.05
-    #: Opening speed: the 2F-85's fastest; letting go faster did not move the released cube more.
-    gripper_open_speed_m_s: float = 0.15
-    #: Parts at rest sleep (Bullet's deactivation): they leave the contact solve until something
-    #: touches them, which wakes them. With four cubes resting on the table the cell stepped at about
-    #: half the bare robot's rate, with them asleep at 0.86 of it (``benchmarks/throughput.py``). A part
-    #: counts as at rest when its mean squared velocity (m/s, rad/s) stays under ``sleep_threshold``
-    #: (1e-6: about 1 mm/s) for Bullet's two seconds; every pose reset of a part wakes it.
-    parts_sleep: bool = True
-    sleep_threshold: float = 1e-6
-    gear_max_force_n: float = 200.0
-    gear_erp: float = 0.8
-    cube_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001)
-    #: Prisms (a compound of convex hulls) without friction anchors: a hull's table contact points
-    #: outlive a push, so anchored ones pulled a pushed prism back to where it lay
-    #: (docs/irregular.md, Limits, "Sub-millimetre pushes"); the pads' anchors still pin it.
-    prism_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001, friction_anchor=False)
-    pad_contact: Contact = Contact(lateral_friction=1.2, spinning_friction=0.002)
-    table_contact: Contact = Contact(lateral_friction=0.5, spinning_friction=0.001, friction_anchor=False)
-
-    @property
-    def substeps(self) -> int:
-        """Physics steps per control period."""
-        steps = round(self.control_period_s / self.time_step_s)
-        if steps < 1 or not math.isclose(steps * self.time_step_s, self.control_period_s, rel_tol=1e-9):
-            raise ValueError(
-                f"control period {self.control_period_s} s is not a multiple of the time step {self.time_step_s} s"
-            )
-        return steps
-
-
-@dataclass(frozen=True)
-class CameraConfig:
-    """The top camera: L515-like RGB intrinsics, 70 cm above the table, looking straight down.
-
-    The long image axis runs along world y; image "down" points to world -x, towards the robot;
-    the camera is turned ``roll_deg`` about its optical axis.
-    """
-
-    width_px: int = 1920
-    height_px: int = 1080
-    horizontal_fov_deg: float = 70.0
-    position_m: tuple[float, float, float] = (0.5, 0.0, 0.70)
-    near_m: float = 0.1
-    far_m: float = 2.0
-    light_direction: tuple[float, float, float] = (0.3, 0.2, 1.0)
-    #: Turn of the camera about its optical axis. No real camera is mounted exactly square to the
-    #: table; with 0, a cube square to the table (as every push leaves it) has its edges on whole
-    #: pixels of the aliased render, and its position is only known to about half a pixel
-    #: (0.25 mm); a few degrees give every edge a staircase to measure below a pixel.
-    roll_deg: float = 3.0
-
-    def calibrated_intrinsics(self) -> CameraIntrinsics:
-        """The intrinsics of the rendered image, as a calibration would find them.
-
-        TinyRenderer decides a pixel's coverage at its corner, not its centre, and flips rows:
-        the rendered image sits half a pixel right of and half a pixel above the nominal
-        pinhole (measured: +0.52, -0.59 px on blob centroids).
-        """
-        nominal = CameraIntrinsics.from_fov(self.width_px, self.height_px, self.horizontal_fov_deg)
-        return dataclasses.replace(nominal, cx_px=nominal.cx_px + 0.5, cy_px=nominal.cy_px - 0.5)
-
-    def view(self) -> CameraView:
-        """What this camera sees, for the plan check (no world needed)."""
-        return CameraView(self.calibrated_intrinsics(), self.pose_world())
-
-    def pose_world(self) -> Pose:
-        """``T_W_C`` in the OpenCV optical frame: x right (about world -y), y down (about world -x), z forward."""
-        square = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-        return Pose.from_rotation(self.position_m, square @ rotation_z(math.radians(self.roll_deg)))
-
-
-@dataclass(frozen=True)
-class CellConfig:
-    """Everything that makes one work cell."""
-
-    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
-    camera: CameraConfig = field(default_factory=CameraConfig)
-    camera_noise: CameraNoiseConfig = field(default_factory=CameraNoiseConfig)
-    table_size_m: tuple[float, float] = (1.3, 1.4)
-    table_centre_xy_m: tuple[float, float] = (0.35, 0.0)
-    #: A real cell's errors (``bt_arrange_sim.realcell``); all off by default: the ideal cell.
-    errors: RealCellErrors = field(default_factory=RealCellErrors)
-    #: The calibration board bolted to the flange (``bt_arrange_sim.calibration``), or None (a run's cell).
-    board: CharucoBoard | None = None
-    board_mount: BoardMount = field(default_factory=BoardMount)
-
-    @classmethod
-    def ideal(cls) -> CellConfig:
-        """Today's simulated cell, exactly (no real-cell error term on)."""
-        return cls()
-
-    @classmethod
-    def real(cls, cell_seed: int = 0) -> CellConfig:
-        """The paper's real cell: ``realcell.real()``'s error terms (docs/simulation.md)."""
-        from bt_arrange_sim import realcell
-
-        return cls(errors=realcell.real(cell_seed))
-
-    @classmethod
-    def from_toml(cls, path: str | os.PathLike[str]) -> CellConfig:
-        """A cell with the user's own error values (``realcell.load_toml``; a ``PlanError`` names a bad key)."""
-        from bt_arrange_sim import realcell
-
-        return cls(errors=realcell.load_toml(path))
-
-    @classmethod
-    def named(cls, name: str) -> CellConfig:
-        """``ideal``, ``real`` or a ``.toml`` file, as ``--cell`` takes it."""
-        from bt_arrange_sim import realcell
-
-        return cls(errors=realcell.parse_cell(name))
 
 
 @contextlib.contextmanager
@@ -232,7 +86,7 @@ def _cached_hand_eye(urdf_path: os.PathLike[str] | str) -> tuple[np.ndarray, flo
     return _HAND_EYE[key]
 
 
-class WorkCell:
+class WorkCell(CellBase):
     """One simulated work cell with its own physics world.
 
     ``gui=True`` opens the pybullet window (needs a display); the default is DIRECT, headless.
@@ -273,7 +127,7 @@ class WorkCell:
             base_position = (float(translation[0]), float(translation[1]), float(translation[2]))
         robot_urdf = self.urdf_path or default_urdf_path()
         if self.config.board is not None:
-            from bt_arrange_sim.calibration import write_urdf_with_board
+            from bt_arrange_sim.pybullet.calibration import write_urdf_with_board
 
             # The calibration board is a link of the robot (bolted to the flange), never a constraint.
             robot_urdf = write_urdf_with_board(robot_urdf, self.config.board, self.config.board_mount)
@@ -304,7 +158,7 @@ class WorkCell:
         self.finger_joint_indices = tuple(self._joint_index[name] for name in self.FINGER_JOINTS)
         self.tcp_link_index = self._link_index[TCP_FRAME]
         if self.config.board is not None:
-            from bt_arrange_sim.calibration import BOARD_LINK, texture_board
+            from bt_arrange_sim.pybullet.calibration import BOARD_LINK, texture_board
 
             texture_board(self.client, self.robot_id, self._link_index[BOARD_LINK], self.config.board)
         self._configure_gripper()
@@ -327,16 +181,6 @@ class WorkCell:
 
     # -- world -----------------------------------------------------------------------------
 
-    @property
-    def sim_time_s(self) -> float:
-        """Seconds of simulated time since the cell was built."""
-        return self._steps * self.config.physics.time_step_s
-
-    @property
-    def robot(self) -> Robot:
-        """The cell's devices behind the interfaces behaviours use."""
-        return Robot(arm=self.arm, gripper=self.gripper, camera=self.camera, clock=self.clock)
-
     def step(self, control_periods: int = 1) -> None:
         """Advance the world by whole control periods (each several physics steps)."""
         friction = self.config.errors.friction.enabled
@@ -357,10 +201,6 @@ class WorkCell:
             (x, y, _), _ = self.client.getBasePositionAndOrientation(body)
             self.client.changeDynamics(body, -1, lateralFriction=nominal * self.config.errors.friction_scale(x, y))
 
-    def settle(self, seconds: float = 0.5) -> None:
-        """Let the world run with the current commands, e.g. after adding cubes."""
-        self.step(max(1, round(seconds / self.config.physics.control_period_s)))
-
     def parts_at_rest(self, speed_m_s: float = 0.001, speed_rad_s: float = 0.01) -> bool:
         """True when every part moves slower than ``speed_m_s`` and turns slower than ``speed_rad_s``."""
         for body in self.cubes.values():
@@ -379,17 +219,7 @@ class WorkCell:
             self.client.disconnect()
             self.client = None  # type: ignore[assignment]
 
-    def __enter__(self) -> WorkCell:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
     # -- cubes -----------------------------------------------------------------------------
-
-    def add_cube(self, colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0, name: str | None = None) -> str:
-        """Put a 5 cm cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
-        return self.add_object(CUBE, colour, x_m, y_m, yaw_rad, name=name)
 
     def add_object(
         self,
@@ -449,11 +279,6 @@ class WorkCell:
         position, orientation = self.client.getBasePositionAndOrientation(self.cubes[name])
         return Pose(np.array(position), np.array(orientation))
 
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
-        """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry (90 degrees for a square top, else 180)."""
-        pose = self.cube_pose_truth(name)
-        return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).shape.symmetry_rad)
-
     def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.
 
@@ -490,7 +315,7 @@ class WorkCell:
         contact = dataclasses.replace(self.config.physics.pad_contact, lateral_friction=lateral_friction)
         body = self.cubes[cube]
         for finger in self.finger_joint_indices:
-            contact.apply(self.client, self.robot_id, finger)
+            apply_contact(contact, self.client, self.robot_id, finger)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 0)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 1)
         self._wake(cube)
@@ -521,7 +346,7 @@ class WorkCell:
         visual = self.client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=[*TABLE_RGB, 1.0])
         cx, cy = self.config.table_centre_xy_m
         table = self.client.createMultiBody(0.0, collision, visual, basePosition=[cx, cy, -thickness / 2])
-        self.config.physics.table_contact.apply(self.client, table)
+        apply_contact(self.config.physics.table_contact, self.client, table)
         return int(table)
 
     def begin_grasp(self) -> None:
@@ -580,7 +405,7 @@ class WorkCell:
         erp = gripper.coupling_erp if gripper.enabled else physics.gear_erp
         self.client.changeConstraint(self.gear_constraint_id, gearRatio=-1, maxForce=physics.gear_max_force_n, erp=erp)
         for finger in self.finger_joint_indices:
-            physics.pad_contact.apply(self.client, self.robot_id, finger)
+            apply_contact(physics.pad_contact, self.client, self.robot_id, finger)
             if gripper.enabled and gripper.pad_stiffness_n_m > 0:
                 # Silicone pads: a compliant contact instead of pybullet's rigid one.
                 self.client.changeDynamics(

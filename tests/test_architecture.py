@@ -1,0 +1,139 @@
+"""The simulator's layers (issue 31, item 4): no import circle in sim/, and the two engines are siblings.
+
+Every import counts: at module level, inside a function, under ``TYPE_CHECKING`` (the same coupling).
+The neutral layer is every module of ``bt_arrange_sim`` outside its engine packages; it imports no
+engine, and neither engine imports the other.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+SIM = Path(__file__).resolve().parents[1] / "sim"
+PACKAGE = "bt_arrange_sim"
+ENGINES = ("bt_arrange_sim.pybullet", "bt_arrange_sim.mujoco")
+MAX_MODULE_LINES = 600
+
+
+def _modules() -> dict[str, Path]:
+    modules = {}
+    for path in SIM.rglob("*.py"):
+        parts = [PACKAGE, *path.relative_to(SIM).with_suffix("").parts]
+        if parts[-1] == "__init__":
+            parts.pop()
+        modules[".".join(parts)] = path
+    return modules
+
+
+def _owner(name: str, modules: dict[str, Path]) -> str | None:
+    """The module of ``modules`` that ``name`` (a module, or a name inside one) is, or is in."""
+    while name and name not in modules:
+        name = name.rpartition(".")[0]
+    return name or None
+
+
+def _imports(module: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str | None] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found |= {_owner(alias.name, modules) for alias in node.names if alias.name.startswith(PACKAGE)}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            if base.startswith(PACKAGE):
+                found |= {_owner(f"{base}.{alias.name}", modules) for alias in node.names}
+    return {name for name in found if name is not None and name != module}
+
+
+def _graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {module: _imports(module, path, modules) for module, path in modules.items()}
+
+
+def _engine_of(module: str) -> str | None:
+    return next((e for e in ENGINES if module == e or module.startswith(e + ".")), None)
+
+
+def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    circles: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for other in graph.get(node, ()):
+            if other not in index:
+                visit(other)
+                low[node] = min(low[node], low[other])
+            elif other in stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                circles.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return circles
+
+
+def test_no_import_circle_in_sim() -> None:
+    assert _circles(_graph()) == []
+
+
+def test_the_circle_check_finds_a_circle() -> None:
+    assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_neither_engine_imports_the_other_and_the_neutral_layer_imports_neither() -> None:
+    offenders = []
+    for module, imported in sorted(_graph().items()):
+        mine = _engine_of(module)
+        for other in sorted(imported):
+            theirs = _engine_of(other)
+            if theirs is not None and theirs != mine:
+                offenders.append(f"{module} -> {other}")
+    assert offenders == []
+
+
+def test_every_engine_is_found_through_the_backends_entry_points() -> None:
+    import tomllib
+
+    pyproject = tomllib.loads((SIM.parent / "pyproject.toml").read_text(encoding="utf-8"))
+    declared = pyproject["project"]["entry-points"]["bt_arrange.backends"].values()
+    assert {_engine_of(value.partition(":")[0]) for value in declared} == set(ENGINES)
+
+
+def test_every_module_of_sim_stays_under_600_lines() -> None:
+    long = {
+        str(p.relative_to(SIM)): n
+        for p in SIM.rglob("*.py")
+        if (n := len(p.read_text().splitlines())) >= MAX_MODULE_LINES
+    }
+    assert long == {}
+
+
+def test_the_names_that_moved_to_the_pybullet_engine_still_resolve_with_a_deprecation_warning() -> None:
+    import pytest
+
+    import bt_arrange_sim
+    from bt_arrange_sim.pybullet.cell import WorkCell
+    from bt_arrange_sim.pybullet.runs import SimulatedRun
+
+    with pytest.warns(DeprecationWarning, match="bt_arrange_sim.pybullet.cell"):
+        assert bt_arrange_sim.WorkCell is WorkCell
+    with pytest.warns(DeprecationWarning, match="bt_arrange_sim.pybullet.runs"):
+        assert bt_arrange_sim.SimulatedRun is SimulatedRun
