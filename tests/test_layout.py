@@ -7,7 +7,6 @@ import math
 import pytest
 
 from bt_arrange.errors import PlanError
-from bt_arrange.shapes import Prism
 from bt_arrange.layout import (
     Pads,
     Part,
@@ -20,6 +19,7 @@ from bt_arrange.layout import (
     release_pads,
     start_clearance_m,
 )
+from bt_arrange.shapes import Prism
 
 EDGE = 0.05
 PADS = Pads()
