@@ -366,10 +366,10 @@ def _read_object_type(text: str) -> ObjectType:
     points_m: list[tuple[float, float]] = []
     at = 1
     while at < len(words) and ":" in words[at]:
-        x, colon, y = words[at].partition(":")
-        if ":" in y:
+        x_text, _, y_text = words[at].partition(":")
+        if ":" in y_text:
             raise ValueError(f"vertex {words[at]!r} is not X:Y in millimetres")
-        points_m.append((_parse_mm(x), _parse_mm(y)))
+        points_m.append((_parse_mm(x_text), _parse_mm(y_text)))
         at += 1
     values: dict[str, str] = {}
     rest = words[at:]

@@ -192,9 +192,11 @@ class Arrangement(py_trees.composites.Sequence):
 
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
-        """The plan, its thresholds and its colours (BehaviorTree.CPP's ``providedPorts``)."""
+        """The plan, its thresholds, its colours and its scene (BehaviorTree.CPP's ``providedPorts``)."""
         return (
-            Port("targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name] per object, separated by ;"),
+            Port(
+                "targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name[,object type]] per object, separated by ;"
+            ),
             Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "the yaw threshold the report checks [deg] (0: position only)"),
             Port("colours", COLOURS, DEFAULT_COLOUR_TABLE, "the plan's own colours: name:rgb:r,g,b;... (empty: none)"),
