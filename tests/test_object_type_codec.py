@@ -44,7 +44,9 @@ def test_every_type_of_every_plan_reads_back_identical(path):
 def test_every_plan_exported_reads_back_as_the_same_tree_and_plan(path):
     module = treefile.load(path)
     root = treefile.build_root(module)
-    back = xmltree.from_xml(xmltree.to_xml(root, tree_id=path.stem))
+    text = xmltree.to_xml(root, tree_id=path.stem)
+    back = xmltree.from_xml(text)
+    assert xmltree.to_xml(back, tree_id=path.stem) == text  # read and written again: the same file
     assert isinstance(back, Arrangement)
     assert back.targets == root.targets
     assert (back.scene_seed, back.starts) == (module.default_seed, None)
