@@ -16,7 +16,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bt_arrange import plans, ports, treefile, xmltree
-from bt_arrange.errors import PortValueError
+from bt_arrange.errors import PortValueError, XmlTreeError
 from bt_arrange.layout import Release
 from bt_arrange.objects import BAR, CUBE, ObjectStart, ObjectType
 from bt_arrange.ports import DIRECTIONS_TYPE, LIMIT, OBJECT_TYPE, RELEASE
@@ -204,3 +204,13 @@ def test_a_plans_starts_and_seed_are_carried_by_its_xml(tmp_path):
         (s.obj, s.x_m, s.y_m, s.yaw_rad, s.object_type) for s in module.create_scene(4)
     ]
     assert all(isinstance(s, ObjectStart) for s in starts)
+
+
+def test_a_negative_scene_seed_is_one_line_naming_the_node():
+    xml = (
+        '<root BTCPP_format="4"><BehaviorTree ID="t"><Arrangement name="a" targets="red,0.5,0.0,0.0" '
+        'threshold_mm="1" scene_seed="-4"><MoveHome name="m"/></Arrangement></BehaviorTree></root>'
+    )
+    with pytest.raises(XmlTreeError, match=r"<Arrangement name='a'>: scene_seed=-4 must be a whole number") as caught:
+        xmltree.from_xml(xml, source="bad.xml")
+    assert "\n" not in str(caught.value)

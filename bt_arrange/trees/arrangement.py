@@ -218,7 +218,7 @@ class Arrangement(py_trees.composites.Sequence):
             values["threshold_mm"],
             yaw_threshold_deg=values["yaw_threshold_deg"],
             colours=colours,
-            scene_seed=values["scene_seed"],
+            scene_seed=whole_number("scene_seed", values["scene_seed"]),
             starts=values["starts"],
         )
 
