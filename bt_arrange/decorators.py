@@ -21,7 +21,7 @@ from py_trees.common import Access, Status
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.numbers import fixed
-from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, OFF_STRING, STRING, Port
+from bt_arrange.ports import INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
 
 
 class RepeatUntilWithin(py_trees.decorators.Decorator):
@@ -47,7 +47,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         """The offset's key and threshold, the attempts, the counter's key, the yaw's (``providedPorts``)."""
         return (
             Port("offset_key", STRING, description="blackboard key of the offset [mm]"),
-            Port("threshold_mm", DOUBLE, description="succeed once the offset is under this [mm]"),
+            Port("threshold_mm", LIMIT, description="succeed once the offset is under this [mm] (inf: yaw only)"),
             Port("max_attempts", INT, 10, "corrections before giving up"),
             Port("corrections_key", OFF_STRING, None, "blackboard key counting the corrections (empty: none)"),
             Port("yaw_key", OFF_STRING, None, "blackboard key of the yaw error [deg] (empty: position only)"),

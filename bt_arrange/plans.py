@@ -136,6 +136,8 @@ class Plan:
             raise PlanError(f"{self.path}: {error}") from error
         # The run's plan check (the camera's view, the scene, the colours) names this file's entries too.
         root.source = self.source
+        # An XML export of the tree starts its parts as the plan does.
+        root.scene_seed, root.starts = self.seed, self.starts
         return root
 
     @property

@@ -19,17 +19,22 @@ behaviours, never the other way round.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
 from typing import Any
 
-from bt_arrange.errors import BtArrangeError, PortValueError
+import numpy as np
+
+from bt_arrange.errors import BtArrangeError, PlanError, PortValueError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import DEFAULT_TYPE, ObjectType, PartOnTable
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.shapes import Cuboid
+from bt_arrange.shapes import Prism
+from bt_arrange.shapes.prism import push_heading_rad
 
 
 @dataclass(frozen=True)
@@ -134,29 +139,6 @@ def _format_planar_pose(pose: PlanarPose) -> str:
     return ";".join(_format_float(v) for v in (pose.x_m, pose.y_m, pose.yaw_rad))
 
 
-def _parse_object_type(text: str) -> ObjectType:
-    """``""`` (the default type, the cube) or ``name=x*y*z`` in metres."""
-    if not text.strip():
-        return DEFAULT_TYPE
-    name, _, size = text.partition("=")
-    parts = size.split("*")
-    if len(parts) != 3:
-        raise ValueError(f"object type {text!r} is not name=x_m*y_m*z_m")
-    x, y, z = (_parse_float(part) for part in parts)
-    return ObjectType(name.strip(), (x, y, z))
-
-
-def _format_object_type(object_type: ObjectType) -> str:
-    if object_type == DEFAULT_TYPE:
-        return ""
-    if not isinstance(object_type.shape, Cuboid):
-        raise ValueError(
-            f"object type {object_type.name!r} is a {object_type.shape.describe()}: XML trees describe cuboids "
-            "(name=x_m*y_m*z_m) only; run its plan file instead"
-        )
-    return f"{object_type.name}=" + "*".join(_format_float(v) for v in object_type.size_m)
-
-
 def _parse_targets(text: str, make: Callable[..., PartOnTable]) -> list[Any]:
     targets = []
     for entry in (part.strip() for part in text.split(";")):
@@ -164,7 +146,7 @@ def _parse_targets(text: str, make: Callable[..., PartOnTable]) -> list[Any]:
             continue
         fields = [f.strip() for f in entry.split(",")]
         if len(fields) not in (4, 5, 6):
-            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]")
+            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,object type]]")
         colour, x, y, yaw = fields[:4]
         name = fields[4] if len(fields) >= 5 and fields[4] else None
         kind = _parse_object_type(fields[5]) if len(fields) == 6 else DEFAULT_TYPE
@@ -236,42 +218,59 @@ def _format_colours(table: ColourTable) -> str:
 
 
 def _parse_release(text: str) -> Release | None:
-    """``""`` (not among neighbours) or ``axis;opening_m[;offset_x_m;offset_y_m]`` (target frame)."""
+    """``""`` (not among neighbours) or ``axis;opening_m[;offset_x_m;offset_y_m[;centre_x_m;centre_y_m]]``.
+
+    In the target's frame; the centre is where the pads stand from the part's origin (an irregular
+    part's grasp off its centroid), none for a box.
+    """
     if not text.strip():
         return None
     parts = [part.strip() for part in text.split(";")]
-    if len(parts) not in (2, 4):
-        raise ValueError(f"{text!r} is not axis;opening_m[;offset_x_m;offset_y_m]")
+    if len(parts) not in (2, 4, 6):
+        raise ValueError(f"{text!r} is not axis;opening_m[;offset_x_m;offset_y_m[;centre_x_m;centre_y_m]]")
     axis = parts[0]
     if axis not in ("x", "y"):
         raise ValueError(f"axis {axis!r} is not x or y")
     opening_m = _parse_float(parts[1])
     if opening_m <= 0:
         raise ValueError(f"opening_m {parts[1]!r} is not positive")
-    offset_m = (_parse_float(parts[2]), _parse_float(parts[3])) if len(parts) == 4 else (0.0, 0.0)
-    return Release(axis, opening_m, offset_m)
+    offset_m = (_parse_float(parts[2]), _parse_float(parts[3])) if len(parts) >= 4 else (0.0, 0.0)
+    centre_m = (_parse_float(parts[4]), _parse_float(parts[5])) if len(parts) == 6 else (0.0, 0.0)
+    return Release(axis, opening_m, offset_m, centre_m)
 
 
 def _format_release(release: Release | None) -> str:
     if release is None:
         return ""
     text = f"{release.axis};{_format_float(release.opening_m)}"
-    if release.staged:
+    centred = release.centre_m == (0.0, 0.0)
+    if release.staged or not centred:
         text += ";" + ";".join(_format_float(v) for v in release.offset_m)
+    if not centred:
+        text += ";" + ";".join(_format_float(v) for v in release.centre_m)
     return text
 
 
 def _parse_directions(text: str) -> tuple[str, ...]:
-    """Directions of the target's frame, ``+x,-y`` ... (``""``: none)."""
+    """Directions of the target's frame, ``+x,-y`` ..., or a prism's square pushes, ``@-54.0`` (``""``: none)."""
     directions = tuple(part.strip() for part in text.split(",") if part.strip())
-    unknown = [d for d in directions if d not in DIRECTIONS]
+    unknown = [d for d in directions if d not in DIRECTIONS and push_heading_rad(d) is None]
     if unknown:
-        raise ValueError(f"direction {unknown[0]!r} is not one of {', '.join(DIRECTIONS)}")
+        raise ValueError(
+            f"direction {unknown[0]!r} is not one of {', '.join(DIRECTIONS)} nor a square push @DEG (@-54.0)"
+        )
     return directions
 
 
 def _format_directions(directions: tuple[str, ...]) -> str:
     return ",".join(directions)
+
+
+def _parse_limit(text: str) -> float:
+    """A number, or ``inf``: a bound that never binds (a loop that only the yaw ends)."""
+    if text.strip().lower() in ("inf", "+inf", "infinity"):
+        return math.inf
+    return _parse_float(text)
 
 
 def _parse_off_float(text: str) -> float | None:
@@ -283,15 +282,138 @@ def _format_off_float(value: float | None) -> str:
     return _format_float(value or 0.0)
 
 
+# ----------------------------------------------------------------------------------------------
+# Object types: a name, an outline and a height in millimetres (docs/xml.md, "Object types")
+# ----------------------------------------------------------------------------------------------
+
+#: The keys of an object type's text, in the order written: those of a plan's ``[objects.NAME]``.
+OUTLINE_KEY, HEIGHT_KEY, MASS_KEY, FRICTION_KEY = "outline_mm", "height_mm", "mass_kg", "friction"
+#: What separates the fields and the targets of the ``Targets`` port, so never inside an object type.
+_SEPARATORS = (",", ";")
+#: A written outline whose vertices lie this close to the outline re-centred on its area centroid is
+#: already in the part's own frame: it is kept exactly, so that a written part reads back identical.
+_CENTRED_TOLERANCE_M = 1e-12
+#: Object types read since the process started, by text: a tree repeats a part's type on every node
+#: of the part, and each read searches the part's grasps.
+_READ_TYPES_MAX = 512
+
+
+def _decimal_shifted(text: str, places: int) -> Decimal:
+    """The decimal ``text`` times ``10 ** places``, exactly (no rounding to a context's precision)."""
+    value = Decimal(text)
+    if not value.is_finite():
+        raise ValueError(f"{text!r} is not a finite number")
+    sign, digits, exponent = value.as_tuple()
+    assert isinstance(exponent, int)  # finite
+    return Decimal((sign, digits, exponent + places))
+
+
+def _format_mm(value_m: float) -> str:
+    """Metres as millimetres: the shortest text of ``value_m`` with its point moved, so it reads back exactly."""
+    value_mm = _decimal_shifted(repr(float(value_m)), 3)
+    # Below a ten-thousandth of a millimetre, as repr does below 1e-4, an exponent is shorter than the zeros.
+    if value_mm and abs(value_mm) < Decimal("1e-4"):
+        return str(value_mm).lower()
+    return format(value_mm, "f")
+
+
+def _parse_mm(text: str) -> float:
+    """Millimetres as metres: the float nearest the exact decimal, so ``_format_mm`` reads back as it was."""
+    try:
+        return float(_decimal_shifted(text, -3))
+    except InvalidOperation:
+        raise ValueError(f"{text!r} is not a number of millimetres") from None
+
+
+def _format_object_type(object_type: ObjectType) -> str:
+    """``NAME=outline_mm X:Y X:Y ... height_mm H[ mass_kg M][ friction F]``; ``""`` for the default type."""
+    if object_type == DEFAULT_TYPE:
+        return ""
+    name = object_type.name
+    if name != name.strip() or "=" in name or any(s in name for s in _SEPARATORS):
+        raise ValueError(f"object type {name!r}: a name in XML has no '=', ',' or ';' and no space at either end")
+    shape = object_type.shape
+    words = [OUTLINE_KEY, *(f"{_format_mm(x)}:{_format_mm(y)}" for x, y in shape.outline_m)]
+    words += [HEIGHT_KEY, _format_mm(shape.height_m)]
+    if object_type.mass_kg is not None:
+        words += [MASS_KEY, _format_float(object_type.mass_kg)]
+    if object_type.lateral_friction is not None:
+        words += [FRICTION_KEY, _format_float(object_type.lateral_friction)]
+    return f"{name}=" + " ".join(words)
+
+
+def _parse_object_type(text: str) -> ObjectType:
+    """``""`` (the default type, the cube), ``NAME=outline_mm ... height_mm H ...``, or the former ``NAME=x*y*z``."""
+    if not text.strip():
+        return DEFAULT_TYPE
+    return _read_object_type(text.strip())
+
+
+@functools.lru_cache(maxsize=_READ_TYPES_MAX)
+def _read_object_type(text: str) -> ObjectType:
+    name, equals, fields = (part.strip() for part in text.partition("="))
+    if not equals or not name:
+        raise ValueError(f"object type {text!r} is not NAME=outline_mm X:Y X:Y X:Y ... height_mm H")
+    if "*" in fields:  # the former form: a box, x*y*z in metres
+        parts = fields.split("*")
+        if len(parts) != 3:
+            raise ValueError(f"object type {text!r} is not name=x_m*y_m*z_m")
+        x, y, z = (_parse_float(part) for part in parts)
+        return ObjectType(name, (x, y, z))
+    words = fields.split()
+    if not words or words[0] != OUTLINE_KEY:
+        raise ValueError(f"object type {text!r} does not start its shape with {OUTLINE_KEY}")
+    points_m: list[tuple[float, float]] = []
+    at = 1
+    while at < len(words) and ":" in words[at]:
+        x_text, _, y_text = words[at].partition(":")
+        if ":" in y_text:
+            raise ValueError(f"vertex {words[at]!r} is not X:Y in millimetres")
+        points_m.append((_parse_mm(x_text), _parse_mm(y_text)))
+        at += 1
+    values: dict[str, str] = {}
+    rest = words[at:]
+    if len(rest) % 2:
+        raise ValueError(f"object type {text!r}: {rest[-1]!r} has no value")
+    for key, value in zip(rest[::2], rest[1::2], strict=True):
+        if key not in (HEIGHT_KEY, MASS_KEY, FRICTION_KEY) or key in values:
+            known = ", ".join((HEIGHT_KEY, MASS_KEY, FRICTION_KEY))
+            raise ValueError(f"object type {name!r}: {key!r} is not one of {known} (each once, after the outline)")
+        values[key] = value
+    if HEIGHT_KEY not in values:
+        raise ValueError(f"object type {name!r} has no {HEIGHT_KEY}")
+    height_m = _parse_mm(values[HEIGHT_KEY])
+    mass_kg = _parse_float(values[MASS_KEY]) if MASS_KEY in values else None
+    friction = _parse_float(values[FRICTION_KEY]) if FRICTION_KEY in values else None
+    try:
+        shape = Prism.from_outline(points_m, height_m)
+    except PlanError as error:
+        raise ValueError(f"object type {name!r}: {error}") from None
+    if not shape.rectangular and np.allclose(shape.outline_m, points_m, rtol=0.0, atol=_CENTRED_TOLERANCE_M):
+        shape = Prism(tuple(points_m), height_m)
+    return ObjectType(name, None, mass_kg, friction, shape=shape)
+
+
 def targets_type(make: Callable[..., PartOnTable]) -> PortType:
     """The ``Targets`` type, read into ``make(colour, x_m, y_m, yaw_rad, name=, object_type=)`` (the plan's class)."""
     return PortType("Targets", lambda text: _parse_targets(text, make), _format_targets)
+
+
+def starts_type(make: Callable[..., PartOnTable]) -> PortType:
+    """Where the parts start, written as ``Targets`` are; ``""`` is None (scattered from the scene's seed)."""
+    return PortType(
+        "Targets",
+        lambda text: _parse_targets(text, make) if text.strip() else None,
+        lambda starts: "" if starts is None else _format_targets(starts),
+    )
 
 
 STRING = PortType("std::string", str, str)
 #: A text whose empty value means "none" (``None`` in Python).
 OFF_STRING = PortType("std::string", lambda text: text or None, lambda value: value or "")
 DOUBLE = PortType("double", _parse_float, _format_float)
+#: A number that may be ``inf``, written so (BehaviorTree.CPP's ``std::stod`` reads it too).
+LIMIT = PortType("double", _parse_limit, _format_float)
 #: A number whose zero means "off" (``None`` in Python).
 OFF_DOUBLE = PortType("double", _parse_off_float, _format_off_float)
 INT = PortType("int", _parse_int, str)

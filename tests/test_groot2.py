@@ -27,7 +27,7 @@ import pytest
 from py_trees.common import Status
 
 from bt_arrange import cli, treefile, xmltree
-from bt_arrange.errors import BtArrangeError
+from bt_arrange.cli_common import EXIT_NOT_WITHIN
 from bt_arrange.groot2 import Groot2Publisher, GrootError, check_port, preorder, protocol
 from bt_arrange.runner import TransitionLog
 
@@ -39,7 +39,7 @@ TREES = ROOT / "trees"
 SHIPPED = sorted(
     [*TREES.glob("*.py"), *TREES.glob("*.xml"), *TREES.glob("*.toml"), *(ROOT / "bt_arrange/examples").glob("*.toml")]
 )
-#: Plans of irregular parts and frescoes: XML trees describe cuboids, so these are refused in one line instead.
+#: Plans of irregular parts and frescoes (once refused: "XML trees describe cuboids"): their parts' outlines in the XML.
 IRREGULAR = {"fresco.toml", "irregular_parts.toml"}
 
 
@@ -412,12 +412,13 @@ def _btcpp_factory(bt, categories: dict[str, str]):
 @pytest.mark.parametrize("path", SHIPPED, ids=[f"{p.parent.name}/{p.name}" for p in SHIPPED])
 def test_every_shipped_tree_as_xml_loads_and_ticks_in_bt_cpp_4(path):
     bt = pytest.importorskip("behaviortreepy")
+    root = treefile.build_root(treefile.load(path))
+    exported = xmltree.to_xml(root, tree_id=path.stem)
+    # ours reads the export back as the same tree, the parts' shapes exactly
+    back = xmltree.from_xml(exported)
+    assert list(xmltree.iter_structure(back)) == list(xmltree.iter_structure(root))
     if path.name in IRREGULAR:
-        with pytest.raises(BtArrangeError, match="XML trees describe cuboids") as caught:
-            xmltree.to_xml(treefile.build_root(treefile.load(path)), tree_id=path.stem)
-        assert "\n" not in str(caught.value)
-        return
-    exported = xmltree.to_xml(treefile.build_root(treefile.load(path)), tree_id=path.stem)
+        assert back.targets == root.targets and 'object_type="' in exported and " height_mm " in exported
     texts = [exported] + ([path.read_text()] if path.suffix == ".xml" else [])
     for text in texts:
         xml, categories = _for_btcpp(text)
@@ -494,6 +495,56 @@ def test_a_paced_run_is_watched_by_btview(tmp_path):
     assert any(protocol.RUNNING in snapshot.values() for snapshot in seen)
     assert blackboard is not None and blackboard["single_cube"]["/red/target"]["x_m"] == pytest.approx(0.5, abs=0.2)
     assert "serving the tree to Groot2 on tcp://127.0.0.1:" in err
+
+
+def test_a_paced_fresco_run_is_served_live_to_btview():
+    """The fresco's pieces are prisms: the served tree carries their outlines, and BT.CPP 4 loads it too."""
+    bt = pytest.importorskip("behaviortreepy")
+    port = free_port_pair()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), *sys.path])}
+    # 16 s of world time at 8x: the first piece is placed and corrected, the second is under way.
+    command = [sys.executable, "-m", "bt_arrange.cli", "run", "fresco", "--groot", str(port), "--groot-wait-s", "60"]
+    command += ["--pace", "8", "--time-limit-s", "16", "--json"]
+    run = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    client = btview_client(port)
+    try:
+        tree, served = None, ""
+        for _ in range(600):
+            try:
+                tree = client.fetch_tree()
+                served = client.fetch_tree_xml()
+                break
+            except Exception:
+                if run.poll() is not None:
+                    break
+                time.sleep(0.1)
+        assert tree is not None, run.communicate()[1]
+        by_name = {node.name: node for node in tree.walk()}
+        names = {node.uid: node.name for node in tree.walk()}
+        running_seen: set[str] = set()
+        while run.poll() is None:
+            try:
+                polled = client.poll()
+            except Exception:
+                break  # the run ended between two polls
+            running_seen |= {names[uid] for uid, state in polled.statuses.items() if state.raw == protocol.RUNNING}
+            time.sleep(0.05)
+        out, err = run.communicate(timeout=120)
+    finally:
+        client.close()
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode == EXIT_NOT_WITHIN, err  # stopped at the time limit, as asked
+    assert '"timed_out": true' in out
+    assert len(list(tree.walk())) == 178 and by_name["pick tile 1"].registration == "Pick"
+    assert by_name["regrasp tile 1 while turned 12 deg or more"].registration == "RetryUntilThreshold"
+    assert {"pick tile 1", "place tile 1", "arrange tile 2"} <= running_seen, sorted(running_seen)
+    assert 'object_type="tile 1=outline_mm ' in served
+    assert list(xmltree.iter_structure(xmltree.from_xml(served))) == list(
+        xmltree.iter_structure(treefile.build_root(treefile.load("fresco")))
+    )
+    xml, categories = _for_btcpp(served)
+    assert _btcpp_factory(bt, categories).create_tree_from_text(xml).tick_while_running() == bt.NodeStatus.SUCCESS
 
 
 def _main(capsys, *argv: str) -> tuple[int, list[str]]:

@@ -23,7 +23,7 @@ SAMPLE_TEXT = {
     "double": "2.5",
     "int": "3",
     "bool": "true",
-    "ObjectType": "bar=0.08*0.04*0.04",
+    "ObjectType": "bar=outline_mm -40:-20 40:-20 40:20 -40:20 height_mm 40",
     "PlanarPoses": "0.5,0.1,0.0;0.4,0.1,0.0",
     "Release": "y;0.058;0.0;0.01",
     "Directions": "+x,-y",

@@ -7,7 +7,9 @@ from bt_arrange.ports import OBJECT_TYPE, POSES, STRING, Port
 
 OBJ = Port("obj", STRING, description="the object's name: its blackboard namespace (/<obj>/pose ...)")
 COLOUR = Port("colour", STRING, "", "the colour the camera looks for (empty: the object's name)")
-OBJECT_TYPE_PORT = Port("object_type", OBJECT_TYPE, CUBE, "name=x_m*y_m*z_m (empty: the 5 cm cube)")
+OBJECT_TYPE_PORT = Port(
+    "object_type", OBJECT_TYPE, CUBE, "NAME=outline_mm X:Y X:Y X:Y ... height_mm H (empty: the 5 cm cube)"
+)
 KIND_TARGETS = Port(
     "kind_targets", POSES, (), "identical parts: the targets of the kind, x_m,y_m,yaw_rad;... (empty: none)"
 )

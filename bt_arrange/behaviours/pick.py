@@ -80,8 +80,8 @@ class Pick(StagedBehaviour):
             "grasp",
             RELEASE,
             None,
-            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], pads across that axis of the target's frame "
-            "(empty: the free grasp)",
+            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m[;centre_x_m;centre_y_m]], pads across that "
+            "axis of the target's frame (empty: the free grasp)",
             optional=True,
         )
         return (OBJ, OBJECT_TYPE_PORT, grasp)

@@ -52,8 +52,8 @@ class Place(StagedBehaviour):
             "release",
             RELEASE,
             None,
-            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m], released that far from the target "
-            "(empty: at the target, fully open)",
+            "among neighbours: axis;opening_m[;offset_x_m;offset_y_m[;centre_x_m;centre_y_m]], released that far "
+            "from the target (empty: at the target, fully open)",
             optional=True,
         )
         where = Port("where", STRING, "target", "target, or pick: set down where it was picked", optional=True)

@@ -42,8 +42,9 @@ from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.layout import Pads, Release, Step, free_push_directions, restage_releases
+from bt_arrange.objects import ObjectStart
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
-from bt_arrange.ports import COLOURS, DOUBLE, OFF_DOUBLE, Port, targets_type
+from bt_arrange.ports import COLOURS, DOUBLE, INT, OFF_DOUBLE, Port, starts_type, targets_type
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees.steps import (
     Locate,
@@ -173,8 +174,10 @@ def _is_dense(step: Step) -> bool:
     return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(step.part.push_directions)
 
 
-#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,type=x_m*y_m*z_m]]`` per target, read into ``Target``s.
+#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,object type]]`` per target, read into ``Target``s.
 TARGETS = targets_type(Target)
+#: The port type of a plan's starts, written as targets are, read into ``ObjectStart``s (empty: None).
+STARTS = starts_type(ObjectStart)
 
 
 class Arrangement(py_trees.composites.Sequence):
@@ -189,12 +192,17 @@ class Arrangement(py_trees.composites.Sequence):
 
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
-        """The plan, its thresholds and its colours (BehaviorTree.CPP's ``providedPorts``)."""
+        """The plan, its thresholds, its colours and its scene (BehaviorTree.CPP's ``providedPorts``)."""
         return (
-            Port("targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name] per object, separated by ;"),
+            Port(
+                "targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name[,object type]] per object, separated by ;"
+            ),
             Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "the yaw threshold the report checks [deg] (0: position only)"),
             Port("colours", COLOURS, DEFAULT_COLOUR_TABLE, "the plan's own colours: name:rgb:r,g,b;... (empty: none)"),
+            # A plan's [scene]: the simulator's business, carried so that the exported tree runs as its plan.
+            Port("scene_seed", INT, 0, "the seed the parts are scattered from when no --seed is given", optional=True),
+            Port("starts", STARTS, None, "where the parts start, written as targets (empty: scattered)", optional=True),
         )
 
     @classmethod
@@ -210,6 +218,8 @@ class Arrangement(py_trees.composites.Sequence):
             values["threshold_mm"],
             yaw_threshold_deg=values["yaw_threshold_deg"],
             colours=colours,
+            scene_seed=whole_number("scene_seed", values["scene_seed"]),
+            starts=values["starts"],
         )
 
     def __init__(
@@ -223,6 +233,8 @@ class Arrangement(py_trees.composites.Sequence):
         yaw_threshold_deg: float | None = None,
         colours: ColourTable | None = None,
         settings: ManipulationSettings | None = None,
+        scene_seed: int = 0,
+        starts: list[ObjectStart] | None = None,
     ) -> None:
         super().__init__(name=name, memory=True, children=list(children))
         self.targets = targets
@@ -236,6 +248,9 @@ class Arrangement(py_trees.composites.Sequence):
         self.settings = settings if settings is not None else ManipulationSettings()
         #: Where the plan was written (a plan file's ``PlanSource``), so the run's checks name its entries; or None.
         self.source: Any = None
+        #: A plan's scene, for the simulator: the seed its parts are scattered from, or where they start (None: so).
+        self.scene_seed = scene_seed
+        self.starts = starts
 
 
 def arrangement(

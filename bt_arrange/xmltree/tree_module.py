@@ -55,6 +55,8 @@ def load_module(path: str | Path) -> ModuleType:
             from bt_arrange import backends  # the default backend, loaded only to run
 
             backend = backends.load()
+        if text_root.starts is not None:
+            return list(text_root.starts)
         targets = text_root.targets
         return backend.scatter(
             [t.colour for t in targets],
@@ -66,6 +68,8 @@ def load_module(path: str | Path) -> ModuleType:
 
     module.create_root = create_root  # type: ignore[attr-defined]
     module.create_scene = create_scene  # type: ignore[attr-defined]
+    #: The seed ``bt-arrange run`` uses when no --seed is given: the exported plan's (``scene_seed``).
+    module.default_seed = getattr(text_root, "scene_seed", 0)  # type: ignore[attr-defined]
     return module
 
 

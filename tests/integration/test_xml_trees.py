@@ -1,11 +1,11 @@
-"""A tree exported to XML and read back runs as its Python file does: same statuses, same offsets, same seed."""
+"""A tree exported to XML and read back runs as its Python file or plan does: same statuses, same offsets, same seed."""
 
 import json
 from pathlib import Path
 
 import pytest
 
-from bt_arrange import treefile
+from bt_arrange import treefile, xmltree
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
@@ -13,7 +13,8 @@ TREES = Path(__file__).resolve().parents[2] / "trees"
 
 def run(path: Path) -> tuple[dict, list[dict]]:
     module = treefile.load(path)
-    with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=0)) as simulated:
+    seed = getattr(module, "default_seed", 0)  # a plan's [scene] seed, which its XML export carries
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=seed)) as simulated:
         report = simulated.run()
     # Each transition as its line of transitions.jsonl (the recorded run's form: facts only when stated).
     return report.to_dict(), [json.loads(t.to_json()) for t in report.transitions]
@@ -51,3 +52,16 @@ def test_the_xml_tree_runs_as_its_python_file(stem, request):
     for xml_t, python_t in zip(xml_transitions, python_transitions, strict=True):
         assert same_node(xml_t) == same_node(python_t)
     assert json.dumps(without_wall_time(xml_report)) == json.dumps(without_wall_time(python_report))
+
+
+@pytest.mark.parametrize("stem", ["irregular_parts", "fresco"])
+def test_a_plan_of_prisms_exported_to_xml_runs_as_the_plan(stem, tmp_path):
+    """Outlines, square pushes, releases off a piece's centroid and the scene's seed all survive the export."""
+    plan = TREES / f"{stem}.toml"
+    exported = tmp_path / f"{stem}.xml"
+    exported.write_text(xmltree.to_xml(treefile.build_root(treefile.load(plan)), tree_id=stem))
+    plan_report, plan_transitions = run(plan)
+    xml_report, xml_transitions = run(exported)
+    assert xml_report["tree_status"] == "SUCCESS"
+    assert [same_node(t) for t in xml_transitions] == [same_node(t) for t in plan_transitions]
+    assert json.dumps(without_wall_time(xml_report)) == json.dumps(without_wall_time(plan_report))
