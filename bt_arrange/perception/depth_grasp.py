@@ -39,7 +39,7 @@ the pads leaves a placed offset of mean 0.58 mm, sd 0.33, max 1.58 mm (the colou
 0.13 mm): smaller than the paper's row 4 (5.18 +- 3.83 mm in simulation). See
 ``tests/integration/test_depth_grasp_cell.py``.
 
-Outcomes are values, like :class:`~bt_arrange.perception.detection.CubeDetector`'s:
+Outcomes are values, like :class:`~bt_arrange.perception.detection.PartDetector`'s:
 FOUND, NOT_FOUND, AMBIGUOUS (a blob as large as several cubes, or two blobs equally near the
 hint) and PARTIAL (cut by the image border, not standing like a resting cube, not cube-sized).
 Only configuration mistakes raise :class:`~bt_arrange.errors.PerceptionError`: a frame without

@@ -24,7 +24,7 @@ registering that outline to the face seen by the top camera, in three steps:
 Corners are never used: the mask's corners are rounded by the 7x7 morphology (by several
 pixels at an acute corner), whereas every edge point between them is measured exactly.
 
-``CubeDetector`` hands a prism part's face to ``detect_outline``, so ``Detect`` and ``Inspect``
+``PartDetector`` hands a prism part's face to ``detect_outline``, so ``Detect`` and ``Inspect``
 need nothing new; ``bt_arrange.perception.outline_detector.OutlineDetector`` tells parts of one
 colour apart by their outlines. The registration on the table plane is
 ``bt_arrange.perception.outline_fit``. Perception stays free of the simulator.
@@ -416,6 +416,6 @@ def detect_outlines(
 
 
 def detect_outline(detector: FaceSearch, view: PreparedView, colour: ColourRange, roi: WorldRegion | None) -> Detection:
-    """``CubeDetector``'s outcome for a prism part: the one part of ``colour`` whose face is its outline."""
+    """``PartDetector``'s outcome for a prism part: the one part of ``colour`` whose face is its outline."""
     model = OutlineModel.of(detector.config.part)
     return detect_outlines(detector, view, colour, roi, [model])[model.name]

@@ -77,7 +77,7 @@ class DetectorConfig:
 
     #: The part looked for: a cuboid, whose top face (x by y) stands its height above the table,
     #: or a prism, whose top face is its outline (registered by ``bt_arrange.perception.outline``)
-    #: (``CubeDetector.for_object`` sets it; the paper's cube by default).
+    #: (``PartDetector.for_object`` sets it; the paper's cube by default).
     part: ObjectType = CUBE
     #: World z of the table top; the top faces lie the part's height above it.
     table_z_m: float = 0.0
