@@ -14,10 +14,10 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception import (
     DEFAULT_COLOUR_TABLE,
     ColourRange,
-    PartDetector,
     Detection,
     DetectionStatus,
     DetectorConfig,
+    PartDetector,
     PoseModel,
     WorldRegion,
 )

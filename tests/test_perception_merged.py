@@ -15,7 +15,7 @@ import pytest
 from merged_pieces import moved_towards, neighbours
 
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import PartDetector, DetectionStatus, WorldRegion
+from bt_arrange.perception import DetectionStatus, PartDetector, WorldRegion
 from bt_arrange.perception.synthetic import SyntheticPrism, render_frame
 from bt_arrange.shapes.fracture import Piece
 

@@ -14,7 +14,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception import PartDetector, DetectionStatus, DetectorConfig
+from bt_arrange.perception import DetectionStatus, DetectorConfig, PartDetector
 from bt_arrange.perception.outline_detector import OutlineDetector
 from bt_arrange.perception.outline_fit import OutlineModel
 from bt_arrange.perception.synthetic import SyntheticCube, SyntheticPrism, render_frame, sim_intrinsics

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from bt_arrange.geometry import Pose, fold_yaw
-from bt_arrange.perception import PartDetector, DetectorConfig, PoseModel
+from bt_arrange.perception import DetectorConfig, PartDetector, PoseModel
 from bt_arrange.perception.evaluate import evaluate, make_trials
 from bt_arrange.perception.pose import (
-    part_centre_in_world,
     expected_face_area_px,
     fit_square_on_plane,
+    part_centre_in_world,
     solve_face_pose,
     tilt_deg,
 )

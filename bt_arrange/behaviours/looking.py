@@ -16,7 +16,7 @@ from bt_arrange.behaviours.moves import JointMovePlan
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception import PartDetector, Detection, DetectionStatus, WorldRegion
+from bt_arrange.perception import Detection, DetectionStatus, PartDetector, WorldRegion
 from bt_arrange.ports import BOOL, STRING, Port
 from bt_arrange.robot import PixelWindow
 from bt_arrange.shapes import yaw_error_rad

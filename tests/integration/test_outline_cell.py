@@ -9,7 +9,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import PartDetector, DetectionStatus
+from bt_arrange.perception import DetectionStatus, PartDetector
 from bt_arrange.shapes import Prism
 from bt_arrange_sim import WorkCell
 

@@ -7,7 +7,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.motion import gripper_down_pose
-from bt_arrange.perception import PartDetector, DetectionStatus
+from bt_arrange.perception import DetectionStatus, PartDetector
 from bt_arrange.robot import PixelWindow
 from bt_arrange_sim import CameraNoiseConfig, CellConfig, WorkCell
 from bt_arrange_sim.scripted import ScriptedPickPlace
