@@ -48,7 +48,7 @@ def test_found_cube_has_a_pose_and_quality_figures() -> None:
     cube = SyntheticCube("green", 0.58, -0.17, math.radians(23.0), 0.6)
     detection = DETECTOR.detect(render_frame([cube], INTRINSICS, CAMERA), "green")
     assert_found_at(detection, cube)
-    assert detection.found and detection.reason.startswith("green cube at x=0.58")
+    assert detection.found and detection.reason.startswith("green part at x=0.58")
     assert detection.pose_world is not None and detection.planar is not None
     assert detection.pose_world.z_m == pytest.approx(0.025)  # the centre, half an edge below the top
     assert detection.planar.x_m == pytest.approx(cube.x_m, abs=2e-4)

@@ -353,7 +353,7 @@ class PartDetector:
         ratio = area_px / expected_px
         if ratio > self.config.ambiguous_area_fraction:
             raise _Rejected(
-                f"one {name} blob as large as {ratio:.1f} faces: touching cubes of one colour?",
+                f"one {name} blob as large as {ratio:.1f} faces: touching parts of one colour?",
                 DetectionStatus.AMBIGUOUS,
             )
         low, high = self.config.face_area_fraction_range
@@ -410,7 +410,7 @@ class PartDetector:
         expected_px: float,
         xy: tuple[tuple[float, float], ...],
     ) -> Detection:
-        """The cube's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
+        """The part's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
         config = self.config
         x_m, y_m, z_m = config.size_m
         other = None if config.square_top else y_m
@@ -455,7 +455,7 @@ class PartDetector:
         return replace(
             measured,
             status=DetectionStatus.FOUND,
-            reason=f"{name} cube at x={fixed(pose.x_m, 4)} m, y={fixed(pose.y_m, 4)} m, "
+            reason=f"{name} part at x={fixed(pose.x_m, 4)} m, y={fixed(pose.y_m, 4)} m, "
             f"yaw={fixed(math.degrees(pose.yaw_rad))} deg",
             pose_world=pose,
             reprojection_error_px=error_px,

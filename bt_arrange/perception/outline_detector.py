@@ -1,6 +1,6 @@
 """``OutlineDetector``: prism parts of one colour told apart by their outlines, in one frame.
 
-The blob search is the cube detector's (``PartDetector``); each face is registered to every
+The blob search is the part detector's (``PartDetector``); each face is registered to every
 outline (``bt_arrange.perception.outline``), and the better fit names the part.
 """
 
@@ -24,7 +24,7 @@ class OutlineDetector:
 
     ``detect(frame, colour, part=name)`` looks for one part (the first by default),
     ``detect_each(frame, colour)`` answers for every part by name: a face that fits another part's
-    outline better is that part's. The blob search is the cube detector's.
+    outline better is that part's. The blob search is the part detector's.
     """
 
     def __init__(
