@@ -24,7 +24,7 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     """
 
     #: The node's description in the XML ``TreeNodesModel``.
-    node_description = "fails within a tick when the held cube slips out"
+    node_description = "fails within a tick when the held part slips out"
 
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
