@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from bt_arrange.calibration import CalibratedCamera, write_calibration
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.pybullet.backend import SimBackend
 from bt_arrange_sim.pybullet.cell import WorkCell
@@ -39,7 +39,7 @@ def detection_errors_mm(cell_name: str, calibration: object, grid: int = 6, seed
     xs = np.linspace(WORKSPACE_X_M[0] + 0.02, WORKSPACE_X_M[1] - 0.02, grid)
     ys = np.linspace(WORKSPACE_Y_M[0] + 0.02, WORKSPACE_Y_M[1] - 0.02, grid)
     points = [(float(x), float(y)) for x in xs for y in ys]
-    detector = CubeDetector()
+    detector = PartDetector()
     out: dict[str, list[float]] = {"nominal": [], "calibrated": []}
     with WorkCell(config) as cell:
         calibrated = CalibratedCamera(cell.camera, calibration)  # type: ignore[arg-type]

@@ -29,7 +29,7 @@ import numpy as np
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import CornerRefinement, CubeDetector, DetectorConfig
+from bt_arrange.perception import CornerRefinement, DetectorConfig, PartDetector
 from bt_arrange.perception.synthetic import (
     SyntheticPrism,
     render_frame,
@@ -91,7 +91,7 @@ def synthetic(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
         shape = part.shape
         assert isinstance(shape, Prism)
         x_min, x_max, y_min, y_max = visible_table_box(intrinsics, camera, HEIGHT_M, shape.sweep_radius_m + 0.005)
-        detector = CubeDetector(config=replace(DetectorConfig(), corner_refinement=method)).for_object(part)
+        detector = PartDetector(config=replace(DetectorConfig(), corner_refinement=method)).for_object(part)
         for index in range(poses):
             x, y = float(rng.uniform(x_min, x_max)), float(rng.uniform(y_min, y_max))
             yaw = float(rng.uniform(-math.pi, math.pi))
@@ -120,7 +120,7 @@ def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
     rng = np.random.default_rng(seed + 1)
     results = []
     config = replace(DetectorConfig(), corner_refinement=method)
-    detectors = {name: CubeDetector(config=config).for_object(part) for name, part in PARTS.items()}
+    detectors = {name: PartDetector(config=config).for_object(part) for name, part in PARTS.items()}
     with WorkCell(CellConfig()) as world:
         view = world.config.camera.view()
         scenes = max(1, round(poses * len(PARTS) / len(COLOURS)))

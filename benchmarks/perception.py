@@ -24,7 +24,7 @@ import numpy as np
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange.plancheck import CameraView
 from bt_arrange_sim.config import CameraConfig, CellConfig
 from bt_arrange_sim.noise import CameraNoiseConfig
@@ -70,7 +70,7 @@ OBJECTS = {"cube": CUBE, "bar": ObjectType("bar", (0.08, 0.04, 0.04))}
 
 
 def measure_scene(
-    cell: WorkCell, detector: CubeDetector, scene: list[tuple[str, float, float, float]], kind: ObjectType = CUBE
+    cell: WorkCell, detector: PartDetector, scene: list[tuple[str, float, float, float]], kind: ObjectType = CUBE
 ) -> dict:
     """Render one scene and detect each of its parts; returns the per-part errors and timings."""
     for colour, x, y, yaw in scene:
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     noise = CameraNoiseConfig.realistic(seed=args.seed) if args.noise else CameraNoiseConfig()
     rng = np.random.default_rng(args.seed)
     kind = OBJECTS[args.object]
-    detector = CubeDetector().for_object(kind)
+    detector = PartDetector().for_object(kind)
     scenes = []
     with WorkCell(CellConfig(camera=camera, camera_noise=noise)) as cell:
         for index in range(args.poses):

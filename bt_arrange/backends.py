@@ -153,7 +153,7 @@ class Backend(Protocol):
         object_types: Sequence[Any] | None = None,
         names: Sequence[str | None] | None = None,
     ) -> list[Any]:
-        """Where cubes of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
+        """Where parts of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
         ...
 
     def check(self) -> Iterator[str]:

@@ -1,6 +1,6 @@
 """The plan check that knows the cell: one function, run before anything moves.
 
-``check_plan`` takes what a run is about to do (the targets, the threshold, where the cubes start)
+``check_plan`` takes what a run is about to do (the targets, the threshold, where the parts start)
 and what the cell is (the top camera's view, the colours it can tell apart) and raises one
 ``PlanError`` naming the first problem:
 
@@ -9,7 +9,7 @@ and what the cell is (the top camera's view, the colours it can tell apart) and 
 - the threshold is one a push can correct (``check_threshold``: not below
   ``ManipulationSettings.min_threshold_mm``);
 - every start is well formed, of a known colour, alone in its colour and name, clear of the other
-  cubes, and far enough from the other objects' targets for the pads picking it and working there
+  parts, and far enough from the other objects' targets for the pads picking it and working there
   (``layout.start_clearance_m``), and reachable;
 - every target's object is in the scene, in the target's colour;
 - every target and every start lies inside the top camera's view with a margin
@@ -45,7 +45,7 @@ from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees import Target, check_threshold, parts_of, validate_targets
 from bt_arrange.trees.targets import reach_text
 
-#: How far beyond a cube's top face (each side, in metres on the table) the camera must still see:
+#: How far beyond a part's top face (each side, in metres on the table) the camera must still see:
 #: room for a placing error and for the detector's crop around the face.
 VIEW_MARGIN_M = 0.01
 
@@ -54,7 +54,7 @@ VIEW_MARGIN_M = 0.01
 class CameraView:
     """What the top camera sees: its intrinsics and its pose ``T_W_C`` (OpenCV optical frame).
 
-    ``margin_m`` (each side of a cube's top face, metres) is what ``check_plan`` demands beyond
+    ``margin_m`` (each side of a part's top face, metres) is what ``check_plan`` demands beyond
     the face.
     """
 
@@ -85,7 +85,7 @@ class CameraView:
     def sees_disc(self, x_m: float, y_m: float, radius_m: float, z_m: float, samples: int = 32) -> bool:
         """True when a level disc (``samples`` points of its rim) at height ``z_m`` lies inside the image.
 
-        A cube whose top face fits this disc, grown by ``margin_m``, is seen at any yaw.
+        A part whose top face fits this disc, grown by ``margin_m``, is seen at any yaw.
         """
         angles = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
         rim = np.column_stack([x_m + radius_m * np.cos(angles), y_m + radius_m * np.sin(angles), np.full(samples, z_m)])
@@ -166,7 +166,7 @@ def check_scene(
     ``object_type``.
     """
     if isinstance(starts, (str, bytes)) or not isinstance(starts, Iterable):
-        raise PlanError(f"the scene must be a list of cube starts (colour, x_m, y_m, yaw_rad), got {starts!r}")
+        raise PlanError(f"the scene must be a list of part starts (colour, x_m, y_m, yaw_rad), got {starts!r}")
     scene: list[Any] = list(starts)
     known = list(colours) if colours is not None else list(DEFAULT_COLOUR_TABLE.names)
     settings = settings or ManipulationSettings()
@@ -176,21 +176,21 @@ def check_scene(
     for index, start in enumerate(scene, start=1):
         colour = getattr(start, "colour", None)
         if not isinstance(colour, str):
-            raise PlanError(f"cube {index} of the scene is {start!r}, not a cube start (colour, x_m, y_m, yaw_rad)")
+            raise PlanError(f"part {index} of the scene is {start!r}, not a part start (colour, x_m, y_m, yaw_rad)")
         for field in ("x_m", "y_m", "yaw_rad"):
-            finite_number(field, getattr(start, field, None), where=f"cube {index} of the scene ({colour}): ")
+            finite_number(field, getattr(start, field, None), where=f"part {index} of the scene ({colour}): ")
         name = getattr(start, "name", None)
         if name is not None and (not isinstance(name, str) or not name):
-            raise PlanError(f"cube {index} of the scene ({colour}): name={name!r} is not a non-empty string")
+            raise PlanError(f"part {index} of the scene ({colour}): name={name!r} is not a non-empty string")
         if colour not in known:
             raise PlanError(
-                f"cube {index} of the scene: unknown colour {colour!r}{did_you_mean(colour, known)}; "
+                f"part {index} of the scene: unknown colour {colour!r}{did_you_mean(colour, known)}; "
                 f"the cell knows {', '.join(known)}",
                 parts=(("start", _start_name(start)),),
             )
         if _start_name(start) in names:
             raise PlanError(
-                f"cubes {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}",
+                f"parts {names[_start_name(start)]} and {index} of the scene are both named {_start_name(start)!r}",
                 parts=(("start", _start_name(start)),),
             )
         kind = object_type_of(start)
@@ -213,7 +213,7 @@ def check_scene(
         by_colour.setdefault(colour, []).append((kind, index))
     for index, start in enumerate(scene, start=1):
         kind = object_type_of(start)
-        where = f"cube {_start_name(start)} starts at {at_mm(start.x_m, start.y_m)}"
+        where = f"part {_start_name(start)} starts at {at_mm(start.x_m, start.y_m)}"
         this = (("start", _start_name(start)),)
         if view is not None and not view.sees_part(start.x_m, start.y_m, start.yaw_rad, kind):
             raise PlanError(f"{where}, outside the camera's view{_view_text(view, kind.shape.height_m)}", parts=this)
@@ -232,10 +232,10 @@ def check_scene(
             other_shape = object_type_of(other).shape
             least_m = min_centre_distance_m(kind.shape, other_shape)
             if distance_m < least_m:
-                cubes = kind.shape == other_shape and other_shape.is_cube
-                what = "a cube's diagonal" if cubes else "their half diagonals"
+                both_cubes = kind.shape == other_shape and other_shape.is_cube
+                what = "a cube's diagonal" if both_cubes else "their half diagonals"
                 raise PlanError(
-                    f"cubes {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
+                    f"parts {_start_name(start)} and {_start_name(other)} start {distance_m * 1000:.0f} mm apart: "
                     f"closer than {what} ({least_m * 1000:.0f} mm), they would overlap: move them "
                     f"{(least_m - distance_m) * 1000:.0f} mm further apart",
                     parts=(("start", _start_name(start)), ("start", _start_name(other))),
@@ -292,13 +292,13 @@ def check_plan(
         if start is None:
             present = ", ".join(sorted(by_name)) or "none"
             raise PlanError(
-                f"target {target.obj}: no cube {target.obj!r} in the scene (the scene has {present})"
+                f"target {target.obj}: no part {target.obj!r} in the scene (the scene has {present})"
                 f"{did_you_mean(target.obj, by_name)}",
                 parts=(("target", target.obj),),
             )
         if start.colour != target.colour:
             raise PlanError(
-                f"target {target.obj} is {target.colour} but the scene's cube {target.obj} is {start.colour}",
+                f"target {target.obj} is {target.colour} but the scene's part {target.obj} is {start.colour}",
                 parts=(("target", target.obj), ("start", target.obj)),
             )
         if object_type_of(start) != target.object_type:
@@ -318,7 +318,7 @@ def check_plan(
             gap = gap_m(Rect(start.x_m, start.y_m, 0.0, 0.0, 0.0), part.footprint)
             if gap < need_m:
                 raise PlanError(
-                    f"cube {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
+                    f"part {_start_name(start)} starts {gap * 1000:.0f} mm from {part.name}'s target: the pads picking "
                     f"it or working at that target need {need_m * 1000:.0f} mm between its centre and the target's "
                     f"footprint: move it {(need_m - gap) * 1000:.0f} mm further away",
                     parts=(("start", _start_name(start)), ("target", part.name)),

@@ -50,7 +50,7 @@ from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
-from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, CubeDetector
+from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, SessionReport
@@ -221,7 +221,7 @@ class Session:
         robot = self.world.robot
         if calibration is not None:
             robot = dataclasses.replace(robot, camera=CalibratedCamera(robot.camera, calibration))
-        self.context = Context.create(robot, detector=CubeDetector(self.colours), settings=settings)
+        self.context = Context.create(robot, detector=PartDetector(self.colours), settings=settings)
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []

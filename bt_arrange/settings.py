@@ -13,7 +13,7 @@ from bt_arrange.errors import OutOfRangeError
 from bt_arrange.motion.limits import HARDWARE_JOINT_VELOCITY_RAD_S, CartesianLimits, JointLimits
 from bt_arrange.shapes import ROBOTIQ_2F85, Gripper, Shape, preferred_grasp
 
-#: How ``Pick`` squares a cube pinched across its corners (``ManipulationSettings.squaring``).
+#: How ``Pick`` squares a part pinched across its corners (``ManipulationSettings.squaring``).
 SQUARINGS = ("shift", "sweep", "turn", "off")
 
 
@@ -33,7 +33,7 @@ class ManipulationSettings:
     approach_height_m: float = 0.10
     #: A taller part raises the moves above the table: the TCP stays at least this far above its top.
     approach_clearance_m: float = 0.05
-    #: The held cube is let go this far above resting: the arm's height error plus a little.
+    #: The held part is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
     grip_force_n: float = 40.0
     #: The arm's payload (the UR5's 5 kg): the gripper and the part it carries together.
@@ -49,17 +49,17 @@ class ManipulationSettings:
     #: more than about 13 degrees off square, or by two of its vertical edges (a cube turned about 27
     #: degrees or more under the pads: 67 to 70 mm apart, measured): Pick squares it (``squaring``)
     #: and lets go to look again only when it is still this wide. Narrower turned grips are kept, as
-    #: in the paper's orientation error: the pushes square the cube.
+    #: in the paper's orientation error: the pushes square the part.
     turned_grip_margin_m: float = 0.010
     #: A grip wider than the turned-grip margin allows (the pads pinch two vertical edges of a cube turned
     #: about 27 degrees or more; no closing force turns it, its corners stick on the pads) is squared
     #: before it is given up (``Pick``): "shift" opens, moves ``squaring_shift_m`` along the pads so
     #: one corner falls beyond a pad's edge, closes (the pad's edge turns the face square), opens,
     #: comes back to the measured centre and closes again; "sweep" opens and sweeps
-    #: ``squaring_sweep_m`` along the closing axis, a pad pushing the cube's leading corner as a
+    #: ``squaring_sweep_m`` along the closing axis, a pad pushing the part's leading corner as a
     #: flat fence, then closes; "turn" opens, turns the wrist by ``squaring_turn_deg`` about the
     #: TCP's vertical axis and closes, and if the grip is still that wide, opens, turns to minus
-    #: that from the first yaw and closes again (the centred close then squares the cube about its
+    #: that from the first yaw and closes again (the centred close then squares the part about its
     #: centre, as it does any cube turned less than about 27 degrees); "off" lets go at once.
     #: "turn" is the default: in Table 1 row 3 it squared all 45 pinched cubes of 100 and moved them
     #: 0.9 to 2.4 mm on average, where "shift" and "sweep", pivoting about a corner, moved them 13 to 19 mm.
@@ -76,7 +76,7 @@ class ManipulationSettings:
     push_clearance_m: float = 0.010
     #: A push shorter than this along the alternated axis gives way to the other axis.
     min_push_m: float = 0.0002
-    #: The line that pushes: slower than the planner's lines, so the cube stops when the pads do.
+    #: The line that pushes: slower than the planner's lines, so the part stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
     #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
     #: speeds (the URDF's 3.15 and 3.2 rad/s), 16 rad/s^2 (0.2 s to full speed; the pendant allows 40)
@@ -182,6 +182,6 @@ class ManipulationSettings:
         An offset at the threshold may lie diagonally: ``threshold / sqrt(2)`` along each axis.
         Push skips an axis whose offset is below ``min_push_m``, so below ``sqrt(2) * min_push_m``
         an offset over the threshold could leave both axes without a push, and every "correction"
-        would leave the cube where it is.
+        would leave the part where it is.
         """
         return math.sqrt(2.0) * self.min_push_m * 1000

@@ -1,7 +1,7 @@
 """Load a tree file (``trees/*.py``) by path and build its root, with one-line errors.
 
 A tree file exposes ``create_root(...)`` returning a py_trees behaviour, and, to run in the
-simulator, ``create_scene(seed)`` returning where the cubes start. Its own folder is on
+simulator, ``create_scene(seed)`` returning where the parts start. Its own folder is on
 ``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
 
 A ``.xml`` file is a BehaviorTree.CPP tree, read as data by ``bt_arrange.xmltree`` (no code of
@@ -127,7 +127,7 @@ def build_root(module: ModuleType, **options: Any) -> py_trees.behaviour.Behavio
 
 
 def scene(module: ModuleType, seed: int, backend: Backend | None = None) -> list[Any]:
-    """The file's ``create_scene(seed)``: where the cubes start in the simulator.
+    """The file's ``create_scene(seed)``: where the parts start in the simulator.
 
     A ``create_scene`` that takes a ``backend`` (plan and XML files: they scatter their parts
     through it) is handed the run's; without one, such a file asks the default backend.
@@ -136,7 +136,7 @@ def scene(module: ModuleType, seed: int, backend: Backend | None = None) -> list
     where = getattr(module, "__file__", module.__name__)
     if not callable(create_scene):
         raise TreeFileError(
-            f"tree file {where} defines no create_scene(seed): the simulator needs to know where the cubes start"
+            f"tree file {where} defines no create_scene(seed): the simulator needs to know where the parts start"
         )
     options: dict[str, Any] = {}
     if backend is not None and _takes(create_scene, "backend"):

@@ -12,7 +12,7 @@ Each fake implements its protocol of ``bt_arrange.robot`` and records what it wa
   reduced resolution (960 x 540, about 20 ms per frame and detection); a window renders only its
   pixels, through the window's intrinsics.
 
-``make_context()`` puts them together with the real ``MotionPlanner`` and ``CubeDetector``;
+``make_context()`` puts them together with the real ``MotionPlanner`` and ``PartDetector``;
 ``tick_until_done()`` drives a behaviour the way the runner does: tick, brake step, clock step.
 """
 
@@ -36,7 +36,7 @@ from bt_arrange.motion import (
     JointLimits,
     MotionPlanner,
 )
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange.perception.synthetic import SyntheticCube, render_frame, sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import (
     GRIPPER_FORCE_RANGE_N,
@@ -277,7 +277,7 @@ def make_context(
     return Context(
         robot=Robot(arm=arm, gripper=gripper, camera=camera, clock=clock),
         planner=planner,
-        detector=CubeDetector(),
+        detector=PartDetector(),
         settings=settings or ManipulationSettings(),
     )
 

@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from bt_arrange.calibration import CalibratedCamera, CameraCalibration
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange.perception.synthetic import SyntheticCube, render_frame, sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 
@@ -55,7 +55,7 @@ def test_a_calibrations_distortion_undoes_the_lens_and_the_nominal_pinhole_does_
     pose = top_down_camera_pose()
     pinhole = render_frame([truth], sim_intrinsics(), pose)
     lens = _distorted(pinhole, DISTORTION)
-    detector = CubeDetector()
+    detector = PartDetector()
     calibration = CameraCalibration(
         intrinsics=CameraIntrinsics(**{**sim_intrinsics().__dict__, "distortion": DISTORTION}),
         camera_to_base=pose,

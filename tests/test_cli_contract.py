@@ -126,7 +126,7 @@ def bad_run_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
         ),
         "no cube for the target": (
             tree(tmp_path, "nocube.py", GOOD_TREE.format(x=0.5, y=0, scene='scatter(["blue"], seed)')),
-            "no cube 'red' in the scene",
+            "no part 'red' in the scene",
         ),
         "target out of view": (
             tree(tmp_path, "view.py", GOOD_TREE.format(x=0.3, y=0.45, scene=scene)),

@@ -234,7 +234,7 @@ def test_starts_of_a_plan_name_their_entries(tmp_path: Path) -> None:
     with pytest.raises(PlanError) as caught:
         Session(loaded.create_root(), loaded.create_scene(), Opener(), view=camera_view())
     assert str(caught.value) == (
-        f"{path}: [[scene.starts]] 1 and [[scene.starts]] 2: cubes red and blue start 20 mm apart: closer than a "
+        f"{path}: [[scene.starts]] 1 and [[scene.starts]] 2: parts red and blue start 20 mm apart: closer than a "
         "cube's diagonal (71 mm), they would overlap: move them 51 mm further apart"
     )
 

@@ -9,22 +9,22 @@ import pytest
 
 from bt_arrange.errors import PerceptionError
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.perception.synthetic import SIM_CUBE_COLOURS_RGB, SIM_SIDE_RGB, SIM_TABLE_RGB
+from bt_arrange.perception.synthetic import SIM_PART_COLOURS_RGB, SIM_SIDE_RGB, SIM_TABLE_RGB
 
 
-@pytest.mark.parametrize("name", sorted(SIM_CUBE_COLOURS_RGB))
+@pytest.mark.parametrize("name", sorted(SIM_PART_COLOURS_RGB))
 @pytest.mark.parametrize("brightness", [0.45, 0.7, 1.0])
 def test_default_table_covers_the_sim_colours_under_any_lighting(name: str, brightness: float) -> None:
-    rgb = tuple(brightness * c for c in SIM_CUBE_COLOURS_RGB[name])
+    rgb = tuple(brightness * c for c in SIM_PART_COLOURS_RGB[name])
     assert DEFAULT_COLOUR_TABLE[name].contains_rgb(rgb)
     others = [other for other in DEFAULT_COLOUR_TABLE if other != name]
     assert not any(DEFAULT_COLOUR_TABLE[other].contains_rgb(rgb) for other in others)
 
 
-@pytest.mark.parametrize("name", sorted(SIM_CUBE_COLOURS_RGB))
+@pytest.mark.parametrize("name", sorted(SIM_PART_COLOURS_RGB))
 def test_default_ranges_keep_a_hue_margin(name: str) -> None:
     # 10 degrees of hue either way (a lamp, a camera's white balance) must stay inside.
-    hue, saturation, value = colorsys.rgb_to_hsv(*SIM_CUBE_COLOURS_RGB[name])
+    hue, saturation, value = colorsys.rgb_to_hsv(*SIM_PART_COLOURS_RGB[name])
     for shift_deg in (-10.0, 10.0):
         shifted = colorsys.hsv_to_rgb((hue + shift_deg / 360.0) % 1.0, saturation, value)
         assert DEFAULT_COLOUR_TABLE[name].contains_rgb(shifted), shift_deg

@@ -14,15 +14,15 @@ from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception import (
     DEFAULT_COLOUR_TABLE,
     ColourRange,
-    CubeDetector,
     Detection,
     DetectionStatus,
     DetectorConfig,
+    PartDetector,
     PoseModel,
     WorldRegion,
 )
 from bt_arrange.perception.synthetic import (
-    SIM_CUBE_COLOURS_RGB,
+    SIM_PART_COLOURS_RGB,
     SyntheticCube,
     project_points,
     render_frame,
@@ -33,7 +33,7 @@ from bt_arrange.robot import CameraFrame, PixelWindow
 
 INTRINSICS = sim_intrinsics()
 CAMERA = top_down_camera_pose()
-DETECTOR = CubeDetector()
+DETECTOR = PartDetector()
 
 
 def assert_found_at(detection: Detection, cube: SyntheticCube, xy_mm: float = 0.2, yaw_deg: float = 0.3) -> None:
@@ -48,7 +48,7 @@ def test_found_cube_has_a_pose_and_quality_figures() -> None:
     cube = SyntheticCube("green", 0.58, -0.17, math.radians(23.0), 0.6)
     detection = DETECTOR.detect(render_frame([cube], INTRINSICS, CAMERA), "green")
     assert_found_at(detection, cube)
-    assert detection.found and detection.reason.startswith("green cube at x=0.58")
+    assert detection.found and detection.reason.startswith("green part at x=0.58")
     assert detection.pose_world is not None and detection.planar is not None
     assert detection.pose_world.z_m == pytest.approx(0.025)  # the centre, half an edge below the top
     assert detection.planar.x_m == pytest.approx(cube.x_m, abs=2e-4)
@@ -195,7 +195,7 @@ def test_an_extended_colour_table_finds_the_new_colour() -> None:
     orange_rgb = (1.0, 0.5, 0.0)
     cube = SyntheticCube("orange", 0.52, 0.08, 0.3, 0.8, rgb=orange_rgb)
     frame = render_frame([cube, SyntheticCube("red", 0.4, -0.2)], INTRINSICS, CAMERA)
-    detector = CubeDetector(DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb("orange", orange_rgb)))
+    detector = PartDetector(DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb("orange", orange_rgb)))
     assert_found_at(detector.detect(frame, "orange"), cube)
     # Orange (hue 30) is kept apart from red and yellow.
     assert detector.detect(frame, "red").found
@@ -221,7 +221,7 @@ def test_lifted_cube_is_partial_when_resting_and_found_by_free_pnp() -> None:
     resting = DETECTOR.detect(frame, "yellow")
     assert resting.status is DetectionStatus.PARTIAL
     assert "not resting on the table" in resting.reason
-    free = CubeDetector(config=DetectorConfig(pose_model=PoseModel.FREE)).detect(frame, "yellow")
+    free = PartDetector(config=DetectorConfig(pose_model=PoseModel.FREE)).detect(frame, "yellow")
     assert_found_at(free, cube, xy_mm=1.0)
     assert free.pose_world is not None and free.pose_world.z_m == pytest.approx(0.075, abs=0.002)
 
@@ -281,7 +281,7 @@ def test_clutter_gives_outcomes_never_exceptions() -> None:
         for _ in range(12):
             centre = rng.uniform([0, 0], [960, 540])
             points = centre + rng.normal(0.0, rng.uniform(5, 60), (int(rng.integers(3, 8)), 2))
-            colour = (np.array(rng.choice(list(SIM_CUBE_COLOURS_RGB.values()))) * 255 * rng.uniform(0.4, 1.0)).astype(
+            colour = (np.array(rng.choice(list(SIM_PART_COLOURS_RGB.values()))) * 255 * rng.uniform(0.4, 1.0)).astype(
                 int
             )
             cv2.fillPoly(rgb, [points.astype(np.int32)], tuple(int(c) for c in colour))

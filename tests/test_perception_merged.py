@@ -15,7 +15,7 @@ import pytest
 from merged_pieces import moved_towards, neighbours
 
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import CubeDetector, DetectionStatus, WorldRegion
+from bt_arrange.perception import DetectionStatus, PartDetector, WorldRegion
 from bt_arrange.perception.synthetic import SyntheticPrism, render_frame
 from bt_arrange.shapes.fracture import Piece
 
@@ -25,7 +25,7 @@ REGION_HALF_M = 0.05
 def look_for(frame, piece: Piece, around_xy_m: tuple[float, float] | None):
     kind = ObjectType(f"tile {piece.index}", shape=piece.prism)
     roi = None if around_xy_m is None else WorldRegion.around(*around_xy_m, REGION_HALF_M)
-    return CubeDetector().for_object(kind).detect(frame, "red", roi=roi)
+    return PartDetector().for_object(kind).detect(frame, "red", roi=roi)
 
 
 @pytest.mark.parametrize(("seed", "slab_yaw_deg", "gap_mm"), [(3, 0.0, 0.8), (0, 0.0, 0.5), (1, 40.0, 0.7)])

@@ -14,7 +14,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception import CubeDetector, DetectionStatus, DetectorConfig
+from bt_arrange.perception import DetectionStatus, DetectorConfig, PartDetector
 from bt_arrange.perception.outline_detector import OutlineDetector
 from bt_arrange.perception.outline_fit import OutlineModel
 from bt_arrange.perception.synthetic import SyntheticCube, SyntheticPrism, render_frame, sim_intrinsics
@@ -50,7 +50,7 @@ def errors(detection, x_m: float, y_m: float, yaw_rad: float, symmetry_rad: floa
 
 @pytest.mark.parametrize("supersample", [8, 1], ids=["antialiased", "aliased"])
 def test_an_asymmetric_non_convex_outline_is_found_at_every_yaw_over_the_full_circle(supersample) -> None:
-    detector = CubeDetector().for_object(FRAGMENT)
+    detector = PartDetector().for_object(FRAGMENT)
     for k in range(24):
         yaw = -math.pi + (k + 0.37) * 2 * math.pi / 24
         x, y = 0.42 + 0.01 * (k % 5), -0.2 + 0.018 * k
@@ -66,7 +66,7 @@ def test_an_asymmetric_non_convex_outline_is_found_at_every_yaw_over_the_full_ci
 def test_a_symmetric_outline_comes_back_folded_to_its_symmetry() -> None:
     shape = PENTAGON.shape
     assert math.degrees(shape.symmetry_rad) == pytest.approx(72.0)
-    detector = CubeDetector().for_object(PENTAGON)
+    detector = PartDetector().for_object(PENTAGON)
     for k in range(12):
         yaw = -math.pi + (k + 0.5) * 2 * math.pi / 12
         frame = render_frame([prism("green", PENTAGON, 0.5, 0.1, yaw)])
@@ -86,7 +86,7 @@ def test_two_parts_of_one_colour_are_told_apart_by_their_outlines() -> None:
     )
     # Through the cube detector's seam, as Detect and Inspect use it: each finds its own part.
     for kind, x, y, yaw in ((ELL, 0.40, 0.10, 0.7), (TRIANGLE, 0.58, -0.15, -2.4)):
-        detection = CubeDetector().for_object(kind).detect(frame, "blue")
+        detection = PartDetector().for_object(kind).detect(frame, "blue")
         xy_mm, yaw_deg = errors(detection, x, y, yaw, 2 * math.pi)
         assert xy_mm < 0.1 and yaw_deg < 0.1
         assert kind.name in detection.reason
@@ -100,7 +100,7 @@ def test_two_parts_of_one_colour_are_told_apart_by_their_outlines() -> None:
 
 def test_a_face_cut_by_the_image_border_is_partial() -> None:
     frame = render_frame([prism("yellow", ELL, 0.5, 0.47, 1.0)])  # the image spans y -0.45..0.45 m
-    detection = CubeDetector().for_object(ELL).detect(frame, "yellow")
+    detection = PartDetector().for_object(ELL).detect(frame, "yellow")
     assert detection.status is DetectionStatus.PARTIAL
     assert "cut by the image border" in detection.reason
 
@@ -121,7 +121,7 @@ def mirrored_across_longest_edge(
 def test_two_touching_parts_of_one_colour_are_ambiguous() -> None:
     second = mirrored_across_longest_edge(FRAGMENT, 0.5, 0.0, 0.6)
     frame = render_frame([prism("red", FRAGMENT, 0.5, 0.0, 0.6), prism("red", FRAGMENT, *second)])
-    detection = CubeDetector().for_object(FRAGMENT).detect(frame, "red")
+    detection = PartDetector().for_object(FRAGMENT).detect(frame, "red")
     assert detection.status is DetectionStatus.AMBIGUOUS, detection.reason
     assert "touching" in detection.reason
 
@@ -131,7 +131,7 @@ def test_touching_parts_of_different_colours_are_each_measured() -> None:
     second = mirrored_across_longest_edge(FRAGMENT, 0.5, 0.0, 0.6)
     frame = render_frame([prism("green", FRAGMENT, 0.5, 0.0, 0.6), prism("blue", FRAGMENT, *second)])
     for colour, (x, y, yaw) in (("green", (0.5, 0.0, 0.6)), ("blue", second)):
-        detection = CubeDetector().for_object(FRAGMENT).detect(frame, colour)
+        detection = PartDetector().for_object(FRAGMENT).detect(frame, colour)
         xy_mm, yaw_deg = errors(detection, x, y, yaw, 2 * math.pi)
         assert xy_mm < 0.1 and yaw_deg < 0.1
 
@@ -141,7 +141,7 @@ def test_an_unknown_outline_of_the_colour_is_the_wrong_outline() -> None:
     side_mm = 1000 * math.sqrt(FRAGMENT.shape.area_m2)
     square = part("square", [[0, 0], [side_mm, 0], [side_mm, side_mm], [0, side_mm]])
     frame = render_frame([prism("red", square, 0.5, 0.0, 0.3)])
-    detection = CubeDetector().for_object(FRAGMENT).detect(frame, "red")
+    detection = PartDetector().for_object(FRAGMENT).detect(frame, "red")
     assert detection.status is DetectionStatus.WRONG_OUTLINE
     assert "no fragment outline" in detection.reason
     assert detection.pose_world is None
@@ -153,19 +153,19 @@ def test_a_nearly_symmetric_outline_is_ambiguous_not_guessed() -> None:
     almost = part("almost", [[0, 0], [60, 0], [60, 30], [1, 30]])
     assert almost.shape.symmetry_rad == pytest.approx(2 * math.pi)
     frame = render_frame([prism("red", almost, 0.5, 0.0, 0.4)])
-    detection = CubeDetector().for_object(almost).detect(frame, "red")
+    detection = PartDetector().for_object(almost).detect(frame, "red")
     assert detection.status is DetectionStatus.AMBIGUOUS
     assert "too nearly symmetric" in detection.reason
 
 
 def test_nothing_of_the_colour_is_not_found() -> None:
     frame = render_frame([prism("blue", ELL, 0.5, 0.0, 0.0)])
-    detection = CubeDetector().for_object(ELL).detect(frame, "red")
+    detection = PartDetector().for_object(ELL).detect(frame, "red")
     assert detection.status is DetectionStatus.NOT_FOUND
 
 
 def test_a_prism_part_dispatches_and_a_cuboid_keeps_the_cube_path() -> None:
-    detector = CubeDetector()
+    detector = PartDetector()
     assert detector.for_object(CUBE) is detector
     prism_detector = detector.for_object(ELL)
     assert prism_detector.config.part is ELL
@@ -186,5 +186,5 @@ def test_a_tilted_camera_is_handled() -> None:
 
     camera = top_down_camera_pose(tilt_deg=8.0)
     frame = render_frame([prism("red", FRAGMENT, 0.5, 0.02, 2.0)], camera_pose_world=camera)
-    xy_mm, yaw_deg = errors(CubeDetector().for_object(FRAGMENT).detect(frame, "red"), 0.5, 0.02, 2.0, 2 * math.pi)
+    xy_mm, yaw_deg = errors(PartDetector().for_object(FRAGMENT).detect(frame, "red"), 0.5, 0.02, 2.0, 2 * math.pi)
     assert xy_mm < 0.1 and yaw_deg < 0.1

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from bt_arrange.geometry import Pose, fold_yaw
-from bt_arrange.perception import CubeDetector, DetectorConfig, PoseModel
+from bt_arrange.perception import DetectorConfig, PartDetector, PoseModel
 from bt_arrange.perception.evaluate import evaluate, make_trials
 from bt_arrange.perception.pose import (
-    cube_centre_in_world,
     expected_face_area_px,
     fit_square_on_plane,
+    part_centre_in_world,
     solve_face_pose,
     tilt_deg,
 )
@@ -54,7 +54,7 @@ def test_pnp_on_exact_corners_gives_the_exact_pose(camera_name: str) -> None:
         face = solve_face_pose(exact_corners(cube, camera), INTRINSICS.matrix, EDGE_M)
         assert face is not None
         assert face.reprojection_error_px < 1e-6
-        pose = cube_centre_in_world(camera, face.T_C_F, EDGE_M)
+        pose = part_centre_in_world(camera, face.T_C_F, EDGE_M)
         # Eq. 1 and the half-edge step down to the centre: the cube's centre at z = 0.025.
         assert np.allclose(pose.position_m, cube.centre_world.position_m, atol=1e-9)
         assert pose.yaw_rad == pytest.approx(fold_yaw(cube.yaw_rad), abs=1e-9)
@@ -79,7 +79,7 @@ def test_yaw_is_folded_to_the_cubes_symmetry() -> None:
         cube = SyntheticCube("red", 0.5, 0.1, math.radians(yaw_deg))
         face = solve_face_pose(exact_corners(cube, camera), INTRINSICS.matrix, EDGE_M)
         assert face is not None
-        pose = cube_centre_in_world(camera, face.T_C_F, EDGE_M)
+        pose = part_centre_in_world(camera, face.T_C_F, EDGE_M)
         assert -45.0 <= math.degrees(pose.yaw_rad) < 45.0
         assert math.degrees(pose.yaw_rad) == pytest.approx(math.degrees(fold_yaw(math.radians(yaw_deg))), abs=1e-6)
 
@@ -106,7 +106,7 @@ def test_expected_face_area_matches_the_projection() -> None:
 
 
 def test_accuracy_at_1920x1080_anti_aliased() -> None:
-    summary = evaluate(make_trials(20, seed=11), CubeDetector())
+    summary = evaluate(make_trials(20, seed=11), PartDetector())
     assert summary.found == summary.trials
     assert summary.xy_max_mm < 0.2
     assert summary.yaw_max_deg < 0.3
@@ -115,7 +115,7 @@ def test_accuracy_at_1920x1080_anti_aliased() -> None:
 
 def test_accuracy_at_1920x1080_with_the_sims_realistic_noise() -> None:
     trials = make_trials(10, noise_sigma=4.0, blur_sigma_px=0.8, seed=12)
-    summary = evaluate(trials, CubeDetector())
+    summary = evaluate(trials, PartDetector())
     assert summary.found == summary.trials
     assert summary.xy_max_mm < 0.2
     assert summary.yaw_max_deg < 0.3
@@ -123,14 +123,14 @@ def test_accuracy_at_1920x1080_with_the_sims_realistic_noise() -> None:
 
 def test_accuracy_at_1920x1080_aliased_like_tinyrenderer() -> None:
     # Any yaw: the staircase along a slanted edge still pins it below a pixel.
-    summary = evaluate(make_trials(8, supersample=1, seed=13), CubeDetector())
+    summary = evaluate(make_trials(8, supersample=1, seed=13), PartDetector())
     assert summary.found == summary.trials
     assert summary.xy_max_mm < 0.2
     assert summary.yaw_max_deg < 0.5
     # Square to the image axes an aliased edge is known to +-0.5 px only, so the centre to
     # +-0.5 px on each axis, 0.34 mm at worst; the resting model keeps that from becoming a
     # tilt and a sideways shift of millimetres.
-    summary = evaluate(make_trials(8, supersample=1, seed=13, yaw_rad=0.0), CubeDetector())
+    summary = evaluate(make_trials(8, supersample=1, seed=13, yaw_rad=0.0), PartDetector())
     assert summary.found == summary.trials
     assert summary.xy_max_mm < 0.35
     assert summary.yaw_max_deg < 0.5
@@ -138,7 +138,7 @@ def test_accuracy_at_1920x1080_aliased_like_tinyrenderer() -> None:
 
 def test_accuracy_at_1280x720() -> None:
     # 0.75 mm per pixel instead of 0.5 mm.
-    summary = evaluate(make_trials(10, 1280, 720, seed=14), CubeDetector())
+    summary = evaluate(make_trials(10, 1280, 720, seed=14), PartDetector())
     assert summary.found == summary.trials
     assert summary.xy_max_mm < 0.2
     assert summary.yaw_max_deg < 0.3
@@ -146,7 +146,7 @@ def test_accuracy_at_1280x720() -> None:
 
 def test_accuracy_with_a_tilted_camera() -> None:
     camera = CAMERAS["tilted 12 deg"]
-    detector = CubeDetector()
+    detector = PartDetector()
     for cube in (
         SyntheticCube("green", 0.45, 0.05, 0.4, 0.6),
         SyntheticCube("yellow", 0.38, -0.3, -0.2, 0.9),
@@ -161,8 +161,8 @@ def test_accuracy_with_a_tilted_camera() -> None:
 def test_resting_model_beats_free_pnp_on_a_face_seen_head_on() -> None:
     """The measurement behind the default pose model (aliased, square to the image)."""
     trials = make_trials(8, supersample=1, seed=15, yaw_rad=0.0)
-    resting = evaluate(trials, CubeDetector())
-    free = evaluate(trials, CubeDetector(config=DetectorConfig(pose_model=PoseModel.FREE)))
+    resting = evaluate(trials, PartDetector())
+    free = evaluate(trials, PartDetector(config=DetectorConfig(pose_model=PoseModel.FREE)))
     assert resting.xy_mean_mm < 0.25 * free.xy_mean_mm
 
 
@@ -186,11 +186,11 @@ def test_lens_distortion_is_undone() -> None:
         frame.rgb, ideal[..., 0].astype(np.float32), ideal[..., 1].astype(np.float32), cv2.INTER_LINEAR
     )
     distorted = replace(frame, rgb=rgb, intrinsics=replace(INTRINSICS, distortion=distortion))
-    detection = CubeDetector().detect(distorted, "red")
+    detection = PartDetector().detect(distorted, "red")
     assert detection.found, detection.reason
     assert detection.pose_world is not None
     assert math.hypot(detection.pose_world.x_m - cube.x_m, detection.pose_world.y_m - cube.y_m) < 0.0002
     assert abs(math.degrees(fold_yaw(detection.pose_world.yaw_rad - cube.yaw_rad))) < 0.3
     # The same image taken for a pinhole's: the face is no longer a 5 cm square.
-    ignored = CubeDetector().detect(replace(distorted, intrinsics=INTRINSICS), "red")
+    ignored = PartDetector().detect(replace(distorted, intrinsics=INTRINSICS), "red")
     assert not ignored.found

@@ -35,17 +35,17 @@ def test_a_good_plan_in_the_cell_is_accepted() -> None:
 
 
 def test_a_target_without_its_cube_in_the_scene_is_refused() -> None:  # item 1
-    with pytest.raises(PlanError, match=r"^target blue: no cube 'blue' in the scene \(the scene has red\)$"):
+    with pytest.raises(PlanError, match=r"^target blue: no part 'blue' in the scene \(the scene has red\)$"):
         check_plan([RED, BLUE], starts=[RED_START], view=VIEW)
 
 
 def test_a_target_named_otherwise_than_its_cube_is_refused() -> None:
-    with pytest.raises(PlanError, match="no cube 'cube a' in the scene"):
+    with pytest.raises(PlanError, match="no part 'cube a' in the scene"):
         check_plan([Target("red", 0.5, 0.0, name="cube a")], starts=[RED_START], view=VIEW)
 
 
 def test_a_target_whose_cube_has_another_colour_is_refused() -> None:
-    with pytest.raises(PlanError, match="target a is red but the scene's cube a is blue"):
+    with pytest.raises(PlanError, match="target a is red but the scene's part a is blue"):
         check_plan([Target("red", 0.5, 0.0, name="a")], starts=[CubeStart("blue", 0.4, -0.25, 0.0, name="a")])
 
 
@@ -59,7 +59,7 @@ def test_a_reachable_target_the_camera_cannot_see_is_refused(x_m: float, y_m: fl
 
 
 def test_a_start_the_camera_cannot_see_is_refused() -> None:
-    with pytest.raises(PlanError, match=r"^cube red starts at x 300 mm, y 450 mm, outside the camera's view"):
+    with pytest.raises(PlanError, match=r"^part red starts at x 300 mm, y 450 mm, outside the camera's view"):
         check_scene([CubeStart("red", 0.30, 0.45, 0.0)], view=VIEW)
 
 
@@ -96,16 +96,16 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
 @pytest.mark.parametrize(
     ("starts", "message"),
     [
-        ([RED_START, CubeStart("purple", 0.6, 0.2, 0.0)], r"^cube 2 of the scene: unknown colour 'purple'"),
-        ([RED_START, CubeStart("red", 0.6, 0.2, 0.0)], r"^cubes 1 and 2 of the scene are both named 'red'$"),
+        ([RED_START, CubeStart("purple", 0.6, 0.2, 0.0)], r"^part 2 of the scene: unknown colour 'purple'"),
+        ([RED_START, CubeStart("red", 0.6, 0.2, 0.0)], r"^parts 1 and 2 of the scene are both named 'red'$"),
         (
             [RED_START, CubeStart("red", 0.6, 0.2, 0.0, "red bar", ObjectType("bar", (0.08, 0.04, 0.04)))],
             r"^parts 1 and 2 of the scene are both red but of types 'cube' and 'bar': the camera tells parts apart",
         ),
-        ([CubeStart("red", math.nan, 0.0, 0.0)], r"^cube 1 of the scene \(red\): x_m=nan is not a finite number$"),
-        ([("red", 0.5, 0.0, 0.0)], r"^cube 1 of the scene is \('red', 0\.5, 0\.0, 0\.0\), not a cube start"),
-        ([RED_START, CubeStart("blue", 0.42, -0.25, 0.0)], r"^cubes red and blue start 20 mm apart: closer than"),
-        ("red", r"^the scene must be a list of cube starts"),
+        ([CubeStart("red", math.nan, 0.0, 0.0)], r"^part 1 of the scene \(red\): x_m=nan is not a finite number$"),
+        ([("red", 0.5, 0.0, 0.0)], r"^part 1 of the scene is \('red', 0\.5, 0\.0, 0\.0\), not a part start"),
+        ([RED_START, CubeStart("blue", 0.42, -0.25, 0.0)], r"^parts red and blue start 20 mm apart: closer than"),
+        ("red", r"^the scene must be a list of part starts"),
     ],
 )
 def test_a_bad_scene_is_one_plan_error(starts: object, message: str) -> None:
@@ -121,7 +121,7 @@ def test_identical_parts_may_share_a_colour_in_the_scene() -> None:
 def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:
     with pytest.raises(
         PlanError,
-        match=r"^cube blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm",
+        match=r"^part blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm",
     ):
         check_plan([RED], starts=[RED_START, CubeStart("blue", 0.55, 0.0, 0.0)], view=VIEW)
 

@@ -99,8 +99,8 @@ def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"starts": []}, r"^target red: no cube 'red' in the scene \(the scene has none\)$"),
-        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^cube red starts at x 300 mm, y 450 mm, outside"),
+        ({"starts": []}, r"^target red: no part 'red' in the scene \(the scene has none\)$"),
+        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^part red starts at x 300 mm, y 450 mm, outside"),
         ({"time_limit_s": 0}, r"^time limit 0 s must be a positive number of seconds$"),
         ({"time_limit_s": -1.0}, r"^time limit -1\.0 s must be a positive number of seconds$"),
         ({"root": "tree"}, r"^the root must be a py_trees behaviour, got str$"),
@@ -135,7 +135,7 @@ def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  
     (red,) = report.objects
     assert red.name == "red cube" and red.status == "failed"
     # The fake gripper closes on nothing: Pick's reason, found by the node's type and object.
-    assert red.reason.startswith("no cube between the pads"), red.reason
+    assert red.reason.startswith("no part between the pads"), red.reason
 
 
 def test_the_injectors_find_a_node_by_type_and_object_not_by_name() -> None:  # issue 9, item 1

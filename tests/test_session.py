@@ -152,8 +152,8 @@ def test_the_session_counts_world_time_from_the_start_of_the_tree() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"starts": []}, r"^target red: no cube 'red' in the scene \(the scene has none\)$"),
-        ({"starts": [ObjectStart("red", 0.30, 0.45, 0.0)]}, r"^cube red starts at x 300 mm, y 450 mm, outside"),
+        ({"starts": []}, r"^target red: no part 'red' in the scene \(the scene has none\)$"),
+        ({"starts": [ObjectStart("red", 0.30, 0.45, 0.0)]}, r"^part red starts at x 300 mm, y 450 mm, outside"),
         ({"time_limit_s": 0}, r"^time limit 0 s must be a positive number of seconds$"),
         ({"root": "tree"}, r"^the root must be a py_trees behaviour, got str$"),
     ],

@@ -335,7 +335,7 @@ def test_each_skips_the_correction_of_an_object_that_was_not_placed(clock) -> No
     context = make_context(clock, cubes=[cube("red", 0.60, -0.12)], object_width_m=None)
     root = arrangement([RED], correct="each", max_regrasps=1)
     assert run_tree(root, context) == Status.SUCCESS
-    assert find(root, "pick red").feedback_message.startswith("no cube between the pads")
+    assert find(root, "pick red").feedback_message.startswith("no part between the pads")
     assert find(root, "arrange red").status == Status.FAILURE
     assert find(root, "push red").status == Status.INVALID
     assert isinstance(find(root, "park the arm"), MoveHome)

@@ -12,7 +12,7 @@ import numpy as np
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, CartesianLimits, JointLimits, Motion, MotionPlanner
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange.robot import Arm, Robot
 from bt_arrange.settings import ManipulationSettings
 
@@ -111,7 +111,7 @@ class Context:
 
     robot: Robot
     planner: MotionPlanner
-    detector: CubeDetector = field(default_factory=CubeDetector)
+    detector: PartDetector = field(default_factory=PartDetector)
     settings: ManipulationSettings = field(default_factory=ManipulationSettings)
     #: Where the arm waits while the camera looks: out of the top camera's view.
     home_q: FloatArray = field(default_factory=lambda: DEFAULT_HOME_Q.copy())
@@ -128,7 +128,7 @@ class Context:
         *,
         joint_limits: JointLimits | None = None,
         cartesian_limits: CartesianLimits | None = None,
-        detector: CubeDetector | None = None,
+        detector: PartDetector | None = None,
         settings: ManipulationSettings | None = None,
     ) -> Context:
         """A context with the bundled UR5 kinematics and default limits at the arm's control period."""
@@ -141,6 +141,6 @@ class Context:
         return cls(
             robot=robot,
             planner=planner,
-            detector=detector or CubeDetector(),
+            detector=detector or PartDetector(),
             settings=settings or ManipulationSettings(),
         )

@@ -59,8 +59,8 @@ class EstimateGraspFromDepth(StagedBehaviour):
     found, an ambiguous or partial blob: FAILURE with the estimator's reason.
 
     The estimator is colour-blind: ``colour`` is accepted for symmetry with Detect and appears
-    in messages only. Among several cubes it takes the blob nearest ``near_xy_m`` (world metres)
-    when given, else the largest (arbitrary among equal cubes: give a hint when several cubes
+    in messages only. Among several parts it takes the blob nearest ``near_xy_m`` (world metres)
+    when given, else the largest (arbitrary among equal parts: give a hint when several parts
     are in view). ``seed`` seeds the depth noise; the stream restarts at every ``setup()``, so a
     tree set up afresh draws the same noise.
     """

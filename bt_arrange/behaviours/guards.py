@@ -16,15 +16,15 @@ from bt_arrange.ports import Port
 
 
 class GraspGuard(py_trees.decorators.EternalGuard):
-    """Runs its child (e.g. Place) only while the cube stays between the fingers.
+    """Runs its child (e.g. Place) only while the part stays between the fingers.
 
-    Checked before every tick: when the fingers close past the cube's width (it slipped out),
+    Checked before every tick: when the fingers close past the part's width (it slipped out),
     the child is interrupted at once and the guard fails, so a retry above can detect and pick
-    the cube again instead of placing air.
+    the part again instead of placing air.
     """
 
     #: The node's description in the XML ``TreeNodesModel``.
-    node_description = "fails within a tick when the held cube slips out"
+    node_description = "fails within a tick when the held part slips out"
 
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
@@ -54,8 +54,8 @@ class GraspGuard(py_trees.decorators.EternalGuard):
             return True
         low_m = min_held_width_m(self.context.settings, self.object_type)
         self.feedback_message = (
-            f"the cube left the gripper: fingers at {self.context.robot.gripper.width() * 1000:.1f} mm, "
-            f"under the {low_m * 1000:.1f} mm of a held cube"
+            f"the part left the gripper: fingers at {self.context.robot.gripper.width() * 1000:.1f} mm, "
+            f"under the {low_m * 1000:.1f} mm of a held part"
         )
         return False
 

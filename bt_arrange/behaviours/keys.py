@@ -3,7 +3,7 @@
 | key | type | written by | read by |
 |---|---|---|---|
 | ``/<obj>/target`` | ``PlanarPose`` | the tree (``SetBlackboardVariable``) | Place, Inspect, Push |
-| ``/<obj>/pose`` | ``Pose`` (cube centre, world) | Detect, Inspect | Pick, Push |
+| ``/<obj>/pose`` | ``Pose`` (part centre, world) | Detect, Inspect | Pick, Push |
 | ``/<obj>/offset_mm`` | ``float``, planar distance to the target | Inspect | RetryUntilThreshold |
 | ``/<obj>/offset_xy_mm`` | ``(float, float)``, target minus pose in the target's frame | Inspect | Push |
 | ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |

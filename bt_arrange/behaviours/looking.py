@@ -16,7 +16,7 @@ from bt_arrange.behaviours.moves import JointMovePlan
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception import CubeDetector, Detection, DetectionStatus, WorldRegion
+from bt_arrange.perception import Detection, DetectionStatus, PartDetector, WorldRegion
 from bt_arrange.ports import BOOL, STRING, Port
 from bt_arrange.robot import PixelWindow
 from bt_arrange.shapes import yaw_error_rad
@@ -31,12 +31,12 @@ Chooser = Callable[[tuple[tuple[float, float], ...]], "tuple[tuple[float, float]
 
 #: The arm counts as parked (out of the camera's view) within this joint distance of home.
 PARKED_TOLERANCE_RAD = 0.01
-#: Room around a cube located in the binned search view (accurate to 2 mm) for the window that
+#: Room around a part located in the binned search view (accurate to 2 mm) for the window that
 #: measures it: the sub-pixel edge fit reads 5 px (2.4 mm) beyond each edge. Measured: windows
 #: from 4 mm up give the full frame's detection exactly (clean images, 24 random poses).
 LOCATED_MARGIN_M = 0.006
-#: Room around where a cube should be (its target) for the window Inspect looks through first:
-#: a placed or pushed cube lies within a millimetre or two of its target. One farther away (say,
+#: Room around where a part should be (its target) for the window Inspect looks through first:
+#: a placed or pushed part lies within a millimetre or two of its target. One farther away (say,
 #: placed after a 2 cm pick error, about 14 mm off) is found by the search view instead: two
 #: small renders then, instead of one window large enough for every case every time.
 EXPECTED_MARGIN_M = 0.008
@@ -62,7 +62,7 @@ def offset_in_target_frame_mm(target: PlanarPose, pose: Pose) -> tuple[float, fl
 
 def _measure_in_window(
     context: Context,
-    detector: CubeDetector,
+    detector: PartDetector,
     colour: str,
     x_m: float,
     y_m: float,

@@ -87,7 +87,7 @@ def line_to(  # noqa: ANN201 - a planning function
 ):
     """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
 
-    ``pushing``: at the settings' push limits, slower than the planner's, so the cube does not slide on.
+    ``pushing``: at the settings' push limits, slower than the planner's, so the part does not slide on.
     ``free``: the pads hold nothing and touch nothing on the way (down to a part, up from a released
     one): at the settings' free-space line and joint limits.
     """

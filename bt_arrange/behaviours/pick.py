@@ -1,4 +1,4 @@
-"""Pick: grasp a part at its measured pose, check the grip, square a pinched cube, lift."""
+"""Pick: grasp a part at its measured pose, check the grip, square a pinched part, lift."""
 
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
 
-#: Pick's success feedback holds this when it squared a cube it had pinched across its corners.
+#: Pick's success feedback holds this when it squared a part it had pinched across its corners.
 SQUARED_FEEDBACK = "squared from a"
 
 
@@ -43,25 +43,25 @@ class Pick(StagedBehaviour):
     """Grasp the object at its measured pose (``/<obj>/pose``) and lift it.
 
     Approach above it with the pads square to its faces, descend, close with a force limit,
-    check from the finger width that the pads hold the cube across two faces, lift. A bad grasp
-    (nothing between the pads, or a cube turned so the pads meet its corners) lets go before
+    check from the finger width that the pads hold the part across two faces, lift. A bad grasp
+    (nothing between the pads, or a part turned so the pads meet its corners) lets go before
     lifting and fails with the width, so a retry can look and pick again.
 
-    A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a cube turned
+    A grip wider than ``max_grip_width_m`` (the pads pinch two vertical edges of a 5 cm cube turned
     about 27 degrees or more: its corners stick on the pads, and no closing force turns it) is
     squared by contact first, as a real gripper's fingertips align the part
     (``settings.squaring``): "shift" opens, moves ``squaring_shift_m`` along the pads so the
     corner on one pad falls beyond its edge, closes (the pad's edge turns the face), opens, comes
     back to the measured centre and closes again; "sweep" opens and sweeps ``squaring_sweep_m``
-    along the closing axis (towards the robot) so one pad pushes the cube's leading corner as a
-    flat fence, then closes there. Either turns the cube about a corner, so it ends off centre
+    along the closing axis (towards the robot) so one pad pushes the part's leading corner as a
+    flat fence, then closes there. Either turns the part about a corner, so it ends off centre
     along the pads: that offset shows up after placing. "turn" opens, turns the wrist by
-    ``squaring_turn_deg`` about the TCP's vertical axis at grasp height and closes: a cube pinched
+    ``squaring_turn_deg`` about the TCP's vertical axis at grasp height and closes: a 5 cm cube pinched
     at 27 to 45 degrees is then 4.5 to 22.5 degrees from the pads, and the centred close squares
     it about its centre, as any cube turned less than about 27 degrees; a grip still that wide
-    (the cube was turned the other way) opens, turns to minus that from the measured yaw and
+    (the part was turned the other way) opens, turns to minus that from the measured yaw and
     closes again. The decision reads only the finger width; the lift keeps the turned yaw (the
-    cube is square in the pads there, and Place turns it to the target's yaw modulo its
+    part is square in the pads there, and Place turns it to the target's yaw modulo its
     symmetry). Only a grip still that wide lets go and fails.
     Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
 
@@ -99,10 +99,10 @@ class Pick(StagedBehaviour):
             self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
-        #: The first close's width when the pads pinched a turned cube and Pick squared it (m), else None.
+        #: The first close's width when the pads pinched a turned part and Pick squared it (m), else None.
         self.squared_from_width_m: float | None = None
         self._sweep_m = np.zeros(2)
-        #: How far the wrist turned from the measured yaw to square a pinched cube (rad): the lift keeps it.
+        #: How far the wrist turned from the measured yaw to square a pinched part (rad): the lift keeps it.
         self.wrist_turn_rad = 0.0
 
     def stages(self, context: Context) -> list[Stage]:
@@ -135,25 +135,25 @@ class Pick(StagedBehaviour):
 
         def lift_plan(context: Context, q: FloatArray) -> Motion:
             # Straight up from where the close ended (after a squaring sweep, that far along; after a
-            # squaring turn, at the turned yaw: the cube is square in the pads there).
+            # squaring turn, at the turned yaw: the part is square in the pads there).
             return line_to(x + self._sweep_m[0], y + self._sweep_m[1], approach_m, yaw + self.wrist_turn_rad)(
                 context, q
             )
 
         return [
             GripperStage(stage.OPEN_GRIPPER, lambda c: c.robot.gripper.open(opening_m), wait=False),
-            MoveStage(stage.MOVE_ABOVE_CUBE, to_pose(x, y, approach_m, yaw, free=True)),
+            MoveStage(stage.MOVE_ABOVE_PART, to_pose(x, y, approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None, start_periods=0),
-            MoveStage(stage.DESCEND_TO_CUBE, line_to(x, y, grasp_m, yaw, free=True)),
+            MoveStage(stage.DESCEND_TO_PART, line_to(x, y, grasp_m, yaw, free=True)),
             # An irregular part is held off its centre: pads meeting its outline fast turn it, so they
             # close at the squaring speed; a cuboid's centred grasp at the fingers' full speed.
-            close_stage(stage.CLOSE_ON_CUBE, s.grip_force_n, squaring=not centred_grasp(s, kind)),
+            close_stage(stage.CLOSE_ON_PART, s.grip_force_n, squaring=not centred_grasp(s, kind)),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             *self._reclose_stages(s, opening_m),
             *squaring,
-            # A bad grasp lets go before lifting, so the retry finds the cube where it lies.
+            # A bad grasp lets go before lifting, so the retry finds the part where it lies.
             OnlyIf(GripperStage(stage.LET_GO_OF_BAD_GRASP, lambda c: c.robot.gripper.open(opening_m)), self._bad),
-            MoveStage(stage.LIFT_CUBE, lift_plan, hand_on=line_nearly_done(s.hand_on_remaining_m)),
+            MoveStage(stage.LIFT_PART, lift_plan, hand_on=line_nearly_done(s.hand_on_remaining_m)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
 
@@ -173,7 +173,7 @@ class Pick(StagedBehaviour):
                 stage.OPEN_TO_CLOSE_SLOWLY,
                 lambda c: c.robot.gripper.open(reopen_m, speed_m_s=c.settings.finger_speed_m_s),
             ),
-            close_stage(stage.CLOSE_SLOWLY_ON_CUBE, s.grip_force_n, squaring=True),
+            close_stage(stage.CLOSE_SLOWLY_ON_PART, s.grip_force_n, squaring=True),
             InstantStage(stage.CHECK_GRASP_AFTER_CLOSING_SLOWLY, self._check_grasp),
         ]
         return [OnlyIf(step, self._a_little_turned) for step in steps]
@@ -189,7 +189,7 @@ class Pick(StagedBehaviour):
     def _squaring_stages(
         self, s: ManipulationSettings, x: float, y: float, grasp_m: float, yaw: float, opening_m: float
     ) -> list[Stage]:
-        """Stages that square a cube pinched across its corners, each run only after such a grip."""
+        """Stages that square a part pinched across its corners, each run only after such a grip."""
         if s.squaring == "turn":
             return self._turn_stages(s, x, y, grasp_m, yaw, opening_m)
         closing = np.array([math.cos(yaw), math.sin(yaw)])
@@ -206,7 +206,7 @@ class Pick(StagedBehaviour):
             steps: list[Stage] = [
                 open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SWEEP_TO_SQUARE, closing * towards_base * s.squaring_sweep_m, pushing=True),
-                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
+                close_stage(stage.CLOSE_ON_SQUARED_PART, s.grip_force_n, squaring=True),
             ]
         else:  # "shift"
             along_pads = np.array([-math.sin(yaw), math.cos(yaw)]) * s.squaring_shift_m
@@ -214,9 +214,9 @@ class Pick(StagedBehaviour):
                 open_stage(stage.OPEN_TO_SQUARE, opening_m),
                 line(stage.SHIFT_ALONG_PADS, along_pads),
                 close_stage(stage.CLOSE_TO_SQUARE, s.grip_force_n, squaring=True),
-                open_stage(stage.OPEN_SQUARED_CUBE, opening_m),
-                line(stage.RECENTRE_ON_CUBE, np.zeros(2)),
-                close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
+                open_stage(stage.OPEN_SQUARED_PART, opening_m),
+                line(stage.RECENTRE_ON_PART, np.zeros(2)),
+                close_stage(stage.CLOSE_ON_SQUARED_PART, s.grip_force_n, squaring=True),
             ]
         steps.append(InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp))
         return [OnlyIf(step, self._turned) for step in steps]
@@ -226,7 +226,7 @@ class Pick(StagedBehaviour):
     ) -> list[Stage]:
         """Squaring by a wrist turn: ``+squaring_turn_deg`` after a pinched grip, ``-`` only if still pinched.
 
-        The width alone tells which way the cube was turned: turned the other way, ``+`` leaves it
+        The width alone tells which way the part was turned: turned the other way, ``+`` leaves it
         pinched (further from square), and ``-`` from the measured yaw brings it within reach.
         """
         turn_rad = math.radians(s.squaring_turn_deg)
@@ -243,13 +243,13 @@ class Pick(StagedBehaviour):
         one_way: list[Stage] = [
             open_stage(stage.OPEN_TO_SQUARE, opening_m),
             turn(stage.TURN_WRIST_TO_SQUARE, turn_rad),
-            close_stage(stage.CLOSE_ON_TURNED_CUBE, s.grip_force_n, squaring=True),
+            close_stage(stage.CLOSE_ON_TURNED_PART, s.grip_force_n, squaring=True),
             InstantStage(stage.CHECK_TURNED_GRASP, self._check_squared_grasp),
         ]
         other_way: list[Stage] = [
             open_stage(stage.OPEN_TO_TURN_BACK, opening_m),
             turn(stage.TURN_WRIST_OTHER_WAY, -turn_rad),
-            close_stage(stage.CLOSE_ON_SQUARED_CUBE, s.grip_force_n, squaring=True),
+            close_stage(stage.CLOSE_ON_SQUARED_PART, s.grip_force_n, squaring=True),
             InstantStage(stage.CHECK_SQUARED_GRASP, self._check_squared_grasp),
         ]
         guarded: list[Stage] = [OnlyIf(step, self._turned) for step in one_way]
@@ -260,7 +260,7 @@ class Pick(StagedBehaviour):
         return self.squared_from_width_m is not None and self._turned(context)
 
     def _turned(self, context: Context) -> bool:
-        """The first close pinched a turned cube across its corners (wider than a square grip)."""
+        """The first close pinched a turned part across its corners (wider than a square grip)."""
         high_m = max_grip_width_m(context.settings, self.object_type)
         return self.grip_width_m is not None and self.grip_width_m > high_m
 
@@ -278,23 +278,22 @@ class Pick(StagedBehaviour):
         return self.bad_grasp is not None
 
     def _check_grasp(self, context: Context) -> str | None:
-        """Record whether the pads hold the cube across two faces; never fails by itself."""
+        """Record whether the pads hold the part across two faces; never fails by itself."""
         s = context.settings
         self.grip_width_m = width = max(0.0, context.robot.gripper.width())
         kind = self.object_type
         low, high = min_held_width_m(s, kind), max_grip_width_m(s, kind)
         side_mm = grasp_width_m(s, kind) * 1000
-        square = kind.shape.symmetry_rad == math.pi / 2
-        what = f"{side_mm:.0f} mm cube" if square else f"{kind.name} ({side_mm:.0f} mm across)"
+        what = f"{side_mm:.0f} mm cube" if kind.shape.is_cube else f"{kind.name} ({side_mm:.0f} mm across)"
         self.bad_grasp = None
         if width < low:
             self.bad_grasp = (
-                f"no cube between the pads: the fingers closed to {width * 1000:.1f} mm, "
+                f"no part between the pads: the fingers closed to {width * 1000:.1f} mm, "
                 f"a {what} holds them at least {low * 1000:.1f} mm apart"
             )
         elif width > high:
             self.bad_grasp = (
-                f"the pads hold the cube across its corners: {width * 1000:.1f} mm apart, more than the "
+                f"the pads hold the part across its corners: {width * 1000:.1f} mm apart, more than the "
                 f"{high * 1000:.1f} mm of a {what} held nearly square (it is turned)"
             )
         return None

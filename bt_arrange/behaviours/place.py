@@ -107,9 +107,9 @@ class Place(StagedBehaviour):
             # Held through its centre of mass, a part takes the carry's speed; held off it (an irregular
             # part's grasp), the inertia twists it in the pads: the planner's gentler limits.
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=centred_grasp(s, kind))),
-            MoveStage(stage.LOWER_CUBE, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
+            MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
             GripperStage(
-                stage.RELEASE_CUBE, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)
+                stage.RELEASE_PART, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)
             ),
             MoveStage(
                 stage.RETREAT,

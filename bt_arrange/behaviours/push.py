@@ -32,9 +32,9 @@ from bt_arrange.shapes import ROBOTIQ_2F85, SquarePush
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
 
-#: Strategy "diagonal": the most a push may move the cube across its axis, per millimetre along it.
-#: The pads drag the cube sideways by friction (pads 1.2 on the cube: slipping only beyond about
-#: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the cube.
+#: Strategy "diagonal": the most a push may move the part across its axis, per millimetre along it.
+#: The pads drag the part sideways by friction (pads 1.2 on the part: slipping only beyond about
+#: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the part.
 DIAGONAL_ACROSS_RATIO = 0.6
 
 
@@ -50,14 +50,14 @@ class Push(StagedBehaviour):
     Reads the measured pose and the offset (``/<obj>/offset_xy_mm``, target minus pose in the
     target's frame); pushes along ``/<obj>/push_axis`` (x first) by that axis' offset, unless it is
     below ``min_push_m`` and the other one is not. The fingers stand side by side along the face,
-    opened to the cube's width minus a pad's thickness so both pads meet it (a line contact that
-    also squares the cube up); the pads start on the side away from the target, push, back off.
+    opened to the part's width minus a pad's thickness so both pads meet it (a line contact that
+    also squares the part up); the pads start on the side away from the target, push, back off.
 
     ``strategy="paper"`` (the default, and what Table 1 uses) is the paper's: alternate x and y,
     push by the axis' offset. ``strategy="learned"`` is ours: push the axis with the larger offset,
     and learn from each push's response where pushes along that axis land beyond their aim (the arm's
     local calibration error as the camera sees it, which an absolute push never corrects by itself):
-    after a push along an axis aimed at ``aim``, the cube's measured position minus ``aim`` is added to
+    after a push along an axis aimed at ``aim``, the part's measured position minus ``aim`` is added to
     that axis' bias, and the next push along it aims the bias short of the target.
 
     ``towards`` (directions of the target's frame, ``"+x"``, ``"-y"`` ...; default all four) are
@@ -75,7 +75,7 @@ class Push(StagedBehaviour):
 
     ``strategy="diagonal"`` is "learned" whose push also corrects the other axis: the pads move
     across the push by that axis' offset (at most ``DIAGONAL_ACROSS_RATIO`` of the push's length)
-    while they press on the face, and the cube follows them by friction, so one push can correct x
+    while they press on the face, and the part follows them by friction, so one push can correct x
     and y together. The sideways part is a relative motion of the pads, so the arm's absolute
     error does not enter it and it is not learned. It moves sideways only towards a free side
     (``towards``): a neighbour across the push is never shoved.
@@ -156,7 +156,7 @@ class Push(StagedBehaviour):
         self.squaring = False
 
     def stages(self, context: Context) -> list[Stage]:
-        """Choose the axis, then open, go behind the cube, lower, push, back off, lift."""
+        """Choose the axis, then open, go behind the part, lower, push, back off, lift."""
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
@@ -259,7 +259,7 @@ class Push(StagedBehaviour):
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             # Only the push itself touches the part: the moves before and after it run at the free-space limits.
-            MoveStage(stage.MOVE_BEHIND_CUBE, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
+            MoveStage(stage.MOVE_BEHIND_PART, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
             MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True)),
@@ -402,7 +402,7 @@ class Push(StagedBehaviour):
         bias, axis, distance_mm = self.plan_learned(offset_xy_mm, (known[0], known[1]), last, min_push_mm)
         self.write(bias_key, bias)
         index = 0 if axis == "x" else 1
-        # Where this push aims the cube, relative to the target along its axis: the bias short of it.
+        # Where this push aims the part, relative to the target along its axis: the bias short of it.
         aim_mm = -bias[index] if abs(distance_mm) >= min_push_mm else None
         self.write(last_key, (axis, aim_mm))
         return axis, distance_mm / 1000
@@ -416,9 +416,9 @@ class Push(StagedBehaviour):
     ) -> tuple[tuple[float, float], str, float]:
         """The learned strategy's arithmetic: (new bias, axis, signed push distance in mm).
 
-        The cube's position relative to the target is minus the offset. After a push along ``axis``
+        The part's position relative to the target is minus the offset. After a push along ``axis``
         aimed at ``aim`` (relative to the target), the push landed ``position - aim`` beyond its aim:
-        that is the axis' new bias (a push that fell short of the cube underestimates it, and the
+        that is the axis' new bias (a push that fell short of the part underestimates it, and the
         next push reaches further). The next push goes along the axis of the larger offset and
         aims at ``-bias``: it pushes ``offset - bias``.
         """
@@ -457,7 +457,7 @@ class Push(StagedBehaviour):
 
     @staticmethod
     def across_push_mm(offset_xy_mm: tuple[float, float], axis: str, distance_mm: float, min_push_mm: float) -> float:
-        """Strategy "diagonal": how far (mm, signed) the push along ``axis`` also moves the cube across it.
+        """Strategy "diagonal": how far (mm, signed) the push along ``axis`` also moves the part across it.
 
         The other axis' offset, at most ``DIAGONAL_ACROSS_RATIO`` times the push's length (the rest
         is left to a later push); none below the shortest push, or when there is no push.

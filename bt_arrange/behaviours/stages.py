@@ -7,42 +7,46 @@ themselves use, never with a copy of the text.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+from bt_arrange.deprecation import renamed_attributes
+
 # Pick
 OPEN_GRIPPER = "open the gripper"
-MOVE_ABOVE_CUBE = "move above the cube"
+MOVE_ABOVE_PART = "move above the part"
 WAIT_FOR_OPEN_FINGERS = "wait for the fingers to open"
-DESCEND_TO_CUBE = "descend to the cube"
-CLOSE_ON_CUBE = "close on the cube"
+DESCEND_TO_PART = "descend to the part"
+CLOSE_ON_PART = "close on the part"
 CHECK_GRASP = "check the grasp"
 OPEN_TO_CLOSE_SLOWLY = "open to close again slowly"
-CLOSE_SLOWLY_ON_CUBE = "close slowly on the turned cube"
+CLOSE_SLOWLY_ON_PART = "close slowly on the turned part"
 CHECK_GRASP_AFTER_CLOSING_SLOWLY = "check the grasp after closing slowly"
-OPEN_TO_SQUARE = "open to square a turned cube"
-SWEEP_TO_SQUARE = "sweep a pad along the turned cube"
+OPEN_TO_SQUARE = "open to square a turned part"
+SWEEP_TO_SQUARE = "sweep a pad along the turned part"
 SHIFT_ALONG_PADS = "shift along the pads"
-CLOSE_TO_SQUARE = "close to square the cube"
-OPEN_SQUARED_CUBE = "open on the squared cube"
-RECENTRE_ON_CUBE = "re-centre on the cube"
-TURN_WRIST_TO_SQUARE = "turn the wrist to square the cube"
-CLOSE_ON_TURNED_CUBE = "close after turning the wrist"
+CLOSE_TO_SQUARE = "close to square the part"
+OPEN_SQUARED_PART = "open on the squared part"
+RECENTRE_ON_PART = "re-centre on the part"
+TURN_WRIST_TO_SQUARE = "turn the wrist to square the part"
+CLOSE_ON_TURNED_PART = "close after turning the wrist"
 CHECK_TURNED_GRASP = "check the grasp after turning the wrist"
 OPEN_TO_TURN_BACK = "open to turn the wrist the other way"
 TURN_WRIST_OTHER_WAY = "turn the wrist the other way"
-CLOSE_ON_SQUARED_CUBE = "close on the squared cube"
+CLOSE_ON_SQUARED_PART = "close on the squared part"
 CHECK_SQUARED_GRASP = "check the squared grasp"
 LET_GO_OF_BAD_GRASP = "let go of a bad grasp"
-LIFT_CUBE = "lift the cube"
+LIFT_PART = "lift the part"
 CONFIRM_GRASP = "confirm the grasp"
 
 # Place
 CARRY_ABOVE_TARGET = "carry above the target"
-LOWER_CUBE = "lower the cube to the table"
-RELEASE_CUBE = "release the cube"
+LOWER_PART = "lower the part to the table"
+RELEASE_PART = "release the part"
 RETREAT = "retreat"
 
 # Push (the push itself names its distance and axis: see ``push``)
 SET_PUSH_OPENING = "set the push opening"
-MOVE_BEHIND_CUBE = "move behind the cube"
+MOVE_BEHIND_PART = "move behind the part"
 WAIT_FOR_FINGERS = "wait for the fingers"
 LOWER_FINGERS = "lower the fingers"
 BACK_OFF = "back off"
@@ -56,6 +60,38 @@ MOVE_HOME = "move home"
 # Feedback of any staged behaviour between its stages
 WAITING_FOR_BRAKE = "waiting for the arm to stop"
 INTERRUPTED = "interrupted"
+
+
+# Deprecated: the names of the stages that said "cube" for any part, kept one release (CHANGELOG.md).
+_RENAMED = {
+    "MOVE_ABOVE_CUBE": "MOVE_ABOVE_PART",
+    "DESCEND_TO_CUBE": "DESCEND_TO_PART",
+    "CLOSE_ON_CUBE": "CLOSE_ON_PART",
+    "CLOSE_SLOWLY_ON_CUBE": "CLOSE_SLOWLY_ON_PART",
+    "OPEN_SQUARED_CUBE": "OPEN_SQUARED_PART",
+    "RECENTRE_ON_CUBE": "RECENTRE_ON_PART",
+    "CLOSE_ON_TURNED_CUBE": "CLOSE_ON_TURNED_PART",
+    "CLOSE_ON_SQUARED_CUBE": "CLOSE_ON_SQUARED_PART",
+    "LIFT_CUBE": "LIFT_PART",
+    "LOWER_CUBE": "LOWER_PART",
+    "RELEASE_CUBE": "RELEASE_PART",
+    "MOVE_BEHIND_CUBE": "MOVE_BEHIND_PART",
+}
+if TYPE_CHECKING:
+    MOVE_ABOVE_CUBE = MOVE_ABOVE_PART
+    DESCEND_TO_CUBE = DESCEND_TO_PART
+    CLOSE_ON_CUBE = CLOSE_ON_PART
+    CLOSE_SLOWLY_ON_CUBE = CLOSE_SLOWLY_ON_PART
+    OPEN_SQUARED_CUBE = OPEN_SQUARED_PART
+    RECENTRE_ON_CUBE = RECENTRE_ON_PART
+    CLOSE_ON_TURNED_CUBE = CLOSE_ON_TURNED_PART
+    CLOSE_ON_SQUARED_CUBE = CLOSE_ON_SQUARED_PART
+    LIFT_CUBE = LIFT_PART
+    LOWER_CUBE = LOWER_PART
+    RELEASE_CUBE = RELEASE_PART
+    MOVE_BEHIND_CUBE = MOVE_BEHIND_PART
+else:
+    __getattr__ = renamed_attributes(__name__, _RENAMED)
 
 
 def push(distance_m: float, axis: str) -> str:

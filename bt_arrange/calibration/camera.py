@@ -3,7 +3,7 @@
 ``CalibratedCamera`` wraps the world's camera and reports the calibration's intrinsics (with the
 lens distortion) and camera-to-base pose instead of the camera's own nominal ones, on the camera
 and on every frame it takes (a window's intrinsics are the calibration's, windowed). The detector
-then undistorts the corner points (``CubeDetector`` reads ``intrinsics.distortion``) and maps them
+then undistorts the corner points (``PartDetector`` reads ``intrinsics.distortion``) and maps them
 to the table through the calibrated pose. The image itself is untouched.
 """
 

@@ -1,11 +1,11 @@
-"""Perception: find the coloured cubes in a top-camera frame and estimate their poses.
+"""Perception: find the coloured parts in a top-camera frame and estimate their poses.
 
 The paper's pipeline (HSV threshold, 7x7 closing and opening, Suzuki-Abe contours,
 Douglas-Peucker polygon, PnP refined by Levenberg-Marquardt, camera-to-world transform), with
 the corners brought below a pixel so that a 1 mm threshold can be checked at 0.5 mm per pixel.
 It takes a :class:`~bt_arrange.robot.CameraFrame` and knows nothing of the simulator::
 
-    detector = CubeDetector()
+    detector = PartDetector()
     detection = detector.detect(camera.capture(), "red")
     if detection.found:
         print(detection.planar)
@@ -15,14 +15,17 @@ It takes a :class:`~bt_arrange.robot.CameraFrame` and knows nothing of the simul
 See docs/perception.md.
 """
 
+from typing import TYPE_CHECKING
+
+from bt_arrange.deprecation import renamed_attributes
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.perception.corners import CornerRefinement
 from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.perception.detection import (
-    CubeDetector,
     Detection,
     DetectionStatus,
     DetectorConfig,
+    PartDetector,
     WorldRegion,
 )
 from bt_arrange.perception.pose import PoseModel
@@ -32,12 +35,18 @@ __all__ = [
     "ColourRange",
     "ColourTable",
     "CornerRefinement",
-    "CubeDetector",
     "DepthGraspConfig",
     "DepthGraspEstimator",
     "Detection",
     "DetectionStatus",
     "DetectorConfig",
+    "PartDetector",
     "PoseModel",
     "WorldRegion",
 ]
+
+# Deprecated: the names that said "cube" for any part, kept one release (CHANGELOG.md).
+if TYPE_CHECKING:
+    CubeDetector = PartDetector
+else:
+    __getattr__ = renamed_attributes(__name__, {"CubeDetector": "PartDetector"})

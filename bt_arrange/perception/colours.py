@@ -1,4 +1,4 @@
-"""The colour table: which HSV pixels belong to which named cube colour.
+"""The colour table: which HSV pixels belong to which named part colour.
 
 Hues are given in degrees (0..360) and saturation and value as fractions (0..1), the way a
 person reads a colour picker; the masks are computed on OpenCV's 8-bit HSV, where hue runs
@@ -214,7 +214,7 @@ class ColourTable(Mapping[str, ColourRange]):
 #: yellow (0.90, 0.80, 0.10) at 53 deg, green (0.10, 0.65, 0.20) at 131 deg, blue
 #: (0.10, 0.25, 0.85) at 228 deg, all with saturation 0.85..0.90. The ranges keep 15..40 deg of
 #: hue margin, accept half that saturation and down to 15 % value, so a face lit at 45 % still
-#: passes, while the near-white cube sides, the grey table and the grey/black robot (saturation
+#: passes, while the near-white part sides, the grey table and the grey/black robot (saturation
 #: below 0.1) never do. A user's colour joins it with ``with_colour`` (a plan's ``[colours.NAME]``).
 DEFAULT_COLOUR_TABLE = ColourTable(
     [

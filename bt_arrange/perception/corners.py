@@ -10,14 +10,14 @@ four fitted lines:
 * A camera integrates light over each pixel, so an edge pixel's colour is a mix
   ``c * face + (1 - c) * outside`` where ``c`` is the fraction of the pixel the face covers.
   The mix is linear in RGB; solving it for ``c`` in the chroma plane (RGB minus its grey part)
-  makes any grey neighbour (the table, the white cube sides, the robot) count as "outside"
+  makes any grey neighbour (the table, the white part sides, the robot) count as "outside"
   whatever its brightness, and a coloured neighbour is unmixed with its own colour.
 * Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
   height at the column's centre exactly, whatever the slope (the area under a straight line
   over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
 * The outside colour is read per column, just beyond the edge's spread (1 px for a sharp
   edge, more when blurred, measured from the face's own edges): a neighbour changes along a
-  side (the table, then a touching cube), and a cube's side seen as a strip of a pixel or two
+  side (the table, then a touching part), and a part's side seen as a strip of a pixel or two
   must count as outside even though it is a slightly different grey than the table beyond.
   Pixels as far inside count as exactly 1, which keeps their noise out of the sum.
 * A least-squares line through these points per side, with outliers trimmed, and the corners
@@ -178,7 +178,7 @@ def _side_edge_points(
     # Pixel k of the band covers [k, k + 1] measured outwards from the face's end, so with the
     # face's covered fraction c_k the edge lies at sum(c_k) from that end. The outside colour
     # comes from the first pixel beyond the edge's spread, measured from the current line, and
-    # nothing beyond it counts: a cube's side seen as a strip of 1 or 2 pixels between the face
+    # nothing beyond it counts: a part's side seen as a strip of 1 or 2 pixels between the face
     # and the table (they differ a little in chroma) then counts as outside, and a neighbour's
     # face across a gap of a few pixels (2 mm is 4 px) never enters the sum. Pixels as far
     # inside are pure face and count as exactly 1, which keeps their noise out of the edge.
@@ -211,7 +211,7 @@ def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
     for _ in range(3):
         slope, offset = np.polyfit(x[keep], y[keep], 1)
         residual = np.abs(y - (offset + slope * x))
-        # Trim beyond 3.5 robust sigmas (noise, a touching cube's edge); never below 0.05 px.
+        # Trim beyond 3.5 robust sigmas (noise, a touching part's edge); never below 0.05 px.
         limit = max(3.5 * 1.4826 * float(_median(residual[keep])), 0.05)
         new_keep = residual <= limit
         if new_keep.sum() < 5 or np.array_equal(new_keep, keep):

@@ -13,20 +13,20 @@ What it does with ``frame.depth_m`` (never ``frame.rgb``)::
       -> resampled to the L515's depth width (1024 px), keeping the frame's aspect and field of view
       -> seeded depth noise (sigma 1.5 mm at 0.70 m, growing with depth) and 0.25 mm depth units
       -> back-projected to world points with the (scaled) intrinsics and T_W_C
-      -> pixels standing more than 2.5 cm above the table -> connected blobs of a cube's size
+      -> pixels standing more than 2.5 cm above the table -> connected blobs of a part's size
       -> the object's blob: nearest a hint position, else the largest
       -> cv2.minAreaRect of the blob's top points in world x, y: centre, yaw folded to 90 deg
-      -> Detection(pose_world = cube centre at z = table + edge / 2)
+      -> Detection(pose_world = part centre at z = table + edge / 2)
 
 It is colour-blind by design: a learned grasp estimator proposes grasps on whatever object
-stands on the table, and so does this one. With several cubes in view it cannot tell the red
+stands on the table, and so does this one. With several parts in view it cannot tell the red
 one from the blue one; pass ``near_xy_m`` (a colour-blind hint: where the object was put, or a
-rough earlier estimate) or it takes the largest blob, which among equal cubes is arbitrary.
+rough earlier estimate) or it takes the largest blob, which among equal parts is arbitrary.
 
 Where its errors come from: the resampling's area averaging mixes the top face and the table
-behind it into "flying pixels" along the cube's far edges (real depth cameras show the same at
-depth discontinuities); back-projected, they land outside the cube, the farther out the more
-obliquely the camera sees the cube, and ``minAreaRect``, an extremal fit, follows them. Depth
+behind it into "flying pixels" along the part's far edges (real depth cameras show the same at
+depth discontinuities); back-projected, they land outside the part, the farther out the more
+obliquely the camera sees the part, and ``minAreaRect``, an extremal fit, follows them. Depth
 noise moves points along their rays. The error is mostly a pull of the centre away from the
 point below the camera, growing towards the edge of the view.
 
@@ -39,9 +39,9 @@ the pads leaves a placed offset of mean 0.58 mm, sd 0.33, max 1.58 mm (the colou
 0.13 mm): smaller than the paper's row 4 (5.18 +- 3.83 mm in simulation). See
 ``tests/integration/test_depth_grasp_cell.py``.
 
-Outcomes are values, like :class:`~bt_arrange.perception.detection.CubeDetector`'s:
-FOUND, NOT_FOUND, AMBIGUOUS (a blob as large as several cubes, or two blobs equally near the
-hint) and PARTIAL (cut by the image border, not standing like a resting cube, not cube-sized).
+Outcomes are values, like :class:`~bt_arrange.perception.detection.PartDetector`'s:
+FOUND, NOT_FOUND, AMBIGUOUS (a blob as large as several parts, or two blobs equally near the
+hint) and PARTIAL (cut by the image border, not standing like a resting part, not of its size).
 Only configuration mistakes raise :class:`~bt_arrange.errors.PerceptionError`: a frame without
 depth, a depth image that does not match its intrinsics, noise without a random generator.
 """
@@ -99,13 +99,13 @@ class DepthGraspConfig:
     min_height_m: float = 0.025
     #: The blob's top points: within this of its top height (a fifth of an edge, about 7 noise sigmas).
     top_band_m: float = 0.010
-    #: A blob's top must stand this close to one edge above the table: a cube resting on it.
+    #: A blob's top must stand this close to one edge above the table: a part resting on it.
     top_height_tolerance_m: float = 0.010
-    #: Blobs smaller than this fraction of a face's area are specks, not cubes, and are ignored.
+    #: Blobs smaller than this fraction of a face's area are specks, not parts, and are ignored.
     min_area_fraction: float = 0.25
-    #: A blob this many faces large holds several cubes (touching): AMBIGUOUS.
+    #: A blob this many faces large holds several parts (touching): AMBIGUOUS.
     ambiguous_area_fraction: float = 1.6
-    #: Each side of the fitted rectangle, relative to the edge, for a whole cube.
+    #: Each side of the fitted rectangle, relative to the edge, for a whole part.
     side_fraction_range: tuple[float, float] = (0.8, 1.35)
     #: With a hint, only blobs whose centre lies within this distance of it are candidates.
     max_hint_distance_m: float = 0.10
@@ -260,10 +260,10 @@ def scaled_intrinsics(intrinsics: CameraIntrinsics, width_px: int, height_px: in
 
 
 class DepthGraspEstimator:
-    """Grasp poses of resting cubes from a depth image alone; a substitute for Berscheid et al.
+    """Grasp poses of resting parts from a depth image alone; a substitute for Berscheid et al.
 
     ``estimate(frame, near_xy_m=None, rng=generator)`` returns a
-    :class:`~bt_arrange.perception.detection.Detection` whose ``pose_world`` is the cube's
+    :class:`~bt_arrange.perception.detection.Detection` whose ``pose_world`` is the part's
     centre (where a parallel gripper grasps it, pads square to its faces). The estimator keeps
     no state: the random generator for the depth noise is passed in, so runs are reproducible
     from its seed.
@@ -346,9 +346,9 @@ class DepthGraspEstimator:
         frame: CameraFrame,
         near_xy_m: tuple[float, float] | None = None,
         rng: np.random.Generator | None = None,
-        name: str = "cube",
+        name: str = "part",
     ) -> Detection:
-        """The grasp pose of one cube, from the depth image of ``frame`` only.
+        """The grasp pose of one part, from the depth image of ``frame`` only.
 
         ``near_xy_m`` (world metres) picks, among several blobs, the one nearest to it (within
         ``max_hint_distance_m``); without it the largest blob is taken. ``rng`` draws the depth
@@ -363,7 +363,7 @@ class DepthGraspEstimator:
         camera: Camera,
         near_xy_m: tuple[float, float] | None = None,
         rng: np.random.Generator | None = None,
-        name: str = "cube",
+        name: str = "part",
     ) -> Detection:
         """:meth:`estimate` of the camera's full frame, rendering only where something stands.
 
@@ -417,7 +417,7 @@ class DepthGraspEstimator:
         return any(edges)
 
     def estimate_view(
-        self, view: DepthView, near_xy_m: tuple[float, float] | None = None, name: str = "cube"
+        self, view: DepthView, near_xy_m: tuple[float, float] | None = None, name: str = "part"
     ) -> Detection:
         """:meth:`estimate` on a prepared :class:`DepthView` (e.g. to estimate several objects from one)."""
         config = self.config
@@ -489,7 +489,7 @@ class DepthGraspEstimator:
         intrinsics = view.intrinsics
         r, c = blob.pixels[:, 0], blob.pixels[:, 1]
         heights = view.height_m[r, c]
-        # Most of a cube's blob is its top face; the upper quartile is its height, robust to the
+        # Most of a part's blob is its top face; the upper quartile is its height, robust to the
         # sides and to the flying pixels along its edges.
         top_m = float(np.percentile(heights, 75))
         top = heights >= top_m - config.top_band_m
@@ -503,7 +503,7 @@ class DepthGraspEstimator:
             return outcome(DetectionStatus.PARTIAL, f"{where}: cut by the image border", **measured)
         if faces > config.ambiguous_area_fraction:
             return outcome(
-                DetectionStatus.AMBIGUOUS, f"{where}: as large as {faces:.1f} faces, touching cubes?", **measured
+                DetectionStatus.AMBIGUOUS, f"{where}: as large as {faces:.1f} faces, touching parts?", **measured
             )
         shape = config.part.shape
         if abs(top_m - config.part_height_m) > config.top_height_tolerance_m:

@@ -1,4 +1,4 @@
-"""The cube detector: a camera frame and a colour in, a :class:`Detection` out.
+"""The part detector: a camera frame and a colour in, a :class:`Detection` out.
 
 Outcomes are values, never exceptions: a behaviour reads ``status`` and puts ``reason`` into
 its feedback message. Only configuration mistakes raise
@@ -14,11 +14,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_arrange.deprecation import renamed_attributes
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.numbers import fixed
@@ -32,8 +34,8 @@ from bt_arrange.perception.corners import (
 )
 from bt_arrange.perception.pose import (
     PoseModel,
-    cube_centre_in_world,
     fit_square_on_plane,
+    part_centre_in_world,
     pixel_on_plane,
     project_world,
     solve_face_pose,
@@ -58,7 +60,7 @@ def _format_xy(points: Iterable[tuple[float, float]]) -> str:
 
 
 class _Rejected(Exception):
-    """A check of ``CubeDetector._measure`` the blob failed: the outcome's status and reason."""
+    """A check of ``PartDetector._measure`` the blob failed: the outcome's status and reason."""
 
     def __init__(self, reason: str, status: DetectionStatus = DetectionStatus.PARTIAL) -> None:
         super().__init__(reason)
@@ -66,8 +68,8 @@ class _Rejected(Exception):
         self.status = status
 
 
-class CubeDetector:
-    """Finds coloured cubes' top faces in a camera frame and estimates their poses.
+class PartDetector:
+    """Finds coloured parts' top faces in a camera frame and estimates their poses.
 
     ``detect(frame, "red")`` looks for one colour, ``detect_all(frame)`` for every colour of the
     table; both accept a :class:`WorldRegion` to look only at blobs whose centre lies inside.
@@ -77,19 +79,19 @@ class CubeDetector:
         self.colours = colours
         self.config = config or DetectorConfig()
 
-    def for_object(self, object_type: object | None) -> CubeDetector:
+    def for_object(self, object_type: object | None) -> PartDetector:
         """A detector like this one for parts of ``object_type`` (an ``ObjectType``; None or the same shape: itself)."""
         if not isinstance(object_type, ObjectType) or object_type.shape == self.config.part.shape:
             return self
-        return CubeDetector(self.colours, replace(self.config, part=object_type))
+        return PartDetector(self.colours, replace(self.config, part=object_type))
 
     def detect(self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None) -> Detection:
-        """Look for the cube of ``colour``; raises PerceptionError for a colour not in the table."""
+        """Look for the part of ``colour``; raises PerceptionError for a colour not in the table."""
         colour_range = self.colours[colour]
         return self._detect(self._prepare(frame), colour_range, roi)
 
     def detect_all(self, frame: CameraFrame, roi: WorldRegion | None = None) -> dict[str, Detection]:
-        """Look for the cube of every colour in the table, in table order."""
+        """Look for the part of every colour in the table, in table order."""
         view = self._prepare(frame)
         return {name: self._detect(view, colour_range, roi) for name, colour_range in self.colours.items()}
 
@@ -351,7 +353,7 @@ class CubeDetector:
         ratio = area_px / expected_px
         if ratio > self.config.ambiguous_area_fraction:
             raise _Rejected(
-                f"one {name} blob as large as {ratio:.1f} faces: touching cubes of one colour?",
+                f"one {name} blob as large as {ratio:.1f} faces: touching parts of one colour?",
                 DetectionStatus.AMBIGUOUS,
             )
         low, high = self.config.face_area_fraction_range
@@ -408,12 +410,12 @@ class CubeDetector:
         expected_px: float,
         xy: tuple[tuple[float, float], ...],
     ) -> Detection:
-        """The cube's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
+        """The part's pose from its four corners (on the table plane, or by PnP), checked by reprojection."""
         config = self.config
         x_m, y_m, z_m = config.size_m
         other = None if config.square_top else y_m
         face = solve_face_pose(corners, view.intrinsics.matrix, x_m, other_edge_m=other)
-        pnp_pose = None if face is None else cube_centre_in_world(view.T_W_C, face.T_C_F, z_m, config.symmetry_rad)
+        pnp_pose = None if face is None else part_centre_in_world(view.T_W_C, face.T_C_F, z_m, config.symmetry_rad)
         plane = fit_square_on_plane(corners, view.intrinsics, view.T_W_C, config.top_z_m, x_m, other)
         # Everything measured so far, as a PARTIAL outcome that the checks below complete.
         measured = Detection(
@@ -453,7 +455,7 @@ class CubeDetector:
         return replace(
             measured,
             status=DetectionStatus.FOUND,
-            reason=f"{name} cube at x={fixed(pose.x_m, 4)} m, y={fixed(pose.y_m, 4)} m, "
+            reason=f"{name} part at x={fixed(pose.x_m, 4)} m, y={fixed(pose.y_m, 4)} m, "
             f"yaw={fixed(math.degrees(pose.yaw_rad))} deg",
             pose_world=pose,
             reprojection_error_px=error_px,
@@ -481,3 +483,10 @@ class CubeDetector:
         else:
             corners = polygon
         return corners if view.undistort is None else view.undistort(corners)
+
+
+# Deprecated: the names that said "cube" for any part, kept one release (CHANGELOG.md).
+if TYPE_CHECKING:
+    CubeDetector = PartDetector
+else:
+    __getattr__ = renamed_attributes(__name__, {"CubeDetector": "PartDetector"})

@@ -18,7 +18,7 @@ import numpy as np
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.perception.corners import CornerRefinement
-from bt_arrange.perception.detection import CubeDetector, DetectorConfig
+from bt_arrange.perception.detection import DetectorConfig, PartDetector
 from bt_arrange.perception.pose import PoseModel
 from bt_arrange.perception.synthetic import (
     SyntheticCube,
@@ -116,7 +116,7 @@ def _corner_error_px(found: np.ndarray, truth: np.ndarray) -> float:
     return float(distances.min(axis=1).max())
 
 
-def evaluate(trials: list[Trial], detector: CubeDetector) -> Summary:
+def evaluate(trials: list[Trial], detector: PartDetector) -> Summary:
     """Detect every trial's cube and summarise the errors of the FOUND ones."""
     corner_px, xy_mm, yaw_deg, seconds = [], [], [], []
     for trial in trials:
@@ -156,7 +156,7 @@ def runtime_ms(repeats: int = 20) -> dict[str, float]:
         SyntheticCube("yellow", 0.60, -0.30, 0.0, 0.45),
     ]
     frame = render_frame(cubes, sim_intrinsics(), top_down_camera_pose())
-    detector = CubeDetector()
+    detector = PartDetector()
     calls = {
         "detect (one colour)": lambda: detector.detect(frame, "red"),
         "detect_all (four cubes)": lambda: detector.detect_all(frame),
@@ -209,7 +209,7 @@ def main(argv: list[str] | None = None) -> None:
     for label, render in renders.items():
         progress(label)
         trials = make_trials(n, seed=seed, **render)  # type: ignore[arg-type]
-        print(evaluate(trials, CubeDetector()).row(label), flush=True)
+        print(evaluate(trials, PartDetector()).row(label), flush=True)
 
     print(f"\nMethods compared, 1920x1080, {n} trials per row, seed {seed}\n")
     print(HEADER)
@@ -225,7 +225,7 @@ def main(argv: list[str] | None = None) -> None:
                     config = replace(config, max_reprojection_error_px=5.0, max_edge_error_fraction=0.1)
                     row += " (relaxed gates)"
                 progress(row)
-                print(evaluate(trials, CubeDetector(config=config)).row(row), flush=True)
+                print(evaluate(trials, PartDetector(config=config)).row(row), flush=True)
 
     print("\nRuntime, 1920x1080, median of 20 calls\n", flush=True)
     print("evaluate: timing detection and rendering, 20 calls each", file=sys.stderr, flush=True)

@@ -4,7 +4,7 @@ A prism part (``bt_arrange.shapes.Prism``) has a top face of any simple polygon,
 at a known height. Its pose on the table (x, y of the area centroid, yaw) is found by
 registering that outline to the face seen by the top camera, in three steps:
 
-1. **The face**: the HSV mask of the colour, cleaned as for cubes, at full resolution on a crop
+1. **The face**: the HSV mask of the colour, cleaned as for boxes, at full resolution on a crop
    around the blob; its Suzuki-Abe contour is taken onto the plane of the top faces (each
    pixel's ray meets ``z = table + height``), so the rest works in metres on the table.
 2. **Coarse registration**, over the full circle of yaw (over one symmetry turn for a symmetric
@@ -15,16 +15,16 @@ registering that outline to the face seen by the top camera, in three steps:
    corners the morphology rounds, says whether the face is this outline at all (another part,
    covered) and whether the second yaw fits as well (ambiguous).
 3. **Sub-pixel edges**: each model edge of the coarse pose is measured below a pixel by the
-   cube's method (``bt_arrange.perception.corners``: covered fractions unmixed in the chroma
+   box's method (``bt_arrange.perception.corners``: covered fractions unmixed in the chroma
    plane, summed across columns or rows), skipping where a band would reach another edge; the
    points are taken onto the plane and the 3-DoF pose is solved by trimmed least squares on
    their distances to the model's edge lines (Gauss-Newton on x, y and yaw). Two passes, like
-   the cube's; the second reads the outside colour just beyond the measured edge spread.
+   the box's; the second reads the outside colour just beyond the measured edge spread.
 
 Corners are never used: the mask's corners are rounded by the 7x7 morphology (by several
 pixels at an acute corner), whereas every edge point between them is measured exactly.
 
-``CubeDetector`` hands a prism part's face to ``detect_outline``, so ``Detect`` and ``Inspect``
+``PartDetector`` hands a prism part's face to ``detect_outline``, so ``Detect`` and ``Inspect``
 need nothing new; ``bt_arrange.perception.outline_detector.OutlineDetector`` tells parts of one
 colour apart by their outlines. The registration on the table plane is
 ``bt_arrange.perception.outline_fit``. Perception stays free of the simulator.
@@ -416,6 +416,6 @@ def detect_outlines(
 
 
 def detect_outline(detector: FaceSearch, view: PreparedView, colour: ColourRange, roi: WorldRegion | None) -> Detection:
-    """``CubeDetector``'s outcome for a prism part: the one part of ``colour`` whose face is its outline."""
+    """``PartDetector``'s outcome for a prism part: the one part of ``colour`` whose face is its outline."""
     model = OutlineModel.of(detector.config.part)
     return detect_outlines(detector, view, colour, roi, [model])[model.name]

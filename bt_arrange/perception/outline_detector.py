@@ -1,6 +1,6 @@
 """``OutlineDetector``: prism parts of one colour told apart by their outlines, in one frame.
 
-The blob search is the cube detector's (``CubeDetector``); each face is registered to every
+The blob search is the part detector's (``PartDetector``); each face is registered to every
 outline (``bt_arrange.perception.outline``), and the better fit names the part.
 """
 
@@ -12,7 +12,7 @@ from dataclasses import replace
 from bt_arrange.errors import PerceptionError
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourTable
-from bt_arrange.perception.detection import CubeDetector
+from bt_arrange.perception.detection import PartDetector
 from bt_arrange.perception.outline import detect_outlines
 from bt_arrange.perception.outline_fit import OutlineModel
 from bt_arrange.perception.values import Detection, DetectorConfig, WorldRegion
@@ -24,7 +24,7 @@ class OutlineDetector:
 
     ``detect(frame, colour, part=name)`` looks for one part (the first by default),
     ``detect_each(frame, colour)`` answers for every part by name: a face that fits another part's
-    outline better is that part's. The blob search is the cube detector's.
+    outline better is that part's. The blob search is the part detector's.
     """
 
     def __init__(
@@ -42,7 +42,7 @@ class OutlineDetector:
             )
         # The blob search keeps any blob of a quarter of the smallest face.
         smallest = min(self.models, key=lambda m: m.area_m2)
-        self.search = CubeDetector(colours, replace(config or DetectorConfig(), part=smallest.part))
+        self.search = PartDetector(colours, replace(config or DetectorConfig(), part=smallest.part))
 
     def detect(
         self, frame: CameraFrame, colour: str, roi: WorldRegion | None = None, part: str | None = None

@@ -33,7 +33,7 @@ from bt_arrange.perception.values import DetectorConfig, PreparedView, WorldRegi
 
 
 class FaceSearch(Protocol):
-    """What the outline side needs of a detector (``CubeDetector`` is one): its config and its blob search."""
+    """What the outline side needs of a detector (``PartDetector`` is one): its config and its blob search."""
 
     config: DetectorConfig
 

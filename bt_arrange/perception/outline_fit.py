@@ -24,7 +24,7 @@ COARSE_POINTS = 160
 ICP_POINTS = 320
 #: Two yaws this far apart (after folding to the symmetry) are different registrations.
 DISTINCT_YAW_DEG = 10.0
-#: The sub-pixel passes: (band half width, px; margin at the edge's ends, px), as the cube's.
+#: The sub-pixel passes: (band half width, px; margin at the edge's ends, px), as the box's.
 EDGE_PASSES: tuple[tuple[int, float], ...] = ((5, 3.0), (4, 3.0))
 #: Fewer edge points than this on an edge: the edge is left out of the fit.
 MIN_EDGE_POINTS = 5

@@ -1,4 +1,4 @@
-"""From four image corners to the cube's pose in the world.
+"""From four image corners to the part's pose in the world.
 
 Two models, chosen with :class:`PoseModel`:
 
@@ -7,8 +7,8 @@ Two models, chosen with :class:`PoseModel`:
   ``SOLVEPNP_ITERATIVE`` (the paper names a direct linear transformation; for four coplanar
   points OpenCV starts from the plane's homography instead, as its DLT needs six points not all
   in one plane), refined by Levenberg-Marquardt (``cv2.solvePnPRefineLM``), then the paper's Eq. 1,
-  ``T_W_O = T_W_C * T_C_O``, with the cube's centre half an edge below the top face.
-* ``RESTING``, the default: a cube on the table has its top face at a known height, so each
+  ``T_W_O = T_W_C * T_C_O``, with the part's centre half an edge below the top face.
+* ``RESTING``, the default: a part on the table has its top face at a known height, so each
   corner's ray meets that plane at the corner itself; a square of the known edge fitted to
   the four points gives x, y and yaw. PnP of four points seen head-on cannot tell a slightly
   larger face from a nearer or tilted one, and turns a quarter-pixel error in the face's size
@@ -21,29 +21,30 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
 
+from bt_arrange.deprecation import renamed_attributes
 from bt_arrange.geometry import FloatArray, Pose, fold_yaw, rotation_z
 from bt_arrange.robot import CameraIntrinsics
 
 
 class PoseModel(str, enum.Enum):
-    """Which model of the cube turns its corners into a pose."""
+    """Which model of the part turns its corners into a pose."""
 
-    #: The cube rests flat on the table, so its top face lies at a known height: x, y and yaw
+    #: The part rests flat on the table, so its top face lies at a known height: x, y and yaw
     #: from the corners' rays meeting that plane. Robust to errors in the face's apparent size.
     RESTING = "resting"
-    #: Any 6-DoF pose, from PnP alone (the paper's method): also sees a tilted or lifted cube,
+    #: Any 6-DoF pose, from PnP alone (the paper's method): also sees a tilted or lifted part,
     #: but a face seen head-on turns a size error of a fraction of a pixel into a tilt and a
     #: sideways shift of millimetres.
     FREE = "free"
 
 
 def square_object_points(edge_m: float, other_edge_m: float | None = None) -> FloatArray:
-    """The top face's corners in the face frame (z out of the cube), in the order of the corners.
+    """The top face's corners in the face frame (z out of the part), in the order of the corners.
 
     Seen from above, like the camera sees them, they run clockwise on screen: the order of
     :func:`~bt_arrange.perception.segmentation.order_corners`. ``other_edge_m`` (default
@@ -71,13 +72,13 @@ def match_rectangle_sides(points: FloatArray, edge_m: float, other_edge_m: float
     return pts if keep else np.roll(pts, -1, axis=0)
 
 
-#: Turns the face frame by 180 degrees about its x axis: z out of the cube <-> z into it.
+#: Turns the face frame by 180 degrees about its x axis: z out of the part <-> z into it.
 _FLIP_X = Pose.from_rotation(np.zeros(3), np.diag([1.0, -1.0, -1.0]))
 
 
 @dataclass(frozen=True)
 class FacePose:
-    """The top face in the camera frame (z out of the cube), and how well it explains the corners."""
+    """The top face in the camera frame (z out of the part), and how well it explains the corners."""
 
     T_C_F: Pose
     reprojection_error_px: float
@@ -147,7 +148,7 @@ def solve_face_pose(
             continue
         projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, dist)
         error_px = _rms_px(np.asarray(projected, dtype=float), image_points)
-        # The face must lie in front of the camera, seen from outside the cube.
+        # The face must lie in front of the camera, seen from outside the part.
         rotation, _ = cv2.Rodrigues(rvec)
         if tvec.ravel()[2] <= 0 or rotation[:, 2] @ tvec.ravel() >= 0:
             continue
@@ -161,7 +162,7 @@ class PlaneFit:
     """A level square fitted to corners back-projected onto the plane of the top faces.
 
     ``centre_m`` is the face centre (x, y, z) in the world, ``yaw_rad`` the heading of its edges,
-    ``edge_m`` the edge length the corners suggest (the known edge for a cube resting on the
+    ``edge_m`` the edge length the corners suggest (the known edge for a part resting on the
     table), ``reprojection_error_px`` the RMS distance between the corners and the projected
     square of the known edge.
     """
@@ -182,7 +183,7 @@ def fit_square_on_plane(
 ) -> PlaneFit | None:
     """x, y and yaw of a level square face on the plane ``z = plane_z_m`` from its four corners.
 
-    For a cube resting on the table the height of its top face is known, and each corner's ray
+    For a part resting on the table the height of its top face is known, and each corner's ray
     meets that plane at the corner itself: a rigid 2D fit (Procrustes) of the known square to the
     four points gives the pose. Unlike 6-DoF PnP, an error in the face's apparent size cannot
     turn into a tilt or a depth, and so into a sideways shift of the centre. Corners are
@@ -229,11 +230,11 @@ def _signed_area(points: FloatArray) -> float:
     return 0.5 * float(np.sum(points[:, 0] * np.roll(points[:, 1], -1) - np.roll(points[:, 0], -1) * points[:, 1]))
 
 
-def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float, symmetry_rad: float = math.pi / 2) -> Pose:
-    """Eq. 1 for the cube's centre, with the yaw folded to the cube's 90-degree symmetry.
+def part_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float, symmetry_rad: float = math.pi / 2) -> Pose:
+    """Eq. 1 for the part's centre, with the yaw folded to the part's symmetry.
 
     The centre lies half an edge (``edge_m``: the height) below the top face, along the face normal
-    into the cube. The face frame's x axis is turned by a multiple of ``symmetry_rad`` (90 degrees
+    into the part. The face frame's x axis is turned by a multiple of ``symmetry_rad`` (90 degrees
     for a square top, 180 for a rectangle) about the normal so that the returned yaw lies in
     ``[-symmetry/2, symmetry/2)``: every such turn shows the same part.
     """
@@ -245,7 +246,7 @@ def cube_centre_in_world(T_W_C: Pose, T_C_F: Pose, edge_m: float, symmetry_rad: 
 
 
 def tilt_deg(T_W_O: Pose) -> float:
-    """Angle between the cube's up axis and the world's, in degrees (0 for a cube lying flat)."""
+    """Angle between the part's up axis and the world's, in degrees (0 for a part lying flat)."""
     return math.degrees(math.acos(float(np.clip(T_W_O.rotation[2, 2], -1.0, 1.0))))
 
 
@@ -303,3 +304,10 @@ def expected_outline_area_px(
     points = np.column_stack([outline, np.zeros(len(outline))]) + np.asarray(centre_world, dtype=float)
     p = project_world(intrinsics, T_W_C, points)
     return 0.5 * abs(float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])))
+
+
+# Deprecated: the names that said "cube" for any part, kept one release (CHANGELOG.md).
+if TYPE_CHECKING:
+    cube_centre_in_world = part_centre_in_world
+else:
+    __getattr__ = renamed_attributes(__name__, {"cube_centre_in_world": "part_centre_in_world"})

@@ -17,19 +17,21 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bt_arrange.deprecation import renamed_attributes, renamed_keywords
 from bt_arrange.geometry import FloatArray, Pose, rotation_z
 from bt_arrange.objects import CUBE
 from bt_arrange.perception.colours import PAINT_RGB, SIDE_RGB
 from bt_arrange.robot import CameraFrame, CameraIntrinsics
 from bt_arrange.shapes import Prism
 
-#: The simulated cell's top-face colours (RGB 0..1, fully lit) and cube sides.
-SIM_CUBE_COLOURS_RGB = PAINT_RGB
+#: The simulated cell's top-face colours (RGB 0..1, fully lit) and part sides.
+SIM_PART_COLOURS_RGB = PAINT_RGB
 SIM_SIDE_RGB = SIDE_RGB
 #: The synthetic cube's edge: the paper's cube (``bt_arrange.objects.CUBE``).
 CUBE_EDGE_M = CUBE.size_m[0]
@@ -100,7 +102,7 @@ class SyntheticCube:
 
 def _top_rgb(rgb: tuple[float, float, float] | None, colour: str, brightness: float) -> FloatArray:
     """A top face's rendered colour (0..1): ``rgb``, else the simulator's paint of ``colour``, lit by ``brightness``."""
-    return np.asarray(rgb if rgb is not None else SIM_CUBE_COLOURS_RGB[colour], dtype=float) * brightness
+    return np.asarray(rgb if rgb is not None else SIM_PART_COLOURS_RGB[colour], dtype=float) * brightness
 
 
 @dataclass(frozen=True)
@@ -108,7 +110,7 @@ class SyntheticPrism:
     """A flat part resting on the table: a :class:`Prism` at ``(x, y)`` (its area centroid) turned by ``yaw_rad``.
 
     The top face is ``rgb`` if given, else the simulator's colour of that name, scaled by
-    ``brightness``; the sides are near-white and shaded like a cube's.
+    ``brightness``; the sides are near-white and shaded like a box's.
     """
 
     colour: str
@@ -283,8 +285,9 @@ def _inside_polygon(polygon: FloatArray, u: FloatArray, v: FloatArray) -> NDArra
     return inside
 
 
+@renamed_keywords(cubes="parts")
 def render_frame(
-    cubes: Sequence[SyntheticCube | SyntheticPrism],
+    parts: Sequence[SyntheticCube | SyntheticPrism],
     intrinsics: CameraIntrinsics | None = None,
     camera_pose_world: Pose | None = None,
     *,
@@ -296,7 +299,7 @@ def render_frame(
     blur_sigma_px: float = 0.0,
     seed: int = 0,
 ) -> CameraFrame:
-    """Render cubes and prisms on a grey table as the top camera sees them.
+    """Render ``parts`` (cubes and prisms) on a grey table as the top camera sees them.
 
     ``noise_sigma`` is Gaussian sensor noise in 0..255 grey levels, ``blur_sigma_px`` a Gaussian
     blur applied before the noise; the default camera is the simulated cell's.
@@ -308,8 +311,8 @@ def render_frame(
     image[:] = np.asarray(table_rgb, dtype=np.float32)
     light = np.asarray(light_direction, dtype=float) / np.linalg.norm(light_direction)
 
-    faces = [_visible(part, intrinsics, camera_pose_world, side_rgb, light) for part in cubes]
-    # Tiles: the cubes' pixel boxes, merged where they overlap so that shared edges mix the two
+    faces = [_visible(part, intrinsics, camera_pose_world, side_rgb, light) for part in parts]
+    # Tiles: the parts' pixel boxes, merged where they overlap so that shared edges mix the two
     # colours that meet there (and not the table's).
     boxes: list[list[int]] = []
     for sides, top in faces:
@@ -402,3 +405,10 @@ def random_cubes(
         )
         for _ in range(count)
     ]
+
+
+# Deprecated: the names that said "cube" for any part, kept one release (CHANGELOG.md).
+if TYPE_CHECKING:
+    SIM_CUBE_COLOURS_RGB = SIM_PART_COLOURS_RGB
+else:
+    __getattr__ = renamed_attributes(__name__, {"SIM_CUBE_COLOURS_RGB": "SIM_PART_COLOURS_RGB"})

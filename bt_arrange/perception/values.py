@@ -77,13 +77,13 @@ class DetectorConfig:
 
     #: The part looked for: a cuboid, whose top face (x by y) stands its height above the table,
     #: or a prism, whose top face is its outline (registered by ``bt_arrange.perception.outline``)
-    #: (``CubeDetector.for_object`` sets it; the paper's cube by default).
+    #: (``PartDetector.for_object`` sets it; the paper's cube by default).
     part: ObjectType = CUBE
     #: World z of the table top; the top faces lie the part's height above it.
     table_z_m: float = 0.0
     #: The paper's 7x7 closing and opening, applied at full resolution.
     kernel_px: int = PAPER_KERNEL_PX
-    #: Blobs smaller than this are specks, not cubes, and are ignored.
+    #: Blobs smaller than this are specks, not parts, and are ignored.
     min_area_fraction: float = 0.25
     #: A whole, uncovered face: anything outside is PARTIAL.
     face_area_fraction_range: tuple[float, float] = (0.8, 1.25)
@@ -95,10 +95,10 @@ class DetectorConfig:
     #: strays about 2 px (the rounded corners of the mask), a notch deeper than this (a
     #: covered corner) makes the face PARTIAL. Shallower ones do not touch the measured edges.
     max_outline_deviation_px: float = 4.0
-    #: A larger RMS reprojection error means the corners are not those of a 5 cm square.
+    #: A larger RMS reprojection error means the corners are not those of the part's top face.
     max_reprojection_error_px: float = 1.0
     #: RESTING only: the face's size on the top-face plane may differ this much from the edge;
-    #: more means the cube is not resting on the table (lifted, stacked, tipped) or not 5 cm.
+    #: more means the part is not resting on the table (lifted, stacked, tipped) or not of ``part``'s size.
     max_edge_error_fraction: float = 0.04
     pose_model: PoseModel = PoseModel.RESTING
     corner_refinement: CornerRefinement = CornerRefinement.EDGE_LINES
@@ -138,7 +138,7 @@ class DetectorConfig:
 
     @property
     def top_z_m(self) -> float:
-        """World z of the cubes' top faces."""
+        """World z of the parts' top faces."""
         return self.table_z_m + self.size_m[2]
 
 
@@ -146,7 +146,7 @@ class DetectorConfig:
 class Detection:
     """The outcome of looking for one colour in one frame.
 
-    ``pose_world`` is ``T_W_O`` of the cube's centre (set only when FOUND) from the configured
+    ``pose_world`` is ``T_W_O`` of the part's centre (set only when FOUND) from the configured
     :class:`PoseModel`, its yaw folded into ``[-45, 45)`` degrees (``[-90, 90)`` for a rectangle). Quality figures:
     ``corners_px``, the refined top-face corners (undistorted pixel coordinates);
     ``reprojection_error_px``, the RMS distance between them and the model's projected face;
@@ -172,12 +172,12 @@ class Detection:
 
     @property
     def found(self) -> bool:
-        """True when the cube was found and ``pose_world`` is set."""
+        """True when the part was found and ``pose_world`` is set."""
         return self.status is DetectionStatus.FOUND
 
     @property
     def planar(self) -> PlanarPose | None:
-        """x, y and folded yaw of the cube's centre on the table, when found."""
+        """x, y and folded yaw of the part's centre on the table, when found."""
         return None if self.pose_world is None else self.pose_world.planar()
 
 

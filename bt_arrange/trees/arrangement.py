@@ -8,7 +8,7 @@ One object (``arrange_one``)::
     │   └── Sequence "transfer red"
     │       ├── Detect "detect red"               camera -> /red/pose (``locate``: how the object is found)
     │       ├── Pick "pick red"
-    │       └── GraspGuard "while holding red"    fails within a tick when the cube slips out
+    │       └── GraspGuard "while holding red"    fails within a tick when the part slips out
     │           └── Place "place red"
     ├── Inspect "inspect red after placing"        -> /red/offset_mm, /red/placed_offset_mm
     └── RepeatUntilWithin "correct red"            while /red/offset_mm >= threshold

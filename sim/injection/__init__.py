@@ -13,11 +13,11 @@ through its camera; nothing the tree reports is touched, and no cube is ever fix
 | ``pick_translation`` | b) translation | after that detection | ``max_m`` = 0.025 m: up to 2.5 cm, any direction |
 | ``pick_translation_xy`` | b) translation, read per axis | after that detection | ``max_m`` = 0.025 m in x and in y |
 | ``pick_rotation`` | c) orientation | after that detection | ``max_deg`` = 40 deg |
-| ``surface_shift`` | d) surface | "close on the cube" | ``max_m`` = 0.003 m along the pads |
+| ``surface_shift`` | d) surface | "close on the part" | ``max_m`` = 0.003 m along the pads |
 | ``transport_slip`` | e) grip | "carry above the target" | ``duration_s`` = 0.05 s, ``friction_scale`` = 0 |
-| ``release_stick`` | f) friction | "release the cube" | ``max_m`` = 0.003 m toward one finger |
+| ``release_stick`` | f) friction | "release the part" | ``max_m`` = 0.003 m toward one finger |
 | ``release_height`` | g) release | the first placing | ``height_m`` = 0.005 m |
-| ``release_tilt`` | h) tilting | "release the cube" | ``max_deg`` = 5 deg |
+| ``release_tilt`` | h) tilting | "release the part" | ``max_deg`` = 5 deg |
 
 Use::
 

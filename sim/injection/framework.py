@@ -133,10 +133,10 @@ class InjectableRun(Protocol):
 
 
 #: Stages (feedback messages of the running behaviour) the injectors wait for: the behaviours' own names.
-CLOSE_STAGE = stage.CLOSE_ON_CUBE
-LIFT_STAGE = stage.LIFT_CUBE
+CLOSE_STAGE = stage.CLOSE_ON_PART
+LIFT_STAGE = stage.LIFT_PART
 CARRY_STAGE = stage.CARRY_ABOVE_TARGET
-RELEASE_STAGE = stage.RELEASE_CUBE
+RELEASE_STAGE = stage.RELEASE_PART
 T = TypeVar("T")
 #: Draws tried before a picking injector gives up on finding one that still lets the pads grasp the cube.
 MAX_DRAWS = 10_000

@@ -141,7 +141,7 @@ class PickRotation(Injector):
 class SurfaceShift(Injector):
     """Surface error (Fig. 2d): an uneven face moves the cube as the fingers close.
 
-    When ``pick <obj>`` starts "close on the cube" (the pads around the cube, not yet touching it)
+    When ``pick <obj>`` starts "close on the part" (the pads around the cube, not yet touching it)
     the cube is shifted by a distance uniform in +-``max_m`` along the pads, i.e. the horizontal
     axis across the closing axis (the TCP's y axis), where the closing pads do not centre it.
 

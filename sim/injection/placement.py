@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 class ReleaseStick(Injector):
     """Friction error (Fig. 2f): the cube sticks to one finger as the gripper opens.
 
-    When ``place <obj>`` starts "release the cube", one finger is chosen at random and a distance
+    When ``place <obj>`` starts "release the part", one finger is chosen at random and a distance
     uniform in [0, ``max_m``]; for the following ticks the cube follows that finger's opening: it is
     put (``displace_cube``) where it was when the release began plus the finger's travel since, along
     the closing axis, until it has been dragged that far; then it stays where it was let go.
@@ -123,7 +123,7 @@ class ReleaseHeight(Injector):
     """Release error (Fig. 2g): the cube is let go above the table and drops.
 
     An execution error of the robot, not of its reports: the context's ``release_clearance_m``
-    becomes ``height_m`` from the first "lift the cube" of ``pick <obj>`` until the first
+    becomes ``height_m`` from the first "lift the part" of ``pick <obj>`` until the first
     ``place <obj>`` ends, then the nominal clearance is restored, so only that placing drops the
     cube (not another object's, nor the placing after a regrasp). Deterministic: no draw.
 
@@ -171,7 +171,7 @@ class ReleaseHeight(Injector):
 class ReleaseTilt(Injector):
     """Tilting error (Fig. 2h): the cube tips as the gripper opens, falls back flat and moves.
 
-    When ``place <obj>`` runs "release the cube", as soon as the opening pads are clear of the
+    When ``place <obj>`` runs "release the part", as soon as the opening pads are clear of the
     tilted cube, it is turned about a random horizontal axis through its centre (direction uniform)
     by an angle uniform in [0, ``max_deg``], lifted just enough to keep its lowest corner above the
     table (pybullet reset of the cube's true pose), and left to fall back.

@@ -65,8 +65,8 @@ def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
     assert guard.status == Status.FAILURE
     assert place.status == Status.INVALID, "the child is interrupted"
     assert place.feedback_message == stages.INTERRUPTED
-    assert guard.feedback_message.startswith("the cube left the gripper: fingers at ")
-    assert guard.feedback_message.endswith("mm, under the 47.0 mm of a held cube")
+    assert guard.feedback_message.startswith("the part left the gripper: fingers at ")
+    assert guard.feedback_message.endswith("mm, under the 47.0 mm of a held part")
     assert context.brake.active, "the carry motion goes to the brake"
     assert_comes_to_rest(brake_until_idle(context))
 
@@ -76,6 +76,6 @@ def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
     guard, place = guarded_place(context)
     guard.tick_once()
     assert guard.status == Status.FAILURE
-    assert guard.feedback_message == "the cube left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held cube"
+    assert guard.feedback_message == "the part left the gripper: fingers at 0.0 mm, under the 47.0 mm of a held part"
     assert place.status == Status.INVALID, "the child never ran"
     assert fake_arm(context).commands == []

@@ -30,7 +30,7 @@ from bt_arrange.settings import ManipulationSettings
     ("make", "during"),
     [
         (lambda: MoveHome("park"), stages.MOVE_HOME),
-        (lambda: Pick("pick red", "red"), stages.DESCEND_TO_CUBE),
+        (lambda: Pick("pick red", "red"), stages.DESCEND_TO_PART),
     ],
     ids=["joint motion", "straight line"],
 )

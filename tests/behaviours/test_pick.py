@@ -45,11 +45,11 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
     assert_never_blocks(run)
     seen = list(dict.fromkeys(t.feedback for t in run.running))
     assert seen == [
-        stages.MOVE_ABOVE_CUBE,
+        stages.MOVE_ABOVE_PART,
         stages.WAIT_FOR_OPEN_FINGERS,
-        stages.DESCEND_TO_CUBE,
-        stages.CLOSE_ON_CUBE,
-        stages.LIFT_CUBE,
+        stages.DESCEND_TO_PART,
+        stages.CLOSE_ON_PART,
+        stages.LIFT_PART,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [(c.kind, c.value) for c in gripper.commands] == [
@@ -68,10 +68,10 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback == (
-        "no cube between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
+        "no part between the pads: the fingers closed to 0.0 mm, a 50 mm cube holds them at least 47.0 mm apart"
     )
     feedback = [t.feedback for t in run.ticks]
-    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_PART), "lets go before lifting"
     assert fake_arm(context).tcp_pose().z_m == pytest.approx(SETTINGS.approach_height_m, abs=1e-6), "lifted clear"
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
@@ -84,12 +84,12 @@ def test_pick_that_still_holds_a_turned_cube_by_its_corners_after_squaring_lets_
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback == (
-        "the pads hold the cube across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
+        "the pads hold the part across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
         "held nearly square (it is turned) after squaring a 68.0 mm grip"
     )
     feedback = [t.feedback for t in run.ticks]
-    assert feedback.index(stages.CLOSE_ON_SQUARED_CUBE) < feedback.index(stages.LET_GO_OF_BAD_GRASP)
-    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert feedback.index(stages.CLOSE_ON_SQUARED_PART) < feedback.index(stages.LET_GO_OF_BAD_GRASP)
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_PART), "lets go before lifting"
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
 
@@ -100,7 +100,7 @@ def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, ma
         ArmKinematics().check_reachable(gripper_down_pose(FAR_X_M, 0.0, SETTINGS.approach_height_m))
     run = tick_until_done(set_up(make(f"{make.__name__} red", "red"), context), context)
     assert [t.status for t in run.ticks] == [Status.FAILURE], "fails on its first tick"
-    first_move = stages.MOVE_ABOVE_CUBE if make is Pick else stages.CARRY_ABOVE_TARGET
+    first_move = stages.MOVE_ABOVE_PART if make is Pick else stages.CARRY_ABOVE_TARGET
     assert run.feedback.startswith(f"{first_move}: ")
     assert str(unreachable.value).split(" is out of reach")[1] in run.feedback
     assert fake_arm(context).commands == []

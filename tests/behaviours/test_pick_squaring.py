@@ -49,17 +49,17 @@ def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> N
     assert_never_blocks(run)
     seen = list(dict.fromkeys(t.feedback for t in run.running))
     assert seen == [
-        stages.MOVE_ABOVE_CUBE,
+        stages.MOVE_ABOVE_PART,
         stages.WAIT_FOR_OPEN_FINGERS,
-        stages.DESCEND_TO_CUBE,
-        stages.CLOSE_ON_CUBE,
+        stages.DESCEND_TO_PART,
+        stages.CLOSE_ON_PART,
         stages.OPEN_TO_SQUARE,
         stages.SHIFT_ALONG_PADS,
         stages.CLOSE_TO_SQUARE,
-        stages.OPEN_SQUARED_CUBE,
-        stages.RECENTRE_ON_CUBE,
-        stages.CLOSE_ON_SQUARED_CUBE,
-        stages.LIFT_CUBE,
+        stages.OPEN_SQUARED_PART,
+        stages.RECENTRE_ON_PART,
+        stages.CLOSE_ON_SQUARED_PART,
+        stages.LIFT_PART,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     assert [c.kind for c in gripper.commands] == ["open", "close", "open", "close", "open", "close"]
@@ -82,11 +82,11 @@ def test_pick_squaring_by_a_sweep_pushes_along_the_closing_axis_towards_the_base
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     seen = list(dict.fromkeys(t.feedback for t in run.running))
-    assert seen[seen.index(stages.CLOSE_ON_CUBE) + 1 :] == [
+    assert seen[seen.index(stages.CLOSE_ON_PART) + 1 :] == [
         stages.OPEN_TO_SQUARE,
         stages.SWEEP_TO_SQUARE,
-        stages.CLOSE_ON_SQUARED_CUBE,
-        stages.LIFT_CUBE,
+        stages.CLOSE_ON_SQUARED_PART,
+        stages.LIFT_PART,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)
     first, final = (
@@ -105,7 +105,7 @@ def test_pick_with_squaring_off_lets_a_cube_pinched_across_its_corners_go_at_onc
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
-    assert run.feedback.startswith("the pads hold the cube across its corners: 68.0 mm apart")
+    assert run.feedback.startswith("the pads hold the part across its corners: 68.0 mm apart")
     assert [c.kind for c in fake_gripper(context).commands] == ["open", "close", "open"]
 
 
@@ -155,11 +155,11 @@ def test_pick_squaring_by_a_turn_turns_the_wrist_once_when_that_squares_the_cube
     )
     assert_never_blocks(run)
     seen = list(dict.fromkeys(t.feedback for t in run.running))
-    assert seen[seen.index(stages.CLOSE_ON_CUBE) + 1 :] == [
+    assert seen[seen.index(stages.CLOSE_ON_PART) + 1 :] == [
         stages.OPEN_TO_SQUARE,
         stages.TURN_WRIST_TO_SQUARE,
-        stages.CLOSE_ON_TURNED_CUBE,
-        stages.LIFT_CUBE,
+        stages.CLOSE_ON_TURNED_PART,
+        stages.LIFT_PART,
     ], "the other way is not tried when the first turn squared it"
     assert [c.kind for c in fake_gripper(context).commands] == ["open", "close", "open", "close"]
     first, turned = _close_poses(context)
@@ -182,14 +182,14 @@ def test_pick_squaring_by_a_turn_turns_the_other_way_only_when_the_first_turn_le
     assert run.feedback.endswith("(squared from a 68.0 mm grip across its corners, the wrist turned -22.5 deg)")
     assert_never_blocks(run)
     seen = list(dict.fromkeys(t.feedback for t in run.running))
-    assert seen[seen.index(stages.CLOSE_ON_CUBE) + 1 :] == [
+    assert seen[seen.index(stages.CLOSE_ON_PART) + 1 :] == [
         stages.OPEN_TO_SQUARE,
         stages.TURN_WRIST_TO_SQUARE,
-        stages.CLOSE_ON_TURNED_CUBE,
+        stages.CLOSE_ON_TURNED_PART,
         stages.OPEN_TO_TURN_BACK,
         stages.TURN_WRIST_OTHER_WAY,
-        stages.CLOSE_ON_SQUARED_CUBE,
-        stages.LIFT_CUBE,
+        stages.CLOSE_ON_SQUARED_PART,
+        stages.LIFT_PART,
     ]
     first, plus, minus = _close_poses(context)
     assert _yaw_step_deg(first, plus) == pytest.approx(TURN.squaring_turn_deg, abs=1e-3)
@@ -206,7 +206,7 @@ def test_pick_squaring_by_a_turn_that_leaves_it_pinched_both_ways_lets_go_and_fa
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback == (
-        "the pads hold the cube across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
+        "the pads hold the part across its corners: 68.0 mm apart, more than the 60.0 mm of a 50 mm cube "
         "held nearly square (it is turned) after squaring a 68.0 mm grip"
     )
     assert [c.kind for c in fake_gripper(context).commands] == [
@@ -220,7 +220,7 @@ def test_pick_squaring_by_a_turn_that_leaves_it_pinched_both_ways_lets_go_and_fa
     ]
     feedback = [t.feedback for t in run.ticks]
     assert feedback.index(stages.TURN_WRIST_OTHER_WAY) < feedback.index(stages.LET_GO_OF_BAD_GRASP)
-    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_CUBE), "lets go before lifting"
+    assert feedback.index(stages.LET_GO_OF_BAD_GRASP) < feedback.index(stages.LIFT_PART), "lets go before lifting"
     assert fake_gripper(context).width() == pytest.approx(SETTINGS.open_width_m, abs=1e-3)
 
 

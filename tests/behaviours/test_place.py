@@ -26,8 +26,8 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     assert_never_blocks(run)
     assert list(dict.fromkeys(t.feedback for t in run.running)) == [
         stages.CARRY_ABOVE_TARGET,
-        stages.LOWER_CUBE,
-        stages.RELEASE_CUBE,
+        stages.LOWER_PART,
+        stages.RELEASE_PART,
         stages.RETREAT,
     ]
     arm, gripper = fake_arm(context), fake_gripper(context)

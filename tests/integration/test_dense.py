@@ -6,7 +6,7 @@ import pytest
 
 from bt_arrange.layout import Rect, gap_m
 from bt_arrange.objects import CUBE
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange.perception.detection import WorldRegion
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.config import CellConfig
@@ -19,7 +19,7 @@ PITCH_M = CUBE_EDGE_M + 0.002
 
 
 def test_identical_faces_2_mm_apart_are_separate_cubes_on_camera() -> None:
-    detector = CubeDetector()
+    detector = PartDetector()
     with WorkCell(CellConfig()) as cell:
         for i in range(3):
             cell.add_cube("green", 0.45 + i * PITCH_M, 0.05, 0.0, name=f"g{i}")

@@ -39,8 +39,8 @@ SCENE_SEED = 0
 OBJ = "red"
 #: Stages whose first tick the probe notes (before any injector acts in that tick).
 STAGES = {
-    f"pick {OBJ}": (stages.CLOSE_ON_CUBE,),
-    f"place {OBJ}": (stages.CARRY_ABOVE_TARGET, stages.LOWER_CUBE, stages.RELEASE_CUBE, stages.RETREAT),
+    f"pick {OBJ}": (stages.CLOSE_ON_PART,),
+    f"place {OBJ}": (stages.CARRY_ABOVE_TARGET, stages.LOWER_PART, stages.RELEASE_PART, stages.RETREAT),
 }
 
 
@@ -288,7 +288,7 @@ def test_grasp_feasibility_binds_across_the_closing_axis_only():
 def test_attach_checks_the_cube_and_attaches_once():
     module = treefile.load(TREE)
     with SimulatedRun(treefile.build_root(module), treefile.scene(module, seed=SCENE_SEED)) as run:
-        with pytest.raises(PlanError, match="no cube 'blue'"):
+        with pytest.raises(PlanError, match="no part 'blue'"):
             PickTranslation().attach(run, "blue", np.random.default_rng(0))
         injector = PickTranslation()
         attach_all(run, OBJ, [injector], seed=0)
@@ -320,7 +320,7 @@ def test_perception_offset_makes_the_pick_miss_the_centre_and_inspection_stays_e
     assert trial.camera_offset_after == (0.0, 0.0, 0.0), "the camera is back for the inspections"
     assert record["also_seen_by"] == []
     # The pads come down at the wrong place; closing centres the cube along the closing axis only.
-    close = trial.probe.stages[stages.CLOSE_ON_CUBE]
+    close = trial.probe.stages[stages.CLOSE_ON_PART]
     held = trial.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     nominal = baseline.probe.transitions[f"pick {OBJ}"].cube_in_tcp_mm
     assert abs(held[0] - nominal[0]) < 0.3
@@ -342,7 +342,7 @@ def test_pick_translation_moves_the_detected_cube_and_the_grasp_centres_it_along
     assert max(abs(record["dx_mm"]), abs(record["dy_mm"])) <= 25.0
     assert record["distance_mm"] == pytest.approx(math.hypot(record["dx_mm"], record["dy_mm"]), abs=2e-3)
     assert record["distance_mm"] <= 25.0
-    close = trial.probe.stages[stages.CLOSE_ON_CUBE]
+    close = trial.probe.stages[stages.CLOSE_ON_PART]
     closing_axis = close.tcp.rotation[:2, 0] / np.linalg.norm(close.tcp.rotation[:2, 0])
     assert abs(shift @ closing_axis) <= 17.5, "the limit binds across the closing axis"
     assert abs(shift @ _pad_axis(close)) <= 25.0
@@ -417,7 +417,7 @@ def test_transport_slip_lets_the_cube_slide_along_the_pads_for_a_moment():
     assert 5.0 < slip[2] < 25.0, "fell down the pads, caught again"
     assert abs(slip[1]) > 1.0, "slid along the pads under the carry's acceleration"
     carried = trial.probe.stages[stages.CARRY_ABOVE_TARGET].cube_in_tcp_mm
-    lowered = trial.probe.stages[stages.LOWER_CUBE].cube_in_tcp_mm
+    lowered = trial.probe.stages[stages.LOWER_PART].cube_in_tcp_mm
     np.testing.assert_allclose(lowered - carried, slip, atol=0.4)
     assert trial.red.placed_offset_mm > 1.0
     assert trial.detections() == 1
@@ -441,7 +441,7 @@ def test_release_stick_drags_the_cube_toward_one_finger_as_it_opens():
     record = trial.record("release_stick")
     assert record["fired"] and 1.0 < record["drag_mm"] <= 3.0
     assert record["dragged_mm"] == record["drag_mm"] and record["ticks"] > 3, "dragged over several ticks"
-    release = trial.probe.stages[stages.RELEASE_CUBE]
+    release = trial.probe.stages[stages.RELEASE_PART]
     placed = trial.probe.transitions[f"place {OBJ}"]
     moved = _xy_mm(release.cube, placed.cube)
     np.testing.assert_allclose(moved, [record["dx_mm"], record["dy_mm"]], atol=0.3)
@@ -455,9 +455,9 @@ def test_release_height_lets_the_cube_go_above_the_table_once():
     trial = _trial(("release_height:0.005",), seed=0)
     record, baseline = trial.record("release_height"), _trial(())
     assert record["fired"] and record["release_clearance_mm"] == 5.0 and record["nominal_clearance_mm"] == 0.5
-    released_z = trial.probe.stages[stages.RELEASE_CUBE].cube.z_m
+    released_z = trial.probe.stages[stages.RELEASE_PART].cube.z_m
     assert released_z == pytest.approx(0.025 + 0.005, abs=1e-3)
-    assert baseline.probe.stages[stages.RELEASE_CUBE].cube.z_m == pytest.approx(0.0255, abs=1e-3)
+    assert baseline.probe.stages[stages.RELEASE_PART].cube.z_m == pytest.approx(0.0255, abs=1e-3)
     assert trial.probe.transitions[f"place {OBJ}"].cube.z_m == pytest.approx(0.025, abs=5e-4), "it dropped"
     assert trial.settings_after.release_clearance_m == ManipulationSettings().release_clearance_m, "restored"
     _assert_recovered(trial)
@@ -489,7 +489,7 @@ def test_injectors_compose_and_the_same_seed_reproduces_the_records():
     assert trial.record("perception_offset")["camera_dyaw_deg"] != 0.0
     measured = trial.probe.measured[0]
     cube = trial.probe.fired["pick_rotation"][1].cube
-    closing = trial.probe.stages[stages.CLOSE_ON_CUBE].tcp.rotation
+    closing = trial.probe.stages[stages.CLOSE_ON_PART].tcp.rotation
     closing_yaw = math.atan2(closing[1, 0], closing[0, 0])
     assert grasp_fits(cube.x_m, cube.y_m, cube.yaw_rad, (measured.x_m, measured.y_m, closing_yaw), 0.05, 0.085)
     _assert_recovered(trial)

@@ -13,7 +13,7 @@ import pytest
 from merged_pieces import moved_towards, neighbours
 
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import CubeDetector, DetectionStatus, WorldRegion
+from bt_arrange.perception import DetectionStatus, PartDetector, WorldRegion
 from bt_arrange_sim.pybullet.cell import WorkCell
 
 
@@ -28,7 +28,7 @@ def test_two_merged_pieces_are_each_measured_at_their_targets_within_a_tenth_by_
         cell.settle(0.3)
         frame = cell.robot.camera.capture()
         for name, piece in (("a", a), ("b", b)):
-            detector = CubeDetector().for_object(kinds[name])
+            detector = PartDetector().for_object(kinds[name])
             assert detector.detect(frame, "red").status is DetectionStatus.AMBIGUOUS, "one blob in the mask"
             detection = detector.detect(frame, "red", roi=WorldRegion.around(piece.x_m, piece.y_m, 0.05))
             assert detection.found, detection.reason

@@ -26,7 +26,7 @@ if os.environ.get("MUJOCO_GL") == "osmesa" and ctypes.util.find_library("OSMesa"
 from bt_arrange import cli  # noqa: E402
 from bt_arrange.geometry import Pose  # noqa: E402
 from bt_arrange.objects import CUBE, ObjectStart  # noqa: E402
-from bt_arrange.perception import CubeDetector  # noqa: E402
+from bt_arrange.perception import PartDetector  # noqa: E402
 from bt_arrange.robot import PixelWindow  # noqa: E402
 from bt_arrange.trees import Target, arrangement  # noqa: E402
 from bt_arrange_sim.mujoco.cell import MujocoCell  # noqa: E402
@@ -82,7 +82,7 @@ def test_the_camera_is_the_pybullet_cells_pinhole_and_its_windows_are_crops() ->
         assert full.rgb.shape == (1080, 1920, 3) and full.depth_m is not None
         # Depth on the table, straight below the camera: its height.
         assert full.depth_m[540, 960] == pytest.approx(0.70, abs=1e-3)
-        found = CubeDetector().detect(full, "blue")
+        found = PartDetector().detect(full, "blue")
         truth = cell.cube_pose_truth("blue")
         assert found.pose_world is not None
         assert math.hypot(found.pose_world.x_m - truth.x_m, found.pose_world.y_m - truth.y_m) < 2e-4
@@ -91,7 +91,7 @@ def test_the_camera_is_the_pybullet_cells_pinhole_and_its_windows_are_crops() ->
         crop = full.rgb[500:740, 600:920].astype(int)
         assert np.mean(np.abs(part.rgb.astype(int) - crop)) < 0.05  # the same pixels, a few edge samples aside
         binned = camera.capture(window=PixelWindow(0, 0, 1920, 1080, 4))
-        found_binned = CubeDetector().detect(binned, "blue")
+        found_binned = PartDetector().detect(binned, "blue")
         assert found_binned.pose_world is not None
         assert math.hypot(found_binned.pose_world.x_m - truth.x_m, found_binned.pose_world.y_m - truth.y_m) < 1e-3
 

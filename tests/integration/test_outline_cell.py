@@ -9,7 +9,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import CubeDetector, DetectionStatus
+from bt_arrange.perception import DetectionStatus, PartDetector
 from bt_arrange.shapes import Prism
 from bt_arrange_sim.pybullet.cell import WorkCell
 
@@ -37,7 +37,7 @@ def test_non_convex_and_symmetric_outlines_are_found_at_many_yaws_in_the_cells_f
             cell.settle(0.05)
             frame = cell.camera.capture()
             for (colour, *_), kind in zip(PLACES, kinds, strict=True):
-                detection = CubeDetector().for_object(kind).detect(frame, colour)
+                detection = PartDetector().for_object(kind).detect(frame, colour)
                 assert detection.found, detection.reason
                 true_x, true_y, true_yaw = cell.cube_planar_truth(kind.name)
                 pose = detection.pose_world
@@ -54,11 +54,11 @@ def test_two_parts_of_one_colour_are_told_apart_by_outline_in_the_cells_frames()
         cell.settle(0.05)
         frame = cell.camera.capture()
         for kind in (FRAGMENT, ELL):
-            detection = CubeDetector().for_object(kind).detect(frame, "red")
+            detection = PartDetector().for_object(kind).detect(frame, "red")
             assert detection.found, detection.reason
             true_x, true_y, _ = cell.cube_planar_truth(kind.name)
             assert (detection.pose_world.x_m, detection.pose_world.y_m) == pytest.approx((true_x, true_y), abs=1e-4)
         cell.remove_cube("ell")
         cell.settle(0.01)
-        alone = CubeDetector().for_object(ELL).detect(cell.camera.capture(), "red")
+        alone = PartDetector().for_object(ELL).detect(cell.camera.capture(), "red")
         assert alone.status is DetectionStatus.WRONG_OUTLINE, alone.reason

@@ -7,7 +7,7 @@ import pytest
 
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.motion import gripper_down_pose
-from bt_arrange.perception import CubeDetector, DetectionStatus
+from bt_arrange.perception import DetectionStatus, PartDetector
 from bt_arrange.robot import PixelWindow
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.noise import CameraNoiseConfig
@@ -29,7 +29,7 @@ def test_every_cube_is_found_within_a_fifth_of_a_millimetre(noise):
         for colour, x, y, yaw in SCENE:
             cell.add_cube(colour, x, y, yaw)
         cell.settle(0.1)
-        detections = CubeDetector().detect_all(cell.camera.capture())
+        detections = PartDetector().detect_all(cell.camera.capture())
         for colour, *_ in SCENE:
             detection = detections[colour]
             assert detection.found, detection.reason
@@ -45,7 +45,7 @@ def test_a_cube_under_the_gripper_is_not_reported_as_found():
         script = ScriptedPickPlace(cell)
         # Hover over the cube, low enough for the gripper body to hide part of its face.
         script.move_to(gripper_down_pose(0.515, 0.0, 0.09, 0.2))
-        detection = CubeDetector().detect(cell.camera.capture(), "red")
+        detection = PartDetector().detect(cell.camera.capture(), "red")
         assert detection.status in (DetectionStatus.PARTIAL, DetectionStatus.NOT_FOUND)
         assert detection.reason
 
@@ -54,7 +54,7 @@ def test_a_cube_off_the_edge_of_the_image_is_partial():
     with WorkCell() as cell:
         cell.add_cube("blue", 0.5, 0.46, 0.0)  # the image spans about y -0.45..0.45 m at the top faces
         cell.settle(0.1)
-        detection = CubeDetector().detect(cell.camera.capture(), "blue")
+        detection = PartDetector().detect(cell.camera.capture(), "blue")
         assert detection.status is DetectionStatus.PARTIAL
         assert "border" in detection.reason
 
@@ -70,7 +70,7 @@ def test_a_window_has_the_full_frames_pixels_and_gives_its_detection(noise):
         for colour, x, y, yaw in SCENE:
             cell.add_cube(colour, x, y, yaw)
         cell.settle(0.1)
-        camera, detector = cell.camera, CubeDetector()
+        camera, detector = cell.camera, PartDetector()
         full = camera.capture(with_depth=True)
         for colour, x, y, _ in SCENE:
             window = detector.window_around(camera.intrinsics, camera.pose_world, x, y, 0.05)
@@ -99,7 +99,7 @@ def test_a_binned_full_view_locates_every_cube_within_two_millimetres():
         for colour, x, y, yaw in SCENE:
             cell.add_cube(colour, x, y, yaw)
         cell.settle(0.1)
-        camera, detector = cell.camera, CubeDetector()
+        camera, detector = cell.camera, PartDetector()
         binning = detector.search_binning(camera.intrinsics, camera.pose_world)
         assert binning == 8
         search = camera.capture(window=PixelWindow.full(camera.intrinsics, binning))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from bt_arrange.motion import ArmKinematics
-from bt_arrange.perception import CubeDetector
+from bt_arrange.perception import PartDetector
 from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.pybullet.cell import WorkCell
 
@@ -17,7 +17,7 @@ def _camera_error_mm(config: CellConfig, calibration=None) -> float | None:  # n
         cell.add_cube("red", 0.58, 0.18, yaw_rad=0.2)
         cell.settle(0.2)
         camera = cell.camera if calibration is None else CalibratedCamera(cell.camera, calibration)
-        detection = CubeDetector().detect(camera.capture(), "red")
+        detection = PartDetector().detect(camera.capture(), "red")
         if detection.pose_world is None:
             return None
         x, y, _ = cell.cube_planar_truth("red")
