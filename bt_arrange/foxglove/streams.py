@@ -48,6 +48,20 @@ def check_port(port: object) -> int:
     return port
 
 
+def port_argument(text: str) -> int:
+    """An argparse type: the live server's port."""
+    import argparse
+
+    try:
+        return check_port(int(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a port number (put the tree file before --foxglove, or give the port)"
+        ) from None
+    except FoxgloveError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 class LiveServer:
     """Foxglove's WebSocket protocol on ``bind:port``, read-only: no client may publish or call a service.
 
