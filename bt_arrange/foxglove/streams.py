@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import io
 import sys
+import time
 from typing import Any
 
 from bt_arrange.errors import BtArrangeError
@@ -24,6 +25,8 @@ MCAP_NAME = "run.mcap"
 INSTALL_HINT = "pip install 'bt-arrange[foxglove]'"
 #: The live server's default port (Foxglove's own default).
 DEFAULT_PORT = 8765
+#: Wall time the live server stays up after the run, so that its last messages are sent before it stops.
+LINGER_S = 0.5
 
 
 class FoxgloveError(BtArrangeError, ValueError):
@@ -53,11 +56,13 @@ def port_argument(text: str) -> int:
     import argparse
 
     try:
-        return check_port(int(text))
+        value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"{text!r} is not a port number (put the tree file before --foxglove, or give the port)"
         ) from None
+    try:
+        return check_port(value)
     except FoxgloveError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
 
@@ -97,7 +102,8 @@ class LiveServer:
         return f"ws://{self.bind}:{self.port}"
 
     def close(self) -> None:
-        """Stop serving (clients are disconnected)."""
+        """Stop serving, after ``LINGER_S`` for the last messages (the report, the final poses) to reach the clients."""
+        time.sleep(LINGER_S)
         self.server.stop()
 
     def __enter__(self) -> LiveServer:
