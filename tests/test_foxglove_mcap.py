@@ -179,3 +179,19 @@ def test_the_log_has_the_feedback_by_node_and_the_report_is_the_report(messages,
     part = next(e for e in entities if e.id == "part/red")
     assert part.frame_id == "red" and part.frame_locked and part.cubes[0].size.x == pytest.approx(0.04, abs=0.03)
     assert math.isclose(part.cubes[0].color.r, 1.0, abs_tol=0.5)
+
+
+def test_the_layout_shipped_is_the_one_built() -> None:
+    from bt_arrange.foxglove.layout import layout_json
+
+    shipped = (ROOT / "docs" / "foxglove-layout.json").read_text(encoding="utf-8")
+    assert shipped == layout_json(), "python -m bt_arrange.foxglove.layout > docs/foxglove-layout.json"
+    panels = {panel["panelType"] for panel in _panels(json.loads(shipped)["content"])}
+    assert {"ThreeDee", "Image", "Plot", "Log"} <= panels
+
+
+def _panels(content: dict):  # noqa: ANN202 - the panels of a layout's content, depth first
+    if content["type"] == "panel":
+        yield content
+    for item in content.get("items", []):
+        yield from _panels(item["content"])
