@@ -54,7 +54,8 @@ from bt_arrange.robot import CameraFrame, PixelWindow
 from bt_arrange.trees import Arrangement
 from bt_arrange.xmltree import tag_of
 
-#: World time between two ``/tf`` messages (a decimation of the control period: 50 Hz is smooth in the 3-D panel).
+#: The least world time between two ``/tf`` messages: a decimation of the control period (8 ms: every third), smooth
+#: in the 3-D panel at a third of the size.
 TF_PERIOD_S = 0.02
 #: World time between two repeats of ``/robot_description`` and ``/parts`` when live: a live client
 #: that connects after the start sees them too (the protocol keeps no message for late subscribers).
