@@ -237,6 +237,11 @@ class RunObserver:
     def finish(self, report: Any) -> None:
         """At the end: the last ``/tree`` and ``/tf`` (the final poses), then ``/report``."""
         time_ns = self.now_ns()
+        # A run stopped at its time limit resets its nodes without reporting each change: read them.
+        for node, row in zip(self.nodes, self._node_rows, strict=True):
+            if row["status"] != node.status.value:
+                row["status"] = node.status.value
+                self._tree_changed = True
         if self._tree_changed:
             self._publish_tree(time_ns)
         self._publish_tf(time_ns)
