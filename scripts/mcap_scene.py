@@ -27,6 +27,7 @@ from bt_arrange.geometry import quaternion_to_matrix  # noqa: E402
 
 
 def matrix(translation, rotation) -> np.ndarray:  # noqa: ANN001 - Foxglove Vector3, Quaternion
+    """The 4x4 transform of a Foxglove translation and rotation."""
     out = np.eye(4)
     out[:3, :3] = quaternion_to_matrix([rotation.x, rotation.y, rotation.z, rotation.w])
     out[:3, 3] = (translation.x, translation.y, translation.z)
@@ -56,6 +57,7 @@ def read(path: Path, until_ns: int) -> tuple[dict, list, bytes | None]:
 
 
 def in_world(frame: str, transforms: dict) -> np.ndarray:
+    """The pose of ``frame`` in the world: its transforms chained up to the root."""
     pose = np.eye(4)
     while frame in transforms:
         parent, step = transforms[frame]
@@ -65,12 +67,10 @@ def in_world(frame: str, transforms: dict) -> np.ndarray:
 
 
 def draw(path: Path, out: Path, time_s: float) -> None:
+    """The scene at ``time_s`` of world time, and the last image up to then, as a PNG."""
     transforms, entities, image = read(path, round(time_s * 1e9))
     figure = plt.figure(figsize=(12, 5.5))
     axes = figure.add_subplot(1, 2, 1, projection="3d")
-    children: dict[str, list[str]] = {}
-    for child, (parent, _) in transforms.items():
-        children.setdefault(parent, []).append(child)
     for child, (parent, _) in transforms.items():  # the arm: a line from each link's origin to its child's
         if parent == "world":
             continue
@@ -121,6 +121,7 @@ def draw(path: Path, out: Path, time_s: float) -> None:
 
 
 def main() -> None:
+    """The command line."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("mcap", type=Path)
     parser.add_argument("out", type=Path)
