@@ -100,19 +100,10 @@ class TappedCamera:
         return getattr(self._camera, name)
 
 
-class RunObserver:
-    """Logs one session's run to ``context`` (see the module's text); attach it with ``attach(session)``."""
+class Channels:
+    """The run's topics on one context, made before the world is built when live: a client subscribes before tick 1."""
 
-    def __init__(
-        self, session: Any, context: foxglove.Context, *, urdf_path: Path | None = None, server: Any = None
-    ) -> None:
-        self.session = session
-        #: The live server (``--foxglove``), or None: it is told the world time, and late clients get the statics.
-        self.server = server
-        self._last_statics_s = -math.inf
-        self.context = context
-        self.urdf_path = urdf_path or default_urdf_path()
-        self.links = RobotLinks(self.urdf_path)
+    def __init__(self, context: foxglove.Context) -> None:
         self.image = CompressedImageChannel("/camera/image", context=context)
         self.calibration = CameraCalibrationChannel("/camera/calibration", context=context)
         self.tf = FrameTransformsChannel("/tf", context=context)
@@ -126,6 +117,21 @@ class RunObserver:
         self.offsets = foxglove.Channel(
             "/offsets", schema=scene.OFFSETS_SCHEMA, message_encoding="json", context=context
         )
+
+
+class RunObserver:
+    """Logs one session's run to ``context`` (see the module's text); attach it with ``attach(session)``."""
+
+    def __init__(self, session: Any, channels: Channels, *, urdf_path: Path | None = None, server: Any = None) -> None:
+        self.session = session
+        #: The live server (``--foxglove``), or None: it is told the world time, and late clients get the statics.
+        self.server = server
+        self._last_statics_s = -math.inf
+        self.urdf_path = urdf_path or default_urdf_path()
+        self.links = RobotLinks(self.urdf_path)
+        self.image, self.calibration, self.tf = channels.image, channels.calibration, channels.tf
+        self.robot_description, self.parts, self.tree = channels.robot_description, channels.parts, channels.tree
+        self.log, self.report, self.offsets = channels.log, channels.report, channels.offsets
         self.nodes = preorder(session.root)
         self._node_rows = [
             {"uid": uid, "type": tag_of(node), "name": node.name, "status": node.status.value}

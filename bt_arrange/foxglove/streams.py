@@ -95,6 +95,10 @@ class LiveServer:
             raise FoxgloveError(f"cannot serve Foxglove on {bind}:{port}: {str(error).splitlines()[0]}") from None
         self.bind = bind
         self.port = int(self.server.port)
+        from bt_arrange.foxglove.observer import Channels
+
+        #: The run's topics, advertised from now on: a client can subscribe while the world is built.
+        self.channels = Channels(self.context)
 
     @property
     def address(self) -> str:
@@ -116,8 +120,10 @@ class LiveServer:
 class RunStreams:
     """One session's observer and its MCAP writer (when recording); ``finish`` ends both."""
 
-    def __init__(self, observer: Any, writer: Any, buffer: io.BytesIO | None) -> None:
+    def __init__(self, observer: Any, writer: Any, buffer: io.BytesIO | None, context: Any) -> None:
         self.observer = observer
+        # The context binds the channels to the writer: it must live as long as the run (the SDK keeps no reference).
+        self.context = context
         self._writer = writer
         self._buffer = buffer
 
@@ -152,12 +158,13 @@ def start(session: Any) -> RunStreams | None:
         return None
     import foxglove
 
-    from bt_arrange.foxglove.observer import RunObserver
+    from bt_arrange.foxglove.observer import Channels, RunObserver
 
     context = live.context if live is not None else foxglove.Context()
     buffer = writer = None
     if session.record_dir is not None:
         buffer = io.BytesIO()
         writer = foxglove.open_mcap(buffer, context=context)
-    observer = RunObserver(session, context, server=live.server if live is not None else None).attach()
-    return RunStreams(observer, writer, buffer)
+    channels = live.channels if live is not None else Channels(context)
+    observer = RunObserver(session, channels, server=live.server if live is not None else None).attach()
+    return RunStreams(observer, writer, buffer, context)
