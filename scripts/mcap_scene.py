@@ -109,7 +109,8 @@ def draw(path: Path, out: Path, time_s: float) -> None:
     axes.set_box_aspect((0.9, 0.9, 0.9))
     axes.set_xlabel("x (m)")
     axes.set_ylabel("y (m)")
-    axes.set_title(f"{path.name} at {time_s:g} s of world time: /tf, /parts")
+    moment = f"{time_s:g} s of world time" if time_s < 1e9 else "the end"
+    axes.set_title(f"{path.name} at {moment}: /tf, /parts")
     if image is not None:
         pixels = cv2.cvtColor(cv2.imdecode(np.frombuffer(image, np.uint8), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
         side = figure.add_subplot(1, 2, 2)

@@ -19,6 +19,7 @@ from mcap.reader import make_reader  # noqa: E402
 
 from bt_arrange import backends, treefile  # noqa: E402
 from bt_arrange.foxglove.links import RobotLinks  # noqa: E402
+from bt_arrange.geometry import quaternion_to_matrix  # noqa: E402
 from bt_arrange.motion.urdf import default_urdf_path  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,7 +48,8 @@ def recorded(tmp_path_factory):  # noqa: ANN001, ANN201 - the folder, the report
         report = run.run()
         truth = {name: run.truth.planar_pose(name) for name in run.truth.part_names()}
         full = {name: run.world.pose_truth(name) for name in run.truth.part_names()}
-    return folder, report, truth, full
+        tcp = run.world.robot.arm.tcp_pose()
+    return folder, report, truth, full, tcp
 
 
 def read(folder: Path):  # noqa: ANN201 - the summary; (schema, channel, message, decoded) per message, in file order
@@ -123,7 +125,7 @@ def test_the_last_transform_of_each_part_is_its_final_ground_truth(messages, rec
         assert abs(transform.translation.z - full[name].position_m[2]) < 1e-5
 
 
-def test_the_links_chain_to_the_measured_tcp(messages) -> None:  # noqa: ANN001
+def test_the_links_chain_to_the_measured_tcp(messages, recorded) -> None:  # noqa: ANN001
     _, _, by_topic = messages
     links = RobotLinks(default_urdf_path())
     transforms = {t.child_frame_id: t for t in by_topic["/tf"][-1][2].transforms}
@@ -134,6 +136,39 @@ def test_the_links_chain_to_the_measured_tcp(messages) -> None:  # noqa: ANN001
         frame = transforms[frame].parent_frame_id
     assert chain[-1] == links.base_link and all(parents.get(f) == transforms[f].parent_frame_id for f in chain[:-1])
     assert {"camera", "red"} <= set(transforms)
+    # The URDF's joints at the measured positions put the TCP where the arm measures it.
+    pose = np.eye(4)
+    for frame in chain:
+        t = transforms[frame]
+        step = np.eye(4)
+        step[:3, :3] = quaternion_to_matrix([t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w])
+        step[:3, 3] = (t.translation.x, t.translation.y, t.translation.z)
+        pose = step @ pose
+    tcp = recorded[4]
+    assert np.allclose(pose[:3, 3], tcp.position_m, atol=1e-4)
+    assert np.allclose(pose[:3, :3], quaternion_to_matrix(tcp.quaternion_xyzw), atol=1e-3)
+
+
+def decoded(message):  # noqa: ANN001, ANN201 - a Foxglove SDK message (opaque) as its protobuf
+    from mcap.records import Schema
+    from mcap_protobuf.decoder import DecoderFactory
+
+    schema = type(message).get_schema()
+    record = Schema(id=1, name=schema.name, encoding=schema.encoding, data=schema.data)
+    return DecoderFactory().decoder_for("protobuf", record)(message.encode())
+
+
+def test_a_prism_is_a_closed_mesh_and_a_box_a_cube() -> None:
+    from bt_arrange.foxglove import scene
+    from bt_arrange.shapes import Prism
+
+    triangle = Prism.from_outline([(0.0, 0.0), (0.05, 0.0), (0.0, 0.04)], 0.03)
+    entity = decoded(scene.part_entity("tile", triangle, (1.0, 0.5, 0.0)))
+    points = entity.triangles[0].points
+    assert len(points) == 3 * (2 + 2 * 3)  # a top, a bottom and two triangles per wall
+    assert {round(p.z, 6) for p in points} == {-0.015, 0.015}
+    box = decoded(scene.part_entity("bar", Prism.box(0.08, 0.04, 0.04), (0.0, 0.0, 1.0)))
+    assert box.cubes and box.cubes[0].size.x == pytest.approx(0.08) and box.frame_locked
 
 
 def test_the_tree_statuses_agree_with_the_transitions(messages, recorded) -> None:  # noqa: ANN001
