@@ -230,3 +230,31 @@ def _panels(content: dict):  # noqa: ANN202 - the panels of a layout's content, 
         yield content
     for item in content.get("items", []):
         yield from _panels(item["content"])
+
+
+def test_an_error_in_the_recording_stops_it_not_the_run(tmp_path, monkeypatch) -> None:  # noqa: ANN001
+    from bt_arrange.errors import RecordError
+    from bt_arrange.foxglove.observer import RunObserver
+
+    calls = {"n": 0}
+    publish = RunObserver._publish_tf
+
+    def failing(self, time_ns):  # noqa: ANN001, ANN202
+        calls["n"] += 1
+        if calls["n"] == 20:
+            raise ValueError("a world without joints")
+        return publish(self, time_ns)
+
+    monkeypatch.setattr(RunObserver, "_publish_tf", failing)
+    module = treefile.load(str(ROOT / "trees" / "single_cube.py"))
+    backend = backends.load()
+    with backend.open_run(
+        treefile.build_root(module), treefile.scene(module, 0, backend=backend), record_dir=tmp_path
+    ) as run:
+        with pytest.raises(RecordError) as caught:
+            run.run()
+    error = caught.value
+    assert error.result.all_within_threshold, "the run went on"
+    assert [fault.path.name for fault in error.faults] == ["run.mcap"]
+    assert "the recording stopped (ValueError: a world without joints)" in str(error)
+    assert not (tmp_path / "run.mcap").exists() and (tmp_path / "replay.html").is_file()

@@ -18,8 +18,10 @@ each message and in its own ``timestamp``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +75,21 @@ def _stamp(time_s: float) -> Timestamp:
     return Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
 
 
+def _observing(hook: Callable[..., None]) -> Callable[..., None]:
+    """A hook that only observes: an error in it stops the recording (``failed``), never the run."""
+
+    @functools.wraps(hook)
+    def guarded(self: RunObserver, *args: Any) -> None:
+        if self.failed is not None:
+            return
+        try:
+            hook(self, *args)
+        except Exception as error:  # noqa: BLE001 - whatever broke the recording, the run goes on
+            self.failed = f"{type(error).__name__}: {error}"
+
+    return guarded
+
+
 class TappedCamera:
     """A camera that hands each frame it captures to the observer, unchanged, then to the caller."""
 
@@ -124,6 +141,8 @@ class RunObserver:
 
     def __init__(self, session: Any, channels: Channels, *, urdf_path: Path | None = None, server: Any = None) -> None:
         self.session = session
+        #: Why the recording stopped (an error in a hook), or None: the run goes on, the file is not written.
+        self.failed: str | None = None
         #: The live server (``--foxglove``), or None: it is told the world time, and late clients get the statics.
         self.server = server
         self._last_statics_s = -math.inf
@@ -161,6 +180,7 @@ class RunObserver:
     def _count(self, topic: str) -> None:
         self.counts[topic] = self.counts.get(topic, 0) + 1
 
+    @_observing
     def on_runner(self, runner: Any) -> None:
         """Before the first tick: tap the camera, log what never changes and the first poses."""
         context = runner.context
@@ -179,6 +199,7 @@ class RunObserver:
         self.parts.log(self._scene_update, log_time=time_ns)
         self._count("/parts")
 
+    @_observing
     def on_transition(self, transition: Any) -> None:
         """A status change: the node's row for ``/tree``, its feedback on ``/log``."""
         row = self._row_of.get(transition.node_id)
@@ -196,6 +217,7 @@ class RunObserver:
             )
             self._count("/log")
 
+    @_observing
     def on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
         """After a tick: ``/tree`` if a node changed, ``/tf`` once per ``TF_PERIOD_S`` of world time."""
         time_ns = self.now_ns()
@@ -208,6 +230,7 @@ class RunObserver:
                 if time_ns / 1e9 - self._last_statics_s >= STATICS_PERIOD_S:
                     self._publish_statics(time_ns)
 
+    @_observing
     def on_frame(self, frame: CameraFrame) -> None:
         """A frame the perception captured: its image as PNG, and the intrinsics it was taken with."""
         ok, png = cv2.imencode(
@@ -240,6 +263,7 @@ class RunObserver:
         )
         self._count("/camera/calibration")
 
+    @_observing
     def finish(self, report: Any) -> None:
         """At the end: the last ``/tree`` and ``/tf`` (the final poses), then ``/report``."""
         time_ns = self.now_ns()

@@ -12,6 +12,7 @@ and a full disk is the same one-line ending (exit 3).
 
 from __future__ import annotations
 
+import errno
 import io
 import sys
 import time
@@ -140,8 +141,10 @@ class RunStreams:
             self._writer = None
 
     def mcap_bytes(self) -> bytes:
-        """The finished MCAP file."""
+        """The finished MCAP file; an ``OSError`` (the record's one-line fault, exit 3) if the recording failed."""
         assert self._buffer is not None and self._writer is None, "finish() first"
+        if self.observer.failed is not None:
+            raise OSError(errno.EIO, f"the recording stopped ({self.observer.failed})")
         return self._buffer.getvalue()
 
 
