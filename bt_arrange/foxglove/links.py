@@ -16,6 +16,9 @@ import numpy as np
 
 from bt_arrange.geometry import FloatArray, matrix_to_quaternion
 
+#: A quaternion (x, y, z, w) as plain floats: cheaper than an array for one product per joint and tick.
+Quaternion = tuple[float, ...]
+
 
 @dataclass(frozen=True)
 class Joint:
@@ -55,18 +58,6 @@ def _rz(angle_rad: float) -> FloatArray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _axis_angle(axis: FloatArray, angle_rad: float) -> FloatArray:
-    x, y, z = axis
-    c, s, t = math.cos(angle_rad), math.sin(angle_rad), 1.0 - math.cos(angle_rad)
-    return np.array(
-        [
-            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-        ]
-    )
-
-
 class RobotLinks:
     """The joints of a URDF; ``transforms(positions)`` gives each joint's parent-to-child transform."""
 
@@ -96,25 +87,40 @@ class RobotLinks:
         parents = [joint.parent for joint in self.joints if joint.parent not in children]
         #: The link no joint moves: the robot's base, placed in the world by the world-to-base transform.
         self.base_link = parents[0] if parents else "base_link"
-        # A fixed joint's transform never changes: worked out once.
-        self._fixed = {j.name: _as_transform(j.origin) for j in self.joints if j.kind == "fixed"}
+        # Worked out once: a joint's child frame is its origin, then a turn about (or a slide along) its axis, so
+        # each tick needs one quaternion product (or one rotated axis), no matrices.
+        self._origins = [
+            (t, tuple(float(v) for v in q)) for t, q in map(_as_transform, (j.origin for j in self.joints))
+        ]
+        self._slides = [joint.origin[:3, :3] @ joint.axis for joint in self.joints]
 
-    def transforms(self, positions: dict[str, float]) -> list[tuple[str, str, FloatArray, FloatArray]]:
+    def transforms(self, positions: dict[str, float]) -> list[tuple[str, str, FloatArray, Quaternion]]:
         """``(parent, child, translation_m, quaternion_xyzw)`` per joint; a joint not in ``positions`` is at 0."""
-        out = []
-        for joint in self.joints:
-            fixed = self._fixed.get(joint.name)
-            if fixed is not None:
-                out.append((joint.parent, joint.child, *fixed))
-                continue
-            value = positions.get(joint.name, 0.0)
-            motion = np.eye(4)
-            if joint.kind == "prismatic":
-                motion[:3, 3] = joint.axis * value
+        out: list[tuple[str, str, FloatArray, Quaternion]] = []
+        for joint, (translation, rotation), slide in zip(self.joints, self._origins, self._slides, strict=True):
+            value = positions.get(joint.name, 0.0) if joint.kind != "fixed" else 0.0
+            if joint.kind == "fixed" or value == 0.0:
+                out.append((joint.parent, joint.child, translation, rotation))
+            elif joint.kind == "prismatic":
+                out.append((joint.parent, joint.child, translation + slide * value, rotation))
             else:  # revolute or continuous
-                motion[:3, :3] = _axis_angle(joint.axis, value)
-            out.append((joint.parent, joint.child, *_as_transform(joint.origin @ motion)))
+                half = value / 2
+                sin_half = math.sin(half)
+                turn = (joint.axis[0] * sin_half, joint.axis[1] * sin_half, joint.axis[2] * sin_half, math.cos(half))
+                out.append((joint.parent, joint.child, translation, _multiply(rotation, turn)))
         return out
+
+
+def _multiply(a: Quaternion, b: Quaternion) -> Quaternion:
+    """The quaternion product ``a b`` (x, y, z, w): ``b``'s turn in ``a``'s frame."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
 
 
 def _as_transform(matrix: FloatArray) -> tuple[FloatArray, FloatArray]:
