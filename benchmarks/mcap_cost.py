@@ -9,7 +9,9 @@ inside a pair so that a machine warming up does not favour one side. Each run's 
 session's own (``report.wall_seconds``) plus the writing of the record at the end.
 
 Key figures: ``mb_per_world_minute`` (the file's size over the run's world time), ``overhead_ratio``
-(summed wall time with the streams over without them; the target is under 1.10) and
+(summed wall time with the streams over without them; the target is under 1.10), ``median_pair_ratio``
+(the median of the pairs' ratios: one slow run on a busy machine moves it less), ``cpu_ratio`` (the
+process's CPU time, every thread, with over without: what other jobs on the machine move least) and
 ``observer_share``, the time spent in the observer's own hooks and in finishing the file over the
 recorded runs' wall time: what the recording costs the tree's thread, free of the machine's noise.
 Per topic: messages and bytes before the file's compression.
@@ -66,12 +68,12 @@ def one_run(tree: str, folder: Path, with_mcap: bool) -> dict[str, float]:
     SPENT["s"] = 0.0
     try:
         with SimulatedRun(treefile.build_root(module), treefile.scene(module, 0), record_dir=folder) as run:
-            start = time.perf_counter()
+            start, cpu_start = time.perf_counter(), time.process_time()
             report = run.run()
-            wall_s = time.perf_counter() - start
+            wall_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
     finally:
         streams.start = _START  # type: ignore[assignment]
-    return {"wall_s": wall_s, "world_s": report.sim_seconds, "observer_s": SPENT["s"]}
+    return {"wall_s": wall_s, "cpu_s": cpu_s, "world_s": report.sim_seconds, "observer_s": SPENT["s"]}
 
 
 def topics(path: Path) -> dict[str, dict[str, int]]:
@@ -112,6 +114,10 @@ def main() -> None:
         "wall_s_with": round(statistics.median(r["wall_s"] for r in with_runs), 3),
         "wall_s_without": round(statistics.median(r["wall_s"] for r in without_runs), 3),
         "overhead_ratio": round(wall_with / wall_without, 3),
+        "median_pair_ratio": round(
+            statistics.median(a["wall_s"] / b["wall_s"] for a, b in zip(with_runs, without_runs, strict=True)), 3
+        ),
+        "cpu_ratio": round(sum(r["cpu_s"] for r in with_runs) / sum(r["cpu_s"] for r in without_runs), 3),
         "observer_share": round(sum(r["observer_s"] for r in with_runs) / wall_with, 4),
         "topics": per_topic,
     }
@@ -122,8 +128,10 @@ def main() -> None:
     print(f"size: {figures['mb_per_world_minute']} MB per minute of world time")
     print(
         f"wall time (median of {args.pairs}): {figures['wall_s_with']} s with the streams, "
-        f"{figures['wall_s_without']} s without; overhead ratio {figures['overhead_ratio']}"
+        f"{figures['wall_s_without']} s without; overhead ratio {figures['overhead_ratio']}, "
+        f"median pair ratio {figures['median_pair_ratio']}"
     )
+    print(f"CPU time of the process (every thread) with over without the streams: {figures['cpu_ratio']}")
     print(f"the observer's own share of the recorded runs' wall time: {figures['observer_share'] * 100:.1f} %")
     for topic, counts in per_topic.items():
         print(f"  {topic:22s} {counts['messages']:6d} messages {counts['bytes'] / 1e3:9.1f} kB before compression")

@@ -167,7 +167,9 @@ def start(session: Any) -> RunStreams | None:
     buffer = writer = None
     if session.record_dir is not None:
         buffer = io.BytesIO()
-        writer = foxglove.open_mcap(buffer, context=context)
+        # One thread: zstd on more would take the cores the physics and the renderer run on (two here).
+        options = foxglove.mcap.MCAPWriteOptions(compression_threads=0)
+        writer = foxglove.open_mcap(buffer, context=context, writer_options=options)
     channels = live.channels if live is not None else Channels(context)
     observer = RunObserver(session, channels, server=live.server if live is not None else None).attach()
     return RunStreams(observer, writer, buffer, context)
