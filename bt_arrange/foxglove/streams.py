@@ -137,8 +137,11 @@ class RunStreams:
         """The last messages (final poses, the report); the MCAP file's summary."""
         self.observer.finish(report)
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            try:
+                writer.close()
+            except Exception as error:  # noqa: BLE001 - the SDK's own error type: the file, not the run, failed
+                self.observer.failed = self.observer.failed or f"{type(error).__name__}: {error}"
 
     def mcap_bytes(self) -> bytes:
         """The finished MCAP file; an ``OSError`` (the record's one-line fault, exit 3) if the recording failed."""
