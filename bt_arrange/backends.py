@@ -86,6 +86,8 @@ class RunSession(Protocol):
     transition_hooks: list[Callable[[Any], object]]
     #: Called with the runner before the first tick (``--groot-wait-s`` waits there).
     runner_hooks: list[Callable[[Any], object]]
+    #: The live Foxglove server the run streams to (``--foxglove``; a ``bt_arrange.session.Session`` has it), or None.
+    foxglove_live: Any
 
     def elapsed_s(self) -> float:
         """World time since the tree started."""

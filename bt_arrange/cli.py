@@ -3,6 +3,7 @@
     bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--gui] [--live] [--record DIR] [--json]
                    [--groot [PORT]] [--groot-wait-s S] [--groot-bind ADDR] [--pace F]
+                   [--foxglove [PORT]] [--foxglove-bind ADDR]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
     bt-arrange experiment [--rows ...] [--trials 100] [--seed 0] [--threshold-mm 1.0 | --thresholds 0.29,0.5,1,2]
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
@@ -54,6 +55,8 @@ from bt_arrange.cli_common import (
 from bt_arrange.cli_experiment import _experiment
 from bt_arrange.cli_run import _run
 from bt_arrange.errors import BtArrangeError, RecordError
+from bt_arrange.foxglove.streams import DEFAULT_PORT as FOXGLOVE_PORT
+from bt_arrange.foxglove.streams import port_argument as foxglove_port
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -212,6 +215,22 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="ADDR",
         help="with --groot: the address to serve on (default 127.0.0.1, this machine only; 0.0.0.0 for all)",
+    )
+    run.add_argument(
+        "--foxglove",
+        type=foxglove_port,
+        nargs="?",
+        const=FOXGLOVE_PORT,
+        default=None,
+        metavar="PORT",
+        help=f"serve the run live to Foxglove (its WebSocket protocol) on PORT (default {FOXGLOVE_PORT}; 0: any "
+        "free port), read-only: the streams of run.mcap; needs the foxglove extra; docs/foxglove.md",
+    )
+    run.add_argument(
+        "--foxglove-bind",
+        default=None,
+        metavar="ADDR",
+        help="with --foxglove: the address to serve on (default 127.0.0.1, this machine only; 0.0.0.0 for all)",
     )
     run.add_argument(
         "--pace",

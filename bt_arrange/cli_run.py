@@ -24,6 +24,8 @@ from bt_arrange.errors import BtArrangeError, RecordError
 def _run(args: argparse.Namespace) -> int:
     _check_threshold_option(args.threshold_mm)
     _check_groot_options(args)
+    if args.foxglove is None and args.foxglove_bind is not None:
+        raise BtArrangeError("--foxglove-bind serves a run to Foxglove only with --foxglove [PORT]")
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
@@ -35,6 +37,7 @@ def _run(args: argparse.Namespace) -> int:
     # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
     with (
         _groot_publisher(root, args) as groot,
+        _foxglove_server(args) as foxglove,
         backend.open_run(
             root,
             starts,
@@ -50,6 +53,10 @@ def _run(args: argparse.Namespace) -> int:
         if groot is not None:
             run.transition_hooks.append(groot.on_transition)
             run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
+        if foxglove is not None:
+            if not hasattr(run, "foxglove_live"):
+                raise BtArrangeError(f"backend {args.backend!r} cannot stream a run to Foxglove (--foxglove)")
+            run.foxglove_live = foxglove
         if args.live:
             from bt_arrange.display import LiveView
 
@@ -98,6 +105,17 @@ def _groot_publisher(root: Any, args: argparse.Namespace) -> Any:
         file=sys.stderr,
     )
     return publisher
+
+
+def _foxglove_server(args: argparse.Namespace) -> Any:
+    """A context manager: the live Foxglove server (``--foxglove``), else None; bound before the world is built."""
+    if args.foxglove is None:
+        return contextlib.nullcontext(None)
+    from bt_arrange.foxglove.streams import LiveServer
+
+    server = LiveServer(args.foxglove, bind=args.foxglove_bind or "127.0.0.1")
+    print(f"bt-arrange: serving the run to Foxglove on {server.address} (read-only)", file=sys.stderr)
+    return server
 
 
 def _wait_for_groot(publisher: Any, wait_s: float | None) -> None:
@@ -155,7 +173,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
         )
     if args.record:
         if recorded:
-            print(f"recorded images, report.json, transitions.jsonl and replay.html in {args.record}")
+            mcap = ", run.mcap" if (Path(args.record) / "run.mcap").is_file() else ""
+            print(f"recorded images, report.json, transitions.jsonl{mcap} and replay.html in {args.record}")
         else:
             print(f"the record in {args.record} is incomplete (the line on stderr says which file and why)")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")

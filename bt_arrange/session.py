@@ -48,6 +48,7 @@ from bt_arrange.calibration.file import CameraCalibration
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, RecordError
+from bt_arrange.foxglove import streams as foxglove_streams
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
@@ -238,6 +239,8 @@ class Session:
         self.title = title or root.name
         #: The recorded files that could not be written (a full disk, the folder gone); the run goes on.
         self.faults = files.Faults()
+        #: A live Foxglove server (``bt_arrange.foxglove.streams.LiveServer``, ``--foxglove``) to stream to, or None.
+        self.foxglove_live: Any = None
 
     def elapsed_s(self) -> float:
         """World time since the tree started (the settling of the scene excluded), as the report counts it."""
@@ -255,6 +258,8 @@ class Session:
         if self.record_dir is not None:
             self.replay = ReplayRecorder(self.root)
             self._save_image("before_picking")
+        # run.mcap and the live Foxglove view: an observer on the hooks below (None without either).
+        streams = foxglove_streams.start(self)
         runner = Runner(
             self.root,
             self.context,
@@ -282,6 +287,8 @@ class Session:
             transitions=result.transitions,
             ground_truth=self.truth is not None,
         )
+        if streams is not None:
+            streams.finish(report)
         if self.record_dir is not None:
             self._finish_log(log, result.transitions)
             replay = self.replay
@@ -290,6 +297,9 @@ class Session:
                 "report.json": lambda path: files.write_json(path, report.to_dict()),
                 "replay.html": lambda path: replay.write(path, title=self.title, summary=report.to_dict()),
             }
+            if streams is not None and streams.records:
+                recorded = streams
+                ends[foxglove_streams.MCAP_NAME] = lambda path: files.write_bytes(path, recorded.mcap_bytes())
             for name, write in ends.items():
                 path = self.record_dir / name
                 with self.faults.guard(path):

@@ -15,6 +15,7 @@ from typing import Any
 
 import py_trees
 
+from bt_arrange.geometry import Pose
 from bt_arrange.perception import ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraFrame, Clock, Robot
@@ -76,6 +77,10 @@ class CellWorld:
     def planar_pose(self, name: str) -> tuple[float, float, float]:
         """The simulator's true ``(x_m, y_m, yaw_rad)`` of a part (yaw folded to its symmetry)."""
         return self.cell.cube_planar_truth(name)
+
+    def pose_truth(self, name: str) -> Pose:
+        """The simulator's true 6-D pose of a part's centre (the Foxglove recording draws parts lifted too)."""
+        return self.cell.cube_pose_truth(name)
 
 
 class CellRun(Session):

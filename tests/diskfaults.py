@@ -103,6 +103,9 @@ def assert_whole(folder: Path) -> list[str]:
                 json.loads(line)
         elif name.endswith(".html"):
             assert data.rstrip().endswith(b"</html>"), f"{name} is cut short"
+        elif name.endswith(".mcap"):
+            magic = b"\x89MCAP0\r\n"
+            assert data.startswith(magic) and data.endswith(magic), f"{name} is cut short"
         elif name.endswith((".csv", ".md")):
             assert data.endswith(b"\n"), f"{name} is cut short"
     return names

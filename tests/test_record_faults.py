@@ -28,7 +28,7 @@ from bt_arrange.trees import Target, arrangement
 RED, GREEN = Target("red", 0.50, 0.05), Target("green", 0.50, -0.05)
 STARTS = [ObjectStart("red", 0.42, -0.22, 0.1), ObjectStart("green", 0.58, -0.22, 0.1)]
 RECORD = ("after_placing_green.png", "after_placing_red.png", "after_pushing.png", "before_picking.png")
-RECORD += ("replay.html", "report.json", "transitions.jsonl")
+RECORD += ("replay.html", "report.json", "transitions.jsonl", "run.mcap")
 
 
 def recorded_run(folder: Path, hook=None):  # noqa: ANN001, ANN201 - a transition hook; the report
