@@ -34,7 +34,7 @@ from mcap.reader import make_reader
 from bt_arrange import treefile
 from bt_arrange.foxglove import streams
 from bt_arrange.foxglove.observer import RunObserver
-from bt_arrange_sim.runs import SimulatedRun
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 ROOT = Path(__file__).resolve().parent.parent
 
