@@ -366,8 +366,18 @@ def _box_size_m(points: FloatArray) -> tuple[float, float] | None:
         or len({(round(px / BOX_TOLERANCE_M), round(py / BOX_TOLERANCE_M)) for px, py in points}) != 4
     ):
         return None
-    # Rounded to a picometre: an offset rectangle's edges come out of the subtraction an ulp short.
-    return round(float(high[0] - low[0]), 12), round(float(high[1] - low[1]), 12)
+    return _edge_m(float(low[0]), float(high[0])), _edge_m(float(low[1]), float(high[1]))
+
+
+def _edge_m(low: float, high: float) -> float:
+    """A box's edge from its outline's extremes: exact when written about its centre, else to 15 digits.
+
+    An offset rectangle's edges come out of the subtraction an ulp off (0.18 - 0.10 is
+    0.07999999999999999); 15 significant digits take that back and keep any written figure.
+    """
+    if low == -high:
+        return high - low
+    return float(f"{high - low:.15g}")
 
 
 #: Two edges closer than this (metres) make a square top.

@@ -203,7 +203,7 @@ class Injector(ABC):
         if self._run is not None:
             raise PlanError(f"{self.name} is already attached to a run: make one injector per run")
         if obj not in run.cell.cubes:
-            raise PlanError(f"{self.name}: no cube {obj!r} in the cell; cubes: {', '.join(sorted(run.cell.cubes))}")
+            raise PlanError(f"{self.name}: no part {obj!r} in the cell; parts: {', '.join(sorted(run.cell.cubes))}")
         self._run, self.obj, self._rng = run, obj, rng
         self._attach(run, obj)
 
