@@ -50,14 +50,14 @@ def detection_errors_mm(cell_name: str, calibration: object, grid: int = 6, seed
             cell.settle(0.3)
             frames = {"nominal": cell.camera.capture(), "calibrated": calibrated.capture()}
             for colour, _ in zip(COLOURS, batch, strict=False):
-                tx, ty, _ = cell.cube_planar_truth(colour)
+                tx, ty, _ = cell.part_planar_truth(colour)
                 for name, frame in frames.items():
                     found = detector.detect(frame, colour)
                     if found.pose_world is None:
                         out[name].append(float("nan"))
                         continue
                     out[name].append(math.hypot(found.pose_world.x_m - tx, found.pose_world.y_m - ty) * 1000)
-                cell.remove_cube(colour)
+                cell.remove_part(colour)
     return out
 
 

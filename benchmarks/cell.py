@@ -47,10 +47,10 @@ def run_trial(seed: int, index: int) -> dict:
         cell.add_cube("red", *start)
         cell.settle(0.3)
         script = ScriptedPickPlace(cell)
-        pick = script.pick(*cell.cube_planar_truth("red"))
+        pick = script.pick(*cell.part_planar_truth("red"))
         if pick.grasped:
             script.place(*target)
-        x, y, yaw = cell.cube_planar_truth("red")
+        x, y, yaw = cell.part_planar_truth("red")
         sim_seconds = cell.clock.now()
     return {
         "trial": index,

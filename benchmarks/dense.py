@@ -36,7 +36,7 @@ def run_once(path: Path, seed: int, inject: str | None, inject_seed: int) -> dic
         names = [t.obj for t in root.targets]
         rects = {}
         for target in root.targets:
-            x, y, yaw = run.cell.cube_planar_truth(target.obj)
+            x, y, yaw = run.cell.part_planar_truth(target.obj)
             half_x_m, half_y_m = (v / 2 for v in target.object_type.shape.extent_m)
             rects[target.obj] = Rect(x, y, yaw, half_x_m, half_y_m)
     gaps = [gap_m(rects[a], rects[b]) for i, a in enumerate(names) for b in names[i + 1 :]]

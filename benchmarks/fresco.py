@@ -57,7 +57,7 @@ def run_once(seed: int, pieces: int, gap_mm: float, inject: str | None, inject_s
         report = run.run()
         outlines = {}
         for target in root.targets:
-            x, y, yaw = run.cell.cube_planar_truth(target.obj)
+            x, y, yaw = run.cell.part_planar_truth(target.obj)
             shape = target.object_type.shape
             assert isinstance(shape, Prism)
             pieces_m = tuple(tuple((float(px), float(py)) for px, py in piece) for piece in shape.convex_pieces())

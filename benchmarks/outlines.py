@@ -144,11 +144,11 @@ def cell(poses: int, seed: int, method: CornerRefinement) -> list[dict]:
                 start = time.process_time()
                 detection = detectors[name].detect(frame, colour)
                 ms = (time.process_time() - start) * 1000
-                x, y, yaw = world.cube_planar_truth(name)
+                x, y, yaw = world.part_planar_truth(name)
                 error = _error(detection, PARTS[name], x, y, yaw)
                 results.append({"source": "cell", "outline": name, "ms": ms, **error})
             for _, name, *_ in placed:
-                world.remove_cube(name)
+                world.remove_part(name)
     return results
 
 

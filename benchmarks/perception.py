@@ -84,7 +84,7 @@ def measure_scene(
         start = time.perf_counter()
         detection = detector.detect(frame, colour)
         pipeline_ms = (time.perf_counter() - start) * 1000
-        true_x, true_y, true_yaw = cell.cube_planar_truth(colour)
+        true_x, true_y, true_yaw = cell.part_planar_truth(colour)
         cube = {"colour": colour, "status": detection.status.value, "pipeline_ms": pipeline_ms}
         if detection.found:
             assert detection.pose_world is not None
@@ -98,7 +98,7 @@ def measure_scene(
             cube["reason"] = detection.reason
         cubes.append(cube)
     for colour, *_ in scene:
-        cell.remove_cube(colour)
+        cell.remove_part(colour)
     return {"render_ms": render_ms, "cubes": cubes}
 
 

@@ -34,8 +34,8 @@ def run(seed: int = 0) -> dict:
         def bump_after_detection(transition) -> None:  # noqa: ANN001
             if transition.behaviour == "detect red" and transition.new == "SUCCESS":
                 # 45 degrees to the faces: 14 mm along each, so the pads still come down beside it.
-                direction = session.cell.cube_planar_truth("red")[2] + math.pi / 4
-                session.cell.displace_cube(
+                direction = session.cell.part_planar_truth("red")[2] + math.pi / 4
+                session.cell.displace_part(
                     "red", DISPLACEMENT_M * np.cos(direction), DISPLACEMENT_M * np.sin(direction)
                 )
 

@@ -3,16 +3,28 @@
 An engine's cell (``pybullet.cell.WorkCell``, ``mujoco.cell.MujocoCell``) subclasses ``CellBase``
 and has ``config`` (a ``CellConfig``), ``_steps`` (physics steps so far), ``object_types``, the
 devices (``arm``, ``gripper``, ``camera``, ``clock``), ``step``, ``add_object``,
-``cube_pose_truth`` and ``close``.
+``part_pose_truth`` and ``close``.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from bt_arrange.deprecation import warn_once
 from bt_arrange.geometry import Pose, fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.robot import Robot
+
+#: The cell's methods that said cube for any part, old -> new (deprecated aliases, CHANGELOG).
+RENAMED_METHODS = {
+    "cube_pose_truth": "part_pose_truth",
+    "cube_planar_truth": "part_planar_truth",
+    "place_cube_truth": "place_part_truth",
+    "cube_in_gripper_truth": "part_in_gripper_truth",
+    "displace_cube": "displace_part",
+    "remove_cube": "remove_part",
+    "add_cubes": "add_parts",
+}
 
 
 class CellBase:
@@ -53,18 +65,34 @@ class CellBase:
         """Put a 5 cm cube of ``colour`` on the table, resting, at (x, y, yaw); returns its name."""
         return self.add_object(CUBE, colour, x_m, y_m, yaw_rad, name=name)
 
-    def cube_pose_truth(self, name: str) -> Pose:
+    def part_pose_truth(self, name: str) -> Pose:
         """The engine's true pose of a part's centre. Never steer the robot with it."""
         raise NotImplementedError
 
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+    def part_planar_truth(self, name: str) -> tuple[float, float, float]:
         """True (x_m, y_m, yaw_rad) of a part, yaw folded to its symmetry (90 degrees for a square top, else 180)."""
-        pose = self.cube_pose_truth(name)
+        pose = self.part_pose_truth(name)
         return pose.x_m, pose.y_m, fold_yaw(pose.yaw_rad, self.object_types.get(name, CUBE).shape.symmetry_rad)
 
     def close(self) -> None:
         """Free the engine's resources."""
         raise NotImplementedError
+
+    # -- names that said cube for any part: deprecated aliases, warned once, for one release ----------
+
+    @property
+    def cubes(self) -> dict[str, int]:
+        """Deprecated: ``parts``."""
+        warn_once(f"{type(self).__name__}.cubes", f"{type(self).__name__}.parts")
+        parts: dict[str, int] = getattr(self, "parts")  # noqa: B009  # the engine's cell sets it
+        return parts
+
+    def __getattr__(self, name: str) -> Any:
+        new = RENAMED_METHODS.get(name)
+        if new is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        warn_once(f"{type(self).__name__}.{name}", f"{type(self).__name__}.{new}")
+        return getattr(self, new)
 
     def __enter__(self) -> Any:
         return self

@@ -4,16 +4,24 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bt_arrange.checks import whole_number
+from bt_arrange.deprecation import renamed_attributes
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType, object_type_of
 from bt_arrange.plancheck import CameraView
 
 #: A part's starting pose on the table (``bt_arrange.objects.ObjectStart``: colour, x, y, yaw, name, type).
-CubeStart = ObjectStart
+PartStart = ObjectStart
+
+if TYPE_CHECKING:
+    CubeStart = PartStart
+else:
+    # ``CubeStart`` said cube for any part: a deprecated alias, warned once, for one release.
+    __getattr__ = renamed_attributes(__name__, {"CubeStart": "PartStart"})
 
 
 #: Cubes start inside the UR5's comfortable reach, and inside the top camera's view with the plan
@@ -41,7 +49,7 @@ def scatter(
     view: CameraView | None = None,
     object_types: Sequence[ObjectType] | None = None,
     names: Sequence[str | None] | None = None,
-) -> list[CubeStart]:
+) -> list[PartStart]:
     """Random starting poses for parts of ``colours``, reproducible from ``seed`` (a whole number, 0 or more).
 
     ``avoid`` holds things with ``x_m`` and ``y_m`` (targets) that the parts keep clear of; ``view``
@@ -60,7 +68,7 @@ def scatter(
     if len(kinds) != len(colours) or len(labels) != len(colours):
         raise PlanError(f"scatter: {len(colours)} colours, {len(kinds)} object types and {len(labels)} names")
     taken = [(float(a.x_m), float(a.y_m), object_type_of(a)) for a in avoid]  # type: ignore[attr-defined]
-    starts: list[CubeStart] = []
+    starts: list[PartStart] = []
     for colour, kind, label in zip(colours, kinds, labels, strict=True):
         # The top face grown by the view's margin, at any yaw (1 mm spare for the rim's sampling).
         x_m, y_m = kind.shape.extent_m
@@ -77,5 +85,5 @@ def scatter(
             what = kind.name
             raise PlanError(f"no room left on the table for a {colour} {what} after {max_tries} tries")
         taken.append((x, y, kind))
-        starts.append(CubeStart(colour, x, y, float(rng.uniform(-math.pi, math.pi)), label, kind))
+        starts.append(PartStart(colour, x, y, float(rng.uniform(-math.pi, math.pi)), label, kind))
     return starts

@@ -52,7 +52,7 @@ class CellWorld:
     def place(self, starts: Sequence[Any], colours: ColourTable) -> None:
         """Paint with ``colours`` and put the parts on the table, resting, where they start."""
         self.cell.colours = colours
-        self.cell.add_cubes(starts)
+        self.cell.add_parts(starts)
 
     def settle(self, seconds: float) -> None:
         """Run the physics for ``seconds`` of world time with the arm holding still."""
@@ -72,15 +72,15 @@ class CellWorld:
 
     def part_names(self) -> list[str]:
         """Every part in the cell, by name."""
-        return list(self.cell.cubes)
+        return list(self.cell.parts)
 
     def planar_pose(self, name: str) -> tuple[float, float, float]:
         """The simulator's true ``(x_m, y_m, yaw_rad)`` of a part (yaw folded to its symmetry)."""
-        return self.cell.cube_planar_truth(name)
+        return self.cell.part_planar_truth(name)
 
     def pose_truth(self, name: str) -> Pose:
         """The simulator's true 6-D pose of a part's centre (the Foxglove recording draws parts lifted too)."""
-        return self.cell.cube_pose_truth(name)
+        return self.cell.part_pose_truth(name)
 
 
 class CellRun(Session):

@@ -81,7 +81,7 @@ def tree(tmp_path: Path, name: str, body: str) -> str:
 
 GOOD_TREE = """
     from bt_arrange.trees import Target, arrangement
-    from bt_arrange_sim.scenes import CubeStart, scatter
+    from bt_arrange_sim.scenes import PartStart, scatter
     TARGETS = [Target("red", {x}, {y})]
     def create_root(threshold_mm=1.0):
         return arrangement(TARGETS, threshold_mm=threshold_mm)
@@ -135,7 +135,7 @@ def bad_run_files(tmp_path: Path) -> dict[str, tuple[str, str]]:
         "target behind the base": (tree(tmp_path, "behind.py", GOOD_TREE.format(x=-0.4, y=0, scene=scene)), "view"),
         "unknown cube colour": (
             tree(
-                tmp_path, "paint.py", GOOD_TREE.format(x=0.5, y=0, scene=f'{scene} + [CubeStart("pink", 0.4, 0.3, 0)]')
+                tmp_path, "paint.py", GOOD_TREE.format(x=0.5, y=0, scene=f'{scene} + [PartStart("pink", 0.4, 0.3, 0)]')
             ),
             "unknown colour 'pink'",
         ),

@@ -20,13 +20,13 @@ from bt_arrange.plancheck import CameraView, check_plan, check_scene
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
 from bt_arrange_sim.config import CameraConfig
-from bt_arrange_sim.scenes import CubeStart, scatter
+from bt_arrange_sim.scenes import PartStart, scatter
 
 VIEW: CameraView = CameraConfig().view()
 RED = Target("red", 0.50, 0.0)
 BLUE = Target("blue", 0.50, 0.15)
-RED_START = CubeStart("red", 0.40, -0.25, 0.3)
-BLUE_START = CubeStart("blue", 0.62, -0.25, 0.0)
+RED_START = PartStart("red", 0.40, -0.25, 0.3)
+BLUE_START = PartStart("blue", 0.62, -0.25, 0.0)
 
 
 def test_a_good_plan_in_the_cell_is_accepted() -> None:
@@ -46,7 +46,7 @@ def test_a_target_named_otherwise_than_its_cube_is_refused() -> None:
 
 def test_a_target_whose_cube_has_another_colour_is_refused() -> None:
     with pytest.raises(PlanError, match="target a is red but the scene's part a is blue"):
-        check_plan([Target("red", 0.5, 0.0, name="a")], starts=[CubeStart("blue", 0.4, -0.25, 0.0, name="a")])
+        check_plan([Target("red", 0.5, 0.0, name="a")], starts=[PartStart("blue", 0.4, -0.25, 0.0, name="a")])
 
 
 @pytest.mark.parametrize(("x_m", "y_m"), [(0.30, 0.45), (-0.40, 0.0), (0.5, -0.47), (0.23, 0.0)])
@@ -60,7 +60,7 @@ def test_a_reachable_target_the_camera_cannot_see_is_refused(x_m: float, y_m: fl
 
 def test_a_start_the_camera_cannot_see_is_refused() -> None:
     with pytest.raises(PlanError, match=r"^part red starts at x 300 mm, y 450 mm, outside the camera's view"):
-        check_scene([CubeStart("red", 0.30, 0.45, 0.0)], view=VIEW)
+        check_scene([PartStart("red", 0.30, 0.45, 0.0)], view=VIEW)
 
 
 def test_the_view_margin_counts_the_cube_s_turn() -> None:
@@ -96,15 +96,15 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
 @pytest.mark.parametrize(
     ("starts", "message"),
     [
-        ([RED_START, CubeStart("purple", 0.6, 0.2, 0.0)], r"^part 2 of the scene: unknown colour 'purple'"),
-        ([RED_START, CubeStart("red", 0.6, 0.2, 0.0)], r"^parts 1 and 2 of the scene are both named 'red'$"),
+        ([RED_START, PartStart("purple", 0.6, 0.2, 0.0)], r"^part 2 of the scene: unknown colour 'purple'"),
+        ([RED_START, PartStart("red", 0.6, 0.2, 0.0)], r"^parts 1 and 2 of the scene are both named 'red'$"),
         (
-            [RED_START, CubeStart("red", 0.6, 0.2, 0.0, "red bar", ObjectType("bar", (0.08, 0.04, 0.04)))],
+            [RED_START, PartStart("red", 0.6, 0.2, 0.0, "red bar", ObjectType("bar", (0.08, 0.04, 0.04)))],
             r"^parts 1 and 2 of the scene are both red but of types 'cube' and 'bar': the camera tells parts apart",
         ),
-        ([CubeStart("red", math.nan, 0.0, 0.0)], r"^part 1 of the scene \(red\): x_m=nan is not a finite number$"),
+        ([PartStart("red", math.nan, 0.0, 0.0)], r"^part 1 of the scene \(red\): x_m=nan is not a finite number$"),
         ([("red", 0.5, 0.0, 0.0)], r"^part 1 of the scene is \('red', 0\.5, 0\.0, 0\.0\), not a part start"),
-        ([RED_START, CubeStart("blue", 0.42, -0.25, 0.0)], r"^parts red and blue start 20 mm apart: closer than"),
+        ([RED_START, PartStart("blue", 0.42, -0.25, 0.0)], r"^parts red and blue start 20 mm apart: closer than"),
         ("red", r"^the scene must be a list of part starts"),
     ],
 )
@@ -114,7 +114,7 @@ def test_a_bad_scene_is_one_plan_error(starts: object, message: str) -> None:
 
 
 def test_identical_parts_may_share_a_colour_in_the_scene() -> None:
-    twins = [RED_START, CubeStart("red", 0.6, 0.2, 0.0, name="other red")]
+    twins = [RED_START, PartStart("red", 0.6, 0.2, 0.0, name="other red")]
     assert check_scene(twins, view=VIEW) == twins
 
 
@@ -123,7 +123,7 @@ def test_a_cube_resting_on_another_object_s_target_is_refused() -> None:
         PlanError,
         match=r"^part blue starts 25 mm from red's target: the pads picking it or working at that target need 69 mm",
     ):
-        check_plan([RED], starts=[RED_START, CubeStart("blue", 0.55, 0.0, 0.0)], view=VIEW)
+        check_plan([RED], starts=[RED_START, PartStart("blue", 0.55, 0.0, 0.0)], view=VIEW)
 
 
 # -- property-based: every generated plan is accepted and valid, or refused with a named problem ---
@@ -136,14 +136,14 @@ numbers = st.one_of(
     st.none(),
 )
 targets = st.builds(Target, colours, numbers, numbers, numbers, st.one_of(st.none(), st.sampled_from(["a", "b"])))
-starts = st.builds(CubeStart, colours, numbers, numbers, numbers, st.one_of(st.none(), st.sampled_from(["a", "b"])))
+starts = st.builds(PartStart, colours, numbers, numbers, numbers, st.one_of(st.none(), st.sampled_from(["a", "b"])))
 thresholds = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True), st.integers(-3, 3), st.none(), st.text(max_size=2)
 )
 FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
-def assert_valid(plan: list[Target], scene: list[CubeStart] | None) -> None:
+def assert_valid(plan: list[Target], scene: list[PartStart] | None) -> None:
     """What an accepted plan guarantees, checked independently of how check_plan found it."""
     for target in plan:
         assert all(math.isfinite(v) for v in (target.x_m, target.y_m, target.yaw_rad))

@@ -18,10 +18,10 @@ from bt_arrange.errors import PlanError
 from bt_arrange.session import Session, SessionReport, World
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.pybullet import runs
-from bt_arrange_sim.scenes import CubeStart
+from bt_arrange_sim.scenes import PartStart
 
 RED = Target("red", 0.50, 0.0)
-RED_START = CubeStart("red", 0.40, -0.20, 0.0)
+RED_START = PartStart("red", 0.40, -0.20, 0.0)
 
 
 class FakeCell:
@@ -34,11 +34,11 @@ class FakeCell:
         self.context = make_context(self.clock)
         self.robot = self.context.robot
         self.camera = self.robot.camera
-        self.starts: dict[str, CubeStart] = {}
+        self.starts: dict[str, PartStart] = {}
         self.cubes = self.starts  # the names of the parts, as the cell's body ids by name
         FakeCell.built.append(self)
 
-    def add_cubes(self, starts) -> None:
+    def add_parts(self, starts) -> None:
         for start in starts:
             self.starts[start.name or start.colour] = start
         self.camera.cubes = [cube(s.colour, s.x_m, s.y_m, s.yaw_rad) for s in self.starts.values()]
@@ -55,7 +55,7 @@ class FakeCell:
     def parts_at_rest(self) -> bool:
         return self.resting
 
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+    def part_planar_truth(self, name: str) -> tuple[float, float, float]:
         start = self.starts[name]
         return start.x_m, start.y_m, start.yaw_rad
 
@@ -100,7 +100,7 @@ def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:
     ("kwargs", "message"),
     [
         ({"starts": []}, r"^target red: no part 'red' in the scene \(the scene has none\)$"),
-        ({"starts": [CubeStart("red", 0.30, 0.45, 0.0)]}, r"^part red starts at x 300 mm, y 450 mm, outside"),
+        ({"starts": [PartStart("red", 0.30, 0.45, 0.0)]}, r"^part red starts at x 300 mm, y 450 mm, outside"),
         ({"time_limit_s": 0}, r"^time limit 0 s must be a positive number of seconds$"),
         ({"time_limit_s": -1.0}, r"^time limit -1\.0 s must be a positive number of seconds$"),
         ({"root": "tree"}, r"^the root must be a py_trees behaviour, got str$"),
@@ -115,7 +115,7 @@ def test_a_bad_run_is_refused_before_a_world_is_built(fake_cell, kwargs, message
 
 def test_a_custom_root_still_has_its_scene_checked(fake_cell) -> None:
     with pytest.raises(PlanError, match="unknown colour 'purple'"):
-        runs.SimulatedRun(py_trees.behaviours.Success("done"), [CubeStart("purple", 0.5, 0.0, 0.0)])
+        runs.SimulatedRun(py_trees.behaviours.Success("done"), [PartStart("purple", 0.5, 0.0, 0.0)])
     assert fake_cell.built == []
 
 
@@ -129,7 +129,7 @@ def test_the_window_without_a_display_is_refused_first(fake_cell, monkeypatch) -
 
 def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  # issue 9, item 1
     target = Target("red", 0.50, 0.0, name="red cube")
-    start = CubeStart("red", 0.40, -0.20, 0.0, name="red cube")
+    start = PartStart("red", 0.40, -0.20, 0.0, name="red cube")
     with runs.SimulatedRun(arrangement([target], max_regrasps=0), [start]) as run:
         report = run.run()
     (red,) = report.objects

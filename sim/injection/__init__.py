@@ -1,6 +1,6 @@
 """Error injection: one injector per manipulation error of the paper's Sec. 3, at the moment it names.
 
-Every injector acts on the simulated world only: a cube's true pose (``WorkCell.displace_cube``
+Every injector acts on the simulated world only: a cube's true pose (``WorkCell.displace_part``
 or pybullet's reset), the pads' friction, the camera's physical pose (``SimCamera.set_render_offset``)
 or an execution parameter of the robot (the release height). It reaches the world through the cell's
 methods named in ``framework.InjectableCell``, which the pybullet cell and the MuJoCo cell

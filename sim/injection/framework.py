@@ -77,19 +77,19 @@ class InjectableCell(Protocol):
         """The top camera (``InjectableCamera``)."""
         ...
 
-    def cube_pose_truth(self, name: str) -> Pose:
+    def part_pose_truth(self, name: str) -> Pose:
         """A part's true pose."""
         ...
 
-    def cube_planar_truth(self, name: str) -> tuple[float, float, float]:
+    def part_planar_truth(self, name: str) -> tuple[float, float, float]:
         """A part's true (x, y, yaw), yaw folded to its symmetry."""
         ...
 
-    def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+    def displace_part(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Move a resting part by (dx, dy) and turn it by dyaw."""
         ...
 
-    def place_cube_truth(self, name: str, pose: Pose) -> None:
+    def place_part_truth(self, name: str, pose: Pose) -> None:
         """Put a part at ``pose``; physics moves it on."""
         ...
 
@@ -109,7 +109,7 @@ class InjectableCell(Protocol):
         """Give both pads a friction coefficient, effective at once for the held part."""
         ...
 
-    def cube_in_gripper_truth(self, name: str) -> bool:
+    def part_in_gripper_truth(self, name: str) -> bool:
         """True when both pads touch the part."""
         ...
 
@@ -202,8 +202,8 @@ class Injector(ABC):
         """Register this injector's hooks on ``run`` for the cube ``obj``, drawing from ``rng``."""
         if self._run is not None:
             raise PlanError(f"{self.name} is already attached to a run: make one injector per run")
-        if obj not in run.cell.cubes:
-            raise PlanError(f"{self.name}: no part {obj!r} in the cell; parts: {', '.join(sorted(run.cell.cubes))}")
+        if obj not in run.cell.parts:
+            raise PlanError(f"{self.name}: no part {obj!r} in the cell; parts: {', '.join(sorted(run.cell.parts))}")
         self._run, self.obj, self._rng = run, obj, rng
         self._attach(run, obj)
 
@@ -287,7 +287,7 @@ class Injector(ABC):
         if isinstance(measured, Pose):
             x, y, yaw = measured.x_m, measured.y_m, measured.yaw_rad
         else:
-            truth = self.run.cell.cube_pose_truth(self.cube)
+            truth = self.run.cell.part_pose_truth(self.cube)
             x, y, yaw = truth.x_m, truth.y_m, truth.yaw_rad
         return x, y, self._closing_yaw(yaw)
 

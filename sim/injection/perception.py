@@ -48,7 +48,7 @@ class PerceptionOffset(Injector):
     def _attach(self, run: InjectableRun, obj: str) -> None:
         camera = run.cell.camera
         cx, cy = camera.pose_world.x_m, camera.pose_world.y_m
-        truth = run.cell.cube_pose_truth(obj)
+        truth = run.cell.part_pose_truth(obj)
         max_m, max_rad = self.params["max_m"], math.radians(self.params["max_deg"])
 
         def draw() -> tuple[float, float, float]:
@@ -83,7 +83,7 @@ class PerceptionOffset(Injector):
                 return
             self.fired = True
             camera.set_render_offset()
-            now = run.cell.cube_pose_truth(obj)
+            now = run.cell.part_pose_truth(obj)
             measured = read_blackboard(keys.key(obj, keys.POSE))
             self.details["time_s"] = round(transition.time_s, 4)
             if isinstance(measured, Pose):

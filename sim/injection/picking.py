@@ -61,14 +61,14 @@ class PickTranslation(Injector):
 
     def _inject(self) -> None:
         cell = self.run.cell
-        x, y, yaw = cell.cube_planar_truth(self.cube)
+        x, y, yaw = cell.part_planar_truth(self.cube)
         reference = self._grasp_reference()
         drawn = _sample(self._draw, lambda d: self._fits(x + d[0], y + d[1], yaw, reference))
         if drawn is None:
             self.details.update(dx_mm=0.0, dy_mm=0.0, draws=MAX_DRAWS, skipped="no draw fits between the pads")
             return
         (dx, dy), draws = drawn
-        cell.displace_cube(self.cube, float(dx), float(dy))
+        cell.displace_part(self.cube, float(dx), float(dy))
         self.details.update(
             dx_mm=_mm(dx),
             dy_mm=_mm(dy),
@@ -125,7 +125,7 @@ class PickRotation(Injector):
 
     def _inject(self) -> None:
         cell, max_rad = self.run.cell, math.radians(self.params["max_deg"])
-        x, y, yaw = cell.cube_planar_truth(self.cube)
+        x, y, yaw = cell.part_planar_truth(self.cube)
         reference = self._grasp_reference()
         drawn = _sample(
             lambda: float(self.rng.uniform(-max_rad, max_rad)), lambda d: self._fits(x, y, yaw + d, reference)
@@ -134,7 +134,7 @@ class PickRotation(Injector):
             self.details.update(dyaw_deg=0.0, draws=MAX_DRAWS, skipped="no draw fits between the pads")
             return
         dyaw, draws = drawn
-        cell.displace_cube(self.cube, dyaw_rad=dyaw)
+        cell.displace_part(self.cube, dyaw_rad=dyaw)
         self.details.update(dyaw_deg=_deg(dyaw), draws=draws)
 
 
@@ -162,7 +162,7 @@ class SurfaceShift(Injector):
         pad_axis = _horizontal(cell.arm.tcp_pose().rotation[:, 1])
         shift = float(self.rng.uniform(-self.params["max_m"], self.params["max_m"]))
         dx, dy = shift * pad_axis
-        cell.displace_cube(self.cube, float(dx), float(dy))
+        cell.displace_part(self.cube, float(dx), float(dy))
         self.fired = True
         self.details.update(
             time_s=self._now(),

@@ -35,7 +35,7 @@ class ReleaseStick(Injector):
 
     When ``place <obj>`` starts "release the part", one finger is chosen at random and a distance
     uniform in [0, ``max_m``]; for the following ticks the cube follows that finger's opening: it is
-    put (``displace_cube``) where it was when the release began plus the finger's travel since, along
+    put (``displace_part``) where it was when the release began plus the finger's travel since, along
     the closing axis, until it has been dragged that far; then it stays where it was let go.
 
     Record: ``finger`` (joint name), ``drag_mm``, ``dx_mm``, ``dy_mm`` (world), ``ticks``, ``start_s``, ``end_s``.
@@ -85,7 +85,7 @@ class ReleaseStick(Injector):
             "direction": direction,
             "distance": distance,
             "opening_at_start": self._finger_state(finger),
-            "from_xy": cell.cube_pose_truth(self.cube).position_m[:2].copy(),
+            "from_xy": cell.part_pose_truth(self.cube).position_m[:2].copy(),
             "applied": 0.0,
             "ticks": 0,
         }
@@ -105,9 +105,9 @@ class ReleaseStick(Injector):
         target = drag["distance"] if finish else min(travel, drag["distance"])
         if target > drag["applied"]:
             # Absolute, not by increments: the pad's contact pushes the cube back a little every step.
-            here = self.run.cell.cube_pose_truth(self.cube).position_m[:2]
+            here = self.run.cell.part_pose_truth(self.cube).position_m[:2]
             dx, dy = drag["from_xy"] + target * drag["direction"] - here
-            self.run.cell.displace_cube(self.cube, float(dx), float(dy))
+            self.run.cell.displace_part(self.cube, float(dx), float(dy))
             drag["applied"] = target
             drag["ticks"] += 1
         if finish or drag["applied"] >= drag["distance"] - 1e-12:
@@ -212,7 +212,7 @@ class ReleaseTilt(Injector):
         """The cube's rotation after the tilt, and its current position."""
         assert self._draw is not None
         axis_rad, tilt_rad = self._draw
-        truth = self.run.cell.cube_pose_truth(self.cube)
+        truth = self.run.cell.part_pose_truth(self.cube)
         axis = np.array([math.cos(axis_rad), math.sin(axis_rad), 0.0])
         return _axis_angle(axis, tilt_rad) @ quaternion_to_matrix(truth.quaternion_xyzw), truth.position_m.copy()
 
@@ -240,7 +240,7 @@ class ReleaseTilt(Injector):
         lowest_m = self._box().support_m(rotation[2, :])
         z = max(float(position[2]), lowest_m + 1e-4)
         moved = Pose.from_rotation([position[0], position[1], z], rotation)
-        cell.place_cube_truth(self.cube, moved)
+        cell.place_part_truth(self.cube, moved)
         self.fired = True
         axis_rad, tilt_rad = self._draw
         self.details.update(

@@ -83,7 +83,7 @@ class TransportSlip(Injector):
 
     def _cube_in_tcp(self) -> np.ndarray:
         cell = self.run.cell
-        return cell.arm.tcp_pose().inverse().transform_point(cell.cube_pose_truth(self.cube).position_m)
+        return cell.arm.tcp_pose().inverse().transform_point(cell.part_pose_truth(self.cube).position_m)
 
     def _begin(self) -> None:
         cell = self.run.cell
@@ -100,7 +100,7 @@ class TransportSlip(Injector):
         assert self._start is not None
         cell = self.run.cell
         slip = self._cube_in_tcp() - self._start[1]
-        held = bool(cell.cube_in_gripper_truth(self.cube))
+        held = bool(cell.part_in_gripper_truth(self.cube))
         self._set_pad_friction(cell.config.physics.pad_contact.lateral_friction)
         self.details.update(end_s=self._now(), slip_mm=[_mm(v) for v in slip], held_after=held)
         self._start = None

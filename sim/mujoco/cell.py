@@ -48,8 +48,8 @@ class MujocoCell(CellBase):
         self._substeps = self.config.physics.substeps
         self._steps = 0
         self._parts: dict[str, PartSpec] = {}
-        #: Each part's body id, by name (``WorkCell.cubes``' meaning).
-        self.cubes: dict[str, int] = {}
+        #: Each part's body id, by name (``WorkCell.parts``' meaning).
+        self.parts: dict[str, int] = {}
         self.object_types: dict[str, ObjectType] = {}
         self.colours: ColourTable = DEFAULT_COLOUR_TABLE
         self.grasp_offset_m = 0.0
@@ -76,7 +76,7 @@ class MujocoCell(CellBase):
         if self.camera is not None:
             self.camera.close()
         self.model, self.data = model, data
-        self.cubes = {name: model.body(name).id for name in self._parts}
+        self.parts = {name: model.body(name).id for name in self._parts}
         self.tcp_body = model.body(TCP_FRAME).id
         self.finger_joint_indices = tuple(model.joint(n).id for n in self.FINGER_JOINTS)
         self._finger_body = {
@@ -91,7 +91,7 @@ class MujocoCell(CellBase):
                 data.qpos[model.joint(joint).qposadr[0]] = carry["qpos"][joint]
                 data.qvel[model.joint(joint).dofadr[0]] = carry["qvel"][joint]
             for name, (qpos, qvel) in carry["parts"].items():
-                if name in self.cubes:
+                if name in self.parts:
                     joint = model.joint(f"{name}_free")
                     data.qpos[joint.qposadr[0] : joint.qposadr[0] + 7] = qpos
                     data.qvel[joint.dofadr[0] : joint.dofadr[0] + 6] = qvel
@@ -108,7 +108,7 @@ class MujocoCell(CellBase):
         model, data = self.model, self.data
         joints = (*self.ARM_JOINTS, *self.FINGER_JOINTS)
         parts = {}
-        for name in self.cubes:
+        for name in self.parts:
             joint = model.joint(f"{name}_free")
             parts[name] = (
                 data.qpos[joint.qposadr[0] : joint.qposadr[0] + 7].copy(),
@@ -182,7 +182,7 @@ class MujocoCell(CellBase):
         self._rebuild()
         return name
 
-    def add_cubes(self, starts: Iterable[Any]) -> None:
+    def add_parts(self, starts: Iterable[Any]) -> None:
         """Put several parts on the table (a scene from ``scenes.scatter``): one rebuild for all."""
         for start in starts:
             kind = getattr(start, "object_type", None) or CUBE
@@ -204,7 +204,7 @@ class MujocoCell(CellBase):
         self.object_types[name] = object_type
         return name
 
-    def remove_cube(self, name: str) -> None:
+    def remove_part(self, name: str) -> None:
         """Take a part off the table."""
         self._parts.pop(name)
         self.object_types.pop(name, None)
@@ -216,14 +216,14 @@ class MujocoCell(CellBase):
         joint = self.model.joint(f"{name}_free")
         return int(joint.qposadr[0]), int(joint.dofadr[0])
 
-    def cube_pose_truth(self, name: str) -> Pose:
+    def part_pose_truth(self, name: str) -> Pose:
         """The engine's true pose of a part's centre. Never steer the robot with it."""
         qadr, _ = self._free(name)
         qpos = self.data.qpos
         return Pose(qpos[qadr : qadr + 3].copy(), _xyzw(qpos[qadr + 3 : qadr + 7]))
 
-    def place_cube_truth(self, name: str, pose: Pose) -> None:
-        """Error injection: put a part at ``pose``; it moves on by physics (``WorkCell.place_cube_truth``)."""
+    def place_part_truth(self, name: str, pose: Pose) -> None:
+        """Error injection: put a part at ``pose``; it moves on by physics (``WorkCell.place_part_truth``)."""
         qadr, dadr = self._free(name)
         x, y, z, w = (float(v) for v in pose.quaternion_xyzw)
         self.data.qpos[qadr : qadr + 3] = pose.position_m
@@ -231,11 +231,11 @@ class MujocoCell(CellBase):
         self.data.qvel[dadr : dadr + 6] = 0.0
         self.invalidate()
 
-    def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+    def displace_part(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting part by (dx, dy) and turn it by dyaw, as a bump would."""
-        pose = self.cube_pose_truth(name)
+        pose = self.part_pose_truth(name)
         moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
-        self.place_cube_truth(name, moved)
+        self.place_part_truth(name, moved)
 
     def finger_opening_m(self, finger: int) -> float:
         """True position of one finger joint (``finger_joint_indices``): its pad's distance from the centre."""
@@ -263,10 +263,10 @@ class MujocoCell(CellBase):
                 friction = cell_model.pad_friction(self._parts[name].friction, self._pad_friction, self.mujoco_physics)
                 model.pair_friction[pair, :2] = friction
 
-    def cube_in_gripper_truth(self, name: str) -> bool:
+    def part_in_gripper_truth(self, name: str) -> bool:
         """True when both finger links touch the part."""
         self.forward()
-        body = self.cubes[name]
+        body = self.parts[name]
         touching = set()
         model, data = self.model, self.data
         fingers = set(self._finger_body.values())

@@ -3,7 +3,7 @@
 Each ``WorkCell`` owns its own ``BulletClient``, so several worlds can live in one process.
 The world frame has its origin on the table top under the robot base, z up.
 
-Ground truth (``cube_pose_truth``) is for evaluation and error injection only: behaviours
+Ground truth (``part_pose_truth``) is for evaluation and error injection only: behaviours
 see the world through the camera, like the robot in the paper.
 """
 
@@ -29,7 +29,7 @@ from bt_arrange_sim.parts import TABLE_RGB
 from bt_arrange_sim.perturbed_robot import hand_eye_base_pose, write_perturbed_urdf
 from bt_arrange_sim.pybullet.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.pybullet.objects import apply_contact, create_object
-from bt_arrange_sim.scenes import CubeStart
+from bt_arrange_sim.scenes import PartStart
 
 
 @contextlib.contextmanager
@@ -111,7 +111,7 @@ class WorkCell(CellBase):
             fixedTimeStep=physics.time_step_s, numSolverIterations=physics.solver_iterations
         )
         self._steps = 0
-        self.cubes: dict[str, int] = {}
+        self.parts: dict[str, int] = {}
         #: Each part's type, by name (the cube's unless ``add_object`` said otherwise).
         self.object_types: dict[str, ObjectType] = {}
         #: The colour table the cell paints from: the one the camera's detector reads.
@@ -197,13 +197,13 @@ class WorkCell(CellBase):
     def _apply_friction_field(self) -> None:
         """A real cell's table: each cube's friction is the field's where it lies (new contacts take it)."""
         nominal = self.config.physics.cube_contact.lateral_friction
-        for body in self.cubes.values():
+        for body in self.parts.values():
             (x, y, _), _ = self.client.getBasePositionAndOrientation(body)
             self.client.changeDynamics(body, -1, lateralFriction=nominal * self.config.errors.friction_scale(x, y))
 
     def parts_at_rest(self, speed_m_s: float = 0.001, speed_rad_s: float = 0.01) -> bool:
         """True when every part moves slower than ``speed_m_s`` and turns slower than ``speed_rad_s``."""
-        for body in self.cubes.values():
+        for body in self.parts.values():
             linear, angular = self.client.getBaseVelocity(body)
             if np.linalg.norm(linear) > speed_m_s or np.linalg.norm(angular) > speed_rad_s:
                 return False
@@ -237,14 +237,14 @@ class WorkCell(CellBase):
         """
         colour_name = colour.name if isinstance(colour, ColourRange) else colour
         name = name or colour_name
-        if name in self.cubes:
+        if name in self.parts:
             raise ValueError(f"a cube named {name!r} is already in the cell")
         objects = self.config.errors.objects
         # A real cell's parts: each edge off by its tolerance (the perception assumes the nominal size).
         edge_error_m = float(self._edge_rng.normal(0.0, objects.edge_sigma_mm / 1000)) if objects.enabled else 0.0
         built = object_type.resized(edge_error_m) if edge_error_m else object_type
         pose = Pose.from_planar(x_m, y_m, yaw_rad, z_m=built.shape.height_m / 2)
-        self.cubes[name] = create_object(
+        self.parts[name] = create_object(
             self.client,
             built,
             colour,
@@ -256,7 +256,7 @@ class WorkCell(CellBase):
         self.object_types[name] = object_type
         if self.config.physics.parts_sleep:
             self.client.changeDynamics(
-                self.cubes[name],
+                self.parts[name],
                 -1,
                 activationState=import_pybullet().ACTIVATION_STATE_ENABLE_SLEEPING,
                 sleepThreshold=self.config.physics.sleep_threshold,
@@ -265,36 +265,36 @@ class WorkCell(CellBase):
 
     def _wake(self, name: str) -> None:
         """A part whose pose or contacts were changed from outside moves again under physics."""
-        self.client.changeDynamics(self.cubes[name], -1, activationState=import_pybullet().ACTIVATION_STATE_WAKE_UP)
+        self.client.changeDynamics(self.parts[name], -1, activationState=import_pybullet().ACTIVATION_STATE_WAKE_UP)
 
-    def remove_cube(self, name: str) -> None:
+    def remove_part(self, name: str) -> None:
         """Take a cube off the table."""
-        self.client.removeBody(self.cubes.pop(name))
+        self.client.removeBody(self.parts.pop(name))
         self.object_types.pop(name, None)
 
     # -- ground truth: evaluation and error injection only ---------------------------------
 
-    def cube_pose_truth(self, name: str) -> Pose:
+    def part_pose_truth(self, name: str) -> Pose:
         """The simulator's true pose of a cube's centre. Never steer the robot with it."""
-        position, orientation = self.client.getBasePositionAndOrientation(self.cubes[name])
+        position, orientation = self.client.getBasePositionAndOrientation(self.parts[name])
         return Pose(np.array(position), np.array(orientation))
 
-    def displace_cube(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
+    def displace_part(self, name: str, dx_m: float = 0.0, dy_m: float = 0.0, dyaw_rad: float = 0.0) -> None:
         """Error injection: move a resting cube by (dx, dy) and turn it by dyaw, as a bump would.
 
         The robot learns of it only through its camera. Never used to steer or to fake a result.
         """
-        pose = self.cube_pose_truth(name)
+        pose = self.part_pose_truth(name)
         moved = Pose.from_planar(pose.x_m + dx_m, pose.y_m + dy_m, pose.yaw_rad + dyaw_rad, z_m=pose.z_m)
-        self.client.resetBasePositionAndOrientation(self.cubes[name], moved.position_m, moved.quaternion_xyzw)
+        self.client.resetBasePositionAndOrientation(self.parts[name], moved.position_m, moved.quaternion_xyzw)
         self._wake(name)
 
-    def place_cube_truth(self, name: str, pose: Pose) -> None:
+    def place_part_truth(self, name: str, pose: Pose) -> None:
         """Error injection: put a cube at ``pose`` (a tilt, a drag by a sticking finger); it moves on by physics.
 
         The robot learns of it only through its camera. Never used to steer or to fake a result.
         """
-        self.client.resetBasePositionAndOrientation(self.cubes[name], pose.position_m, pose.quaternion_xyzw)
+        self.client.resetBasePositionAndOrientation(self.parts[name], pose.position_m, pose.quaternion_xyzw)
         self._wake(name)
 
     def finger_opening_m(self, finger: int) -> float:
@@ -313,22 +313,22 @@ class WorkCell(CellBase):
         filtering the pair out and back in, and made afresh at the next physics step.
         """
         contact = dataclasses.replace(self.config.physics.pad_contact, lateral_friction=lateral_friction)
-        body = self.cubes[cube]
+        body = self.parts[cube]
         for finger in self.finger_joint_indices:
             apply_contact(contact, self.client, self.robot_id, finger)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 0)
             self.client.setCollisionFilterPair(self.robot_id, body, finger, -1, 1)
         self._wake(cube)
 
-    def add_cubes(self, starts: Iterable[CubeStart]) -> None:
+    def add_parts(self, starts: Iterable[PartStart]) -> None:
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""
         for start in starts:
             kind = getattr(start, "object_type", None) or CUBE
             self.add_object(kind, start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name)
 
-    def cube_in_gripper_truth(self, name: str) -> bool:
+    def part_in_gripper_truth(self, name: str) -> bool:
         """True when both finger pads touch the cube."""
-        body = self.cubes[name]
+        body = self.parts[name]
         return all(
             len(self.client.getContactPoints(self.robot_id, body, linkIndexA=finger)) > 0
             for finger in self.finger_joint_indices

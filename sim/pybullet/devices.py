@@ -168,7 +168,7 @@ class SimGripper(CellGripper):
         cell = self._cell
         if cell.config.physics.prism_contact.friction_anchor:
             return False
-        unanchored = [cell.cubes[n] for n, t in cell.object_types.items() if not t.shape.rectangular]
+        unanchored = [cell.parts[n] for n, t in cell.object_types.items() if not t.shape.rectangular]
         return any(
             self._client.getContactPoints(self._body, body, linkIndexA=finger)
             for body in unanchored

@@ -42,18 +42,18 @@ def test_two_worlds_in_one_process_are_independent():
         second.add_cube("red", 0.4, 0.1)
         first.settle(0.2)
         second.settle(0.2)
-        assert first.cube_pose_truth("red").x_m == pytest.approx(0.5, abs=1e-4)
-        assert second.cube_pose_truth("red").x_m == pytest.approx(0.4, abs=1e-4)
+        assert first.part_pose_truth("red").x_m == pytest.approx(0.5, abs=1e-4)
+        assert second.part_pose_truth("red").x_m == pytest.approx(0.4, abs=1e-4)
         assert first.client._client != second.client._client
 
 
 def test_a_cube_rests_where_it_was_put(cell):
     cell.add_cube("green", 0.45, -0.12, 0.4)
     cell.settle(1.0)
-    x, y, yaw = cell.cube_planar_truth("green")
+    x, y, yaw = cell.part_planar_truth("green")
     assert (x, y) == pytest.approx((0.45, -0.12), abs=2e-5)
     assert yaw == pytest.approx(0.4, abs=1e-3)
-    assert cell.cube_pose_truth("green").z_m == pytest.approx(CUBE_EDGE_M / 2, abs=1e-3)
+    assert cell.part_pose_truth("green").z_m == pytest.approx(CUBE_EDGE_M / 2, abs=1e-3)
 
 
 def test_no_constraint_touches_a_cube(cell):

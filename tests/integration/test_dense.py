@@ -28,7 +28,7 @@ def test_identical_faces_2_mm_apart_are_separate_cubes_on_camera() -> None:
         # The search at a quarter of the resolution merges them; looked at again at full resolution, three.
         assert len(detector.locate(frame, "green")) == 3
         for i in range(3):
-            x, y, _ = cell.cube_planar_truth(f"g{i}")
+            x, y, _ = cell.part_planar_truth(f"g{i}")
             detection = detector.detect(frame, "green", roi=WorldRegion.around(x, y, 0.02))
             assert detection.found, detection.reason
             planar = detection.planar
@@ -47,7 +47,7 @@ def test_a_2x2_block_with_2_mm_gaps_ends_within_1_mm_without_touching_or_shoving
     with SimulatedRun(root, scatter([t.colour for t in targets], 1, avoid=targets)) as run:
         report = run.run()
         feedback = {t.behaviour: t.feedback for t in report.transitions if t.new == "SUCCESS"}
-        truth = {t.obj: run.cell.cube_planar_truth(t.obj) for t in targets}
+        truth = {t.obj: run.cell.part_planar_truth(t.obj) for t in targets}
     assert report.tree_status == "SUCCESS"
     for outcome in report.objects:
         assert outcome.final_offset_truth_mm < 1.0, outcome

@@ -34,7 +34,7 @@ def test_estimates_on_rendered_frames_are_millimetres_off(seed, record_property)
     estimator = DepthGraspEstimator()
     rng = np.random.default_rng(seed)
     with WorkCell() as cell:
-        cell.add_cubes(starts)
+        cell.add_parts(starts)
         cell.settle(0.2)
         frame = cell.camera.capture(with_depth=True)
         view = estimator.sensor_view(frame, rng)
@@ -44,7 +44,7 @@ def test_estimates_on_rendered_frames_are_millimetres_off(seed, record_property)
             estimate = estimator.estimate_view(view, near_xy_m=(start.x_m, start.y_m), name=start.colour)
             assert estimate.found, estimate.reason
             assert estimate.planar is not None
-            true_x, true_y, true_yaw = cell.cube_planar_truth(start.colour)
+            true_x, true_y, true_yaw = cell.part_planar_truth(start.colour)
             errors_mm.append(math.hypot(estimate.planar.x_m - true_x, estimate.planar.y_m - true_y) * 1000)
             yaw_errors_deg.append(abs(math.degrees(fold_yaw(estimate.planar.yaw_rad - true_yaw))))
     summary = (
@@ -61,7 +61,7 @@ def test_estimates_on_rendered_frames_are_millimetres_off(seed, record_property)
 
 def test_the_estimate_does_not_depend_on_the_colour_image():
     with WorkCell() as cell:
-        cell.add_cubes(scatter(["red"], 5))
+        cell.add_parts(scatter(["red"], 5))
         cell.settle(0.2)
         frame = cell.camera.capture(with_depth=True)
     blind = dataclasses.replace(frame, rgb=np.zeros_like(frame.rgb))

@@ -36,7 +36,7 @@ def test_a_three_piece_fresco_is_reassembled_with_its_gaps(tmp_path: Path) -> No
         report = run.run()
         outlines = {}
         for target in root.targets:
-            x, y, yaw = run.cell.cube_planar_truth(target.obj)
+            x, y, yaw = run.cell.part_planar_truth(target.obj)
             pieces = tuple(tuple(map(tuple, p)) for p in target.object_type.shape.convex_pieces())
             outlines[target.obj] = Outline(x, y, yaw, pieces)
     assert [o.name for o in report.objects] == ["tile 1", "tile 2", "tile 3"]

@@ -76,7 +76,7 @@ class Probe:
     _nodes: dict[str, Any] = field(default_factory=dict)
 
     def snap(self) -> Snapshot:
-        return Snapshot(self.run.cell.cube_pose_truth(OBJ), self.run.cell.arm.tcp_pose())
+        return Snapshot(self.run.cell.part_pose_truth(OBJ), self.run.cell.arm.tcp_pose())
 
     def before_tick(self, root) -> None:
         for behaviour, watched in STAGES.items():
@@ -153,7 +153,7 @@ def _trial(specs: tuple[str, ...], seed: int = 0, cached: bool = True) -> Trial:
                 probe,
                 run.context.settings,
                 run.cell.camera.render_offset,
-                run.cell.cube_pose_truth(OBJ),
+                run.cell.part_pose_truth(OBJ),
             )
     return _TRIALS[key]
 

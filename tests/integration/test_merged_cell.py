@@ -32,7 +32,7 @@ def test_two_merged_pieces_are_each_measured_at_their_targets_within_a_tenth_by_
             assert detector.detect(frame, "red").status is DetectionStatus.AMBIGUOUS, "one blob in the mask"
             detection = detector.detect(frame, "red", roi=WorldRegion.around(piece.x_m, piece.y_m, 0.05))
             assert detection.found, detection.reason
-            x, y, yaw = cell.cube_planar_truth(name)
+            x, y, yaw = cell.part_planar_truth(name)
             pose = detection.pose_world
             assert 1000 * math.hypot(pose.x_m - x, pose.y_m - y) < 0.1
             assert abs(math.degrees(math.remainder(pose.yaw_rad - yaw, 2 * math.pi))) < 0.1

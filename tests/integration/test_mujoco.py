@@ -83,7 +83,7 @@ def test_the_camera_is_the_pybullet_cells_pinhole_and_its_windows_are_crops() ->
         # Depth on the table, straight below the camera: its height.
         assert full.depth_m[540, 960] == pytest.approx(0.70, abs=1e-3)
         found = PartDetector().detect(full, "blue")
-        truth = cell.cube_pose_truth("blue")
+        truth = cell.part_pose_truth("blue")
         assert found.pose_world is not None
         assert math.hypot(found.pose_world.x_m - truth.x_m, found.pose_world.y_m - truth.y_m) < 2e-4
         window = PixelWindow(600, 500, 320, 240)
@@ -116,7 +116,7 @@ def test_a_closed_gripper_holds_a_cube_by_friction_with_its_fingers_coupled() ->
         assert cell.gripper.width() == pytest.approx(0.05, abs=1e-3)
         left, right = (cell.finger_opening_m(f) for f in cell.finger_joint_indices)
         assert abs(left - right) < 1e-4
-        assert cell.cube_in_gripper_truth("red")
+        assert cell.part_in_gripper_truth("red")
         lifted = Pose(np.array([0.25, 0.0, 0.125]), tcp.quaternion_xyzw)
         q_lift = kinematics.inverse(lifted, q_grasp)
         peak = np.zeros(6)
@@ -133,7 +133,7 @@ def test_a_closed_gripper_holds_a_cube_by_friction_with_its_fingers_coupled() ->
 
         efforts = urdf_efforts()
         assert np.all(peak < [efforts[name] for name in cell.ARM_JOINTS]), peak
-        cube = cell.cube_pose_truth("red")
+        cube = cell.part_pose_truth("red")
         assert cube.z_m == pytest.approx(0.125, abs=1e-3)
         assert model.nu == 8 and data.ncon > 0
 
@@ -169,11 +169,11 @@ def test_a_non_convex_prism_is_its_convex_pieces_and_rests_where_it_was_put() ->
     with MujocoCell() as cell:
         cell.add_object(ell, "green", 0.5, 0.1, 0.4)
         cell.settle(0.5)
-        pose = cell.cube_pose_truth("green")
-        x, y, yaw = cell.cube_planar_truth("green")
+        pose = cell.part_pose_truth("green")
+        x, y, yaw = cell.part_planar_truth("green")
         assert math.hypot(x - 0.5, y - 0.1) < 1e-4 and yaw == pytest.approx(0.4, abs=1e-3)
         assert pose.z_m == pytest.approx(0.01, abs=1e-4)  # no mesh margin: it rests at its true height
-        body = cell.cubes["green"]
+        body = cell.parts["green"]
         assert cell.model.body_mass[body] == pytest.approx(mass_of(ell), rel=1e-6)
         pieces = [
             g for g in range(cell.model.ngeom) if cell.model.geom_bodyid[g] == body and cell.model.geom_contype[g]

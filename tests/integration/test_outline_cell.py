@@ -39,12 +39,12 @@ def test_non_convex_and_symmetric_outlines_are_found_at_many_yaws_in_the_cells_f
             for (colour, *_), kind in zip(PLACES, kinds, strict=True):
                 detection = PartDetector().for_object(kind).detect(frame, colour)
                 assert detection.found, detection.reason
-                true_x, true_y, true_yaw = cell.cube_planar_truth(kind.name)
+                true_x, true_y, true_yaw = cell.part_planar_truth(kind.name)
                 pose = detection.pose_world
                 assert 1000 * math.hypot(pose.x_m - true_x, pose.y_m - true_y) < 0.1
                 assert abs(math.degrees(fold_yaw(pose.yaw_rad - true_yaw, kind.shape.symmetry_rad))) < 0.15
             for kind in kinds:
-                cell.remove_cube(kind.name)
+                cell.remove_part(kind.name)
 
 
 def test_two_parts_of_one_colour_are_told_apart_by_outline_in_the_cells_frames() -> None:
@@ -56,9 +56,9 @@ def test_two_parts_of_one_colour_are_told_apart_by_outline_in_the_cells_frames()
         for kind in (FRAGMENT, ELL):
             detection = PartDetector().for_object(kind).detect(frame, "red")
             assert detection.found, detection.reason
-            true_x, true_y, _ = cell.cube_planar_truth(kind.name)
+            true_x, true_y, _ = cell.part_planar_truth(kind.name)
             assert (detection.pose_world.x_m, detection.pose_world.y_m) == pytest.approx((true_x, true_y), abs=1e-4)
-        cell.remove_cube("ell")
+        cell.remove_part("ell")
         cell.settle(0.01)
         alone = PartDetector().for_object(ELL).detect(cell.camera.capture(), "red")
         assert alone.status is DetectionStatus.WRONG_OUTLINE, alone.reason

@@ -33,7 +33,7 @@ def test_every_cube_is_found_within_a_fifth_of_a_millimetre(noise):
         for colour, *_ in SCENE:
             detection = detections[colour]
             assert detection.found, detection.reason
-            true_x, true_y, true_yaw = cell.cube_planar_truth(colour)
+            true_x, true_y, true_yaw = cell.part_planar_truth(colour)
             assert math.hypot(detection.planar.x_m - true_x, detection.planar.y_m - true_y) < 0.2e-3
             assert abs(fold_yaw(detection.planar.yaw_rad - true_yaw)) < math.radians(0.3)
 
@@ -106,5 +106,5 @@ def test_a_binned_full_view_locates_every_cube_within_two_millimetres():
         assert search.rgb.shape == (135, 240, 3)
         for colour, *_ in SCENE:
             (located,) = detector.locate(search, colour)
-            true_x, true_y, _ = cell.cube_planar_truth(colour)
+            true_x, true_y, _ = cell.part_planar_truth(colour)
             assert 1000 * math.dist(located, (true_x, true_y)) < 2.0

@@ -27,13 +27,13 @@ def test_an_ell_rests_where_it_is_put_as_one_rigid_body_of_its_volume() -> None:
     with WorkCell() as cell:
         cell.add_object(ELL, "red", 0.45, 0.1, 0.4, name="ell")
         cell.settle(0.5)
-        x, y, yaw = cell.cube_planar_truth("ell")
+        x, y, yaw = cell.part_planar_truth("ell")
         assert (x, y) == pytest.approx((0.45, 0.1), abs=2e-4)
         assert yaw == pytest.approx(0.4, abs=2e-3)
-        assert cell.cube_pose_truth("ell").z_m == pytest.approx(0.01, abs=5e-4), "resting on its face, not tipped"
+        assert cell.part_pose_truth("ell").z_m == pytest.approx(0.01, abs=5e-4), "resting on its face, not tipped"
         # The notch is empty: a ray down into the L's inner corner meets the table, not the part.
         inner = cell.client.rayTest([0.45 + 0.012, 0.1 + 0.012, 0.1], [0.45 + 0.012, 0.1 + 0.012, -0.01])[0]
-        assert inner[0] != cell.cubes["ell"]
+        assert inner[0] != cell.parts["ell"]
 
 
 def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> None:
@@ -43,7 +43,7 @@ def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> N
         cell.add_object(ELL, "red", 0.45, 0.1, 0.4, name="ell")
         cell.settle(0.3)
         script = ScriptedPickPlace(cell, object_type=ELL)
-        x, y, yaw = cell.cube_planar_truth("ell")
+        x, y, yaw = cell.part_planar_truth("ell")
         picked = script.pick(x, y, yaw)
         assert picked.grasped, picked.feedback
         # The pads sink about 1 mm into the light part under 40 N (measured 58.9 to 59.1 mm); Pick allows 3.
@@ -51,7 +51,7 @@ def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> N
         target = (0.52, -0.08, 1.2)
         script.place(*target)
         cell.settle(0.3)
-        x, y, yaw = cell.cube_planar_truth("ell")
+        x, y, yaw = cell.part_planar_truth("ell")
         assert math.hypot(x - target[0], y - target[1]) < 0.002, "placed within 2 mm (no push yet)"
         assert abs(math.degrees(fold_yaw(yaw - target[2], 2 * math.pi))) < 1.0
 
@@ -66,14 +66,14 @@ def test_a_prism_pushed_under_a_millimetre_stays_where_the_pads_left_it(part, pu
     with WorkCell() as cell:
         cell.add_object(part, "red", 0.45, 0.1, 0.0, name="part")
         cell.settle(0.5)
-        start = cell.cube_pose_truth("part")
+        start = cell.part_pose_truth("part")
         heading = part.shape.named_pushes(ROBOTIQ_2F85)[push].heading_rad
         feedback = ScriptedPickPlace(cell, object_type=part).push_along(
             start.x_m, start.y_m, start.yaw_rad, heading, distance_m
         )
         assert f"({push[1:]} deg)" in feedback, feedback
         cell.settle(1.0)
-        pose = cell.cube_pose_truth("part")
+        pose = cell.part_pose_truth("part")
         c, s = math.cos(start.yaw_rad + heading), math.sin(start.yaw_rad + heading)
         dx, dy = pose.x_m - start.x_m, pose.y_m - start.y_m
         assert dx * c + dy * s == pytest.approx(distance_m, abs=1e-4), "moved by the push, along it"
@@ -118,9 +118,9 @@ def test_a_part_turned_50_deg_after_its_release_is_picked_again_at_its_camera_po
         def turn_after_release(transition) -> None:  # noqa: ANN001 - a Transition
             # An injected error, as a part turning in the pads would leave it: the tree learns of it by camera.
             if transition.behaviour == "place green" and transition.new == "SUCCESS" and not turned:
-                x, y, yaw = run.cell.cube_planar_truth("green")
+                x, y, yaw = run.cell.part_planar_truth("green")
                 turned.append(yaw)
-                run.cell.place_cube_truth("green", Pose.from_planar(x, y, yaw + math.radians(50), z_m=0.01))
+                run.cell.place_part_truth("green", Pose.from_planar(x, y, yaw + math.radians(50), z_m=0.01))
 
         run.transition_hooks.append(turn_after_release)
         report = run.run()

@@ -20,7 +20,7 @@ def _camera_error_mm(config: CellConfig, calibration=None) -> float | None:  # n
         detection = PartDetector().detect(camera.capture(), "red")
         if detection.pose_world is None:
             return None
-        x, y, _ = cell.cube_planar_truth("red")
+        x, y, _ = cell.part_planar_truth("red")
         return float(np.hypot(detection.pose_world.x_m - x, detection.pose_world.y_m - y) * 1000)
 
 
@@ -57,7 +57,7 @@ def _grip_red_cube(config: CellConfig) -> tuple[WorkCell, float]:
     cell.settle(0.2)
     cell.gripper.close(40.0)
     cell.settle(1.0)
-    x, y, _ = cell.cube_planar_truth("red")
+    x, y, _ = cell.part_planar_truth("red")
     return cell, float((np.array([x, y]) - tcp.position_m[:2]) @ closing[:2])
 
 

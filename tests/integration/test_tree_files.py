@@ -37,8 +37,8 @@ def test_a_two_centimetre_picking_error_is_pushed_back_within_the_threshold():
         def bump_after_detection(transition):
             if transition.behaviour == "detect red" and transition.new == "SUCCESS":
                 # 45 degrees to the faces: 14 mm along each, so the pads still come down beside it.
-                direction = run.cell.cube_planar_truth("red")[2] + math.pi / 4
-                run.cell.displace_cube("red", 0.02 * np.cos(direction), 0.02 * np.sin(direction))
+                direction = run.cell.part_planar_truth("red")[2] + math.pi / 4
+                run.cell.displace_part("red", 0.02 * np.cos(direction), 0.02 * np.sin(direction))
 
         run.transition_hooks.append(bump_after_detection)
         report = run.run()

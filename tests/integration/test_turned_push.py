@@ -13,7 +13,7 @@ import pytest
 from bt_arrange.behaviours import Inspect, MoveHome
 from bt_arrange.trees import Arrangement, Target, correction, set_target
 from bt_arrange_sim.pybullet.runs import SimulatedRun
-from bt_arrange_sim.scenes import CubeStart
+from bt_arrange_sim.scenes import PartStart
 
 
 def correct_only(target: Target) -> Arrangement:
@@ -38,7 +38,7 @@ def test_a_cube_25_mm_off_and_turned_12_degrees_is_pushed_home_within_a_millimet
     # 25 mm beyond the target along its x axis, 3 mm along its y, turned from its yaw.
     along_m, across_m = 0.025, 0.003
     c, s = math.cos(target.yaw_rad), math.sin(target.yaw_rad)
-    start = CubeStart(
+    start = PartStart(
         "red",
         target.x_m + c * along_m - s * across_m,
         target.y_m + s * along_m + c * across_m,
