@@ -466,3 +466,12 @@ def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # issue 9
     assert result.stdout.strip() == "False"
     source = (Path(__file__).resolve().parents[1] / "bt_arrange" / "behaviours" / "grasp_estimation.py").read_text()
     assert "bt_arrange.trees import" not in source
+
+
+def test_by_depth_looks_for_its_configured_box_type_and_names_it_when_a_target_is_another():
+    bar = ObjectType("bar", (0.08, 0.04, 0.04))
+    with pytest.raises(PlanError, match=r"looks for a cube \(50 x 50 x 50 mm\), not a bar"):
+        by_depth()(Target("red", 0.5, 0.1, object_type=bar))
+    estimator = DepthGraspEstimator(dataclasses.replace(CLEAN, part=bar))
+    node = by_depth(estimator=estimator)(Target("red", 0.5, 0.1, object_type=bar))
+    assert isinstance(node, EstimateGraspFromDepth)

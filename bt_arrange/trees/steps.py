@@ -72,8 +72,9 @@ def by_depth(
     def locate(target: Target) -> py_trees.behaviour.Behaviour:
         if target.object_type != known:
             raise PlanError(
-                f"target {target.obj}: the depth-only grasp estimator knows the paper's 5 cm cube only, "
-                f"not a {target.object_type.name} ({target.object_type.size_text})"
+                f"target {target.obj}: the depth-only grasp estimator looks for a {known.name} ({known.size_text}), "
+                f"not a {target.object_type.name} ({target.object_type.size_text}): it finds one box type per run, "
+                "given as by_depth(estimator=DepthGraspEstimator(DepthGraspConfig(part=...)))"
             )
         return EstimateGraspFromDepth(
             f"estimate {target.obj} grasp from depth",
