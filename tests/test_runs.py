@@ -35,7 +35,7 @@ class FakeCell:
         self.robot = self.context.robot
         self.camera = self.robot.camera
         self.starts: dict[str, PartStart] = {}
-        self.cubes = self.starts  # the names of the parts, as the cell's body ids by name
+        self.parts = self.starts  # the names of the parts, as the cell's body ids by name
         FakeCell.built.append(self)
 
     def add_parts(self, starts) -> None:
