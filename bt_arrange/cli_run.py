@@ -171,6 +171,9 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
+        source = getattr(report, "camera_margin_source", "")
+        if source:
+            print(f"within: the camera's offset plus its own error under the threshold; camera error {source}")
     if args.record:
         if recorded:
             mcap = ", run.mcap" if (Path(args.record) / "run.mcap").is_file() else ""

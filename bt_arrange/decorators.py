@@ -22,6 +22,7 @@ from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.numbers import fixed
 from bt_arrange.ports import INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
+from bt_arrange.uncertainty import CAMERA_MARGIN_KEY
 
 
 class RepeatUntilWithin(py_trees.decorators.Decorator):
@@ -37,6 +38,9 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
     ``obj`` names the object corrected, for reports that look for the reason an object failed.
     With ``yaw_key`` and ``yaw_threshold_deg`` the object is within only when the absolute yaw error
     there (degrees) is under ``yaw_threshold_deg`` too: the loop also corrects yaw.
+
+    The offset counts as under the threshold only with the camera's own error added: the margin
+    the session writes at ``bt_arrange.uncertainty.CAMERA_MARGIN_KEY`` (mm; none there, no margin).
     """
 
     #: The node's description in the XML ``TreeNodesModel``.
@@ -86,6 +90,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.required_reads: dict[str, str] = {offset_key: f"an Inspect{'' if self.obj is None else ' of ' + self.obj}"}
         if self.yaw_key is not None:
             self.blackboard.register_key(self.yaw_key, access=Access.READ)
+        self.blackboard.register_key(CAMERA_MARGIN_KEY, access=Access.READ)
         if corrections_key is not None:
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
 
@@ -134,23 +139,32 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         yaw = self._yaw_error()
         yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
         yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
-        if offset < self.threshold_mm and yaw_within:
+        margin = self._margin_mm()
+        margin_text = f" + camera {margin:.2f} mm" if margin > 0 else ""
+        if offset + margin < self.threshold_mm and yaw_within:
             under = (
                 f"offset {offset:.2f} mm"  # no offset threshold: the yaw alone decides (a regrasp)
                 if math.isinf(self.threshold_mm)
-                else f"offset {offset:.2f} mm < {self.threshold_mm:.2f} mm"
+                else f"offset {offset:.2f} mm{margin_text} < {self.threshold_mm:.2f} mm"
             )
             self.feedback_message = f"{under}{yaw_text} after {self.attempts} correction(s)"
             return Status.SUCCESS
         if self.attempts >= self.max_attempts:
             what = f"offset still {offset:.2f} mm" + (
-                f" >= {self.threshold_mm:.2f} mm" if offset >= self.threshold_mm else ""
+                f"{margin_text} >= {self.threshold_mm:.2f} mm" if offset + margin >= self.threshold_mm else ""
             )
             if not yaw_within:
                 what += f"{yaw_text} (>= {self.yaw_threshold_deg:.2f} deg)"
             self.feedback_message = f"{what} after {self.attempts} correction(s)"
             return Status.FAILURE
         return None
+
+    def _margin_mm(self) -> float:
+        """The camera's own error (mm) the session wrote, 0 without one."""
+        if not self.blackboard.exists(CAMERA_MARGIN_KEY):
+            return 0.0
+        value = self.blackboard.get(CAMERA_MARGIN_KEY)
+        return 0.0 if value is None else float(value)
 
     def _yaw_error(self) -> float | None:
         if self.yaw_key is None or not self.blackboard.exists(self.yaw_key):

@@ -56,6 +56,10 @@ class SessionReport:
     yaw_threshold_deg: float | None = None
     #: False when the world had no ground truth: the ``*_truth_*`` figures are None, the report camera only.
     ground_truth: bool = True
+    #: The camera's own error (mm) a measured offset had to leave under the threshold to count as
+    #: within, and where the figure comes from (``bt_arrange.uncertainty``).
+    camera_margin_mm: float = 0.0
+    camera_margin_source: str = ""
 
     @property
     def all_within_threshold(self) -> bool:
@@ -80,6 +84,7 @@ class SessionReport:
             "objects_within": sum(o.status == "within" for o in self.objects),
             "threshold_mm": self.threshold_mm,
             "yaw_threshold_deg": self.yaw_threshold_deg,
+            "camera_margin_mm": round(self.camera_margin_mm, 4),
             "tree_status": self.tree_status,
             "timed_out": self.timed_out,
             "sim_seconds": round(self.sim_seconds, 3),

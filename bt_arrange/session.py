@@ -60,6 +60,7 @@ from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import Arrangement, Target
+from bt_arrange.uncertainty import CAMERA_MARGIN_KEY, camera_margin_mm
 
 #: The longest the scene settles before the tree starts (parts put on the table come to rest), seconds.
 SETTLE_S = 0.3
@@ -239,6 +240,8 @@ class Session:
         self.title = title or root.name
         #: The recorded files that could not be written (a full disk, the folder gone); the run goes on.
         self.faults = files.Faults()
+        #: The camera's own error (mm) a measured offset must leave under the threshold, and whence.
+        self.camera_margin_mm, self.camera_margin_source = camera_margin_mm(calibration, self.world)
         #: A live Foxglove server (``bt_arrange.foxglove.streams.LiveServer``, ``--foxglove``) to stream to, or None.
         self.foxglove_live: Any = None
 
@@ -254,6 +257,8 @@ class Session:
         report (``result``) and names the file and the cause ("the run finished, its record did not").
         """
         py_trees.blackboard.Blackboard.clear()
+        # The camera's own error, for every decorator that judges "within" (bt_arrange.uncertainty).
+        py_trees.blackboard.Blackboard.set(CAMERA_MARGIN_KEY, self.camera_margin_mm)
         log = TransitionLog(self.record_dir / "transitions.jsonl" if self.record_dir else None)
         if self.record_dir is not None:
             self.replay = ReplayRecorder(self.root)
@@ -286,6 +291,8 @@ class Session:
             timed_out=result.timed_out,
             transitions=result.transitions,
             ground_truth=self.truth is not None,
+            camera_margin_mm=self.camera_margin_mm,
+            camera_margin_source=self.camera_margin_source,
         )
         if streams is not None:
             streams.finish(report)
@@ -472,13 +479,14 @@ class Session:
         return earlier[-1].feedback if earlier else ""
 
     def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
-        """Within only when the offset and (with a yaw threshold) the yaw error are under their thresholds."""
+        """Within only when the offset with the camera's margin, and the yaw error, are under their thresholds."""
         assert isinstance(self.root, Arrangement)
         if final_offset_mm is None:
             return "failed"
         yaw_threshold = self.root.yaw_threshold_deg
         yaw_within = yaw_threshold is None or final_yaw_error_deg is None or abs(final_yaw_error_deg) < yaw_threshold
-        return "within" if final_offset_mm < self.root.threshold_mm and yaw_within else "outside"
+        within = final_offset_mm + self.camera_margin_mm < self.root.threshold_mm
+        return "within" if within and yaw_within else "outside"
 
     def _truth_offset_mm(self, target: Target) -> float | None:
         if self.truth is None:

@@ -20,6 +20,7 @@ from bt_arrange.perception import ColourTable
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.session import GroundTruth, Session, World
+from bt_arrange.uncertainty import IDEAL_CELL_CAMERA_MM
 from bt_arrange_sim.config import CellConfig
 
 
@@ -77,6 +78,12 @@ class CellWorld:
     def planar_pose(self, name: str) -> tuple[float, float, float]:
         """The simulator's true ``(x_m, y_m, yaw_rad)`` of a part (yaw folded to its symmetry)."""
         return self.cell.part_planar_truth(name)
+
+    @property
+    def camera_margin_mm(self) -> float | None:
+        """The camera's measured error (mm, ``bt_arrange.uncertainty``): the ideal cell's; None in a real cell."""
+        errors = self.cell.config.errors
+        return None if errors.enabled else IDEAL_CELL_CAMERA_MM
 
     def pose_truth(self, name: str) -> Pose:
         """The simulator's true 6-D pose of a part's centre (the Foxglove recording draws parts lifted too)."""

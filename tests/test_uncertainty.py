@@ -1,0 +1,83 @@
+"""The camera's own error as a margin under the threshold (issue 38, item 5): the decorator, the source, the report."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+from py_trees.common import Status
+from test_decorators import OFFSET, push_then_inspect, write_offset
+
+from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.geometry import Pose
+from bt_arrange.robot import CameraIntrinsics
+from bt_arrange.uncertainty import (
+    CAMERA_MARGIN_KEY,
+    IDEAL_CELL_CAMERA_MM,
+    calibration_margin_mm,
+    camera_margin_mm,
+)
+
+
+def loop(offsets_mm: list[float]) -> RepeatUntilWithin:
+    child, _ = push_then_inspect(offsets_mm)
+    return RepeatUntilWithin("correct red", child, offset_key=OFFSET, threshold_mm=1.0, max_attempts=5)
+
+
+def run(decorator: RepeatUntilWithin, ticks: int = 20) -> Status:
+    for _ in range(ticks):
+        decorator.tick_once()
+        if decorator.status != Status.RUNNING:
+            break
+    return decorator.status
+
+
+def test_an_offset_under_the_threshold_but_not_with_the_margin_is_pushed_again() -> None:
+    py_trees.blackboard.Blackboard.set(CAMERA_MARGIN_KEY, 0.04)
+    write_offset(0.97)
+    decorator = loop([0.5])
+    assert run(decorator) == Status.SUCCESS
+    assert decorator.attempts == 1
+    assert "0.50 mm + camera 0.04 mm < 1.00 mm" in decorator.feedback_message
+
+
+def test_without_a_margin_the_same_offset_is_within_at_once() -> None:
+    write_offset(0.97)
+    decorator = loop([0.5])
+    assert run(decorator) == Status.SUCCESS
+    assert decorator.attempts == 0
+
+
+def test_the_failure_names_the_margin() -> None:
+    py_trees.blackboard.Blackboard.set(CAMERA_MARGIN_KEY, 0.1)
+    write_offset(0.95)
+    decorator = RepeatUntilWithin("correct red", push_then_inspect([0.95])[0], OFFSET, 1.0, max_attempts=1)
+    assert run(decorator) == Status.FAILURE
+    assert "0.95 mm + camera 0.10 mm >= 1.00 mm after 1 correction(s)" in decorator.feedback_message
+
+
+class Calibration:
+    def __init__(self, reprojection_error_px: float, height_m: float, fx_px: float) -> None:
+        self.reprojection_error_px = reprojection_error_px
+        self.camera_to_base = Pose.from_planar(0.5, 0.0, 0.0, z_m=height_m)
+        self.intrinsics = CameraIntrinsics(
+            fx_px=fx_px, fy_px=fx_px, cx_px=959.5, cy_px=539.5, width_px=1920, height_px=1080
+        )
+
+
+def test_a_calibrated_camera_s_margin_is_twice_its_rms_at_the_table_s_scale() -> None:
+    calibration = Calibration(0.153, 0.70, 1371.0)
+    assert calibration_margin_mm(calibration) == pytest.approx(2 * 0.153 * 700 / 1371.0)
+    margin, source = camera_margin_mm(calibration, world=None)
+    assert margin == pytest.approx(0.156, abs=1e-3)
+    assert "0.153 px RMS" in source
+
+
+def test_the_world_s_figure_without_a_calibration_and_none_without_either() -> None:
+    class IdealWorld:
+        camera_margin_mm = IDEAL_CELL_CAMERA_MM
+
+    margin, source = camera_margin_mm(None, IdealWorld())
+    assert margin == IDEAL_CELL_CAMERA_MM
+    assert "perception benchmarks" in source
+    margin, source = camera_margin_mm(None, object())
+    assert margin == 0.0 and source.startswith("unknown")
