@@ -21,8 +21,12 @@ from py_trees.common import Access, Status
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.numbers import fixed
-from bt_arrange.ports import INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
+from bt_arrange.ports import BOOL, INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY
+
+#: A correction that closes less than this share of the best offset (and of the best yaw error)
+#: so far counts towards ``stall_after``.
+STALL_FRACTION = 0.1
 
 
 class RepeatUntilWithin(py_trees.decorators.Decorator):
@@ -56,6 +60,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             Port("corrections_key", OFF_STRING, None, "blackboard key counting the corrections (empty: none)"),
             Port("yaw_key", OFF_STRING, None, "blackboard key of the yaw error [deg] (empty: position only)"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "succeed once the yaw error is under this too [deg] (0: off)"),
+            Port("stall_after", INT, 0, "fail once this many corrections in a row closed nothing (0: off)"),
+            Port("accumulate", BOOL, False, "count on from what the corrections key holds (a second loop)"),
         )
 
     def __init__(
@@ -69,8 +75,12 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         obj: str | None = None,
         yaw_key: str | None = None,
         yaw_threshold_deg: float | None = None,
+        stall_after: int = 0,
+        accumulate: bool = False,
     ) -> None:
         positive_number("threshold", threshold_mm, "mm", style="unit", finite=False)
+        if stall_after:
+            whole_number("stall_after", stall_after, style="unit")
         if yaw_threshold_deg is not None:
             positive_number("yaw threshold", yaw_threshold_deg, "deg", style="unit", finite=False)
         whole_number("max_attempts", max_attempts, style="unit")
@@ -84,6 +94,15 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.attempts = 0
         self.yaw_key = yaw_key if yaw_threshold_deg is not None else None
         self.yaw_threshold_deg = None if yaw_threshold_deg is None else float(yaw_threshold_deg)
+        #: Corrections in a row that closed less than ``STALL_FRACTION`` of the best offset and yaw error so far
+        #: end the loop with FAILURE ("stopped converging"), for a fallback above it; 0: never.
+        self.stall_after = int(stall_after)
+        self._best: tuple[float, float] | None = None
+        self._stalls = 0
+        #: With ``accumulate`` the count at ``corrections_key`` goes on from what it held (a second loop of one object).
+        self.accumulate = accumulate
+        self._counted_before = 0
+        self.stalled_key = keys.key(self.obj, keys.PUSHES_STALLED) if stall_after and self.obj else None
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
         #: The key it cannot judge without, and who writes it (``bt_arrange.keycheck``).
@@ -93,10 +112,19 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self.blackboard.register_key(CAMERA_MARGIN_KEY, access=Access.READ)
         if corrections_key is not None:
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
+        if self.stalled_key is not None:
+            self.blackboard.register_key(self.stalled_key, access=Access.WRITE)
 
     def initialise(self) -> None:
         """Start counting corrections from zero."""
         self.attempts = 0
+        self._best = None
+        self._stalls = 0
+        self._counted_before = 0
+        if self.accumulate and self.corrections_key is not None and self.blackboard.exists(self.corrections_key):
+            self._counted_before = int(self.blackboard.get(self.corrections_key) or 0)
+        if self.stalled_key is not None:
+            self.blackboard.set(self.stalled_key, "no", overwrite=True)
         self._record()
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
@@ -149,6 +177,14 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             )
             self.feedback_message = f"{under}{yaw_text} after {self.attempts} correction(s)"
             return Status.SUCCESS
+        if self._stalled(offset, yaw):
+            if self.stalled_key is not None:
+                self.blackboard.set(self.stalled_key, keys.STALLED, overwrite=True)
+            self.feedback_message = (
+                f"pushes stopped converging: offset {offset:.2f} mm{yaw_text} after {self.attempts} correction(s), "
+                f"{self._stalls} in a row closing less than {STALL_FRACTION:.0%}"
+            )
+            return Status.FAILURE
         if self.attempts >= self.max_attempts:
             what = f"offset still {offset:.2f} mm" + (
                 f"{margin_text} >= {self.threshold_mm:.2f} mm" if offset + margin >= self.threshold_mm else ""
@@ -158,6 +194,23 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             self.feedback_message = f"{what} after {self.attempts} correction(s)"
             return Status.FAILURE
         return None
+
+    def _stalled(self, offset: float, yaw: float | None) -> bool:
+        """Count a correction that closed less than ``STALL_FRACTION`` of the best offset and yaw error so far."""
+        if not self.stall_after:
+            return False
+        now = (offset, abs(yaw) if yaw is not None else 0.0)
+        if self._best is None:
+            self._best = now
+            return False
+        keep = 1.0 - STALL_FRACTION
+        # Only what is still outside its threshold counts: a yaw already within shrinking by a hundredth is no progress.
+        offset_outside = offset + self._margin_mm() >= self.threshold_mm
+        yaw_outside = self.yaw_threshold_deg is not None and now[1] >= self.yaw_threshold_deg
+        improved = (offset_outside and now[0] < self._best[0] * keep) or (yaw_outside and now[1] < self._best[1] * keep)
+        self._best = (min(self._best[0], now[0]), min(self._best[1], now[1]))
+        self._stalls = 0 if improved else self._stalls + 1
+        return self._stalls >= self.stall_after
 
     def _margin_mm(self) -> float:
         """The camera's own error (mm) the session wrote, 0 without one."""
@@ -184,7 +237,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
 
     def _record(self) -> None:
         if self.corrections_key is not None:
-            self.blackboard.set(self.corrections_key, self.attempts, overwrite=True)
+            self.blackboard.set(self.corrections_key, self._counted_before + self.attempts, overwrite=True)
 
 
 #: The former name of ``RepeatUntilWithin`` (it repeats on success, like py_trees' ``Repeat``).

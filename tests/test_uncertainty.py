@@ -81,3 +81,41 @@ def test_the_world_s_figure_without_a_calibration_and_none_without_either() -> N
     assert "perception benchmarks" in source
     margin, source = camera_margin_mm(None, object())
     assert margin == 0.0 and source.startswith("unknown")
+
+
+# ----------------------------------------------------------------------------------------------
+# Pushes that stop converging (issue 38, item 5)
+# ----------------------------------------------------------------------------------------------
+
+
+def test_corrections_that_close_nothing_end_the_loop_saying_so() -> None:
+    write_offset(2.0)
+    child, _ = push_then_inspect([1.2, 1.15, 1.12, 1.1, 0.5])
+    decorator = RepeatUntilWithin("correct red", child, OFFSET, 1.0, max_attempts=10, obj="red", stall_after=3)
+    assert run(decorator, ticks=40) == Status.FAILURE
+    assert decorator.attempts == 4  # 2.0 -> 1.2 closed 40 %, then three that closed under 10 % each
+    assert "pushes stopped converging: offset 1.10 mm after 4 correction(s)" in decorator.feedback_message
+    assert py_trees.blackboard.Blackboard.get("/red/pushes_stalled") == "stalled"
+
+
+def test_a_loop_that_keeps_closing_is_not_stalled() -> None:
+    write_offset(2.0)
+    child, _ = push_then_inspect([1.7, 1.5, 1.3, 1.1, 0.9])
+    decorator = RepeatUntilWithin("correct red", child, OFFSET, 1.0, max_attempts=10, obj="red", stall_after=3)
+    assert run(decorator, ticks=40) == Status.SUCCESS
+    assert decorator.attempts == 5
+    assert py_trees.blackboard.Blackboard.get("/red/pushes_stalled") == "no"
+
+
+def test_a_second_loop_counts_on_from_the_first() -> None:
+    corrections = "/red/corrections"
+    write_offset(2.0)
+    first = RepeatUntilWithin(
+        "first", push_then_inspect([1.9, 1.9, 1.9])[0], OFFSET, 1.0, 10, corrections, obj="red", stall_after=2
+    )
+    assert run(first, ticks=40) == Status.FAILURE
+    second = RepeatUntilWithin(
+        "second", push_then_inspect([0.5])[0], OFFSET, 1.0, 10, corrections, obj="red", accumulate=True
+    )
+    assert run(second, ticks=40) == Status.SUCCESS
+    assert py_trees.blackboard.Blackboard.get(corrections) == first.attempts + 1

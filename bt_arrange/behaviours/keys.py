@@ -29,6 +29,10 @@ OFFSET_MM = "offset_mm"
 OFFSET_XY_MM = "offset_xy_mm"
 PLACED_OFFSET_MM = "placed_offset_mm"
 CORRECTIONS = "corrections"
+#: ``STALLED`` once the object's correction ended because its pushes stopped converging
+#: (``RepeatUntilWithin.stall_after``), else ``"no"``: a text, as XML trees compare them.
+PUSHES_STALLED = "pushes_stalled"
+STALLED = "stalled"
 PUSH_AXIS = "push_axis"
 YAW_ERROR_DEG = "yaw_error_deg"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"

@@ -210,6 +210,11 @@ def check_strategy(strategy: object) -> str:
     return str(strategy)
 
 
+#: Corrections in a row that close less than a tenth of the best offset or yaw error so far
+#: (``RepeatUntilWithin.stall_after``) before a free part is picked up and placed again.
+STALL_AFTER_PUSHES = 3
+
+
 def correction(
     target: Target,
     threshold_mm: float = 1.0,
@@ -261,7 +266,11 @@ def correction(
         memory=True,
         children=[push, inspect(target, f"inspect {obj}{label}", kind_targets=kind_targets)],
     )
-    return RepeatUntilWithin(
+    # A free part whose pushes stop converging is picked up and placed again, and corrected once more,
+    # rather than spending the rest of its pushes (issue 38). Among neighbours the release and the
+    # sides to push from are the layout's: there the loop keeps its pushes.
+    free = towards is None and not restage
+    loop = RepeatUntilWithin(
         name=f"correct {obj} to {threshold_mm:g} mm{label}",
         child=push_and_look,
         offset_key=keys.key(obj, keys.OFFSET_MM),
@@ -271,6 +280,48 @@ def correction(
         obj=obj,
         yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
         yaw_threshold_deg=yaw_threshold_deg,
+        stall_after=STALL_AFTER_PUSHES if free else 0,
+    )
+    if not free:
+        return loop
+    kind = target.object_type
+    again = RepeatUntilWithin(
+        name=f"correct {obj} to {threshold_mm:g} mm after placing it again{label}",
+        child=py_trees.composites.Sequence(
+            name=f"push and inspect {obj} after placing it again{label}",
+            memory=True,
+            children=[
+                Push(f"push {obj} after placing it again{label}", obj, strategy, kind, yaw_threshold_deg),
+                inspect(target, f"inspect {obj} after pushing it again{label}", kind_targets=kind_targets),
+            ],
+        ),
+        offset_key=keys.key(obj, keys.OFFSET_MM),
+        threshold_mm=threshold_mm,
+        max_attempts=max_pushes,
+        corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
+        obj=obj,
+        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+        yaw_threshold_deg=yaw_threshold_deg,
+        accumulate=True,
+    )
+    place_again = py_trees.composites.Sequence(
+        name=f"place {obj} again when its pushes stall{label}",
+        memory=True,
+        children=[
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj}'s pushes stalled{label}",
+                check=py_trees.common.ComparisonExpression(
+                    keys.key(obj, keys.PUSHES_STALLED), keys.STALLED, operator.eq
+                ),
+            ),
+            Pick(f"pick {obj} to place it again{label}", obj, kind),
+            GraspGuard(f"while holding {obj} to place it again{label}", Place(f"place {obj} again{label}", obj, kind)),
+            inspect(target, f"inspect {obj} after placing it again{label}", kind_targets=kind_targets),
+            again,
+        ],
+    )
+    return py_trees.composites.Selector(
+        name=f"correct {obj}, else place it again{label}", memory=True, children=[loop, place_again]
     )
 
 
