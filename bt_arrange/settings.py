@@ -7,7 +7,7 @@ The part's own geometry is its shape's and the pads' figures are the gripper's
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from bt_arrange.errors import OutOfRangeError
 from bt_arrange.motion.limits import HARDWARE_JOINT_VELOCITY_RAD_S, CartesianLimits, JointLimits
@@ -74,8 +74,12 @@ class ManipulationSettings:
     squaring_turn_deg: float = 22.5
     #: The pads start this far from the face they push, and back off this far after.
     push_clearance_m: float = 0.010
-    #: A push shorter than this along the alternated axis gives way to the other axis.
+    #: A push shorter than this along the alternated axis gives way to the other axis. A threshold
+    #: finer than ``min_threshold_mm`` lowers it to fit (``for_threshold``), down to ``finest_push_m``.
     min_push_m: float = 0.0002
+    #: The shortest push made at all (m): pushes of 0.3 to 0.8 mm kept all but 0.010 to 0.016 mm of
+    #: what they moved (docs/irregular.md, "Sub-millimetre pushes"), so 0.05 mm is still a push.
+    finest_push_m: float = 0.00005
     #: The line that pushes: slower than the planner's lines, so the part stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
     #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
@@ -185,3 +189,19 @@ class ManipulationSettings:
         would leave the part where it is.
         """
         return math.sqrt(2.0) * self.min_push_m * 1000
+
+    @property
+    def finest_threshold_mm(self) -> float:
+        """The smallest threshold a tree takes (mm): ``min_threshold_mm`` at ``finest_push_m``."""
+        return math.sqrt(2.0) * self.finest_push_m * 1000
+
+    def for_threshold(self, threshold_mm: float) -> ManipulationSettings:
+        """These settings for a ``threshold_mm`` finer than ``min_threshold_mm``: ``min_push_m`` lowered to fit.
+
+        An offset at the threshold may lie diagonally, ``threshold / sqrt(2)`` along each axis: that
+        becomes the shortest push (never under ``finest_push_m``). A coarser threshold keeps these settings.
+        """
+        fitting_m = threshold_mm / 1000 / math.sqrt(2.0)
+        if fitting_m >= self.min_push_m:
+            return self
+        return replace(self, min_push_m=max(fitting_m, self.finest_push_m))

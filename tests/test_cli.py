@@ -145,7 +145,7 @@ def test_show_prints_the_tree_as_text(capsys):
         (("--scheduler", "tcp://127.0.0.1:8786"), ("--scheduler needs --executor dask",)),
         (("--rows", "system,wobble"), ("unknown row 'wobble'", "tilt, all")),
         (("--executor", "dask", "--scheduler", " "), ("--scheduler is empty",)),
-        (("--thresholds", "0.5,0.1"), ("--thresholds 0.1", "below 0.28 mm")),
+        (("--thresholds", "0.5,0.05"), ("--thresholds 0.05", "below 0.07 mm")),
         (("--cell", "ideal,lab"), ("--cell lab", "unknown cell 'lab'")),
         (("--cell", "real", "--strategy", "learned", "--thresholds", ","), ("--thresholds is empty",)),
     ],

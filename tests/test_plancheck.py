@@ -77,11 +77,11 @@ def test_every_scattered_start_passes_the_check_at_its_own_yaw() -> None:
         check_scene(scatter(list(PAINT_RGB), seed), view=VIEW)
 
 
-@pytest.mark.parametrize("threshold_mm", [0.1, 0.2, 0.25])
+@pytest.mark.parametrize("threshold_mm", [0.01, 0.05, 0.065])
 def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(threshold_mm: float) -> None:  # item 3
-    floor = ManipulationSettings().min_threshold_mm
-    assert floor == pytest.approx(math.sqrt(2) * 0.2)
-    message = rf"threshold {threshold_mm:g} mm is below 0\.28 mm, the smallest offset a push can correct"
+    floor = ManipulationSettings().finest_threshold_mm
+    assert floor == pytest.approx(math.sqrt(2) * 0.05)
+    message = rf"threshold {threshold_mm:g} mm is below 0\.07 mm, the smallest offset a push can correct"
     for build in (
         lambda: arrangement([RED], threshold_mm=threshold_mm),
         lambda: correction(RED, threshold_mm),
@@ -91,6 +91,15 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
         with pytest.raises(PlanError, match=message):
             build()
     check_threshold(floor)  # the floor itself is allowed
+
+
+@pytest.mark.parametrize(
+    ("threshold_mm", "min_push_mm"), [(1.0, 0.2), (0.3, 0.2), (0.25, 0.25 / math.sqrt(2)), (0.08, 0.08 / math.sqrt(2))]
+)
+def test_a_fine_threshold_lowers_the_shortest_push_to_fit(threshold_mm: float, min_push_mm: float) -> None:  # issue 38
+    root = arrangement([RED], threshold_mm=threshold_mm)
+    assert root.settings.min_push_m * 1000 == pytest.approx(min_push_mm)
+    assert root.settings.min_threshold_mm <= max(threshold_mm, ManipulationSettings().finest_threshold_mm) + 1e-9
 
 
 @pytest.mark.parametrize(

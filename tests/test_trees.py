@@ -167,10 +167,29 @@ def arrange_red(indent: int, threshold: str = "1") -> list[str]:
         f"{pad}      GraspGuard while holding red",
         f"{pad}        Place place red",
         f"{pad}  Inspect inspect red after placing",
+        *correct_red(indent + 1, threshold),
+    ]
+
+
+def correct_red(indent: int, threshold: str = "1") -> list[str]:
+    """Algorithm 1's inner loop, and the fallback that places the part again when its pushes stall (issue 38)."""
+    pad = "  " * indent
+    return [
+        f"{pad}Selector correct red, else place it again",
         f"{pad}  RepeatUntilWithin correct red to {threshold} mm",
         f"{pad}    Sequence push and inspect red",
         f"{pad}      Push push red",
         f"{pad}      Inspect inspect red",
+        f"{pad}  Sequence place red again when its pushes stall",
+        f"{pad}    CheckBlackboardVariableValue red's pushes stalled",
+        f"{pad}    Pick pick red to place it again",
+        f"{pad}    GraspGuard while holding red to place it again",
+        f"{pad}      Place place red again",
+        f"{pad}    Inspect inspect red after placing it again",
+        f"{pad}    RepeatUntilWithin correct red to {threshold} mm after placing it again",
+        f"{pad}      Sequence push and inspect red after placing it again",
+        f"{pad}        Push push red after placing it again",
+        f"{pad}        Inspect inspect red after pushing it again",
     ]
 
 

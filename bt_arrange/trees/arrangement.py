@@ -293,6 +293,8 @@ def arrangement(
     if correct not in CORRECT_MODES:
         raise PlanError(f"correct={correct!r}: choose one of {', '.join(CORRECT_MODES)}")
     check_threshold(threshold_mm, settings)
+    # A threshold finer than 0.28 mm needs pushes shorter than 0.2 mm along an axis.
+    settings = settings.for_threshold(float(threshold_mm))
     whole_number("max_pushes", max_pushes)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")

@@ -212,15 +212,17 @@ def plan_steps(
 def check_threshold(threshold_mm: object, settings: ManipulationSettings | None = None) -> float:
     """The threshold in millimetres, or a ``PlanError``: it must be a number a push can correct.
 
-    The floor is ``settings.min_threshold_mm`` (0.28 mm with the default ``min_push_m`` of 0.2 mm):
-    below it a correction loop could "push" without moving the arm.
+    The floor is ``settings.finest_threshold_mm`` (0.07 mm with the default ``finest_push_m`` of
+    0.05 mm): below it a correction loop could "push" without moving the arm. A tree built for a
+    threshold under ``min_threshold_mm`` (0.28 mm) lowers its ``min_push_m`` to fit
+    (``ManipulationSettings.for_threshold``).
     """
     value_mm = positive_number("threshold_mm", threshold_mm, "mm")
     settings = settings or ManipulationSettings()
-    floor_mm = settings.min_threshold_mm
+    floor_mm = settings.finest_threshold_mm
     if value_mm < floor_mm:
         raise PlanError(
             f"threshold {threshold_mm:g} mm is below {floor_mm:.2f} mm, the smallest offset a push can correct "
-            f"(pushes shorter than min_push_m = {settings.min_push_m * 1000:.1f} mm along an axis are not made)"
+            f"(pushes shorter than finest_push_m = {settings.finest_push_m * 1000:.2f} mm along an axis are not made)"
         )
     return value_mm
