@@ -106,7 +106,10 @@ def test_an_irregular_part_s_tree_regrasps_between_the_inspect_after_placing_and
 
 
 def test_a_cuboid_s_tree_has_no_regrasp() -> None:
-    assert not [node for node in arrange_one(RED_CUBE).iterate() if "again" in node.name or "regrasp" in node.name]
+    # The fallback of a correction that stalls places any free part again (issue 38): not a regrasp while turned.
+    assert not [
+        node for node in arrange_one(RED_CUBE).iterate() if "regrasp" in node.name or "while turned" in node.name
+    ]
 
 
 def test_a_part_placed_nearly_square_is_not_picked_again_and_nothing_waits_a_tick() -> None:

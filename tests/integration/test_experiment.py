@@ -98,8 +98,8 @@ def test_every_error_of_section_3_is_a_row_with_its_injectors():
 
 def test_thresholds_and_the_campaign_product_are_checked():
     assert parse_thresholds("0.29, 0.5,1,2") == [0.29, 0.5, 1.0, 2.0]
-    with pytest.raises(PlanError, match=r"--thresholds 0.25: .*below 0.28 mm"):
-        parse_thresholds("0.25,1")
+    with pytest.raises(PlanError, match=r"--thresholds 0.05: .*below 0.07 mm"):
+        parse_thresholds("0.05,1")
     with pytest.raises(PlanError, match="'x' is not a number"):
         parse_thresholds("1,x")
     with pytest.raises(PlanError, match="-1 must be a positive"):
