@@ -211,8 +211,9 @@ def check_strategy(strategy: object) -> str:
 
 
 #: Corrections in a row that close less than a tenth of the best offset or yaw error so far
-#: (``RepeatUntilWithin.stall_after``) before a free part is picked up and placed again.
-STALL_AFTER_PUSHES = 3
+#: (``RepeatUntilWithin.stall_after``) before a free part is picked up and placed again. Two: with three,
+#: a fragment whose small pushes moved nothing spent its ten pushes at 0.58 mm (issue 38).
+STALL_AFTER_PUSHES = 2
 
 
 def correction(
