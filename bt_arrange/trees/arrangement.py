@@ -174,7 +174,7 @@ def _is_dense(step: Step) -> bool:
     return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(step.part.push_directions)
 
 
-#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,object type]]`` per target, read into ``Target``s.
+#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,object type[,z_m]]]`` per target, read into ``Target``s.
 TARGETS = targets_type(Target)
 #: The port type of a plan's starts, written as targets are, read into ``ObjectStart``s (empty: None).
 STARTS = starts_type(ObjectStart)
@@ -195,7 +195,9 @@ class Arrangement(py_trees.composites.Sequence):
         """The plan, its thresholds, its colours and its scene (BehaviorTree.CPP's ``providedPorts``)."""
         return (
             Port(
-                "targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name[,object type]] per object, separated by ;"
+                "targets",
+                TARGETS,
+                description="colour,x_m,y_m,yaw_rad[,name[,object type[,z_m]]] per object, separated by ;",
             ),
             Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "the yaw threshold the report checks [deg] (0: position only)"),
