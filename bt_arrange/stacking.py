@@ -81,7 +81,9 @@ def layers(targets: Sequence[Target]) -> list[list[Target]]:
 
 def footprint_of(target: Target, settings: ManipulationSettings) -> Footprint:
     """The target's footprint on the table (a box's rectangle, an outline's convex pieces)."""
-    return Part(target.obj, target.x_m, target.y_m, target.yaw_rad, target.object_type.shape, settings.gripper).footprint
+    return Part(
+        target.obj, target.x_m, target.y_m, target.yaw_rad, target.object_type.shape, settings.gripper
+    ).footprint
 
 
 def polygons(footprint: Footprint) -> list[np.ndarray]:
@@ -211,7 +213,9 @@ def _carried(target: Target, supports: dict[str, Support]) -> list[Target]:
 
 
 def _mm(value_m: float) -> str:
-    return f"{value_m * 1000:.0f} mm" if abs(value_m * 1000 - round(value_m * 1000)) < 0.05 else f"{value_m * 1000:.1f} mm"
+    return (
+        f"{value_m * 1000:.0f} mm" if abs(value_m * 1000 - round(value_m * 1000)) < 0.05 else f"{value_m * 1000:.1f} mm"
+    )
 
 
 def check_layers(
@@ -222,7 +226,8 @@ def check_layers(
         if not math.isfinite(target.z_m) or target.z_m < 0.0:
             raise PlanError(
                 f"target {target.obj}: z_m = {target.z_m!r} must be 0 (on the table) or more, the height of its "
-                "bottom face", parts=(("target", target.obj),)
+                "bottom face",
+                parts=(("target", target.obj),),
             )
     if not layered(plan):
         return
@@ -233,8 +238,13 @@ def check_layers(
         if support is None:
             continue
         if not support.below:
-            tops = sorted({_mm(top_m(o)) for o in plan if o.obj != target.obj and overlap(
-                footprint_of(o, settings), footprint_of(target, settings))})
+            tops = sorted(
+                {
+                    _mm(top_m(o))
+                    for o in plan
+                    if o.obj != target.obj and overlap(footprint_of(o, settings), footprint_of(target, settings))
+                }
+            )
             under = f" (the tops under it lie at {', '.join(tops)})" if tops else " (nothing lies under its footprint)"
             raise PlanError(
                 f"target {target.obj} at z {_mm(target.z_m)} stands on nothing: no part's top face is at "
@@ -363,8 +373,10 @@ def layered_steps(
     return steps
 
 
-def check_pads_clear(steps: Sequence[tuple[Target, Step]], plan: Sequence[Target], settings: ManipulationSettings) -> None:
-    """Refuse a raised part whose pads, releasing it, come down onto a lower part that stands taller than their bottoms."""
+def check_pads_clear(
+    steps: Sequence[tuple[Target, Step]], plan: Sequence[Target], settings: ManipulationSettings
+) -> None:
+    """Refuse a raised part whose pads, releasing it, come down onto a lower part taller than their bottoms."""
     pads = Pads.from_settings(settings)
     clearance_m = settings.gripper.table_clearance_m
     for target, step in steps:
@@ -376,10 +388,14 @@ def check_pads_clear(steps: Sequence[tuple[Target, Step]], plan: Sequence[Target
         for other in plan:
             if other.z_m >= target.z_m - LEVEL_TOLERANCE_M or top_m(other) <= pad_bottom_m - clearance_m:
                 continue
-            if any(overlap(volume, footprint_of(other, settings), settings.gripper.neighbour_clearance_m) for volume in volumes):
+            if any(
+                overlap(volume, footprint_of(other, settings), settings.gripper.neighbour_clearance_m)
+                for volume in volumes
+            ):
                 raise PlanError(
-                    f"target {target.obj} at z {_mm(target.z_m)}: the pads releasing it come down to {_mm(pad_bottom_m)}, "
-                    f"onto {other.obj} below, whose top is at {_mm(top_m(other))}: the gripper cannot reach this layer "
+                    f"target {target.obj} at z {_mm(target.z_m)}: the pads releasing it come down to "
+                    f"{_mm(pad_bottom_m)}, onto {other.obj} below, whose top is at {_mm(top_m(other))}: the gripper "
+                    f"cannot reach this layer "
                     f"without touching a lower part (keep the lower part's top {clearance_m * 1000:.0f} mm under the "
                     "pads, or move it out of their way)",
                     parts=(("target", target.obj), ("target", other.obj)),
@@ -396,8 +412,8 @@ def check_camera_range(plan: Sequence[Target], view: CameraView) -> None:
         if range_m < CAMERA_MIN_RANGE_M:
             highest_m = top_m(target) - (CAMERA_MIN_RANGE_M - range_m)
             raise PlanError(
-                f"target {target.obj}: its top face at {_mm(top_m(target))} is {range_m * 1000:.0f} mm from the camera, "
-                f"nearer than its depth's {CAMERA_MIN_RANGE_M * 1000:.0f} mm: the tower is taller than the camera "
-                f"allows (top faces up to {_mm(highest_m)} there)",
+                f"target {target.obj}: its top face at {_mm(top_m(target))} is {range_m * 1000:.0f} mm from the "
+                f"camera, nearer than its depth's {CAMERA_MIN_RANGE_M * 1000:.0f} mm: the tower is taller than "
+                f"the camera allows (top faces up to {_mm(highest_m)} there)",
                 parts=(("target", target.obj),),
             )

@@ -29,9 +29,7 @@ def write(tmp_path: Path, text: str) -> Path:
 
 def cube(colour: str, x_mm: float, y_mm: float, z_mm: float = 0.0, yaw_deg: float = 0.0, obj: str = "") -> str:
     kind = f'object = "{obj}"\n' if obj else ""
-    return (
-        f'[[targets]]\n{kind}colour = "{colour}"\nx_mm = {x_mm}\ny_mm = {y_mm}\nyaw_deg = {yaw_deg}\nz_mm = {z_mm}\n'
-    )
+    return f'[[targets]]\n{kind}colour = "{colour}"\nx_mm = {x_mm}\ny_mm = {y_mm}\nyaw_deg = {yaw_deg}\nz_mm = {z_mm}\n'
 
 
 def refusal(tmp_path: Path, text: str) -> str:

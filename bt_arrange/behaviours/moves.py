@@ -170,9 +170,14 @@ def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) ->
     return grasp_width_m(settings, object_type) + settings.turned_grip_margin_m
 
 
-def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[float, float, float]:
-    """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``)."""
-    return settings.tcp_heights_m(object_type.shape)
+def heights_m(settings: ManipulationSettings, object_type: ObjectType, z_m: float = 0.0) -> tuple[float, float, float]:
+    """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``).
+
+    ``z_m``: the part's bottom face above the table (a raised part, ``bt_arrange.stacking.heights_at_m``).
+    """
+    from bt_arrange.stacking import heights_at_m
+
+    return heights_at_m(settings, object_type.shape, z_m)
 
 
 def open_stage(name: str, opening_m: float) -> GripperStage:

@@ -10,7 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     heights_m,
@@ -106,6 +106,7 @@ class Push(StagedBehaviour):
                 optional=True,
             ),
             Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
+            Z_PORT,
         )
 
     def __init__(
@@ -118,8 +119,11 @@ class Push(StagedBehaviour):
         *,
         towards: tuple[str, ...] | None = None,
         opening_m: float | None = None,
+        z_m: float = 0.0,
     ) -> None:
         super().__init__(name)
+        #: Layers (issue 33): the height of the part's bottom face (0: the table); the pads push at its own height.
+        self.z_m = float(z_m)
         if strategy not in PUSH_STRATEGIES:
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
         self.strategy = strategy
@@ -227,7 +231,7 @@ class Push(StagedBehaviour):
         # The closing axis lies across the push; the gripper is symmetric under a half turn.
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
         opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
-        _, approach_m, push_m = heights_m(s, self.object_type)
+        _, approach_m, push_m = heights_m(s, self.object_type, self.z_m)
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * abs(distance_m)
@@ -310,7 +314,7 @@ class Push(StagedBehaviour):
         half_span_m = opening_m / 2 + s.gripper.pad_thickness_m
         shape = self.object_type.shape
         reach_m = shape.back_within_m(heading, pose.yaw_rad, half_span_m) + s.gripper.pad_width_m / 2
-        _, approach_m, push_m = heights_m(s, self.object_type)
+        _, approach_m, push_m = heights_m(s, self.object_type, self.z_m)
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
