@@ -22,6 +22,7 @@ plus heights; no simulator.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -382,11 +383,13 @@ def check_pads_clear(
     for target, step in steps:
         if target.z_m <= LEVEL_TOLERANCE_M:
             continue
+        if step.release.staged:
+            _check_staged_support(target, step, plan, settings)
         grasp_m, _, _ = raised_heights_m(settings, target)
         pad_bottom_m = grasp_m - settings.gripper.pad_half_height_m
         volumes = release_pads(step.part, step.part.footprint, step.release.axis, pads)
         for other in plan:
-            if other.z_m >= target.z_m - LEVEL_TOLERANCE_M or top_m(other) <= pad_bottom_m - clearance_m:
+            if other.z_m >= target.z_m - LEVEL_TOLERANCE_M or top_m(other) <= pad_bottom_m - clearance_m + 1e-9:
                 continue
             if any(
                 overlap(volume, footprint_of(other, settings), settings.gripper.neighbour_clearance_m)
@@ -400,6 +403,23 @@ def check_pads_clear(
                     "pads, or move it out of their way)",
                     parts=(("target", target.obj), ("target", other.obj)),
                 )
+
+
+def _check_staged_support(target: Target, step: Step, plan: Sequence[Target], settings: ManipulationSettings) -> None:
+    """A raised part released off its target (to be pushed home) must stand there too, with the margin."""
+    dx_m, dy_m = step.release.staging_m
+    c, s = math.cos(target.yaw_rad), math.sin(target.yaw_rad)
+    staged = dataclasses.replace(target, x_m=target.x_m + c * dx_m - s * dy_m, y_m=target.y_m + s * dx_m + c * dy_m)
+    others = [t for t in plan if t.obj != target.obj]
+    depth = depth_inside_m(support_of(staged, [*others, staged], settings).polygon, staged.x_m, staged.y_m)
+    if depth < SUPPORT_MARGIN_M:
+        raise PlanError(
+            f"target {target.obj} at z {_mm(target.z_m)}: its neighbours leave the pads no room at its target, and "
+            f"released {math.hypot(dx_m, dy_m) * 1000:.0f} mm off it to be pushed home its centre of mass would lie "
+            f"{depth * 1000:.1f} mm inside its support, under the {SUPPORT_MARGIN_M * 1000:.0f} mm margin: leave "
+            "room for the pads beside it (a gap of two pads and their clearances), or support it further out",
+            parts=(("target", target.obj),),
+        )
 
 
 def check_camera_range(plan: Sequence[Target], view: CameraView) -> None:
