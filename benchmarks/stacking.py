@@ -65,11 +65,26 @@ class BelowWatch:
         self.correcting_mm: dict[str, float] = {}
 
     def truth(self) -> dict[str, np.ndarray]:
-        return {name: np.array(self.run.cell.part_pose_truth(name).position_m) for name in self.done}
+        """The true positions of the world's parts that lie at the targets done so far.
+
+        Identical parts are told apart by where they lie, not by name: the tree's ``red 1`` may have
+        picked the world's ``red 3``.
+        """
+        cell = self.run.cell
+        world = {name: np.array(cell.part_pose_truth(name).position_m) for name in cell.parts}
+        out = {}
+        for obj in self.done:
+            target = self.targets[obj]
+            name = min(world, key=lambda n: math.hypot(world[n][0] - target.x_m, world[n][1] - target.y_m))
+            out[name] = world[name]
+        return out
 
     def moved_mm(self, before: dict[str, np.ndarray]) -> float:
-        now = self.truth()
-        return max((float(np.linalg.norm(now[n] - p)) * 1000 for n, p in before.items()), default=0.0)
+        cell = self.run.cell
+        return max(
+            (float(np.linalg.norm(np.array(cell.part_pose_truth(n).position_m) - p)) * 1000 for n, p in before.items()),
+            default=0.0,
+        )
 
     def __call__(self, transition: Transition) -> None:
         name, new = transition.behaviour, transition.new
@@ -88,7 +103,7 @@ class BelowWatch:
 
 def standing(run: Any, target: Any) -> tuple[float, float]:
     """How far (mm) the part's true centre lies from its planned height, and its top face's tilt (deg)."""
-    pose = run.cell.part_pose_truth(target.obj)
+    pose = run.cell.part_pose_truth(run.part_of(target))
     expected_m = target.z_m + target.object_type.shape.height_m / 2
     up = pose.rotation[:, 2]
     return (float(pose.position_m[2]) - expected_m) * 1000, math.degrees(math.acos(min(1.0, abs(float(up[2])))))

@@ -19,6 +19,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.errors import PerceptionError
 from bt_arrange.geometry import Pose
+from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.standing import TopFace, measure_top_face
 from bt_arrange.ports import DOUBLE, Port
@@ -105,7 +106,7 @@ class CheckStanding(StagedBehaviour):
         if face.tilt_deg > self.max_tilt_deg:
             return (
                 f"{self.obj} is tipped: its top face tilts {face.tilt_deg:.1f} deg, more than {self.max_tilt_deg:g} "
-                f"deg (at {face.height_m * 1000:.1f} mm, {error_mm:+.1f} mm from its height)"
+                f"deg (at {face.height_m * 1000:.1f} mm, {fixed(error_mm, 1, sign=True)} mm from its height)"
             )
         return None
 
@@ -114,6 +115,6 @@ class CheckStanding(StagedBehaviour):
         assert self.face is not None
         error_mm = (self.face.height_m - self.expected_top_m) * 1000
         return (
-            f"{self.obj} stands on its support: top face {error_mm:+.2f} mm from {self.expected_top_m * 1000:.0f} mm, "
-            f"tilted {self.face.tilt_deg:.2f} deg ({self.face.samples} depth pixels)"
+            f"{self.obj} stands on its support: top face {fixed(error_mm, 2, sign=True)} mm from "
+            f"{self.expected_top_m * 1000:.0f} mm, tilted {self.face.tilt_deg:.2f} deg ({self.face.samples} depth pixels)"
         )
