@@ -80,6 +80,7 @@ class BelowWatch:
         return out
 
     def moved_mm(self, before: dict[str, np.ndarray]) -> float:
+        """The most any of the parts in ``before`` moved since (mm, true 3-D position)."""
         cell = self.run.cell
         return max(
             (float(np.linalg.norm(np.array(cell.part_pose_truth(n).position_m) - p)) * 1000 for n, p in before.items()),
@@ -87,6 +88,7 @@ class BelowWatch:
         )
 
     def __call__(self, transition: Transition) -> None:
+        """Snapshot at a part's start, at its inspection after placing, and at its end."""
         name, new = transition.behaviour, transition.new
         for obj, target in self.targets.items():
             if name == f"arrange {obj}" and new == "RUNNING":
