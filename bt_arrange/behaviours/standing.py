@@ -116,5 +116,6 @@ class CheckStanding(StagedBehaviour):
         error_mm = (self.face.height_m - self.expected_top_m) * 1000
         return (
             f"{self.obj} stands on its support: top face {fixed(error_mm, 2, sign=True)} mm "
-            f"from {self.expected_top_m * 1000:.0f} mm, tilted {self.face.tilt_deg:.2f} deg ({self.face.samples} depth pixels)"
+            f"from {self.expected_top_m * 1000:.0f} mm, tilted {self.face.tilt_deg:.2f} deg "
+            f"({self.face.samples} depth pixels)"
         )
