@@ -1,7 +1,7 @@
 """Arrangements in layers (issue 33): the tower, the pyramid and the pallet, over seeds, plain and with a pick error.
 
     python benchmarks/stacking.py [--plans tower pyramid pallet] [--seeds 0 1 2] [--inject pick_translation]
-                                  [--backend pybullet|mujoco] [--record DIR] [--json]
+                                  [--displace-mm D] [--backend pybullet|mujoco] [--record DIR]
 
 Per plan and seed ``s`` the example plan (``bt_arrange/examples/NAME.toml``) runs with its parts
 scattered from ``s``; ``--inject pick_translation`` adds Table 1's translation pick error (row 2:
@@ -14,6 +14,10 @@ the part shifted up to 2.5 cm after its pose was measured) on every part. Report
 - **moved below**: for each raised part, the most any part placed before it moved (true 3-D
   position) while it was placed (from the start of its subtree to its inspection after placing)
   and while it was corrected (from then to the end of its subtree), against the issue's 0.1 mm.
+
+``--displace-mm D`` shifts each raised part D mm along its support right after it is placed (a
+bump, by error injection), so its correction has work: a gentle push at its own height under
+``REGRASP_OFFSET_MM`` (3 mm), a regrasp from the stack beyond.
 
 Each run prints a JSON line as it ends; the last line sums them up. ``--record DIR`` saves each
 run's images (``DIR/PLAN_sSEED[_inject]/``: before picking, after placing each part, at the end).
@@ -103,6 +107,32 @@ class BelowWatch:
                 self.done.append(obj)
 
 
+class Displace:
+    """Error injection (a bump, as ``cell.displace_part`` makes one): each raised part moved ``mm`` once placed.
+
+    Right after ``place <obj>`` succeeds the world's part at that target is shifted ``mm`` along its
+    support in a direction drawn from ``seed``, so the inspection after placing finds it off and the
+    correction of a raised part (a gentle push, or a regrasp beyond ``REGRASP_OFFSET_MM``) has work.
+    """
+
+    def __init__(self, run: Any, targets: list[Any], mm: float, seed: int) -> None:
+        self.run, self.mm = run, mm
+        self.targets = {t.obj: t for t in targets if t.z_m > 0}
+        self.rng = np.random.default_rng(seed)
+        self.done: set[str] = set()
+
+    def __call__(self, transition: Transition) -> None:
+        """Shift the part once its first placing ends."""
+        for obj, target in self.targets.items():
+            if transition.behaviour == f"place {obj}" and transition.new == "SUCCESS" and obj not in self.done:
+                self.done.add(obj)
+                cell = self.run.cell
+                centre = np.array([target.x_m, target.y_m, target.z_m + target.object_type.shape.height_m / 2])
+                name = min(cell.parts, key=lambda n: float(np.linalg.norm(cell.part_pose_truth(n).position_m - centre)))
+                angle = float(self.rng.uniform(-math.pi, math.pi))
+                cell.displace_part(name, self.mm / 1000 * math.cos(angle), self.mm / 1000 * math.sin(angle))
+
+
 def standing(run: Any, target: Any) -> tuple[float, float]:
     """How far (mm) the part's true centre lies from its planned height, and its top face's tilt (deg)."""
     pose = run.cell.part_pose_truth(run.part_of(target))
@@ -111,7 +141,15 @@ def standing(run: Any, target: Any) -> tuple[float, float]:
     return (float(pose.position_m[2]) - expected_m) * 1000, math.degrees(math.acos(min(1.0, abs(float(up[2])))))
 
 
-def run_once(plan: str, seed: int, inject: str | None, inject_seed: int, backend: str, record: Path | None) -> dict:
+def run_once(
+    plan: str,
+    seed: int,
+    inject: str | None,
+    inject_seed: int,
+    backend: str,
+    record: Path | None,
+    displace_mm: float = 0.0,
+) -> dict:
     """One plan, one seed; its figures."""
     path = examples.path_of(plan)
     assert path is not None, plan
@@ -130,6 +168,8 @@ def run_once(plan: str, seed: int, inject: str | None, inject_seed: int, backend
                 attach_all(run, target.obj, [make_injector(inject)], inject_seed + seed)
         watch = BelowWatch(run, list(root.targets))
         run.transition_hooks.append(watch)
+        if displace_mm:
+            run.transition_hooks.append(Displace(run, list(root.targets), displace_mm, inject_seed + seed))
         report = run.run()
         heights = {t.obj: standing(run, t) for t in root.targets}
     objects = report.to_dict()["objects"]
@@ -139,6 +179,7 @@ def run_once(plan: str, seed: int, inject: str | None, inject_seed: int, backend
         "plan": plan,
         "seed": seed,
         "inject": inject,
+        "displace_mm": displace_mm,
         "backend": backend,
         "tree_status": report.tree_status,
         "parts": len(objects),
@@ -171,6 +212,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--inject", help="an injector's name (sim/injection registry) on every part")
     parser.add_argument("--inject-seed", type=int, default=100)
+    parser.add_argument("--displace-mm", type=float, default=0.0, help="shift each raised part this far once placed")
     parser.add_argument("--backend", choices=("pybullet", "mujoco"), default="pybullet")
     parser.add_argument("--record", type=Path, help="save each run's images under this folder")
     parser.add_argument("--out", type=Path, help="append each run as a JSON line")
@@ -178,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     runs = []
     for plan in args.plans:
         for seed in args.seeds:
-            result = run_once(plan, seed, args.inject, args.inject_seed, args.backend, args.record)
+            result = run_once(plan, seed, args.inject, args.inject_seed, args.backend, args.record, args.displace_mm)
             runs.append(result)
             line = json.dumps(result)
             print(line, flush=True)
@@ -193,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         f"({sum(r['within_by_camera'] for r in runs)} confirmed by the camera), {fallen} fallen; "
         f"most a part below moved {max(r['max_moved_below_truth_mm'] for r in runs):.3f} mm "
         f"(limit {MOVED_BELOW_LIMIT_MM:g}); plans {', '.join(args.plans)}; seeds {args.seeds}; "
-        f"inject {args.inject or 'none'}; {args.backend}"
+        f"inject {args.inject or 'none'}; displaced {args.displace_mm:g} mm; {args.backend}"
     )
     return 0
 

@@ -246,7 +246,9 @@ class Push(StagedBehaviour):
         if self.opening_m is not None:
             # Among neighbours: the fingers stay within the face's width (the layout's opening).
             opening_m = min(opening_m, self.opening_m)
-        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis))
+        return self._motion(
+            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis), gentle=self.z_m > 0.0
+        )
 
     @staticmethod
     def _motion(
@@ -257,6 +259,7 @@ class Push(StagedBehaviour):
         heights: tuple[float, float],
         yaw: float,
         push_stage: str,
+        gentle: bool = False,
     ) -> list[Stage]:
         """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
         approach_m, push_m = heights
@@ -266,7 +269,7 @@ class Push(StagedBehaviour):
             MoveStage(stage.MOVE_BEHIND_PART, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
-            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
                 stage.LIFT_FINGERS,
@@ -319,7 +322,9 @@ class Push(StagedBehaviour):
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
         back = end - direction * s.push_clearance_m
-        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name))
+        return self._motion(
+            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name), gentle=self.z_m > 0.0
+        )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
         heading = self.square_pushes[name].heading_rad
