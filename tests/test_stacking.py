@@ -133,3 +133,66 @@ def test_the_support_polygon_of_a_turned_cube_holds_the_disc_of_its_inscribed_ci
     top = Target("green", 0.5, 0.0, 0.0, z_m=0.05)
     polygon = stacking.support_of(top, [left, right, top], settings).polygon
     assert np.ptp(polygon[:, 1]) == pytest.approx(0.05, abs=1e-9)
+
+
+def nodes(root, kind):
+    import py_trees
+
+    return [n for n in root.iterate() if isinstance(n, kind)] if isinstance(root, py_trees.behaviour.Behaviour) else []
+
+
+def test_a_raised_part_s_subtree_works_at_its_height_and_checks_that_it_stands() -> None:
+    from bt_arrange.behaviours import CheckStanding, Inspect, Pick, Place, Push
+
+    root = plans.load(examples_path("tower")).create_root()
+    green = next(c for c in root.children if c.name == "then the next (green)")
+    assert {n.z_m for n in nodes(green, Place) if n.where == "target"} == {0.05}
+    # Set down where it was picked (on the table) and picked centred before it goes on the tower.
+    assert [n.z_m for n in nodes(green, Place) if n.where == "pick"] == [0.0]
+    assert {n.z_m for n in nodes(green, Inspect)} == {0.05}
+    assert {n.z_m for n in nodes(green, Push)} == {0.05}
+    assert sorted({n.z_m for n in nodes(green, Pick)}) == [0.0, 0.05]
+    assert [n.z_m for n in nodes(green, CheckStanding)] == [0.05, 0.05]  # after placing, and after placing again
+    # Every move above the table clears the finished tower's top (200 mm) by the approach clearance.
+    assert root.settings.approach_height_m == pytest.approx(0.25)
+
+
+def test_after_each_raised_placement_the_parts_below_still_in_view_are_looked_at_again() -> None:
+    from bt_arrange.behaviours import Recheck
+
+    root = plans.load(examples_path("pyramid")).create_root()
+    watched = {
+        c.name.removeprefix("then the next ("): [(n.obj, n.after) for n in nodes(c, Recheck)]
+        for c in root.children
+        if c.name.startswith("then the next")
+    }
+    # The first green cube leaves the third red one in view; the second covers it; the top one covers all.
+    assert watched["green 1)"] == [("red 3", "green 1")]
+    assert watched["green 2)"] == [("green 1", "green 2")]  # its neighbour in its own layer
+    assert watched["blue)"] == []
+
+
+def test_a_plan_in_layers_is_corrected_part_by_part(tmp_path: Path) -> None:
+    text = 'correct = "after_all"\n' + cube("red", 500, 0) + cube("green", 500, 0, 50)
+    with pytest.raises(PlanError, match=r'\[\[targets\]\] 2: correct = "after_all" places every part before'):
+        plans.load(write(tmp_path, text))
+
+
+def test_a_raised_part_released_off_its_target_must_stand_there_too(tmp_path: Path) -> None:
+    # Two bars across two, 2 mm apart: no room for the pads between them, so the second is released
+    # 14 mm off its target, where 5 mm of its centre's margin would be left.
+    bars = "[objects.bar]\nsize_mm = [80, 40, 40]\n"
+    text = bars + cube("red", 500, -21, obj="bar") + cube("green", 500, 21, obj="bar")
+    text += cube("blue", 479, 0, 40, 90, obj="bar") + cube("yellow", 521, 0, 40, 90, obj="bar")
+    message = refusal(tmp_path, text)
+    assert (
+        "target yellow at z 40 mm: its neighbours leave the pads no room at its target, and released 14 mm" in message
+    )
+
+
+def examples_path(name: str) -> Path:
+    from bt_arrange import examples
+
+    path = examples.path_of(name)
+    assert path is not None
+    return path
