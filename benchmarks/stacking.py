@@ -2,6 +2,7 @@
 
     python benchmarks/stacking.py [--plans tower pyramid pallet] [--seeds 0 1 2] [--inject pick_translation]
                                   [--displace-mm D] [--backend pybullet|mujoco] [--record DIR]
+    python benchmarks/stacking.py --table RUNS.jsonl ...    # runs written with --out, as docs/stacking.md shows them
 
 Per plan and seed ``s`` the example plan (``bt_arrange/examples/NAME.toml``) runs with its parts
 scattered from ``s``; ``--inject pick_translation`` adds Table 1's translation pick error (row 2:
@@ -205,6 +206,33 @@ def run_once(
     }
 
 
+def table(lines: list[dict]) -> str:
+    """A markdown table of runs (JSON lines of ``run_once``): a row per plan, engine, injection and displacement."""
+    groups: dict[tuple, list[dict]] = {}
+    for run in lines:
+        key = (run["plan"], run["backend"], run["inject"] or "none", run.get("displace_mm", 0.0))
+        groups.setdefault(key, []).append(run)
+    rows = [
+        "| plan | engine | pick error | bump (mm) | seeds | within 1 mm, 1 deg (truth) | fallen | placed, raised parts "
+        "(mm, camera) | final offset (mm, truth) mean / max | final yaw (deg, truth) max | pushes on raised parts | "
+        "moved below (mm, truth) max |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for (plan, backend, inject, bump), runs in groups.items():
+        finals = [v for r in runs for v in r["final_offset_truth_mm"].values()]
+        yaws = [abs(v) for r in runs for v in r["final_yaw_error_truth_deg"].values()]
+        raised = [n for n in runs[0]["height_error_truth_mm"] if n in runs[0]["moved_below_placing_truth_mm"]]
+        placed = [r["placed_offset_mm"][n] for r in runs for n in raised]
+        pushes = sum(r["pushes"][n] for r in runs for n in raised)
+        rows.append(
+            f"| {plan} | {backend} | {inject} | {bump:g} | {len(runs)} | {sum(r['within'] for r in runs)} of "
+            f"{sum(r['parts'] for r in runs)} | {sum(len(r['fallen']) for r in runs)} | "
+            f"{np.mean(placed):.2f} +- {np.std(placed):.2f} | {np.mean(finals):.3f} / {max(finals):.3f} | "
+            f"{max(yaws):.3f} | {pushes} | {max(r['max_moved_below_truth_mm'] for r in runs):.4f} |"
+        )
+    return "\n".join(rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the plans and seeds, print a JSON line per run and a summary line."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -216,7 +244,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--backend", choices=("pybullet", "mujoco"), default="pybullet")
     parser.add_argument("--record", type=Path, help="save each run's images under this folder")
     parser.add_argument("--out", type=Path, help="append each run as a JSON line")
+    parser.add_argument("--table", type=Path, nargs="+", help="print the runs of these JSON-line files as a table")
     args = parser.parse_args(argv)
+    if args.table:
+        print(table([json.loads(line) for path in args.table for line in path.read_text().splitlines() if line]))
+        return 0
     runs = []
     for plan in args.plans:
         for seed in args.seeds:
