@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_arrange import stacking
 from bt_arrange.checks import at_mm, finite_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import Pose
@@ -76,11 +77,14 @@ class CameraView:
         """True when the top face of a cube of ``edge_m`` at (x, y, yaw), grown by ``margin_m``, is in the image."""
         return self.sees_part(x_m, y_m, yaw_rad, ObjectType("cube", (edge_m, edge_m, edge_m)))
 
-    def sees_part(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType) -> bool:
-        """True when the top face of a part at (x, y, yaw), grown by ``margin_m``, lies inside the image."""
+    def sees_part(self, x_m: float, y_m: float, yaw_rad: float, object_type: ObjectType, z_m: float = 0.0) -> bool:
+        """True when the top face of a part at (x, y, yaw), grown by ``margin_m``, lies inside the image.
+
+        ``z_m``: the part's bottom face above the table (a raised part's top face is nearer the camera).
+        """
         shape = object_type.shape
         corners = footprint_m(grown(shape, self.margin_m), x_m, y_m, yaw_rad)
-        return self.sees_outline(corners, shape.height_m)
+        return self.sees_outline(corners, z_m + shape.height_m)
 
     def sees_disc(self, x_m: float, y_m: float, radius_m: float, z_m: float, samples: int = 32) -> bool:
         """True when a level disc (``samples`` points of its rim) at height ``z_m`` lies inside the image.
@@ -275,9 +279,10 @@ def check_plan(
     if threshold_mm is not None:
         check_threshold(threshold_mm, settings)
     if view is not None:
+        stacking.check_camera_range(plan, view)
         for target in plan:
-            if not view.sees_part(target.x_m, target.y_m, target.yaw_rad, target.object_type):
-                height_m = target.object_type.shape.height_m
+            if not view.sees_part(target.x_m, target.y_m, target.yaw_rad, target.object_type, target.z_m):
+                height_m = target.z_m + target.object_type.shape.height_m
                 raise PlanError(
                     f"target {target.obj} at {at_mm(target.x_m, target.y_m)} is outside the camera's view"
                     f"{_view_text(view, height_m)}: the part could be placed there but never inspected",

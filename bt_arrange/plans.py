@@ -22,6 +22,7 @@
     y_mm = -60
     yaw_deg = 30                # optional, default 0
     name = "orange bar"         # optional; default the colour, numbered for identical parts
+    z_mm = 40                   # optional, default 0: its bottom face this high, on the parts below (a layer)
 
     [fresco.tile]               # a slab broken into pieces "tile 1" ... "tile N", each a target at its place
     size_mm = [160, 120, 20]    # the whole slab: length, width, height
@@ -81,10 +82,11 @@ TOP_KEYS = (
 )
 OBJECT_KEYS = ("size_mm", "outline_mm", "height_mm", "mass_kg", "friction")
 COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
-TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name")
+TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name", "z_mm")
 SCENE_KEYS = ("seed", "starts")
 FRESCO_KEYS = ("size_mm", "pieces", "gap_mm", "seed", "colour", "x_mm", "y_mm", "yaw_deg")
-START_KEYS = TARGET_KEYS
+#: A part starts on the table: a start has no ``z_mm``.
+START_KEYS = TARGET_KEYS[:-1]
 #: A position or a size in an ``_mm`` field below this many millimetres looks like metres (0.45 for 450).
 LOOKS_LIKE_METRES_MM = 2.0
 
@@ -466,8 +468,9 @@ class _Reader:
         where: str,
         types: dict[str, ObjectType],
         colours: ColourTable,
+        known: Sequence[str] = TARGET_KEYS,
     ) -> tuple[ObjectType, str, float, float, float, str | None]:
-        self.keys(entry, TARGET_KEYS, where)
+        self.keys(entry, known, where)
         type_name = entry.get("object", "cube")
         if not isinstance(type_name, str) or type_name not in types:
             raise self.fail(
@@ -501,6 +504,17 @@ class _Reader:
             raise self.fail(where, f"name = {_shown(name)} must be a non-empty text without '/'")
         return types[type_name], colour, x_mm / 1000, y_mm / 1000, math.radians(yaw_deg), name
 
+    def z_m(self, entry: dict[str, Any], where: str) -> float:
+        """A target's ``z_mm`` (its bottom face above the table; default 0) in metres."""
+        if "z_mm" not in entry:
+            return 0.0
+        z_mm = self.number(entry["z_mm"], where, "z_mm")
+        if z_mm < 0:
+            raise self.fail(where, f"z_mm = {_shown(entry['z_mm'])}: a part's bottom face cannot lie below the table")
+        if 0.0 < z_mm < LOOKS_LIKE_METRES_MM:
+            raise self.fail(where, f"z_mm = {_shown(entry['z_mm'])} looks like metres: the plan is in millimetres")
+        return z_mm / 1000
+
     def targets(self, entries: Any, types: dict[str, ObjectType], colours: ColourTable) -> list[Any]:
         from bt_arrange.trees import Target
 
@@ -512,16 +526,17 @@ class _Reader:
                 f"{len(entries)} targets, over the limit of {MAX_TARGETS} (bt_arrange.filelimits.MAX_TARGETS)",
             )
         read = [self.entry(entry, f"[[targets]] {i}", types, colours) for i, entry in enumerate(entries, start=1)]
+        heights_m = [self.z_m(entry, f"[[targets]] {i}") for i, entry in enumerate(entries, start=1)]
         counts: dict[str, int] = {}
         for _, colour, *_ in read:
             counts[colour] = counts.get(colour, 0) + 1
         numbers: dict[str, int] = {}
         targets = []
-        for kind, colour, x_m, y_m, yaw_rad, name in read:
+        for (kind, colour, x_m, y_m, yaw_rad, name), z_m in zip(read, heights_m, strict=True):
             if name is None and counts[colour] > 1:
                 numbers[colour] = numbers.get(colour, 0) + 1
                 name = f"{colour} {numbers[colour]}"
-            targets.append(Target(colour, x_m, y_m, yaw_rad, name=name, object_type=kind))
+            targets.append(Target(colour, x_m, y_m, yaw_rad, name=name, object_type=kind, z_m=z_m))
         return targets
 
     def scene(
@@ -547,7 +562,8 @@ class _Reader:
             names_by_kind.setdefault((target.object_type.name, target.colour), []).append(target.obj)
         starts = []
         for index, entry in enumerate(entries, start=1):
-            kind, colour, x_m, y_m, yaw_rad, name = self.entry(entry, f"[[scene.starts]] {index}", types, colours)
+            where = f"[[scene.starts]] {index}"
+            kind, colour, x_m, y_m, yaw_rad, name = self.entry(entry, where, types, colours, START_KEYS)
             if name is None:
                 waiting = names_by_kind.get((kind.name, colour), [])
                 name = waiting.pop(0) if waiting else None

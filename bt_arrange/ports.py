@@ -145,12 +145,16 @@ def _parse_targets(text: str, make: Callable[..., PartOnTable]) -> list[Any]:
         if not entry:
             continue
         fields = [f.strip() for f in entry.split(",")]
-        if len(fields) not in (4, 5, 6):
-            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,object type]]")
+        if len(fields) not in (4, 5, 6, 7):
+            raise ValueError(f"target {entry!r} is not colour,x_m,y_m,yaw_rad[,name[,object type[,z_m]]]")
         colour, x, y, yaw = fields[:4]
         name = fields[4] if len(fields) >= 5 and fields[4] else None
-        kind = _parse_object_type(fields[5]) if len(fields) == 6 else DEFAULT_TYPE
-        targets.append(make(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name, object_type=kind))
+        kind = _parse_object_type(fields[5]) if len(fields) >= 6 else DEFAULT_TYPE
+        # A raised target's height (issue 33): only a target has one, and only when not on the table.
+        raised = {"z_m": _parse_float(fields[6])} if len(fields) == 7 and _parse_float(fields[6]) != 0.0 else {}
+        targets.append(
+            make(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name, object_type=kind, **raised)
+        )
     return targets
 
 
@@ -159,10 +163,13 @@ def _format_targets(targets: list[PartOnTable]) -> str:
     for t in targets:
         fields = [t.colour, _format_float(t.x_m), _format_float(t.y_m), _format_float(t.yaw_rad)]
         named = t.name is not None and t.name != t.colour
-        if named or t.object_type != DEFAULT_TYPE:
+        z_m = float(getattr(t, "z_m", 0.0))
+        if named or t.object_type != DEFAULT_TYPE or z_m:
             fields.append(t.name if named and t.name is not None else "")
-        if t.object_type != DEFAULT_TYPE:
+        if t.object_type != DEFAULT_TYPE or z_m:
             fields.append(_format_object_type(t.object_type))
+        if z_m:
+            fields.append(_format_float(z_m))
         entries.append(",".join(fields))
     return ";".join(entries)
 

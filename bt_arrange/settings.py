@@ -82,6 +82,10 @@ class ManipulationSettings:
     finest_push_m: float = 0.00005
     #: The line that pushes: slower than the planner's lines, so the part stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
+    #: Layers (issue 33): the gentler line that pushes a part standing on others. It drags its support
+    #: by friction however fast it goes, but at a third of the speed the pads meet the face with a
+    #: ninth of the kinetic energy, and the part stops within less of its support's edge.
+    raised_push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.05, acceleration_m_s2=0.25, jerk_m_s3=2.0)
     #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
     #: speeds (the URDF's 3.15 and 3.2 rad/s), 16 rad/s^2 (0.2 s to full speed; the pendant allows 40)
     #: and 200 rad/s^3. The lines that carry a part (the lift, the lowering) run at the planner's

@@ -54,6 +54,7 @@ def every_port_set(tag: str) -> dict[str, str]:
 def test_the_project_registers_its_nodes_by_their_classes():
     assert OURS == [
         "Arrangement",
+        "CheckStanding",
         "Detect",
         "GraspGuard",
         "Inspect",

@@ -17,9 +17,11 @@ from bt_arrange.behaviours.moves import holding
 from bt_arrange.behaviours.pick import Pick
 from bt_arrange.behaviours.place import Place
 from bt_arrange.behaviours.push import Push
+from bt_arrange.behaviours.standing import CheckStanding
 
 __all__ = [
     "ArmBrake",
+    "CheckStanding",
     "Context",
     "Detect",
     "EstimateGraspFromDepth",

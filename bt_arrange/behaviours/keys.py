@@ -16,6 +16,8 @@
 | ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
 | ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
 | ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
+| ``/<obj>/top_height_error_mm`` | ``float``, raised top face (depth) minus planned height | CheckStanding | reports |
+| ``/<obj>/tilt_deg`` | ``float``, the tilt of a raised part's top face from depth | CheckStanding | reports |
 """
 
 from __future__ import annotations
@@ -41,6 +43,9 @@ MOVED_MM = "moved_mm"
 MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
 LAST_PUSH = "last_push"
+#: Layers (issue 33): written by ``CheckStanding``.
+TOP_HEIGHT_ERROR_MM = "top_height_error_mm"
+TILT_DEG = "tilt_deg"
 
 
 def key(obj: str, field: str) -> str:

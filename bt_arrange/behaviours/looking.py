@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT
+from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import JointMovePlan
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
@@ -99,6 +100,7 @@ def look(
     expected_xy_m: tuple[float, float] | None = None,
     object_type: ObjectType | None = None,
     choose: Chooser | None = None,
+    z_m: float = 0.0,
 ) -> Detection:
     """Find the part of ``colour``, rendering (or reading out) only the pixels a detection needs.
 
@@ -110,12 +112,15 @@ def look(
     3. A face the window does not show whole (cut by the window, covered) is looked at in the
        full frame, whose outcome and reason stand.
 
-    ``object_type`` (default the cube) sets the size the detector expects. A window shows the
+    ``object_type`` (default the cube) sets the size the detector expects; ``z_m`` (a raised part's
+    bottom face above the table, issue 33) the plane its top face is measured on. A window shows the
     pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
     camera = context.robot.camera
     kind = object_type or CUBE
     detector = context.detector.for_object(kind)
+    if z_m:
+        detector = raised_detector(detector, z_m)
     # Among identical parts a window also shows the neighbours: only a face centred near the spot counts.
     roi_half_m = identical_roi_half_m(kind) if choose is not None else None
     if expected_xy_m is not None:
@@ -156,6 +161,11 @@ def look(
             half_m = roi_half_m or 0.5 * math.hypot(*detector.config.size_m[:2]) + LOCATED_MARGIN_M
             return detector.detect(camera.capture(), colour, roi=WorldRegion.around(*chosen, half_m))
     return detector.detect(camera.capture(), colour)
+
+
+def raised_detector(detector: PartDetector, z_m: float) -> PartDetector:
+    """The detector for a part whose bottom face stands ``z_m`` above the table: its top face's plane moves up."""
+    return PartDetector(detector.colours, replace(detector.config, table_z_m=detector.config.table_z_m + z_m))
 
 
 def at_a_target(xy_m: tuple[float, float], kind_targets: Sequence[PlanarPose], object_type: ObjectType) -> bool:
@@ -205,7 +215,7 @@ class Detect(StagedBehaviour):
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
         """The object, its colour and type, the targets of its kind (BehaviorTree.CPP's ``providedPorts``)."""
-        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS)
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
 
     def __init__(
         self,
@@ -214,9 +224,12 @@ class Detect(StagedBehaviour):
         colour: str | None = None,
         object_type: ObjectType | None = None,
         kind_targets: Sequence[PlanarPose] = (),
+        z_m: float = 0.0,
     ) -> None:
         super().__init__(name)
         self.obj = obj
+        #: Layers (issue 33): the height of the part's bottom face (0: the table), its top face's plane above it.
+        self.z_m = float(z_m)
         self.colour = colour or obj
         self.object_type = object_type or CUBE
         self.kind_targets: tuple[PlanarPose, ...] = tuple(kind_targets)
@@ -264,7 +277,7 @@ class Detect(StagedBehaviour):
 
     def _look(self, context: Context) -> str | None:
         chooser = self.choose if self.kind_targets else None
-        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser)
+        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser, self.z_m)
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
@@ -306,7 +319,7 @@ class Inspect(Detect):
     def provided_ports(cls) -> tuple[Port, ...]:
         """Detect's ports and ``after_placing`` (BehaviorTree.CPP's ``providedPorts``)."""
         after_placing = Port("after_placing", BOOL, False, "also write /<obj>/placed_offset_mm")
-        return (OBJ, COLOUR, after_placing, OBJECT_TYPE_PORT, KIND_TARGETS)
+        return (OBJ, COLOUR, after_placing, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
 
     def __init__(
         self,
@@ -316,8 +329,9 @@ class Inspect(Detect):
         after_placing: bool = False,
         object_type: ObjectType | None = None,
         kind_targets: Sequence[PlanarPose] = (),
+        z_m: float = 0.0,
     ) -> None:
-        super().__init__(name, obj, colour, object_type, kind_targets)
+        super().__init__(name, obj, colour, object_type, kind_targets, z_m)
         self.after_placing = after_placing
         self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM), keys.key(obj, keys.YAW_ERROR_DEG))
@@ -372,7 +386,7 @@ class Recheck(Inspect):
     def provided_ports(cls) -> tuple[Port, ...]:
         """Detect's ports and ``after``, the step checked (BehaviorTree.CPP's ``providedPorts``)."""
         after = Port("after", STRING, "", "the step whose effect is checked")
-        return (OBJ, COLOUR, after, OBJECT_TYPE_PORT, KIND_TARGETS)
+        return (OBJ, COLOUR, after, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
 
     def __init__(
         self,
@@ -382,8 +396,9 @@ class Recheck(Inspect):
         after: str = "",
         object_type: ObjectType | None = None,
         kind_targets: Sequence[PlanarPose] = (),
+        z_m: float = 0.0,
     ) -> None:
-        super().__init__(name, obj, colour, object_type=object_type, kind_targets=kind_targets)
+        super().__init__(name, obj, colour, object_type=object_type, kind_targets=kind_targets, z_m=z_m)
         self.after = after
         self.reads(keys.key(obj, keys.POSE), keys.key(obj, keys.MAX_MOVED_MM))
         self.writes(keys.key(obj, keys.MOVED_MM), keys.key(obj, keys.MAX_MOVED_MM))

@@ -83,11 +83,12 @@ def line_nearly_done(remaining_m: float | None = None) -> Callable[[Context, Mot
 
 
 def line_to(  # noqa: ANN201 - a planning function
-    x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False, free: bool = False
+    x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False, free: bool = False, gentle: bool = False
 ):
     """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
 
-    ``pushing``: at the settings' push limits, slower than the planner's, so the part does not slide on.
+    ``pushing``: at the settings' push limits, slower than the planner's, so the part does not slide on;
+    ``gentle`` with it: at ``raised_push_limits``, for a part standing on others (issue 33).
     ``free``: the pads hold nothing and touch nothing on the way (down to a part, up from a released
     one): at the settings' free-space line and joint limits.
     """
@@ -95,9 +96,8 @@ def line_to(  # noqa: ANN201 - a planning function
     def plan(context: Context, q: FloatArray) -> Motion:
         s = context.settings
         if pushing:
-            return context.planner.move_line(
-                q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=s.push_limits
-            )
+            limits = s.raised_push_limits if gentle else s.push_limits
+            return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
         if free:
             return context.planner.move_line(
                 q,
@@ -170,9 +170,14 @@ def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) ->
     return grasp_width_m(settings, object_type) + settings.turned_grip_margin_m
 
 
-def heights_m(settings: ManipulationSettings, object_type: ObjectType) -> tuple[float, float, float]:
-    """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``)."""
-    return settings.tcp_heights_m(object_type.shape)
+def heights_m(settings: ManipulationSettings, object_type: ObjectType, z_m: float = 0.0) -> tuple[float, float, float]:
+    """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``).
+
+    ``z_m``: the part's bottom face above the table (a raised part, ``bt_arrange.stacking.heights_at_m``).
+    """
+    from bt_arrange.stacking import heights_at_m
+
+    return heights_at_m(settings, object_type.shape, z_m)
 
 
 def open_stage(name: str, opening_m: float) -> GripperStage:

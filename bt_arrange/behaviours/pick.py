@@ -10,7 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -84,13 +84,20 @@ class Pick(StagedBehaviour):
             "axis of the target's frame (empty: the free grasp)",
             optional=True,
         )
-        return (OBJ, OBJECT_TYPE_PORT, grasp)
+        return (OBJ, OBJECT_TYPE_PORT, grasp, Z_PORT)
 
     def __init__(
-        self, name: str, obj: str, object_type: ObjectType | None = None, grasp: Release | None = None
+        self,
+        name: str,
+        obj: str,
+        object_type: ObjectType | None = None,
+        grasp: Release | None = None,
+        z_m: float = 0.0,
     ) -> None:
         super().__init__(name)
         self.obj = obj
+        #: Layers (issue 33): the height of the part's bottom face where it is picked (0: the table).
+        self.z_m = float(z_m)
         #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
         self.object_type = object_type or CUBE
         self.grasp = grasp
@@ -110,7 +117,7 @@ class Pick(StagedBehaviour):
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
         s = context.settings
         kind = self.object_type
-        grasp_m, approach_m, _ = heights_m(s, kind)
+        grasp_m, approach_m, _ = heights_m(s, kind, self.z_m)
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
         if self.grasp is None:

@@ -7,7 +7,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -57,7 +57,7 @@ class Place(StagedBehaviour):
             optional=True,
         )
         where = Port("where", STRING, "target", "target, or pick: set down where it was picked", optional=True)
-        return (OBJ, OBJECT_TYPE_PORT, release, where)
+        return (OBJ, OBJECT_TYPE_PORT, release, where, Z_PORT)
 
     def __init__(
         self,
@@ -66,8 +66,12 @@ class Place(StagedBehaviour):
         object_type: ObjectType | None = None,
         release: Release | None = None,
         where: str = "target",
+        z_m: float = 0.0,
     ) -> None:
         super().__init__(name)
+        #: Layers (issue 33): the height of the support it is released on (0: the table); the lowering
+        #: ends with the part's bottom ``release_clearance_m`` above it, the pads clear of the layer below.
+        self.z_m = float(z_m)
         if where not in ("target", "pick"):
             raise BtArrangeError(f"place {name!r}: where={where!r}, choose target or pick")
         self.obj = obj
@@ -83,7 +87,7 @@ class Place(StagedBehaviour):
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         s = context.settings
         kind = self.object_type
-        grasp_m, approach_m, _ = heights_m(s, kind)
+        grasp_m, approach_m, _ = heights_m(s, kind, self.z_m)
         x, y = target.x_m, target.y_m
         opening_m = release_opening_m(s, kind)
         if self.where == "pick":

@@ -10,7 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     heights_m,
@@ -106,6 +106,7 @@ class Push(StagedBehaviour):
                 optional=True,
             ),
             Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
+            Z_PORT,
         )
 
     def __init__(
@@ -118,8 +119,11 @@ class Push(StagedBehaviour):
         *,
         towards: tuple[str, ...] | None = None,
         opening_m: float | None = None,
+        z_m: float = 0.0,
     ) -> None:
         super().__init__(name)
+        #: Layers (issue 33): the height of the part's bottom face (0: the table); the pads push at its own height.
+        self.z_m = float(z_m)
         if strategy not in PUSH_STRATEGIES:
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
         self.strategy = strategy
@@ -227,7 +231,7 @@ class Push(StagedBehaviour):
         # The closing axis lies across the push; the gripper is symmetric under a half turn.
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
         opening_m, reach_m = self.face_geometry(s, heading, pose.yaw_rad)
-        _, approach_m, push_m = heights_m(s, self.object_type)
+        _, approach_m, push_m = heights_m(s, self.object_type, self.z_m)
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * abs(distance_m)
@@ -242,7 +246,9 @@ class Push(StagedBehaviour):
         if self.opening_m is not None:
             # Among neighbours: the fingers stay within the face's width (the layout's opening).
             opening_m = min(opening_m, self.opening_m)
-        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis))
+        return self._motion(
+            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, axis), gentle=self.z_m > 0.0
+        )
 
     @staticmethod
     def _motion(
@@ -253,6 +259,7 @@ class Push(StagedBehaviour):
         heights: tuple[float, float],
         yaw: float,
         push_stage: str,
+        gentle: bool = False,
     ) -> list[Stage]:
         """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
         approach_m, push_m = heights
@@ -262,7 +269,7 @@ class Push(StagedBehaviour):
             MoveStage(stage.MOVE_BEHIND_PART, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
-            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True)),
+            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
                 stage.LIFT_FINGERS,
@@ -310,12 +317,14 @@ class Push(StagedBehaviour):
         half_span_m = opening_m / 2 + s.gripper.pad_thickness_m
         shape = self.object_type.shape
         reach_m = shape.back_within_m(heading, pose.yaw_rad, half_span_m) + s.gripper.pad_width_m / 2
-        _, approach_m, push_m = heights_m(s, self.object_type)
+        _, approach_m, push_m = heights_m(s, self.object_type, self.z_m)
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
         back = end - direction * s.push_clearance_m
-        return self._motion(opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name))
+        return self._motion(
+            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name), gentle=self.z_m > 0.0
+        )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
         heading = self.square_pushes[name].heading_rad

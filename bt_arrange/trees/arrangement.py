@@ -46,6 +46,7 @@ from bt_arrange.objects import ObjectStart
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.ports import COLOURS, DOUBLE, INT, OFF_DOUBLE, Port, starts_type, targets_type
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.trees import layers
 from bt_arrange.trees.steps import (
     Locate,
     check_strategy,
@@ -108,6 +109,9 @@ def arrange_one(
         set_target(target),
         transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
+        # Layers (issue 33): a raised part must stand on its support; far off, it is placed again, not pushed.
+        *layers.standing(target),
+        *layers.regrasp_while_far(target),
         # An irregular part turned in the pads by more than pushes correct is picked up again (a box's
         # grasp squares it, so its tree is the paper's). Among neighbours there is no room for a free pick.
         *([] if dense or target.object_type.shape.rectangular else [regrasp_while_turned(target)]),
@@ -139,6 +143,7 @@ def arrange_one(
                         after=obj,
                         object_type=neighbour.object_type,
                         kind_targets=neighbour_kind,
+                        z_m=neighbour.z_m,
                     ),
                     correction(
                         neighbour,
@@ -160,6 +165,15 @@ def arrange_one(
     return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
 
 
+def _sides_in_layer(
+    part: Target, steps: Sequence[Step], by_obj: Mapping[str, Target], pads: Pads
+) -> tuple[tuple[str, ...], dict[str, Release]]:
+    """A lower part's free push directions and restaging among the parts of its own layer placed so far."""
+    own = next(st for st in steps if st.part.name == part.obj)
+    placed = [(st.part.name, st.part.footprint) for st in steps if layers.same_layer(by_obj[st.part.name], part)]
+    return free_push_directions(own.part, placed, pads), restage_releases(own.part, placed, pads)
+
+
 def _opening(step: Step | None, dense: bool, pads: Pads) -> float | None:
     """The push opening among neighbours (along x; Push keeps it within the pushed face's own width), None when free."""
     return pads.neighbour_push_opening_m(step.part, "x") if dense and step is not None else None
@@ -174,7 +188,7 @@ def _is_dense(step: Step) -> bool:
     return step.release.staged or bool(step.neighbours) or set(step.push_towards) != set(step.part.push_directions)
 
 
-#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,object type]]`` per target, read into ``Target``s.
+#: The port type of a plan: ``colour,x_m,y_m,yaw_rad[,name[,object type[,z_m]]]`` per target, read into ``Target``s.
 TARGETS = targets_type(Target)
 #: The port type of a plan's starts, written as targets are, read into ``ObjectStart``s (empty: None).
 STARTS = starts_type(ObjectStart)
@@ -195,7 +209,9 @@ class Arrangement(py_trees.composites.Sequence):
         """The plan, its thresholds, its colours and its scene (BehaviorTree.CPP's ``providedPorts``)."""
         return (
             Port(
-                "targets", TARGETS, description="colour,x_m,y_m,yaw_rad[,name[,object type]] per object, separated by ;"
+                "targets",
+                TARGETS,
+                description="colour,x_m,y_m,yaw_rad[,name[,object type[,z_m]]] per object, separated by ;",
             ),
             Port("threshold_mm", DOUBLE, description="the accuracy threshold the report checks [mm]"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "the yaw threshold the report checks [deg] (0: position only)"),
@@ -302,6 +318,9 @@ def arrangement(
         raise PlanError(f"colours must be a ColourTable (bt_arrange.perception), got {type(colours).__name__}")
     table = colours if isinstance(colours, ColourTable) else DEFAULT_COLOUR_TABLE
     plan = validate_targets(targets, colours=table.names, settings=settings)
+    # Layers (issue 33): corrected part by part, every move above the table over the finished tower.
+    layers.check_correct_mode(plan, correct)
+    settings = layers.stack_settings(plan, settings)
     siblings = kinds(plan)
     steps = plan_steps(plan, settings, order=order)
     steps_by_obj = {st.part.name: st for st in steps}
@@ -317,7 +336,14 @@ def arrangement(
     if correct == "each":
         children = []
         for index, step in enumerate(steps):
-            placed = [(st.part.name, st.part.footprint) for st in steps[: index + 1]]
+            target = by_obj[step.part.name]
+            # Layers (issue 33): the pads meet only the parts of a part's own layer on the table.
+            placed = [
+                (st.part.name, st.part.footprint)
+                for st in steps[: index + 1]
+                if layers.same_layer(by_obj[st.part.name], target)
+            ]
+            below = layers.watched_below(target, [by_obj[st.part.name] for st in steps[:index]], settings)
             neighbours = [
                 (
                     by_obj[name],
@@ -325,8 +351,9 @@ def arrangement(
                     restage_releases(steps_by_obj[name].part, placed, pads),
                 )
                 for name in step.neighbours
+            ] + [
+                (part, *_sides_in_layer(part, steps[:index], by_obj, pads)) for part in below
             ]
-            target = by_obj[step.part.name]
             subtree = arrange_one(
                 target,
                 threshold_mm,

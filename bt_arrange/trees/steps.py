@@ -113,7 +113,9 @@ def transfer(
         return finder
 
     look_again: list[py_trees.behaviour.Behaviour] = []
-    if release is not None:
+    # Layers (issue 33): a part going onto others is set down and picked centred first, as among
+    # neighbours: an offset in the pads would put its centre of mass off its support.
+    if release is not None or target.z_m > 0.0:
         # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
         # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
         # at it again, and pick it centred.
@@ -132,7 +134,7 @@ def transfer(
             find(),
             Pick(f"pick {obj}", obj, kind),
             *look_again,
-            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, kind, release=release)),
+            GraspGuard(f"while holding {obj}", Place(f"place {obj}", obj, kind, release=release, z_m=target.z_m)),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
@@ -177,8 +179,8 @@ def regrasp_while_turned(
         name=f"pick and place {obj} again",
         memory=True,
         children=[
-            Pick(f"pick {obj} again", obj, kind),
-            GraspGuard(f"while holding {obj} again", Place(f"place {obj} again", obj, kind)),
+            Pick(f"pick {obj} again", obj, kind, z_m=target.z_m),
+            GraspGuard(f"while holding {obj} again", Place(f"place {obj} again", obj, kind, z_m=target.z_m)),
             inspect(target, f"inspect {obj} after placing again", after_placing=True, kind_targets=kind_targets),
         ],
     )
@@ -199,7 +201,13 @@ def inspect(
 ) -> Inspect:
     """The Inspect of one object (its type, colour and, for identical parts, the targets of its kind)."""
     return Inspect(
-        name, target.obj, target.colour, after_placing, object_type=target.object_type, kind_targets=kind_targets
+        name,
+        target.obj,
+        target.colour,
+        after_placing,
+        object_type=target.object_type,
+        kind_targets=kind_targets,
+        z_m=target.z_m,
     )
 
 
@@ -255,6 +263,7 @@ def correction(
         yaw_threshold_deg,
         towards=towards,
         opening_m=push_opening_m,
+        z_m=target.z_m,
     )
     if restage:
         push = py_trees.composites.Selector(
@@ -292,7 +301,9 @@ def correction(
             name=f"push and inspect {obj} after placing it again{label}",
             memory=True,
             children=[
-                Push(f"push {obj} after placing it again{label}", obj, strategy, kind, yaw_threshold_deg),
+                Push(
+                    f"push {obj} after placing it again{label}", obj, strategy, kind, yaw_threshold_deg, z_m=target.z_m
+                ),
                 inspect(target, f"inspect {obj} after pushing it again{label}", kind_targets=kind_targets),
             ],
         ),
@@ -315,8 +326,11 @@ def correction(
                     keys.key(obj, keys.PUSHES_STALLED), keys.STALLED, operator.eq
                 ),
             ),
-            Pick(f"pick {obj} to place it again{label}", obj, kind),
-            GraspGuard(f"while holding {obj} to place it again{label}", Place(f"place {obj} again{label}", obj, kind)),
+            Pick(f"pick {obj} to place it again{label}", obj, kind, z_m=target.z_m),
+            GraspGuard(
+                f"while holding {obj} to place it again{label}",
+                Place(f"place {obj} again{label}", obj, kind, z_m=target.z_m),
+            ),
             inspect(target, f"inspect {obj} after placing it again{label}", kind_targets=kind_targets),
             again,
         ],
@@ -339,10 +353,10 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
                 name=f"{obj} needs a push {towards}{label}",
                 check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
             ),
-            Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release),
+            Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release, z_m=target.z_m),
             GraspGuard(
                 f"while holding {obj} again{label}",
-                Place(f"place {obj} again{label}", obj, target.object_type, release=release),
+                Place(f"place {obj} again{label}", obj, target.object_type, release=release, z_m=target.z_m),
             ),
         ],
     )

@@ -10,6 +10,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from bt_arrange import stacking
 from bt_arrange.checks import at_mm, finite_number, positive_number
 from bt_arrange.errors import PlanError, UnreachableError
 from bt_arrange.geometry import PlanarPose
@@ -33,7 +34,11 @@ class Target(PartOnTable):
     ``name`` is the object's blackboard namespace (``/<name>/pose``); it defaults to the colour.
     ``object_type`` is its size (default the paper's cube, ``bt_arrange.objects.CUBE``). Several
     targets may share a type and a colour (identical parts): each needs its own name.
+    ``z_m`` is the height of the part's bottom face above the table (0: on the table; above, it
+    stands on the parts below it, ``bt_arrange.stacking``).
     """
+
+    z_m: float = 0.0
 
     @property
     def planar(self) -> PlanarPose:
@@ -68,7 +73,7 @@ def validate_targets(
     for index, target in enumerate(plan, start=1):
         if not isinstance(target, Target):
             raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
-        for field_name in ("x_m", "y_m", "yaw_rad"):
+        for field_name in ("x_m", "y_m", "yaw_rad", "z_m"):
             finite_number(field_name, getattr(target, field_name), where=f"target {index} ({target.colour}): ")
         if not isinstance(target.object_type, ObjectType):
             raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
@@ -115,8 +120,10 @@ def validate_targets(
                 parts=(("object", target.object_type.name), ("target", target.obj)),
             )
     kinematics = kinematics or ArmKinematics()
+    # Layers (issue 33): heights, support, overlaps between heights, the arm's reach above a tower.
+    stacking.check_layers(checked, settings, kinematics)
     for target in checked:
-        grasp_m, approach_m, _ = settings.tcp_heights_m(target.object_type.shape)
+        grasp_m, approach_m, _ = stacking.raised_heights_m(settings, target)
         for height_m in (grasp_m, approach_m):
             try:
                 kinematics.check_reachable(gripper_down_pose(target.x_m, target.y_m, height_m, target.yaw_rad))
@@ -204,8 +211,13 @@ def parts_of(targets: Iterable[Target], settings: ManipulationSettings | None = 
 def plan_steps(
     targets: Sequence[Target], settings: ManipulationSettings | None = None, order: Sequence[str] | None = None
 ) -> list[Step]:
-    """The layout's steps (``bt_arrange.layout.plan_layout``): the placing order and each part's approach."""
+    """The layout's steps (``bt_arrange.layout.plan_layout``): the placing order and each part's approach.
+
+    A plan in layers is laid out layer by layer, bottom-up (``bt_arrange.stacking.layered_steps``).
+    """
     settings = settings or ManipulationSettings()
+    if stacking.layered(targets):
+        return stacking.layered_steps(targets, settings, order)
     return plan_layout(parts_of(targets, settings), Pads.from_settings(settings), order)
 
 

@@ -6,12 +6,12 @@ here. The tag is the class name, except where a file format already fixed anothe
 
 from __future__ import annotations
 
-from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Recheck
+from bt_arrange.behaviours import CheckStanding, Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Recheck
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.trees import Arrangement
 from bt_arrange.xmltree.registry import register_node
 
-for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard):
+for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard, CheckStanding):
     register_node(_node)
 # The tag keeps the decorator's former name: XML files written with it stay readable.
 register_node(RepeatUntilWithin, "RetryUntilThreshold")
