@@ -182,4 +182,8 @@ def test_the_session_check_finds_a_runner_built_in_a_backend() -> None:
         "    def __init__(self):\n"
         "        super().__init__()\n"
     )
-    assert _session_builders(source) == ["line 1: imports Runner", "line 4: calls BehaviourTree", "line 5: calls Runner"]
+    assert _session_builders(source) == [
+        "line 1: imports Runner",
+        "line 4: calls BehaviourTree",
+        "line 5: calls Runner",
+    ]
