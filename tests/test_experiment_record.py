@@ -146,7 +146,7 @@ def test_a_resumed_campaign_rewrites_no_finished_trials_file(tmp_path: Path) -> 
 
 
 def test_a_disk_that_fills_loses_the_trials_file_not_its_measurement(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
-    """The disk fills after trial 0 and has room again after trial 1: trial 1's file is named, its record kept."""
+    """Full after trial 0, room after trial 1: trial 1's file named, its record kept; --resume redoes it."""
     from diskfaults import FullDisk
 
     disk = FullDisk(1 << 62)
@@ -171,6 +171,18 @@ def test_a_disk_that_fills_loses_the_trials_file_not_its_measurement(tmp_path: P
     assert records[("system", 1)]["status"] == "within"
     assert [(out / records[("system", i)]["mcap"]).is_file() for i in (0, 2)] == [True, True]
     assert sorted(p.name for p in (record_dir / "system").iterdir()) == ["trial-0000.mcap", "trial-0002.mcap"]
+
+    # Once there is room, --resume with --record runs the trial whose file is missing, and only it.
+    ran = []
+    run_experiment(
+        ["system"], 3, SEED, 1.0, out, record=record_dir, resume=True, on_trial=lambda r, d, t: ran.append(r["trial"])
+    )
+    assert ran == [1]
+    again = by_trial(out / "trials.jsonl")
+    assert {key: outcome(r) for key, r in again.items()} == {
+        key: {k: v for k, v in outcome(r).items() if k != "mcap_fault"} for key, r in records.items()
+    }
+    assert all((out / r["mcap"]).is_file() for r in again.values())
 
 
 #: The command line with the disk full for MCAP files alone (their temporary files), every other file written.

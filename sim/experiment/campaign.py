@@ -240,7 +240,7 @@ def run_campaign(
         except OSError as error:
             raise PlanError(f"cannot write into {folder}: {files.cause(error)}") from error
         files.remove_stale_temps(folder)
-        log = logs[combination] = TrialLog.open(folder / "trials.jsonl")
+        log = logs[combination] = TrialLog.open(folder / "trials.jsonl", again=recorder.again)
         for record in log.records:
             if record.get("seed") != seed or not combination.owns(record):
                 raise PlanError(
@@ -420,8 +420,8 @@ class TrialLog:
     unwritten: bool = False
 
     @classmethod
-    def open(cls, path: Path) -> TrialLog:
-        """The log at ``path``, mended for a rerun (see the class)."""
+    def open(cls, path: Path, again: Callable[[dict], bool] | None = None) -> TrialLog:
+        """The log at ``path``, mended for a rerun (see the class); a record ``again`` picks is run again too."""
         log = cls(path)
         if not path.exists():
             return log
@@ -435,7 +435,7 @@ class TrialLog:
                 mend = True
                 continue
             key = (record.get("row"), record.get("trial")) if isinstance(record, dict) else None
-            if key is None or record.get("status") == ERROR or key in seen:
+            if key is None or record.get("status") == ERROR or key in seen or (again is not None and again(record)):
                 mend = True  # an errored trial runs again; a repeat (two runs into one folder) is dropped
                 continue
             seen.add(key)

@@ -13,7 +13,9 @@ The parent then points the trial's record at it: ``mcap``, the path relative to 
 and moving ``--out`` and ``DIR`` together keeps it true). A file that could not be written is
 ``"mcap": null`` with ``mcap_fault`` (its cause, one line) and a fault of the campaign (exit 3,
 "the campaign finished, its record did not"); the trial's measurement is kept, as a record the
-disk would not take is.
+disk would not take is, and a rerun that records (``--resume --record DIR``) runs that trial again
+(the same trial, the same record) to write its file. A finished trial with its file is never run
+again, so its file is never rewritten.
 """
 
 from __future__ import annotations
@@ -78,6 +80,10 @@ class Recording:
         if self.record_dir is None:
             return spec
         return dataclasses.replace(spec, mcap=str(trial_file(self.record_dir, self._folder(combination), row, index)))
+
+    def again(self, record: dict) -> bool:
+        """True for a finished trial to run again: this campaign records, and that trial's file was not written."""
+        return self.record_dir is not None and MCAP_KEY in record and record[MCAP_KEY] is None
 
     @staticmethod
     def point(record: dict, spec: TrialSpec, folder: Path, faults: files.Faults) -> None:
