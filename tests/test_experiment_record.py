@@ -249,3 +249,14 @@ def test_a_dask_cluster_records_into_the_shared_folder(tmp_path: Path) -> None:
         path = out / records[("system", index)]["mcap"]
         assert path.resolve() == (record_dir / "system" / f"trial-{index:04d}.mcap").resolve()
         assert path.read_bytes().startswith(b"\x89MCAP0\r\n")
+
+
+def test_a_campaign_of_several_combinations_records_into_their_folders(tmp_path: Path) -> None:
+    out, record_dir = tmp_path / "out", tmp_path / "mcap"
+    run_experiment(["system"], 1, SEED, 1.0, out, thresholds="0.5,1", record=record_dir)
+    found = sorted(p.relative_to(record_dir).as_posix() for p in record_dir.rglob("*.mcap"))
+    assert found == ["threshold-0.5mm/system/trial-0000.mcap", "threshold-1mm/system/trial-0000.mcap"]
+    for folder in ("threshold-0.5mm", "threshold-1mm"):
+        (record,) = read_trials(out / folder / "trials.jsonl")
+        assert record["mcap"] == f"../../mcap/{folder}/system/trial-0000.mcap"
+        assert (out / folder / record["mcap"]).is_file()
