@@ -196,7 +196,8 @@ def _campaign_on_one(args: argparse.Namespace) -> list[dict[str, Any]]:
         bar.close()
     _print_experiment(experiment, summary, args.out)
     if args.record is not None:
-        print(f"one MCAP per trial in {args.record} (ROW/trial-NNNN.mcap; each record's mcap key names its file)")
+        where = "ROW/trial-NNNN.mcap" if all("folder" not in row for row in summary) else "COMBINATION/ROW/..."
+        print(f"one MCAP per trial in {args.record} ({where}; each record's mcap key names its file)")
     return summary
 
 

@@ -436,7 +436,8 @@ class TrialLog:
                 continue
             key = (record.get("row"), record.get("trial")) if isinstance(record, dict) else None
             if key is None or record.get("status") == ERROR or key in seen or (again is not None and again(record)):
-                mend = True  # an errored trial runs again; a repeat (two runs into one folder) is dropped
+                # An errored trial runs again (and one whose MCAP a recording campaign lacks); a repeat is dropped.
+                mend = True
                 continue
             seen.add(key)
             log.records.append(record)

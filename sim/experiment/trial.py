@@ -80,7 +80,7 @@ def _run_trial(spec: TrialSpec) -> dict:
             report = run.run()
         except RecordError as error:  # the trial's MCAP only (a trial records nothing else): its measurement stands
             report = error.result
-            mcap_fault = error.faults[0]
+            mcap_fault = error.faults[0] if error.faults else WriteFault(Path(str(spec.mcap)), str(error))
     (outcome,) = report.objects
     bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
     # Pick states what its grip was as facts (``Pick.facts``), not only in its feedback text.
