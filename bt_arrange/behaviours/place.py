@@ -124,8 +124,8 @@ class Place(StagedBehaviour):
     def _release_stage(opening_m: float, free: bool) -> GripperStage:
         """Open the pads to ``opening_m``; a part that holds them short (wedged) is let go by opening all the way.
 
-        Among neighbours (``free`` False) the pads may not open further than the layout allows: a wedged
-        part fails the place, naming the widths.
+        A free part only: among neighbours (``free`` False) the pads open no further than the layout
+        allows, and a pad may stop on a neighbour's side rather than on the part; the opening is not checked.
         """
         wanted = {"m": opening_m}
 
@@ -136,7 +136,7 @@ class Place(StagedBehaviour):
         return GripperStage(
             stage.RELEASE_PART,
             lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s),
-            opens_to_m=lambda c: wanted["m"],
+            opens_to_m=(lambda c: wanted["m"]) if free else None,
             on_stall=open_fully if free else None,
         )
 

@@ -109,15 +109,14 @@ def test_a_part_that_stays_wedged_fails_the_place_naming_the_widths(clock) -> No
     assert stages.RETREAT not in {t.feedback for t in run.running}
 
 
-def test_among_neighbours_a_wedged_part_is_not_freed_by_opening_into_them(clock) -> None:
+def test_among_neighbours_the_release_opens_no_further_than_the_layout_allows(clock) -> None:
     from bt_arrange.layout import Release
 
     context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
     write({"/p/target": PlanarPose(0.45, -0.1, 0.0)})
     gripper = fake_gripper(context)
-    gripper.wedge(0.041, opens=1)
+    gripper.wedge(0.041, opens=1)  # a pad stopped by a neighbour's side, or the part: the layout's limit holds
     place = Place("place p", "p", release=Release("x", 0.05, (0.0, 0.0), (0.0, 0.0)))
     run = tick_until_done(set_up(place, context), context)
-    assert run.status == Status.FAILURE
-    assert "short of 50.0 mm" in run.feedback
+    assert run.status == Status.SUCCESS, run.feedback
     assert [c.value for c in gripper.commands] == [pytest.approx(0.05)]
