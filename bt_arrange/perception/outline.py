@@ -60,7 +60,7 @@ from bt_arrange.perception.outline_fit import (
     pixels_on_plane,
     resample,
 )
-from bt_arrange.perception.outline_merged import register_in_merged
+from bt_arrange.perception.outline_merged import find_in_merged, register_in_merged
 from bt_arrange.perception.segmentation import Blob
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 
@@ -214,6 +214,8 @@ class _Verdict:
     reason: str
     area_px: float | None = None
     expected_area_px: float | None = None
+    #: Found on its free edges in a blob it shares with other parts: the blob is not this part's alone.
+    shared: bool = False
 
 
 def _judge(
@@ -261,6 +263,32 @@ def _judge(
                     "deg, on its free edges (its face merged with another of its colour)",
                     face.area_px,
                     expected_px,
+                )
+                continue
+        if prior_xy_m is None and not face.touches_border and ratio > config.ambiguous_area_fraction:
+            # No expected place (Detect before picking): where in the blob the outline's free edges fit.
+            fit, places = find_in_merged(view, face, model, plane_z_m, px_per_m, config.max_reprojection_error_px)
+            if places > 1:
+                verdicts[model.name] = _Verdict(
+                    blob_xy_m,
+                    None,
+                    DetectionStatus.AMBIGUOUS,
+                    f"one {name} blob as large as {ratio:.1f} {model.name} faces, where its free edges fit at "
+                    f"{places} places: touching parts of one colour?",
+                    face.area_px,
+                    expected_px,
+                )
+                continue
+            if fit is not None:
+                verdicts[model.name] = _Verdict(
+                    blob_xy_m,
+                    fit,
+                    DetectionStatus.FOUND,
+                    f"{name} {model.name} at x={fit.x_m:.4f} m, y={fit.y_m:.4f} m, yaw={math.degrees(fit.yaw_rad):.2f} "
+                    f"deg, on its free edges (one of a blob as large as {ratio:.1f} faces)",
+                    face.area_px,
+                    expected_px,
+                    shared=True,
                 )
                 continue
         if face.touches_border:
@@ -430,14 +458,23 @@ def detect_outlines(
             )
             judged.append({m.name: failed for m in models})
     # Each blob is the part whose outline it fits (the closest fit, if it fits several).
+    # A blob several parts share (each found on its free edges in it) is each of theirs.
     owners: list[str | None] = []
     for verdicts in judged:
-        fitting = [(v.fit.deviation_px, n) for n, v in verdicts.items() if v.status is DetectionStatus.FOUND and v.fit]
+        fitting = [
+            (v.fit.deviation_px, n)
+            for n, v in verdicts.items()
+            if v.status is DetectionStatus.FOUND and v.fit and not v.shared
+        ]
         owners.append(min(fitting)[1] if fitting else None)
     table_z_m = detector.config.table_z_m
     results: dict[str, Detection] = {}
     for model in models:
-        mine = [verdicts[model.name] for verdicts, owner in zip(judged, owners, strict=True) if owner == model.name]
+        mine = [
+            verdicts[model.name]
+            for verdicts, owner in zip(judged, owners, strict=True)
+            if owner == model.name or (owner is None and verdicts[model.name].shared)
+        ]
         rest = [verdicts[model.name] for verdicts, owner in zip(judged, owners, strict=True) if owner is None]
         if len(mine) == 1:
             results[model.name] = _detection(name, mine[0], xy, table_z_m)
