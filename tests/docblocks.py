@@ -96,7 +96,14 @@ def read_page(path: Path) -> Page:
                 end += 1
             indent = len(opening["indent"])
             code = "\n".join(text[indent:] if text[:indent].isspace() else text for text in lines[index + 1 : end])
-            block = Block(path, index + 1, opening["info"].lower(), code + "\n", skip=pending.get("skip"), needs=pending.get("needs"))
+            block = Block(
+                path,
+                index + 1,
+                opening["info"].lower(),
+                code + "\n",
+                skip=pending.get("skip"),
+                needs=pending.get("needs"),
+            )
             if previous is not None and block.language == "text" and previous.language in ("python", "bash"):
                 previous.output = block
                 marker_text = pending.get("output", "")

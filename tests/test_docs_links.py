@@ -55,7 +55,9 @@ def test_the_pages_have_links_to_check() -> None:
 
 
 def test_a_broken_link_anchor_or_image_is_found(tmp_path: Path) -> None:
-    (tmp_path / "other.md").write_text("# Other\n\n## The `replay` page\n\n## Shapes and the gripper (`bt_arrange.shapes`)\n")
+    (tmp_path / "other.md").write_text(
+        "# Other\n\n## The `replay` page\n\n## Shapes and the gripper (`bt_arrange.shapes`)\n"
+    )
     page = tmp_path / "page.md"
     page.write_text(
         "# Page\n\n## Here\n\n"
@@ -73,7 +75,9 @@ def test_a_broken_link_anchor_or_image_is_found(tmp_path: Path) -> None:
 
 
 def test_anchors_are_github_s() -> None:
-    assert docblocks.slug("Exit 3: the run finished, its record did not") == "exit-3-the-run-finished-its-record-did-not"
+    assert (
+        docblocks.slug("Exit 3: the run finished, its record did not") == "exit-3-the-run-finished-its-record-did-not"
+    )
     assert docblocks.slug("Shapes and the gripper (`bt_arrange.shapes`)") == "shapes-and-the-gripper-bt_arrangeshapes"
     assert docblocks.slug("A real cell: the paper's real column") == "a-real-cell-the-papers-real-column"
     assert docblocks.slug("Interrupted, killed, resumed") == "interrupted-killed-resumed"
