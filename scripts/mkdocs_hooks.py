@@ -12,6 +12,8 @@ Nothing here is imported by the package or the tests; MkDocs loads it by path (`
 
 from __future__ import annotations
 
+import functools
+import importlib.util
 import re
 from pathlib import Path
 from typing import Any
@@ -39,8 +41,67 @@ def public_modules() -> dict[str, list[str]]:
     return found
 
 
-def _module_page(name: str) -> str:
-    return f"::: {name}\n"
+@functools.cache
+def _docstring_markdown() -> Any:
+    """``scripts/griffe_docstrings.py`` (what the API pages render the docstrings with), loaded by path."""
+    spec = importlib.util.spec_from_file_location("griffe_docstrings", ROOT / "scripts" / "griffe_docstrings.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _first_line(obj: Any) -> str:
+    """The summary line of ``obj``'s docstring, as Markdown."""
+    docstring = obj.docstring.value if obj.docstring is not None else ""
+    return str(_docstring_markdown().to_markdown(docstring.strip().split("\n")[0].strip()))
+
+
+def _module_page(name: str, modules: list[str], packages: dict[str, Any]) -> str:
+    """A module's page: mkdocstrings' rendering; for a package, its modules and the names it exports.
+
+    A package that declares ``__all__`` re-exports names of its modules: its page lists them, each a
+    link to the page of the module that defines it, instead of documenting each object twice.
+    """
+    package = packages.get(name)
+    if package is None or not package.is_init_module:
+        return f"::: {name}\n"
+    exports = sorted(package.exports or [])
+    lines = [f"::: {name}", "    options:", f"      members: {'false' if exports else 'true'}", ""]
+    children = [m for m in modules if m.rpartition(".")[0] == name]
+    if children:
+        lines += ["## Modules", ""]
+        lines += [f"- [`{child}`]({child}.md): {_first_line(package[child.rpartition('.')[2]])}" for child in children]
+        lines.append("")
+    if exports:
+        lines += [f"## Exported names (`from {name} import ...`)", ""]
+        for export in exports:
+            member = package.members.get(export)
+            target = member.final_target if member is not None and member.is_alias else member
+            path = target.path if target is not None else ""
+            if path.startswith(tuple(packages)) and not any(part.startswith("_") for part in path.split(".")):
+                lines.append(f"- [`{export}`][{path}]: {_first_line(target)}")
+            else:
+                lines.append(f"- `{export}`")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _load_packages() -> dict[str, Any]:
+    """Every public package of ours as griffe reads it (statically), by dotted name."""
+    import sys
+
+    import griffe
+
+    found: dict[str, Any] = {}
+    for package, _ in PACKAGES:
+        top = griffe.load(package, search_paths=[str(ROOT), *sys.path], resolve_aliases=True, resolve_external=False)
+        pending = [top]
+        while pending:
+            module = pending.pop()
+            found[module.path] = module
+            pending += module.modules.values()
+    return found
 
 
 def _api_index(modules: dict[str, list[str]]) -> str:
@@ -93,8 +154,9 @@ def on_files(files: Files, config: MkDocsConfig) -> Files:
     """Generate the home page and one page per public module."""
     files.append(File.generated(config, "index.md", content=readme_as_home((ROOT / "README.md").read_text("utf-8"))))
     modules = public_modules()
+    packages = _load_packages()
     files.append(File.generated(config, "api/index.md", content=_api_index(modules)))
     for names in modules.values():
         for name in names:
-            files.append(File.generated(config, f"api/{name}.md", content=_module_page(name)))
+            files.append(File.generated(config, f"api/{name}.md", content=_module_page(name, names, packages)))
     return files

@@ -111,6 +111,13 @@ def test_the_public_classes_are_documented(site: Path, page: str, names: list[st
     assert ":class:`" not in text and "::</p>" not in text, "reStructuredText habits rendered as Markdown"
 
 
+def test_a_package_s_page_links_its_exports_to_where_they_are_documented(site: Path) -> None:
+    text = (site / "api" / "bt_arrange.perception.html").read_text(encoding="utf-8")
+    assert 'href="bt_arrange.perception.detection.html#bt_arrange.perception.detection.PartDetector"' in text
+    assert 'href="bt_arrange.perception.colours.html"' in text, "its modules are listed"
+    assert 'id="bt_arrange.perception.PartDetector"' not in text, "documented once, on its module's page"
+
+
 # ----------------------------------------------------------------------------------------------
 # In a browser
 # ----------------------------------------------------------------------------------------------
