@@ -7,7 +7,10 @@
   members by mkdocstrings, and ``api/index.md``, the list of them. The modules are found on disk, so
   a new module gets its page and its place in the navigation without an edit here.
 
-Nothing here is imported by the package or the tests; MkDocs loads it by path (``hooks:``).
+- Lists nested by two spaces, as GitHub reads them, are nested by four for Python-Markdown (which
+  would otherwise flatten them): ``nest_lists_by_four``, on every page.
+
+Nothing here is imported by the package; MkDocs loads it by path (``hooks:``).
 """
 
 from __future__ import annotations
@@ -139,6 +142,57 @@ def _nav_tree(names: list[str]) -> list[Any]:
         else:
             entries.append({child.rpartition(".")[2]: _nav_tree(members)})
     return entries
+
+
+LIST_ITEM = re.compile(r"^( *)((?:[-*+]|\d+[.)]) +)(?=\S)")
+BLOCK_START = re.compile(r"^ *(?:[-*+] |\d+[.)] |#|```|~~~|\||>)")
+
+
+def nest_lists_by_four(markdown: str) -> str:
+    """Markdown whose lists are indented as GitHub reads them, re-indented as Python-Markdown reads them.
+
+    GitHub (CommonMark) takes what is indented to a list item's text (2 spaces after ``- ``) as part of
+    the item: a wrapped line, a nested list, a table or a paragraph after a blank line. Python-Markdown
+    wants 4 spaces per level and would flatten the nested lists and end the items. Each line inside an
+    item moves from the item's text column to 4 spaces past its marker, at every level; fenced blocks
+    move with their item; a line that continues a paragraph without indent stays as it is.
+    """
+    out: list[str] = []
+    stack: list[tuple[int, int]] = []  # per open item: its text column as written, and as rewritten
+    fence, fence_shift, previous_blank = "", 0, True
+    for line in markdown.split("\n"):
+        stripped = line.lstrip(" ")
+        indent = len(line) - len(stripped)
+        if fence:
+            out.append(" " * fence_shift + line if indent >= 0 and line.strip() else line)
+            if stripped.startswith(fence):
+                fence = ""
+            continue
+        if not stripped:
+            out.append(line)
+            previous_blank = True
+            continue
+        item = LIST_ITEM.match(line)
+        lazy = not previous_blank and not BLOCK_START.match(line)
+        while stack and indent < stack[-1][0] and not (lazy and not item):
+            stack.pop()
+        shift = stack[-1][1] - stack[-1][0] if stack else 0
+        if stack and indent < stack[-1][0]:
+            out.append(line)  # a lazy continuation line: Python-Markdown reads it as GitHub does
+        else:
+            out.append(" " * (indent + shift) + stripped)
+        if item:
+            new_marker = indent + shift
+            stack.append((indent + len(item[2]), new_marker + 4))
+        if stripped.startswith(("```", "~~~")):
+            fence, fence_shift = stripped[:3], shift
+        previous_blank = False
+    return "\n".join(out)
+
+
+def on_page_markdown(markdown: str, **kwargs: Any) -> str:
+    """Every page's lists nested as their writers meant (``nest_lists_by_four``)."""
+    return nest_lists_by_four(markdown)
 
 
 def on_config(config: MkDocsConfig) -> MkDocsConfig:

@@ -19,6 +19,7 @@ import http.server
 import importlib.util
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -75,6 +76,15 @@ def test_every_guide_is_a_page_and_the_readme_is_the_home_page(site: Path) -> No
     assert "Behaviour trees for precise robotic arrangement" in home
     assert 'href="cli.html#the-replay-page"' in home, "the README's links into docs/ point at the site's pages"
     assert (site / "images" / "replay.png").is_file()
+
+
+def test_lists_nested_as_github_nests_them_are_nested_on_the_site(site: Path) -> None:
+    """docs/ indents a list item's content by 2 (GitHub's reading); Python-Markdown needs 4: the hook re-indents."""
+    irregular = (site / "irregular.html").read_text(encoding="utf-8")
+    check = irregular.index("<strong>The plan check</strong>")
+    assert irregular.index("<ul>", check) < irregular.index("</li>", check), "the plan check's refusals nest"
+    experiments = (site / "experiments.html").read_text(encoding="utf-8")
+    assert re.search(r'one of:</p>\s*<ul>\s*<li><code>("|&quot;)turn', experiments), "a list in a list item"
 
 
 def test_every_public_module_has_its_api_page(site: Path) -> None:
