@@ -107,18 +107,22 @@ def _load_packages() -> dict[str, Any]:
     return found
 
 
-def _api_index(modules: dict[str, list[str]]) -> str:
+def _api_index(modules: dict[str, list[str]], packages: dict[str, Any]) -> str:
     lines = [
         "# API reference",
         "",
         "Generated from the docstrings of every public module: `bt_arrange`, the framework, and",
-        "`bt_arrange_sim`, the simulated cell and its two engines (the backends `SimBackend` and",
-        "`MujocoBackend`). The guides beside it say how the pieces fit together.",
+        "`bt_arrange_sim`, the simulated cell and its two engines (the backends",
+        "[`SimBackend`][bt_arrange_sim.pybullet.backend.SimBackend] and",
+        "[`MujocoBackend`][bt_arrange_sim.mujoco.backend.MujocoBackend]). The guides beside it say how the",
+        "pieces fit together.",
         "",
     ]
     for package, names in modules.items():
         lines += [f"## `{package}`", ""]
-        lines += [f"- [`{name}`]({name}.md)" for name in names]
+        for name in names:
+            summary = _first_line(packages[name]) if name in packages else ""
+            lines.append(f"- [`{name}`]({name}.md)" + (f": {summary}" if summary else ""))
         lines.append("")
     return "\n".join(lines)
 
@@ -209,7 +213,7 @@ def on_files(files: Files, config: MkDocsConfig) -> Files:
     files.append(File.generated(config, "index.md", content=readme_as_home((ROOT / "README.md").read_text("utf-8"))))
     modules = public_modules()
     packages = _load_packages()
-    files.append(File.generated(config, "api/index.md", content=_api_index(modules)))
+    files.append(File.generated(config, "api/index.md", content=_api_index(modules, packages)))
     for names in modules.values():
         for name in names:
             files.append(File.generated(config, f"api/{name}.md", content=_module_page(name, names, packages)))
