@@ -221,10 +221,14 @@ def test_every_runnable_page_has_blocks() -> None:
 
 
 def test_output_blocks_follow_the_block_that_prints_them() -> None:
-    """A shown output belongs to a block that prints: one that prints nothing would pass any comparison of it."""
+    """A block that prints shows what it prints, and a shown output belongs to a block that prints."""
     for block in BLOCKS:
-        if block.output is not None and block.language == "python":
+        if block.language != "python":
+            continue
+        if block.output is not None:
             assert "print(" in block.code, f"{block.output.where} shows output, but {block.where} prints nothing"
+        elif "print(" in block.code and block.skip is None:
+            raise AssertionError(f"{block.where} prints: show what it prints in a ```text block right under it")
 
 
 def test_the_output_comparison_can_fail() -> None:
