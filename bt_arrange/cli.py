@@ -9,6 +9,7 @@
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
                           [--object cube|bar[,...]]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
+                          [--record DIR] [--resume]
     bt-arrange calibrate [--backend NAME] [--cell ideal|real|FILE.toml] [--views 20] [--out camera.toml]
                          [--seed N] [--gui] [--live] [--record DIR] [--json]
     bt-arrange examples
@@ -286,7 +287,7 @@ def build_parser() -> argparse.ArgumentParser:
         "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
         f"rows (--rows):\n{rows_help}\n\n"
         "exit status: 0 done, 2 a usage error or trials that errored (named; --resume reruns them),\n"
-        "3 the campaign finished, its record did not (a file of --out could not be written: named),\n"
+        "3 the campaign finished, its record did not (a file of --out or --record could not be written: named),\n"
         "130 interrupted or 143 terminated (finished trials are kept; --resume continues)",
     )
     experiment.add_argument(
@@ -314,6 +315,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.add_argument(
+        "--record",
+        type=Path,
+        metavar="DIR",
+        help="one MCAP file per trial (Foxglove's; the foxglove extra): DIR/[COMBINATION/]ROW/trial-NNNN.mcap, "
+        "named by each record's mcap key (docs/foxglove.md)",
     )
     experiment.add_argument(
         "--resume",
