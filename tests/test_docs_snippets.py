@@ -27,7 +27,6 @@ import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import docblocks
 import pytest
@@ -159,27 +158,51 @@ def _run(block: Block, parent: Path, locks: dict[str, threading.Lock]) -> Outcom
             process = subprocess.Popen(
                 command, cwd=cwd, env=_environment(), stdout=stdout, stderr=stderr, text=True, start_new_session=True
             )
-            code, usage = _wait(process, started + BLOCK_STOP_S)
+            code, cpu_s = _wait(process, started + BLOCK_STOP_S)
             stdout.seek(0)
             stderr.seek(0)
-            cpu_s = usage.ru_utime + usage.ru_stime if usage is not None else float("nan")
             return Outcome(code, stdout.read(), stderr.read(), time.monotonic() - started, cpu_s)
     finally:
         for lock in held:
             lock.release()
 
 
-def _wait(process: subprocess.Popen[str], deadline: float) -> tuple[int | None, Any]:
-    """The exit code and resource use of ``process`` (``os.wait4``: its own and its waited children's)."""
+def _session_cpu_s(session: int) -> dict[int, float]:
+    """CPU seconds (user and system) of every live process of ``session``, by pid, from /proc (Linux)."""
+    found = {}
+    tick_s = 1.0 / os.sysconf("SC_CLK_TCK")
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rpartition(")")[2].split()
+        except OSError:
+            continue  # gone meanwhile
+        if int(fields[3]) == session:  # field 6 of proc(5): the session id
+            found[int(stat.parent.name)] = (int(fields[11]) + int(fields[12])) * tick_s  # utime, stime
+    return found
+
+
+def _wait(process: subprocess.Popen[str], deadline: float) -> tuple[int | None, float]:
+    """The exit code of ``process`` and the CPU time of everything it ran.
+
+    The CPU time is the larger of ``os.wait4``'s (the process and the children it waited for) and the
+    sum over every process of its session seen alive (``/proc``, polled): a pool's workers count even
+    when nobody waits for them.
+    """
+    seen: dict[int, float] = {}
+    polled_at = 0.0
     while time.monotonic() < deadline:
         pid, status, usage = os.wait4(process.pid, os.WNOHANG)
         if pid == process.pid:
             process.returncode = os.waitstatus_to_exitcode(status)
-            return process.returncode, usage
+            return process.returncode, max(usage.ru_utime + usage.ru_stime, sum(seen.values()))
+        if Path("/proc/self/stat").exists() and time.monotonic() - polled_at > 0.25:
+            for child, cpu_s in _session_cpu_s(process.pid).items():
+                seen[child] = max(cpu_s, seen.get(child, 0.0))
+            polled_at = time.monotonic()
         time.sleep(0.05)
     os.killpg(process.pid, signal.SIGKILL)  # the block's own session: it and everything it started
     process.wait()
-    return None, None
+    return None, sum(seen.values())
 
 
 def _cost(block: Block) -> int:
