@@ -156,7 +156,14 @@ def _run(block: Block, parent: Path, locks: dict[str, threading.Lock]) -> Outcom
         with open(output / "stdout", "w+") as stdout, open(output / "stderr", "w+") as stderr:
             started = time.monotonic()
             process = subprocess.Popen(
-                command, cwd=cwd, env=_environment(), stdout=stdout, stderr=stderr, text=True, start_new_session=True
+                command,
+                cwd=cwd,
+                env=_environment(),
+                stdin=subprocess.DEVNULL,  # a block never waits for a keyboard
+                stdout=stdout,
+                stderr=stderr,
+                text=True,
+                start_new_session=True,  # its own session: stopped whole, its processes found in /proc
             )
             code, cpu_s = _wait(process, started + BLOCK_STOP_S)
             stdout.seek(0)
