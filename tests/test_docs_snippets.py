@@ -232,10 +232,10 @@ def outcomes(tmp_path_factory: pytest.TempPathFactory):
 
 
 def _report(block: Block, outcome: Outcome) -> str:
+    """What the block printed last (the error first, where a reader looks), then the block itself."""
     tail = "\n".join((outcome.stdout + outcome.stderr).strip().split("\n")[-25:])
-    return (
-        f"{block.where} ({outcome.seconds:.0f} s, {outcome.cpu_s:.0f} s of CPU):\n{block.code}\n--- output ---\n{tail}"
-    )
+    took = f"{outcome.seconds:.0f} s, {outcome.cpu_s:.0f} s of CPU"
+    return f"{block.where} ({took}):\n{tail}\n--- the block ---\n{block.code}"
 
 
 @pytest.mark.parametrize("block", [b for b in BLOCKS if b.language == "python"], ids=lambda b: b.where)
