@@ -64,11 +64,12 @@ class Pads:
 
     @classmethod
     def from_settings(cls, settings: ManipulationSettings) -> Pads:
-        """From ``ManipulationSettings`` (the gripper, the open width, the push clearance)."""
+        """From ``ManipulationSettings`` (the gripper, the open width, the push clearance, the least gap)."""
         return cls(
             gripper=settings.gripper,
             max_opening_m=settings.open_width_m,
             push_clearance_m=settings.push_clearance_m,
+            min_gap_m=settings.min_target_gap_m,
         )
 
     @property
@@ -364,7 +365,7 @@ def check_gaps(parts: Sequence[Part], pads: Pads) -> None:
             if gap < pads.min_gap_m - 1e-9:
                 raise PlanError(
                     f"targets {first.name} and {second.name} are {gap * 1000:.1f} mm apart, under the "
-                    f"{pads.min_gap_m * 1000:.0f} mm two parts need so that each can lie within the threshold "
+                    f"{pads.min_gap_m * 1000:g} mm two parts need so that each can lie within the threshold "
                     f"without touching; {_apart_text(first, second, pads)}",
                     parts=both,
                 )
@@ -396,7 +397,7 @@ def _apart_text(first: Part, second: Part, pads: Pads) -> str:
     need_mm = centre_distance_needed_m(first, second, pads) * 1000
     return (
         f"their centres are {distance_mm:.1f} mm apart and must be at least {need_mm:.1f} mm apart along that "
-        f"line (their footprints and the {pads.min_gap_m * 1000:.0f} mm gap): move them "
+        f"line (their footprints and the {pads.min_gap_m * 1000:g} mm gap): move them "
         f"{need_mm - distance_mm:.1f} mm further apart"
     )
 

@@ -27,7 +27,8 @@
     [fresco.tile]               # a slab broken into pieces "tile 1" ... "tile N", each a target at its place
     size_mm = [160, 120, 20]    # the whole slab: length, width, height
     pieces = 6                  # 3 to 12
-    gap_mm = 2                  # optional, default 2: the gap along every fracture once reassembled, 2 or more
+    gap_mm = 2                  # optional, default 2: the gap along every fracture once reassembled,
+                                # at least twice threshold_mm (0.5 at a 0.25 mm threshold)
     seed = 3                    # optional, default 0: the fracture pattern
     colour = "ochre"            # a built-in or [colours.NAME]; every piece the same colour
     x_mm = 500                  # where the whole goes (its centre)
@@ -57,6 +58,7 @@ from bt_arrange.filelimits import MAX_COLOURS, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.shapes import Prism
+from bt_arrange.settings import DEFAULT_TARGET_GAP_M, ManipulationSettings
 from bt_arrange.shapes.fracture import MAX_PIECES, MIN_GAP_M, MIN_PIECES, fracture
 from bt_arrange.suggest import did_you_mean
 
@@ -278,7 +280,8 @@ class _Reader:
         if "targets" not in data and "fresco" not in data:
             raise self.fail("the top level", "no [[targets]] and no [fresco.NAME]: a plan needs at least one")
         targets = self.targets(data["targets"], types, colours) if "targets" in data else []
-        for kind, target in self.frescoes(data.get("fresco", {}), types, colours, targets):
+        threshold_mm = options.get("threshold_mm", Plan.threshold_mm)
+        for kind, target in self.frescoes(data.get("fresco", {}), types, colours, targets, threshold_mm):
             types[kind.name] = kind
             targets.append(target)
         seed, starts = self.scene(data.get("scene", {}), types, colours, targets)
@@ -338,9 +341,12 @@ class _Reader:
             raise self.fail(where, str(error)) from None
 
     def frescoes(
-        self, table: Any, types: dict[str, ObjectType], colours: ColourTable, targets: list[Any]
+        self, table: Any, types: dict[str, ObjectType], colours: ColourTable, targets: list[Any], threshold_mm: float
     ) -> list[tuple[ObjectType, Any]]:
-        """Each ``[fresco.NAME]``'s pieces: a type and a target per piece, ``NAME 1`` ... ``NAME N``."""
+        """Each ``[fresco.NAME]``'s pieces: a type and a target per piece, ``NAME 1`` ... ``NAME N``.
+
+        The gap along its fractures must keep two pieces each within ``threshold_mm`` apart (twice it).
+        """
         from bt_arrange.trees import Target
 
         if not isinstance(table, dict):
@@ -368,12 +374,14 @@ class _Reader:
             pieces = entry["pieces"]
             if isinstance(pieces, bool) or not isinstance(pieces, int) or not MIN_PIECES <= pieces <= MAX_PIECES:
                 raise self.fail(where, f"pieces = {_shown(pieces)}: a fresco breaks into {MIN_PIECES} to {MAX_PIECES}")
-            gap_mm = self.number(entry.get("gap_mm", MIN_GAP_M * 1000), where, "gap_mm")
-            if gap_mm < MIN_GAP_M * 1000:
+            least_mm = ManipulationSettings().gap_for_threshold_m(threshold_mm) * 1000
+            gap_mm = self.number(entry.get("gap_mm", DEFAULT_TARGET_GAP_M * 1000), where, "gap_mm")
+            if gap_mm < least_mm - 1e-9:
                 raise self.fail(
                     where,
-                    f"gap_mm = {_shown(entry['gap_mm'])}: the gap along a fracture must be at least "
-                    f"{MIN_GAP_M * 1000:g} mm, what two parts need to lie within the threshold without touching",
+                    f"gap_mm = {_shown(entry['gap_mm'])}: two pieces each within the threshold ({threshold_mm:g} mm) "
+                    f"must not touch, so the gap along a fracture must be at least {least_mm:g} mm (twice the "
+                    f"threshold, {MIN_GAP_M * 1000:g} mm at the finest)",
                 )
             seed = entry.get("seed", 0)
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:

@@ -17,6 +17,10 @@ from bt_arrange.shapes import ROBOTIQ_2F85, Gripper, Shape, preferred_grasp
 SQUARINGS = ("shift", "sweep", "turn", "off")
 
 
+#: The least gap between two targets at a threshold of 1 mm or more (m).
+DEFAULT_TARGET_GAP_M = 0.002
+
+
 @dataclass(frozen=True)
 class ManipulationSettings:
     """Heights, widths and forces of handling parts on a table at z = 0 (metres, newtons, seconds).
@@ -80,6 +84,12 @@ class ManipulationSettings:
     #: The shortest push made at all (m): pushes of 0.3 to 0.8 mm kept all but 0.010 to 0.016 mm of
     #: what they moved (docs/irregular.md, "Sub-millimetre pushes"), so 0.05 mm is still a push.
     finest_push_m: float = 0.00005
+    #: Two targets closer than this could touch once each lies within the threshold: twice the
+    #: threshold, at most 2 mm (the gap a 1 mm threshold needs, and what coarser ones keep) and at
+    #: least ``finest_gap_m``. ``for_threshold`` sets it from the run's threshold (issue 38 item 4).
+    min_target_gap_m: float = DEFAULT_TARGET_GAP_M
+    #: The least gap between two targets at all (m): twice the 0.25 mm the precision runs are held to.
+    finest_gap_m: float = 0.0005
     #: The line that pushes: slower than the planner's lines, so the part stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
     #: Layers (issue 33): the gentler line that pushes a part standing on others. It drags its support
@@ -200,12 +210,28 @@ class ManipulationSettings:
         return math.sqrt(2.0) * self.finest_push_m * 1000
 
     def for_threshold(self, threshold_mm: float) -> ManipulationSettings:
-        """These settings for a ``threshold_mm`` finer than ``min_threshold_mm``: ``min_push_m`` lowered to fit.
+        """These settings for a run to ``threshold_mm``: the shortest push and the least gap between targets.
 
-        An offset at the threshold may lie diagonally, ``threshold / sqrt(2)`` along each axis: that
-        becomes the shortest push (never under ``finest_push_m``). A coarser threshold keeps these settings.
+        An offset at the threshold may lie diagonally, ``threshold / sqrt(2)`` along each axis: under
+        ``min_threshold_mm`` that becomes the shortest push (never under ``finest_push_m``). Two
+        neighbours each within the threshold must not touch: the least gap between two targets is
+        ``gap_for_threshold_m``. A threshold of 1 mm or more keeps these settings.
         """
         fitting_m = threshold_mm / 1000 / math.sqrt(2.0)
-        if fitting_m >= self.min_push_m:
-            return self
-        return replace(self, min_push_m=max(fitting_m, self.finest_push_m))
+        changes: dict[str, float] = {}
+        if fitting_m < self.min_push_m:
+            changes["min_push_m"] = max(fitting_m, self.finest_push_m)
+        gap_m = self.gap_for_threshold_m(threshold_mm)
+        if gap_m < self.min_target_gap_m:
+            changes["min_target_gap_m"] = gap_m
+        return replace(self, **changes) if changes else self
+
+    def gap_for_threshold_m(self, threshold_mm: float) -> float:
+        """The least gap two targets need at ``threshold_mm`` (m): twice it, within ``finest_gap_m`` and 2 mm.
+
+        Each of two neighbours may end up to the threshold off its target, towards the other: with
+        the gap at twice the threshold they may meet, never overlap. (A yaw error within the yaw
+        threshold turns a piece's far corners further; the pushes that bring a piece within both
+        keep it off its neighbour, and the figures say how close they came: docs/irregular.md.)
+        """
+        return min(DEFAULT_TARGET_GAP_M, max(self.finest_gap_m, 2.0 * threshold_mm / 1000))

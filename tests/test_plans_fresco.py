@@ -74,7 +74,12 @@ def test_a_fresco_beside_other_targets_and_optional_keys(tmp_path) -> None:
         ("pieces", "2", "pieces = 2: a fresco breaks into 3 to 12"),
         ("pieces", "13", "pieces = 13: a fresco breaks into 3 to 12"),
         ("pieces", "4.5", "pieces = 4.5: a fresco breaks into 3 to 12"),
-        ("gap_mm", "1.5", "gap_mm = 1.5: the gap along a fracture must be at least 2 mm"),
+        (
+            "gap_mm",
+            "1.5",
+            r"gap_mm = 1.5: two pieces each within the threshold \(1 mm\) must not touch, so the gap along a "
+            r"fracture must be at least 2 mm \(twice the threshold, 0.5 mm at the finest\)",
+        ),
         ("gap_mm", '"2"', 'gap_mm = "2" is not a number'),
         ("seed", "-1", "seed = -1 is not a whole number"),
         ("colour", '"ocher"', 'unknown colour "ocher".*ochre'),
@@ -108,3 +113,31 @@ def test_a_fresco_whose_piece_names_are_taken_is_refused(tmp_path) -> None:
 def test_a_plan_needs_targets_or_a_fresco(tmp_path) -> None:
     with pytest.raises(PlanError, match=r"no \[\[targets\]\] and no \[fresco.NAME\]"):
         plans.load(write(tmp_path, "threshold_mm = 1.0\n"))
+
+
+@pytest.mark.parametrize(("threshold_mm", "gap_mm", "refused"), [(0.25, 0.5, False), (0.25, 0.45, True), (0.5, 0.9, True),
+                                                           (0.5, 1.0, False), (0.1, 0.5, False), (0.1, 0.4, True),
+                                                           (3.0, 2.0, False)])
+def test_the_least_gap_is_twice_the_plans_threshold_from_half_a_millimetre_to_two(
+    tmp_path, threshold_mm: float, gap_mm: float, refused: bool
+) -> None:
+    # Two pieces each within the threshold of their targets, towards each other, must not touch; 2 mm
+    # (what a 1 mm threshold needs) is kept for coarser thresholds, 0.5 mm is the least at all.
+    text = f"threshold_mm = {threshold_mm}\n" + with_key("gap_mm", str(gap_mm))
+    path = write(tmp_path, text)
+    if refused:
+        least = max(0.5, min(2.0, 2 * threshold_mm))
+        with pytest.raises(PlanError, match=f"must be at least {least:g} mm"):
+            plans.load(path)
+    else:
+        plan = plans.load(path)
+        assert len(plan.targets) == 3
+
+
+def test_a_tree_run_coarser_than_its_plan_refuses_the_tight_gaps_naming_the_pieces(tmp_path) -> None:
+    from bt_arrange.trees import arrangement
+
+    plan = plans.load(write(tmp_path, "threshold_mm = 0.25\n" + with_key("gap_mm", "0.5")))
+    arrangement(plan.targets, threshold_mm=0.25, colours=plan.colours)  # built as written
+    with pytest.raises(PlanError, match=r"^targets tile \d and tile \d are 0.5 mm apart, under the 2 mm two parts"):
+        arrangement(plan.targets, threshold_mm=1.0, colours=plan.colours)

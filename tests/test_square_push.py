@@ -83,3 +83,22 @@ def test_within_reach_but_turned_it_is_squared_where_the_pads_stand_widest() -> 
     assert name == names[-135] and distance == SQUARING_PRESS_MM
     name, _ = Push.choose_square_push((0.05, 0.05), pushes, (names[0], names[90]), 0.2, True)
     assert name in (names[0], names[90])
+
+
+def test_among_neighbours_two_free_pushes_close_an_offset_between_them_by_their_own_shares() -> None:
+    # Issue 38 item 4. With +x and the hypotenuse's push (-135 deg) free and +y blocked, an offset of
+    # (-0.5, -2) mm is 1.5 mm along +x plus 2.83 mm along -135 deg. Pushed by its whole projection
+    # (1.77 mm along -135 deg), the part would be left (0.75, -0.75) mm off: a -y push, blocked, then.
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[-135])
+    name, distance = Push.choose_square_push((-0.5, -2.0), pushes, free, 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(2 * math.sqrt(2))
+    name, distance = Push.choose_square_push((1.5, 0.0), pushes, free, 0.2, False)  # what is left
+    assert name == names[0] and distance == pytest.approx(1.5)
+    # Every push free (a part with no neighbour): the projection rule, as before.
+    name, distance = Push.choose_square_push((-0.5, -2.0), pushes, tuple(pushes), 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(2.5 / math.sqrt(2))
+    # An offset outside the free pushes' cone: the projection rule too.
+    name, distance = Push.choose_square_push((-0.5, 2.0), pushes, (names[0], names[90]), 0.2, False)
+    assert name == names[90] and distance == pytest.approx(2.0)

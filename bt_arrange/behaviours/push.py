@@ -354,6 +354,15 @@ class Push(StagedBehaviour):
         }
         free = [name for name in pushes if name in towards]
         best = max(pushes, key=lambda name: along[name])
+        if len(free) < len(pushes):
+            # Among neighbours a push by the whole projection can carry the part past the line of a
+            # second free push, into a place only a blocked push would close. Two free pushes whose
+            # headings take the offset between them close it exactly, each by its own share.
+            shares = _free_cone_shares(offset, pushes, free)
+            if shares is not None:
+                chosen, distance_mm = max(shares, key=lambda share: share[1])
+                if distance_mm >= min_push_mm:
+                    return chosen, distance_mm
         usable = [name for name in free if along[name] >= min_push_mm]
         if usable:
             chosen = max(usable, key=lambda name: along[name])
@@ -530,3 +539,28 @@ class Blocked:
             "where a neighbour leaves the pads no room: pick it up and release it again "
             "on the side it can be pushed from"
         )
+
+
+def _free_cone_shares(
+    offset_mm: np.ndarray, pushes: dict[str, SquarePush], free: list[str]
+) -> list[tuple[str, float]] | None:
+    """The two free pushes (and how far each, mm) whose headings take the offset between them, or None.
+
+    ``offset = a u + b v`` with ``a, b >= 0`` for the headings ``u``, ``v`` of two free pushes less than
+    half a turn apart; of all such pairs, the one that travels least (``a + b``).
+    """
+    best: tuple[float, list[tuple[str, float]]] | None = None
+    for i, first in enumerate(free):
+        u = np.array([math.cos(pushes[first].heading_rad), math.sin(pushes[first].heading_rad)])
+        for second in free[i + 1 :]:
+            v = np.array([math.cos(pushes[second].heading_rad), math.sin(pushes[second].heading_rad)])
+            determinant = float(u[0] * v[1] - u[1] * v[0])
+            if abs(determinant) < 1e-6:  # parallel or opposite: no cone
+                continue
+            a = float(offset_mm[0] * v[1] - offset_mm[1] * v[0]) / determinant
+            b = float(u[0] * offset_mm[1] - u[1] * offset_mm[0]) / determinant
+            if a < 0.0 or b < 0.0:
+                continue
+            if best is None or a + b < best[0]:
+                best = (a + b, [(first, a), (second, b)])
+    return None if best is None else best[1]

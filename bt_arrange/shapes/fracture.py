@@ -32,8 +32,10 @@ from bt_arrange.shapes.prism import Prism, outline_problem
 
 #: A fresco is broken into this many pieces at least and at most.
 MIN_PIECES, MAX_PIECES = 3, 12
-#: The least gap along a fracture: the layout's least gap between two targets (``Pads.min_gap_m``).
-MIN_GAP_M = 0.002
+#: The least gap along a fracture at all: the layout's least gap between two targets at its finest
+#: threshold (``ManipulationSettings.finest_gap_m``). A plan's threshold asks for more
+#: (``ManipulationSettings.gap_for_threshold_m``: twice it, 2 mm at 1 mm or more).
+MIN_GAP_M = 0.0005
 #: Draws tried before a fresco is refused (each from the next sub-seed).
 MAX_DRAWS = 400
 #: Sites closer than this share of the mean spacing are redrawn at once: slivers are never graspable.
