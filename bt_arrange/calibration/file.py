@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.errors import PlanError
+from bt_arrange.filelimits import read_limited
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics
@@ -164,6 +165,34 @@ def write_calibration(calibration: CameraCalibration, path: Path | str) -> Path:
     return path
 
 
+def check_image_size(calibration: CameraCalibration, width_px: int, height_px: int) -> None:
+    """A one-line ``PlanError`` when ``calibration`` holds for another image size than the camera's."""
+    k = calibration.intrinsics
+    if (k.width_px, k.height_px) != (width_px, height_px):
+        raise PlanError(
+            f"the calibration is for {k.width_px}x{k.height_px} px images, the camera takes {width_px}x{height_px} px",
+            field="width_px",
+            value=(k.width_px, k.height_px),
+            limit=(width_px, height_px),
+        )
+
+
+def read_calibration_option(
+    path: Path | str, width_px: int | None = None, height_px: int | None = None
+) -> CameraCalibration:
+    """``--calibration``'s file: ``read_calibration``, for an image of ``width_px`` x ``height_px`` when given.
+
+    Its one-line ``PlanError`` starts with the option and the path (``--calibration camera.toml: ...``).
+    """
+    try:
+        calibration = read_calibration(path)
+        if width_px is not None and height_px is not None:
+            check_image_size(calibration, width_px, height_px)
+    except PlanError as error:
+        raise PlanError(f"--calibration {path}: {error}", field=error.field, value=error.value) from error
+    return calibration
+
+
 def _toml_module() -> Any:
     if sys.version_info >= (3, 11):
         import tomllib
@@ -175,11 +204,15 @@ def _toml_module() -> Any:
 
 
 def read_calibration(path: Path | str) -> CameraCalibration:
-    """A calibration from its file; a one-line ``PlanError`` naming the field for any mistake."""
+    """A calibration from its file; a one-line ``PlanError`` naming the field for any mistake.
+
+    Read as every shared file is (``bt_arrange.filelimits.read_limited``): within ``MAX_FILE_BYTES``
+    and UTF-8, or one line saying which.
+    """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
+        text = read_limited(path, "the calibration file", PlanError)
+    except OSError as error:  # a missing file (read_limited words the other faults itself)
         raise PlanError(f"cannot read the calibration file {path}: {error.strerror or error}") from error
     try:
         data = _toml_module().loads(text)

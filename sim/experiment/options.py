@@ -219,12 +219,12 @@ def check_calibration(calibration: str | Path | None) -> str | None:
     """The ``--calibration`` file checked (``read_calibration``), as a string for the trials; None without one."""
     if calibration is None:
         return None
-    from bt_arrange.calibration import read_calibration
+    from bt_arrange.calibration.file import read_calibration_option
+    from bt_arrange_sim.config import CameraConfig
 
-    try:
-        read_calibration(calibration)
-    except PlanError as error:
-        raise PlanError(f"--calibration {calibration}: {error}") from error
+    # Every engine's cell has the same camera (``config.CameraConfig``): the calibration must be for its images.
+    camera = CameraConfig()
+    read_calibration_option(calibration, camera.width_px, camera.height_px)
     return str(calibration)
 
 
