@@ -12,9 +12,7 @@ from typing import Any
 import numpy as np
 
 from bt_arrange import backends
-from bt_arrange.cli_common import (
-    EXIT_OK,
-)
+from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK
 from bt_arrange.errors import BackendError, BtArrangeError
 
 
@@ -47,7 +45,10 @@ def _calibrate(args: argparse.Namespace) -> int:
     skipped = f"{outcome.unreachable} unreachable, {outcome.not_seen} with the board not seen"
     calibration = outcome.calibration
     if calibration is None:
-        raise BtArrangeError(f"calibration failed: {outcome.reason} ({outcome.poses} poses: {skipped})")
+        # The arm has moved: not a usage error (2) but work that fell short, like a part not within (1).
+        print(f"bt-arrange: error: calibration failed: {outcome.reason} ({outcome.poses} poses: {skipped})",
+              file=sys.stderr)  # fmt: skip
+        return EXIT_NOT_WITHIN
     write_calibration(calibration, out)
     k, pose = calibration.intrinsics, calibration.camera_to_base
     result: dict[str, Any] = {

@@ -28,7 +28,7 @@ from typing import Any
 
 from bt_arrange import files
 from bt_arrange.checks import whole_number
-from bt_arrange.errors import BtArrangeError, PlanError, RecordError
+from bt_arrange.errors import PlanError, RecordError, TrialsErroredError
 from bt_arrange.trees import check_threshold
 from bt_arrange_sim.experiment.engines import DEFAULT_ENGINE, trial_engine
 from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_calibration, check_object_rows
@@ -53,15 +53,12 @@ def read_trials(path: Path) -> list[dict]:
     return records
 
 
-class CampaignIncompleteError(BtArrangeError):
+class CampaignIncompleteError(TrialsErroredError):
     """Some trials errored (an exception, a worker that died, the cluster gone); ``--resume`` reruns them.
 
-    ``summary`` holds what ``run_experiment`` would have returned, for the trials that did finish.
+    ``summary`` holds what ``run_experiment`` would have returned, for the trials that did finish
+    (the command line exits 4, ``bt_arrange.cli_common.EXIT_TRIALS_ERRORED``).
     """
-
-    def __init__(self, message: str, *, summary: list[dict] | None = None) -> None:
-        super().__init__(message)
-        self.summary = summary or []
 
 
 @dataclass
