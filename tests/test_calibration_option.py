@@ -132,3 +132,94 @@ def test_a_resume_refuses_a_calibration_changed_in_place_or_another_path_naming_
     # Without a calibration now: named too.
     with pytest.raises(PlanError, match=rf"--calibration {camera} there, none asked"):
         run_experiment(["system"], 2, 1, 1.0, out, resume=True)
+
+
+# ----------------------------------------------------------------------------------------------
+# write_calibration: the project's atomic writer
+# ----------------------------------------------------------------------------------------------
+
+
+def test_a_calibration_is_written_through_the_atomic_writer_fsynced_under_its_own_temporary_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import os
+
+    synced: list[int] = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (synced.append(fd), real_fsync(fd))[1])
+    # Another writer's calibration half-written under the name a fixed temporary name would take.
+    other = tmp_path / ".camera.toml.tmp"
+    other.write_text("another writer's half")
+    path = write_calibration(_calibration(), tmp_path / "camera.toml")
+    assert synced, "the content reaches the disk before the rename"
+    assert other.read_text() == "another writer's half", "another writer's temporary file is not taken"
+    assert read_calibration(path).intrinsics == _calibration().intrinsics
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".camera.toml.tmp", "camera.toml"], "no temporary left"
+
+
+def test_two_calibrations_written_at_once_do_not_collide(tmp_path: Path) -> None:
+    import threading
+
+    from bt_arrange import files
+
+    path = tmp_path / "camera.toml"
+    names: list[str] = []
+    real_temp_name = files.temp_name
+    both_named = threading.Barrier(2)
+
+    def temp_name(target: Path) -> Path:
+        name = real_temp_name(target)
+        names.append(name.name)
+        both_named.wait(timeout=30)  # both writers hold their temporary names at the same moment
+        return name
+
+    errors: list[BaseException] = []
+
+    def write(views: int) -> None:
+        try:
+            write_calibration(CameraCalibration(**{**_calibration().__dict__, "views": views}), path)
+        except BaseException as error:  # noqa: BLE001 - kept for the assertion below
+            errors.append(error)
+
+    files.temp_name, saved = temp_name, files.temp_name
+    try:
+        writers = [threading.Thread(target=write, args=(views,)) for views in (20, 21)]
+        for writer in writers:
+            writer.start()
+        for writer in writers:
+            writer.join(timeout=60)
+    finally:
+        files.temp_name = saved
+    assert errors == [] and len(set(names)) == 2, (errors, names)
+    assert read_calibration(path).views in (20, 21), "one of the two, whole"
+    assert [p.name for p in tmp_path.iterdir()] == ["camera.toml"]
+
+
+def test_a_full_disk_while_writing_the_calibration_exits_3_naming_the_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import contextlib
+    from types import SimpleNamespace
+
+    from diskfaults import FullDisk
+
+    from bt_arrange import cli_calibrate, files
+    from bt_arrange.errors import RecordError
+
+    out = tmp_path / "camera.toml"
+    out.write_text("the old calibration\n")
+    monkeypatch.setattr(files, "_write", FullDisk(100))
+    with pytest.raises(RecordError, match=rf"^cannot write the calibration file {out}: No space left on device$"):
+        write_calibration(_calibration(), out)
+    assert out.read_text() == "the old calibration\n" and len(list(tmp_path.iterdir())) == 1, "old file, no temp"
+
+    outcome = SimpleNamespace(calibration=_calibration(), reason="", poses=20, unreachable=0, not_seen=0)
+    run = SimpleNamespace(tick_hooks=[], run=lambda: outcome, elapsed_s=lambda: 0.0)
+    backend = SimpleNamespace(name="fake", open_calibration=lambda **options: contextlib.nullcontext(run))
+    monkeypatch.setattr(cli_calibrate, "backends", SimpleNamespace(load=lambda name=None: backend))
+    code = cli.main(["calibrate", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 3
+    assert captured.err == f"bt-arrange: error: cannot write the calibration file {out}: No space left on device\n"
+    assert "intrinsics: fx 1371.00" in captured.out, "what was found is printed"
+    assert out.read_text() == "the old calibration\n"

@@ -41,7 +41,8 @@ from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import PlanError
+from bt_arrange import files
+from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.filelimits import read_limited
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.plancheck import CameraView
@@ -153,15 +154,23 @@ def _toml_string(text: str) -> str:
 
 
 def write_calibration(calibration: CameraCalibration, path: Path | str) -> Path:
-    """Write ``calibration`` to ``path`` (through a temporary file beside it, then renamed); the path."""
+    """Write ``calibration`` to ``path`` whole or not at all (``bt_arrange.files.write_text``); the path.
+
+    Through the project's atomic writer: a temporary name of this process's own beside it (two
+    calibrations written at once do not collide), flushed to the disk, then renamed. A file that
+    cannot be written (a full disk, a folder gone or read-only) is a ``RecordError`` naming it,
+    with ``result`` the calibration (the command prints it, then exits 3); ``path`` is then the old
+    file or absent, never cut short.
+    """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
     try:
-        tmp.write_text(calibration.to_toml(), encoding="utf-8")
-        tmp.replace(path)
+        files.write_text(path, calibration.to_toml())
     except OSError as error:
-        tmp.unlink(missing_ok=True)
-        raise PlanError(f"cannot write the calibration file {path}: {error.strerror or error}") from error
+        fault = files.Faults()
+        fault.add(path, error)
+        raise RecordError(
+            f"cannot write the calibration file {path}: {files.cause(error)}", faults=fault.faults, result=calibration
+        ) from error
     return path
 
 
