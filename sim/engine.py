@@ -82,6 +82,9 @@ class CellBackend:
             raise PlanError(f"--cell {cell}: {error}") from error
         return CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
 
+    def check_ready(self) -> None:
+        """A one-line error when the engine cannot start here (a library missing); nothing by default."""
+
     def check_cells(self, cells: Sequence[str]) -> None:
         """A one-line ``PlanError`` when this engine has not every one of ``cells``."""
         from bt_arrange.errors import PlanError
