@@ -207,12 +207,18 @@ def check_options(
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
     ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
-    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler``. ``resume``
+    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler`` (with ``dask``:
+    installed, and the scheduler's port taking a connection). ``resume``
     needs nothing checked here: ``run_experiment`` compares the folder's specification.
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)
     check_calibration(calibration)
+    if executor == "dask":
+        from bt_arrange_sim.executors import check_dask
+
+        # Last: the only check that may wait (a few seconds, for a scheduler that does not answer).
+        check_dask(scheduler)
 
 
 def check_calibration(calibration: str | Path | None) -> str | None:
