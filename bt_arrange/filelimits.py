@@ -11,6 +11,8 @@ times what the shipped files need, docs/xml.md and docs/plans.md) and documented
 | ``MAX_TREE_DEPTH``: nesting of a tree, SubTrees expanded (and of an XML file's elements) | 100 | 10 |
 | ``MAX_TARGETS``: targets (and starts) of a plan file | 200 | 9 |
 | ``MAX_COLOURS``: colours of a plan file | 64 | 2 |
+| ``MAX_OUTLINE_POINTS``: points of one outline (``outline_mm``) | 64 | 6 (``irregular_parts.toml``'s fragment) |
+| ``MAX_OBJECT_TYPES``: types of a plan file (``[objects.NAME]``) | 64 | 5 (``irregular_parts.toml``) |
 
 ``read_limited(path, what)`` reads a file's text within ``MAX_FILE_BYTES``; ``check_tree_size(root,
 where)`` walks a built tree without recursion and refuses one beyond the node or depth limit.
@@ -28,6 +30,10 @@ MAX_TREE_NODES = 10_000
 MAX_TREE_DEPTH = 100
 MAX_TARGETS = 200
 MAX_COLOURS = 64
+#: Points of one outline (a prism's top face); every outline check after this one is O(n log n).
+MAX_OUTLINE_POINTS = 64
+#: Types of a plan file (``[objects.NAME]``, the cube aside): each is judged (its grasps searched) as it loads.
+MAX_OBJECT_TYPES = 64
 
 
 def too_large(what: str, path: Path | str, size: int) -> str:
