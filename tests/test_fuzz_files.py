@@ -77,7 +77,8 @@ TOML_TOKENS = ["nan", "inf", "-inf", "-1", "0", "1e308", "9" * 40, "[", "]", "{"
                "true", "1979-05-27", "[[0, 0], [60, 0], [15, 45]]", "\ufeff", "\x00"]  # fmt: skip
 XML_TOKENS = ["<", ">", "/>", "</", "<Sequence>", "</Sequence>", '<SubTree ID="A"/>', '<SubTree ID="MainTree"/>',
               "&amp;", "&#0;", "&lt;", "<!DOCTYPE r [<!ENTITY a 'b'>]>", "<![CDATA[x]]>", '"', "=", "nan", "-1",
-              "1e9", "<BehaviorTree ID=\"A\">", "</BehaviorTree>", "<Repeat num_cycles=\"-1\">", "\x00", "\ufeff"]  # fmt: skip
+              "1e9", '<BehaviorTree ID="A">', "</BehaviorTree>", '<Repeat num_cycles="-1">', "\x00",
+              "\ufeff"]  # fmt: skip
 
 
 @st.composite
@@ -233,7 +234,7 @@ def _attribute_values() -> list[str]:
 
 SHIPPED_VALUES = _attribute_values()
 tags = st.sampled_from([*xmltree.registry.REGISTRY, "SubTree", "BehaviorTree", "Sequense", "TreeNodesModel", "root"])
-ports = sorted({p.name for model in xmltree.registry.REGISTRY.values() for p in model.ports} | {"name", "ID", "_skipIf"})
+ports = sorted({p.name for m in xmltree.registry.REGISTRY.values() for p in m.ports} | {"name", "ID", "_skipIf"})
 attributes = st.dictionaries(
     st.sampled_from(ports), st.one_of(st.sampled_from(SHIPPED_VALUES), st.text(max_size=8), st.sampled_from(
         ["-1", "0", "1e9", "nan", "inf", "{x}", "red", "A", "B", "MainTree", "true", "0.5,0,0"])), max_size=3,
