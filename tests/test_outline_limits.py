@@ -149,3 +149,32 @@ def test_a_plan_with_more_types_than_the_limit_is_refused_before_any_is_judged(
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err
     assert f"[objects]: {MAX_OBJECT_TYPES + 1} types, over the limit of {MAX_OBJECT_TYPES}" in err
+
+
+def _exact_loop_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    from bt_arrange.shapes import antipodal
+
+    monkeypatch.setattr(antipodal, "_clearly_refused", lambda points, closing, along, centres, *rest: np.zeros(
+        len(centres), dtype=bool))  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_rough_judgement_of_every_place_finds_the_grasps_the_exact_loop_finds(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from bt_arrange.shapes import Prism, antipodal
+    from bt_arrange.shapes.gripper import ROBOTIQ_2F85
+
+    rng = np.random.default_rng(seed)
+    shapes = [
+        [[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]],  # the shipped ell
+        _star(int(rng.integers(5, 20)), seed, wobble=0.5),
+        (np.round(_star(8, seed, wobble=0.3), 3)).tolist(),  # on a millimetre grid: exact ties
+    ]
+    for points in shapes:
+        outline = np.array(Prism.from_outline(np.asarray(points).tolist(), 0.02).outline)
+        rough = antipodal._search(outline, 0.02, ROBOTIQ_2F85)
+        with monkeypatch.context() as patched:
+            _exact_loop_alone(patched)
+            exact = antipodal._search(outline, 0.02, ROBOTIQ_2F85)
+        assert rough == exact, points
