@@ -149,7 +149,7 @@ DECIDED_BY_M = 1e-9
 
 
 def _clearly_refused(
-    points: FloatArray, closing: FloatArray, along: FloatArray, centres: FloatArray, half_pad: float, max_width_m: float
+    points: FloatArray, closing: FloatArray, along: FloatArray, centres: np.ndarray, half_pad: float, max_width_m: float
 ) -> np.ndarray:
     """For each centre along the pads, True when ``_grasp_along``'s checks refuse it by more than ``DECIDED_BY_M``.
 
