@@ -1,6 +1,7 @@
 """What ``run.mcap`` costs: its size per minute of world time, and its share of a recorded run's wall time.
 
     python benchmarks/mcap_cost.py [--json] [--pairs 3] [--tree trees/four_cubes.py]
+    python benchmarks/mcap_cost.py --campaign [--rows system,translation] [--trials 5] [--pairs 2] [--json]
 
 Runs, in one process, ``--pairs`` pairs of the same simulated trial (same seed), each recorded
 (``record_dir``: the images, the transitions, the replay page) once with the Foxglove streams and
@@ -15,6 +16,13 @@ process's CPU time, every thread, with over without: what other jobs on the mach
 ``observer_share``, the time spent in the observer's own hooks and in finishing the file over the
 recorded runs' wall time: what the recording costs the tree's thread, free of the machine's noise.
 Per topic: messages and bytes before the file's compression.
+
+``--campaign``: the same for ``experiment --record DIR`` (one MCAP per trial), after an unmeasured
+warm-up campaign of one trial each way: ``--pairs`` pairs of one campaign (``--rows`` x ``--trials``,
+one worker, in this process) recorded and not, the order alternating; the files' size per trial
+(mean and largest) and per minute of world time, the campaigns' wall and CPU ratios, the
+observer's share, and whether every trial's record is the same with and without the recording
+(wall time and the ``mcap`` key aside).
 """
 
 from __future__ import annotations
@@ -86,12 +94,97 @@ def topics(path: Path) -> dict[str, dict[str, int]]:
     return dict(sorted(found.items(), key=lambda item: -item[1]["bytes"]))
 
 
+def one_campaign(rows: list[str], trials: int, out: Path, record_dir: Path | None) -> dict[str, Any]:
+    """One campaign in this process (one worker): its wall and CPU time, the observer's time, its records."""
+    from bt_arrange_sim.experiment import read_trials, run_experiment
+
+    SPENT["s"] = 0.0
+    start, cpu_start = time.perf_counter(), time.process_time()
+    run_experiment(rows, trials, 0, 1.0, out, record=record_dir)
+    wall_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
+    records = {(r["row"], r["trial"]): r for r in read_trials(out / "trials.jsonl")}
+    return {"wall_s": wall_s, "cpu_s": cpu_s, "observer_s": SPENT["s"], "records": records}
+
+
+def campaign(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``--campaign`` figures (see the module's text)."""
+    rows = [row.strip() for row in args.rows.split(",") if row.strip()]
+    with_runs, without_runs, sizes, world_s = [], [], [], 0.0
+    with tempfile.TemporaryDirectory() as scratch:
+        # Unmeasured: the imports and first uses (pybullet, the SDK, matplotlib) would fall on the first campaign.
+        for recorded in (False, True):
+            one_campaign(
+                rows[:1], 1, Path(scratch) / f"warm-{int(recorded)}", Path(scratch) / "warm" if recorded else None
+            )
+        for pair in range(args.pairs):
+            for recorded in (pair % 2 == 0, pair % 2 == 1):
+                base = Path(scratch) / f"{pair}-{int(recorded)}"
+                result = one_campaign(rows, args.trials, base / "out", base / "mcap" if recorded else None)
+                (with_runs if recorded else without_runs).append(result)
+                if recorded and not sizes:
+                    for record in result["records"].values():
+                        sizes.append((base / "out" / record["mcap"]).stat().st_size)
+                        world_s += record["sim_seconds"]
+
+    def outcome(records: dict) -> dict:
+        return {key: {k: v for k, v in r.items() if k not in ("wall_seconds", "mcap")} for key, r in records.items()}
+
+    reference = outcome(without_runs[0]["records"])
+    identical = all(outcome(run["records"]) == reference for run in with_runs + without_runs)
+    wall_with = sum(r["wall_s"] for r in with_runs)
+    wall_without = sum(r["wall_s"] for r in without_runs)
+    return {
+        "rows": rows,
+        "trials_per_row": args.trials,
+        "pairs": args.pairs,
+        "trials": len(sizes),
+        "records_identical": identical,
+        "world_s_per_trial": round(world_s / len(sizes), 2),
+        "kb_per_trial_mean": round(statistics.mean(sizes) / 1e3, 1),
+        "kb_per_trial_max": round(max(sizes) / 1e3, 1),
+        "mb_per_world_minute": round(sum(sizes) / 1e6 / (world_s / 60), 2),
+        "wall_s_with": round(statistics.median(r["wall_s"] for r in with_runs), 2),
+        "wall_s_without": round(statistics.median(r["wall_s"] for r in without_runs), 2),
+        "overhead_ratio": round(wall_with / wall_without, 3),
+        "cpu_ratio": round(sum(r["cpu_s"] for r in with_runs) / sum(r["cpu_s"] for r in without_runs), 3),
+        "observer_share": round(sum(r["observer_s"] for r in with_runs) / wall_with, 4),
+    }
+
+
+def print_campaign(figures: dict[str, Any]) -> None:
+    """The ``--campaign`` figures for people."""
+    print(
+        f"campaign {','.join(figures['rows'])} x {figures['trials_per_row']} trials ({figures['trials']} trials, "
+        f"{figures['world_s_per_trial']} s of world time each), {figures['pairs']} pair(s) with and without --record"
+    )
+    print(
+        f"size per trial: {figures['kb_per_trial_mean']} kB mean, {figures['kb_per_trial_max']} kB largest; "
+        f"{figures['mb_per_world_minute']} MB per minute of world time"
+    )
+    print(
+        f"wall time (median): {figures['wall_s_with']} s with, {figures['wall_s_without']} s without; "
+        f"ratio {figures['overhead_ratio']}; CPU ratio {figures['cpu_ratio']}"
+    )
+    print(f"the observer's own share of the recorded campaigns' wall time: {figures['observer_share'] * 100:.1f} %")
+    print(f"every trial's record the same with and without --record: {'yes' if figures['records_identical'] else 'NO'}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=3)
     parser.add_argument("--tree", default=str(ROOT / "trees" / "four_cubes.py"))
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--campaign", action="store_true", help="experiment --record: one MCAP per trial")
+    parser.add_argument("--rows", default="system,translation", help="with --campaign: the rows")
+    parser.add_argument("--trials", type=int, default=5, help="with --campaign: trials per row")
     args = parser.parse_args()
+    if args.campaign:
+        figures = campaign(args)
+        if args.json:
+            print(json.dumps(figures))
+        else:
+            print_campaign(figures)
+        return
     with_runs, without_runs, size_bytes, per_topic = [], [], 0, {}
     with tempfile.TemporaryDirectory() as scratch:
         for pair in range(args.pairs):

@@ -9,6 +9,7 @@
                           [--cell ideal|real|FILE.toml[,...]] [--strategy paper|learned|diagonal]
                           [--object cube|bar[,...]]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
+                          [--record DIR] [--resume]
     bt-arrange calibrate [--backend NAME] [--cell ideal|real|FILE.toml] [--views 20] [--out camera.toml]
                          [--seed N] [--gui] [--live] [--record DIR] [--json]
     bt-arrange examples
@@ -309,6 +310,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.add_argument(
         "--out", type=Path, default=Path("runs/experiment"), help="output folder (default runs/experiment)"
+    )
+    experiment.add_argument(
+        "--record",
+        type=Path,
+        metavar="DIR",
+        help="one MCAP file per trial (Foxglove's; the foxglove extra): DIR/[COMBINATION/]ROW/trial-NNNN.mcap, "
+        "named by each record's mcap key (docs/foxglove.md)",
     )
     experiment.add_argument(
         "--resume",

@@ -36,6 +36,7 @@ EXPERIMENT_OPTIONS = (
     ("scheduler", None),
     ("calibration", None),
     ("resume", False),
+    ("record", None),
 )
 
 
@@ -112,6 +113,7 @@ def _experiment_side_by_side(args: argparse.Namespace, names: list[str]) -> int:
         experiment = _experiment_of(backend)
         one = copy.copy(args)
         one.backend, one.out = name, args.out / name
+        one.record = args.record / name if args.record is not None else None
         rows = experiment.parse_rows(args.rows)
         if args.thresholds is not None and args.threshold_mm is not None:
             raise BtArrangeError("give --threshold-mm or --thresholds, not both")
@@ -193,6 +195,9 @@ def _campaign_on_one(args: argparse.Namespace) -> list[dict[str, Any]]:
     finally:
         bar.close()
     _print_experiment(experiment, summary, args.out)
+    if args.record is not None:
+        where = "ROW/trial-NNNN.mcap" if all("folder" not in row for row in summary) else "COMBINATION/ROW/..."
+        print(f"one MCAP per trial in {args.record} ({where}; each record's mcap key names its file)")
     return summary
 
 

@@ -157,6 +157,8 @@ class Session:
     its view); without it, the world's camera as it reports itself. ``transition_hooks`` are
     called with every status change (e.g. to inject an error at the moment the paper names),
     ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick.
+    ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
+    campaign's trial, ``experiment --record``): written whole at the end, or a fault.
     """
 
     def __init__(
@@ -172,6 +174,7 @@ class Session:
         settle_s: float = SETTLE_S,
         settings: ManipulationSettings | None = None,
         calibration: CameraCalibration | None = None,
+        mcap_path: Path | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
@@ -213,6 +216,8 @@ class Session:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
         check_keys(root)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
+        #: The one MCAP file recorded without a record folder (a campaign's trial), or None.
+        self.mcap_path = Path(mcap_path) if mcap_path is not None else None
         self.root = root
         #: Every node of the tree by its id (as text): transitions name their node by it.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
@@ -299,6 +304,9 @@ class Session:
         )
         if streams is not None:
             streams.finish(report)
+            if self.mcap_path is not None and streams.records:
+                with self.faults.guard(self.mcap_path):
+                    files.write_bytes(self.mcap_path, streams.mcap_bytes())
         if self.record_dir is not None:
             self._finish_log(log, result.transitions)
             replay = self.replay

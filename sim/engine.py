@@ -64,10 +64,20 @@ class CellBackend:
         raise NotImplementedError(f"backend {self.name!r} opens no run")
 
     def open_trial_run(
-        self, root: py_trees.behaviour.Behaviour, starts: Iterable[Any], *, cell_config: Any, calibration: Any = None
+        self,
+        root: py_trees.behaviour.Behaviour,
+        starts: Iterable[Any],
+        *,
+        cell_config: Any,
+        calibration: Any = None,
+        mcap_path: Path | None = None,
     ) -> Any:
-        """A campaign's trial (``experiment.engines.TrialEngine``): headless and unrecorded, in ``cell_config``."""
-        return self.open_cell_run(root, starts, cell_config, calibration=calibration)
+        """A campaign's trial (``experiment.engines.TrialEngine``): headless, in ``cell_config``.
+
+        Unrecorded but for ``mcap_path`` (``experiment --record``): the trial's Foxglove streams, that file alone.
+        """
+        recording = {"mcap_path": mcap_path} if mcap_path is not None else {}
+        return self.open_cell_run(root, starts, cell_config, calibration=calibration, **recording)
 
     def cell_config(self, cell: str, run_seed: int = 0) -> Any:
         """The ``CellConfig`` of ``--cell`` (a real cell's per-run errors seeded by ``run_seed``), or a PlanError."""

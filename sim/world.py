@@ -104,7 +104,7 @@ class CellRun(Session):
     """
 
     world: CellWorld
-    SESSION_OPTIONS = ("record_dir", "time_limit_s", "title", "calibration")
+    SESSION_OPTIONS = ("record_dir", "time_limit_s", "title", "calibration", "mcap_path")
 
     def __init__(
         self,

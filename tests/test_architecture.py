@@ -137,3 +137,53 @@ def test_the_names_that_moved_to_the_pybullet_engine_still_resolve_with_a_deprec
         assert bt_arrange_sim.WorkCell is WorkCell
     with pytest.warns(DeprecationWarning, match="bt_arrange_sim.pybullet.runs"):
         assert bt_arrange_sim.SimulatedRun is SimulatedRun
+
+
+#: What ticks a tree: bt_arrange's session builds these, a backend supplies the world they tick.
+_SESSION_BUILDERS = {"Runner", "Session", "BehaviourTree"}
+
+
+def _session_builders(source: str) -> list[str]:
+    """Where ``source`` imports the runner, or calls a ``Runner``, ``Session`` or py_trees ``BehaviourTree`` itself.
+
+    Subclassing ``Session`` (``CellRun``) and calling ``super().__init__`` is the session's own API,
+    not a session built beside it.
+    """
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and node.module == "bt_arrange.runner":
+            found += [f"line {node.lineno}: imports {a.name}" for a in node.names if a.name in _SESSION_BUILDERS]
+        elif isinstance(node, ast.Call):
+            function = node.func
+            name = function.id if isinstance(function, ast.Name) else getattr(function, "attr", None)
+            if name in _SESSION_BUILDERS:
+                found.append(f"line {node.lineno}: calls {name}")
+    return found
+
+
+def test_sim_builds_no_runner_or_session_of_its_own() -> None:
+    """The session belongs to bt_arrange, a backend supplies a world (docs/architecture.md)."""
+    offenders = {
+        str(path.relative_to(SIM)): found
+        for path in sorted(SIM.rglob("*.py"))
+        if (found := _session_builders(path.read_text(encoding="utf-8")))
+    }
+    assert offenders == {}
+
+
+def test_the_session_check_finds_a_runner_built_in_a_backend() -> None:
+    source = (
+        "from bt_arrange.runner import Runner, Transition\n"
+        "import py_trees\n"
+        "def f(tree, context, step):\n"
+        "    py_trees.trees.BehaviourTree(tree)\n"
+        "    return Runner(tree, context, step).run()\n"
+        "class Run(Session):\n"
+        "    def __init__(self):\n"
+        "        super().__init__()\n"
+    )
+    assert _session_builders(source) == [
+        "line 1: imports Runner",
+        "line 4: calls BehaviourTree",
+        "line 5: calls Runner",
+    ]

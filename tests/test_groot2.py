@@ -229,8 +229,20 @@ def test_the_blackboard_of_the_requested_tree_as_msgpack(client, publisher):
         ([protocol.pack_header(ord("U"), 1), b"{}"], protocol.READ_ONLY),
         ([protocol.pack_header(ord("I"), 1), b"not json"], protocol.READ_ONLY),
     ],
-    ids=["short", "long", "blackboard alone", "recording alone", "unknown", "protocol 1", "protocol 3", "protocol 255",
-         "hook", "unhook", "unlock", "garbage"],  # fmt: skip
+    ids=[
+        "short",
+        "long",
+        "blackboard alone",
+        "recording alone",
+        "unknown",
+        "protocol 1",
+        "protocol 3",
+        "protocol 255",
+        "hook",
+        "unhook",
+        "unlock",
+        "garbage",
+    ],
 )
 def test_bad_and_changing_requests_get_bt_cpps_error_reply_and_the_server_goes_on(client, frames, message):
     assert client.raw(frames) == [b"error", message.encode()]

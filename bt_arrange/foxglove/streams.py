@@ -152,15 +152,18 @@ class RunStreams:
 
 
 def start(session: Any) -> RunStreams | None:
-    """The streams of ``session`` (its record folder, its ``foxglove_live`` server), or None when it has neither.
+    """The streams of ``session`` (its record folder or ``mcap_path``, its ``foxglove_live`` server), or None.
 
     A recorded run without the SDK writes its other files and says in one line that ``run.mcap`` is not among them.
     """
     live: LiveServer | None = getattr(session, "foxglove_live", None)
-    if session.record_dir is None and live is None:
+    mcap_path = getattr(session, "mcap_path", None)
+    recording = session.record_dir is not None or mcap_path is not None
+    if not recording and live is None:
         return None
     if not sdk_available():
-        print(f"bt-arrange: {MCAP_NAME} not written: it needs the Foxglove SDK ({INSTALL_HINT})", file=sys.stderr)
+        name = MCAP_NAME if session.record_dir is not None else mcap_path
+        print(f"bt-arrange: {name} not written: it needs the Foxglove SDK ({INSTALL_HINT})", file=sys.stderr)
         return None
     import foxglove
 
@@ -168,7 +171,7 @@ def start(session: Any) -> RunStreams | None:
 
     context = live.context if live is not None else foxglove.Context()
     buffer = writer = None
-    if session.record_dir is not None:
+    if recording:
         buffer = io.BytesIO()
         # One thread: zstd on more would take the cores the physics and the renderer run on (two here).
         options = foxglove.mcap.MCAPWriteOptions(compression_threads=0)

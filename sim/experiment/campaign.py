@@ -30,6 +30,7 @@ from bt_arrange import files
 from bt_arrange.checks import whole_number
 from bt_arrange.errors import PlanError, RecordError, TrialsErroredError
 from bt_arrange.trees import check_threshold
+from bt_arrange_sim.experiment import recording
 from bt_arrange_sim.experiment.engines import DEFAULT_ENGINE, trial_engine
 from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_calibration, check_object_rows
 from bt_arrange_sim.experiment.specification import SPECIFICATION, check_resume, specification
@@ -93,6 +94,7 @@ def run_experiment(
     calibration: str | Path | None = None,
     resume: bool = False,
     engine: str = DEFAULT_ENGINE,
+    record: str | Path | None = None,
 ) -> list[dict]:
     """Run the missing trials of an experiment or a campaign into ``out_dir``; return the summary rows.
 
@@ -113,6 +115,8 @@ def run_experiment(
       (``engines.trial_engine``; a backend's ``experiment`` passes its own).
     - ``resume`` (``--resume``): continue the campaign in ``out_dir``, refused (a ``PlanError``
       naming what differs) when its ``specification.json`` is another campaign's.
+    - ``record`` (``--record DIR``): one MCAP file per trial in that folder (``recording``); a
+      missing Foxglove SDK is a one-line error before anything runs.
 
     Raises ``CampaignIncompleteError`` (with the summary, ``summary``) when a trial errored, after
     recording it; ``RecordError`` (with the summary, ``result``) when a file could not be written.
@@ -131,6 +135,7 @@ def run_experiment(
         combos = [dataclasses.replace(c, engine=engine) for c in combos]
     rows = list(rows)
     check_object_rows(object_name, rows)
+    record_dir = recording.check_record(record)
     if executor == "dask":
         from bt_arrange_sim import executors
 
@@ -150,6 +155,7 @@ def run_experiment(
             on_trial=on_trial,
             flat=flat,
             resume=resume,
+            record_dir=record_dir,
         )
     if flat:
         summary = result.summaries[combos[0]]
@@ -182,6 +188,7 @@ def run_campaign(
     on_trial: Callable[[dict, int, int], None] | None = None,
     flat: bool = False,
     resume: bool = False,
+    record_dir: Path | None = None,
 ) -> CampaignResult:
     """Run every missing trial of every combination, each appended to its folder's ``trials.jsonl`` as it ends.
 
@@ -196,7 +203,8 @@ def run_campaign(
 
     ``resume``: ``out_dir``'s ``specification.json`` (rows, trials, seed, thresholds, cells,
     strategies, types and the folders' layout) must be this campaign's; a ``PlanError`` names what
-    differs. Without it a rerun may also grow a campaign (more trials, more rows).
+    differs. Without it a rerun may also grow a campaign (more trials, more rows). ``record_dir``:
+    each trial run records its MCAP there (``recording``; finished trials are not run, so not rewritten).
     """
     rows = list(rows)
     combos = list(combos)
@@ -216,6 +224,8 @@ def run_campaign(
     wanted = specification(rows, trials, seed, combos, flat)
     check_resume(out_dir, wanted, resume=resume)
     folders = {c: out_dir if flat else out_dir / c.folder for c in combos}
+    recorder = recording.Recording(record_dir, flat)
+    recorder.prepare(combos, rows)
     logs: dict[Combination, TrialLog] = {}
     specs: list[tuple[Combination, TrialSpec]] = []
     for combination in combos:
@@ -225,7 +235,7 @@ def run_campaign(
         except OSError as error:
             raise PlanError(f"cannot write into {folder}: {files.cause(error)}") from error
         files.remove_stale_temps(folder)
-        log = logs[combination] = TrialLog.open(folder / "trials.jsonl")
+        log = logs[combination] = TrialLog.open(folder / "trials.jsonl", again=recorder.again)
         for record in log.records:
             if record.get("seed") != seed or not combination.owns(record):
                 raise PlanError(
@@ -238,7 +248,7 @@ def run_campaign(
         done = {(record["row"], record["trial"]) for record in log.records}
         # Trial by trial across the rows: an interrupted campaign has measured every row about as often.
         specs += [
-            (combination, combination.spec(row, index, seed))
+            (combination, recorder.spec(combination, row, index, seed))
             for index in range(trials)
             for row in rows
             if (row, index) not in done
@@ -254,6 +264,7 @@ def run_campaign(
 
     def keep(combination: Combination, spec: TrialSpec, record: dict) -> None:
         nonlocal finished
+        recorder.point(record, spec, folders[combination], faults)
         logs[combination].append(record, faults)
         if record.get("status") == ERROR:
             lost.append((spec, str(record.get("reason", ""))))
@@ -319,8 +330,8 @@ class TrialLog:
     unwritten: bool = False
 
     @classmethod
-    def open(cls, path: Path) -> TrialLog:
-        """The log at ``path``, mended for a rerun (see the class)."""
+    def open(cls, path: Path, again: Callable[[dict], bool] | None = None) -> TrialLog:
+        """The log at ``path``, mended for a rerun (see the class); a record ``again`` picks is run again too."""
         log = cls(path)
         if not path.exists():
             return log
@@ -334,8 +345,9 @@ class TrialLog:
                 mend = True
                 continue
             key = (record.get("row"), record.get("trial")) if isinstance(record, dict) else None
-            if key is None or record.get("status") == ERROR or key in seen:
-                mend = True  # an errored trial runs again; a repeat (two runs into one folder) is dropped
+            if key is None or record.get("status") == ERROR or key in seen or (again is not None and again(record)):
+                # An errored trial runs again (and one whose MCAP a recording campaign lacks); a repeat is dropped.
+                mend = True
                 continue
             seen.add(key)
             log.records.append(record)

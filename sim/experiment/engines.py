@@ -32,7 +32,11 @@ class TrialEngine(Protocol):
     def open_trial_run(
         self, root: py_trees.behaviour.Behaviour, starts: Iterable[Any], *, cell_config: Any, calibration: Any = None
     ) -> Any:
-        """A run (with ``cell``, the hooks and ``run()``: ``injection.framework.InjectableRun``) in a fresh cell."""
+        """A run (with ``cell``, the hooks and ``run()``: ``injection.framework.InjectableRun``) in a fresh cell.
+
+        A recorded campaign (``experiment --record``) also passes ``mcap_path``: the session's
+        ``mcap_path`` (``bt_arrange.session.Session``), the trial's Foxglove streams to that file.
+        """
         ...
 
     def check_cells(self, cells: Sequence[str]) -> None:

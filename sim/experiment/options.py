@@ -39,6 +39,8 @@ class TrialSpec:
     calibration: str | None = None
     #: The physics engine the trial's cell runs in: a backend's entry point name (``engines.trial_engine``).
     engine: str = DEFAULT_ENGINE
+    #: Where the trial records its MCAP (an absolute path, ``experiment --record``), or None; not in its record.
+    mcap: str | None = None
 
     def record_fields(self) -> dict[str, object]:
         """What names the trial in its record (``trials.jsonl``), in the records' order."""
@@ -203,22 +205,41 @@ def check_options(
     rows: Iterable[str] = (),
     calibration: str | Path | None = None,
     resume: bool = False,
+    record: str | Path | None = None,
 ) -> None:
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
     ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
-    ``rows`` it runs in), and ``--executor`` with ``--workers`` and ``--scheduler`` (with ``dask``:
-    installed, and the scheduler's port taking a connection). ``resume``
-    needs nothing checked here: ``run_experiment`` compares the folder's specification.
+    ``rows`` it runs in), ``--executor`` with ``--workers`` and ``--scheduler`` (with ``dask``:
+    installed, and the scheduler's port taking a connection), and ``--record``. ``resume`` needs
+    nothing checked here: ``run_experiment`` compares the folder's specification.
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)
     check_calibration(calibration)
+    check_record(record)
     if executor == "dask":
         from bt_arrange_sim.executors import check_dask
 
         # Last: the only check that may wait (a few seconds, for a scheduler that does not answer).
         check_dask(scheduler)
+
+
+def check_record(record: str | Path | None) -> Path | None:
+    """The ``--record`` folder, absolute (a Dask worker elsewhere writes there too), or None without one.
+
+    A one-line error when the Foxglove SDK (the ``foxglove`` extra) is missing, or the folder is a file.
+    """
+    if record is None:
+        return None
+    from bt_arrange.foxglove import streams
+
+    if not streams.sdk_available():
+        raise streams.FoxgloveError(f"--record needs the Foxglove SDK: {streams.INSTALL_HINT}")
+    folder = Path(record).absolute()
+    if folder.exists() and not folder.is_dir():
+        raise PlanError(f"--record {record}: it is a file, not a folder")
+    return folder
 
 
 def check_calibration(calibration: str | Path | None) -> str | None:

@@ -9,12 +9,16 @@ from __future__ import annotations
 import math
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 
+from bt_arrange.errors import RecordError
+from bt_arrange.files import WriteFault
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.experiment.engines import trial_engine
 from bt_arrange_sim.experiment.options import TrialSpec, parse_object
+from bt_arrange_sim.experiment.recording import record_keys
 from bt_arrange_sim.experiment.rows import ROWS, row_injectors
 from bt_arrange_sim.realcell import parse_cell
 
@@ -63,12 +67,20 @@ def _run_trial(spec: TrialSpec) -> dict:
 
         calibration = read_calibration(spec.calibration)
     engine = trial_engine(spec.engine)
-    with engine.open_trial_run(root, starts, cell_config=_cell_config(spec), calibration=calibration) as run:
+    mcap_path, mcap_fault = _recording(spec)
+    recording = {"mcap_path": mcap_path} if mcap_path is not None else {}
+    with engine.open_trial_run(
+        root, starts, cell_config=_cell_config(spec), calibration=calibration, **recording
+    ) as run:
         if injectors:
             from bt_arrange_sim.injection import attach_all
 
             attach_all(run, "red", injectors, injection_seed)
-        report = run.run()
+        try:
+            report = run.run()
+        except RecordError as error:  # the trial's MCAP only (a trial records nothing else): its measurement stands
+            report = error.result
+            mcap_fault = error.faults[0] if error.faults else WriteFault(Path(str(spec.mcap)), str(error))
     (outcome,) = report.objects
     bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
     # Pick states what its grip was as facts (``Pick.facts``), not only in its feedback text.
@@ -90,7 +102,19 @@ def _run_trial(spec: TrialSpec) -> dict:
         "injected": {injector.name: injector.record() for injector in injectors},
         "sim_seconds": round(report.sim_seconds, 3),
         "wall_seconds": round(time.perf_counter() - wall_start, 3),
+        **(record_keys(Path(spec.mcap), mcap_fault) if spec.mcap is not None else {}),
     }
+
+
+def _recording(spec: TrialSpec) -> tuple[Path | None, WriteFault | None]:
+    """Where the trial records its MCAP (``experiment --record``), or a fault when this process cannot."""
+    if spec.mcap is None:
+        return None, None
+    from bt_arrange.foxglove import streams
+
+    if not streams.sdk_available():  # a Dask worker installed without the extra
+        return None, WriteFault(Path(spec.mcap), f"this worker has no Foxglove SDK ({streams.INSTALL_HINT})")
+    return Path(spec.mcap), None
 
 
 def _cell_config(spec: TrialSpec) -> CellConfig:

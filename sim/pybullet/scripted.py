@@ -4,7 +4,8 @@ The benchmark of the work cell and its integration tests use it to measure what 
 gripper and the physics can do before perception enters. It runs the very behaviours an
 arrangement tree runs (``Pick``, ``Place``, ``Push``), each as a one-node tree on the world's
 clock, with the cube's true pose written to the blackboard where ``Detect`` would write the
-camera's.
+camera's. The ticking is ``bt_arrange.behaviour_run.BehaviourRun``'s: the cell supplies a world
+(``SimWorld``), never a runner of its own.
 """
 
 from __future__ import annotations
@@ -15,14 +16,15 @@ from dataclasses import dataclass
 import py_trees
 from py_trees.common import Status
 
+from bt_arrange.behaviour_run import BehaviourRun
 from bt_arrange.behaviours import Context, MoveStage, Pick, Place, Push, StagedBehaviour, keys
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.motion import CartesianLimits, JointLimits
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.runner import Runner
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange_sim.pybullet.cell import WorkCell
+from bt_arrange_sim.pybullet.runs import SimWorld
 
 #: The blackboard namespace of the cube the script handles.
 OBJ = "cube"
@@ -62,9 +64,15 @@ class ScriptedPickPlace:
         object_type: ObjectType = CUBE,
     ) -> None:
         self.cell = cell
-        self.context = Context.create(
-            cell.robot, joint_limits=joint_limits, cartesian_limits=cartesian_limits, settings=settings
+        self._behaviours = BehaviourRun(
+            SimWorld(cell),
+            settings=settings,
+            joint_limits=joint_limits,
+            cartesian_limits=cartesian_limits,
+            time_limit_s=time_limit_s,
         )
+        #: The behaviours' context (the cell's robot, the kinematics and limits), shared by every step.
+        self.context: Context = self._behaviours.context
         self.time_limit_s = time_limit_s
         #: The type of the part handled (default the paper's cube).
         self.object_type = object_type
@@ -120,7 +128,7 @@ class ScriptedPickPlace:
         self._blackboard.set(keys.key(OBJ, field), value, overwrite=True)
 
     def _run(self, behaviour: py_trees.behaviour.Behaviour) -> tuple[Status, float]:
-        result = Runner(behaviour, self.context, self.cell.step, time_limit_s=self.time_limit_s).run()
+        result = self._behaviours.run(behaviour)
         return result.status, result.sim_seconds
 
     def _expect_success(self, behaviour: py_trees.behaviour.Behaviour) -> float:
