@@ -148,7 +148,8 @@ class FakeGripper:
 
     A close stops at ``object_width_m`` (a cube between the pads) or at 0 when it is ``None``.
     ``slip()`` takes the cube away: closed fingers go on closing towards 0. With ``stuck=True``
-    the fingers never report standing still.
+    the fingers never report standing still. ``wedge(width_m, opens)`` holds the next ``opens``
+    openings at ``width_m`` (a part wedged between the pads).
     """
 
     def __init__(
@@ -168,6 +169,8 @@ class FakeGripper:
         self._since_s = clock.now()
         self._closing = False
         self.commands: list[GripperCommand] = []
+        self._wedged_m: float | None = None
+        self._wedged_opens = 0
 
     @property
     def max_width_m(self) -> float:
@@ -180,7 +183,14 @@ class FakeGripper:
             raise OutOfRangeError(f"gripper width {width_m * 1000:.1f} mm is outside 0 to 85 mm")
         self.commands.append(GripperCommand(self._clock.now(), "open", width_m))
         self._closing = False
+        if self._wedged_m is not None and self._wedged_opens > 0 and width_m > self._wedged_m:
+            self._wedged_opens -= 1
+            width_m = self._wedged_m
         self._move_to(width_m)
+
+    def wedge(self, width_m: float, opens: int = 1) -> None:
+        """The next ``opens`` openings stop at ``width_m``: the part holds the pads apart."""
+        self._wedged_m, self._wedged_opens = width_m, opens
 
     def close(self, force_n: float, speed_m_s: float | None = None) -> None:
         """Close until the pads meet the object, or each other (at the fake's own speed)."""

@@ -40,7 +40,7 @@ SHIPPED = sorted(
     [*TREES.glob("*.py"), *TREES.glob("*.xml"), *TREES.glob("*.toml"), *(ROOT / "bt_arrange/examples").glob("*.toml")]
 )
 #: Plans of irregular parts and frescoes (once refused: "XML trees describe cuboids"): their parts' outlines in the XML.
-IRREGULAR = {"fresco.toml", "irregular_parts.toml"}
+IRREGULAR = {"fresco.toml", "irregular_parts.toml", "near_symmetric.toml"}
 
 
 def free_port_pair() -> int:

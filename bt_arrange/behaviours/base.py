@@ -141,27 +141,47 @@ class MoveStage(Stage):
 
 
 class GripperStage(Stage):
-    """Command the gripper, then wait until the fingers stop (or fail after the timeout)."""
+    """Command the gripper, then wait until the fingers stop (or fail after the timeout).
+
+    An opening (``opens_to_m``, the width it commands) is done only when the fingers stopped there:
+    fingers that stop short are held apart by the part, wedged between the pads. Then ``on_stall``
+    (if given) is sent once, e.g. open all the way, and the fingers are waited for again; stopping
+    short a second time fails, naming the widths.
+    """
 
     #: Control periods to wait before reading the fingers' speed: they need a moment to start.
     START_PERIODS = 3
+    #: Fingers stopped more than this short of an opening they were sent to (metres): held apart.
+    STALL_SHORT_M = 0.002
 
     def __init__(
-        self, name: str, command: Callable[[Context], None], wait: bool = True, start_periods: int | None = None
+        self,
+        name: str,
+        command: Callable[[Context], None],
+        wait: bool = True,
+        start_periods: int | None = None,
+        *,
+        opens_to_m: Callable[[Context], float] | None = None,
+        on_stall: Callable[[Context], None] | None = None,
     ) -> None:
         """``start_periods``: polls before the fingers' speed counts (``START_PERIODS``; 0 after a command)."""
         super().__init__(name)
         self._command = command
         self._wait = wait
         self._start_periods = self.START_PERIODS if start_periods is None else start_periods
+        self._opens_to_m = opens_to_m
+        self._on_stall = on_stall
         self._started_at_s = 0.0
         self._polls = 0
         self._commanded = False
+        #: How often the fingers stopped short of the opening (0 when they reached it).
+        self.stalled = 0
 
     def start(self, context: Context) -> None:
         """Send the command (a waiting one only with the arm at rest: a motion handed on is braked first)."""
         self._polls = 0
         self._commanded = False
+        self.stalled = 0
         if self._wait and context.brake.carrying:
             context.brake.brake_carried()
             return
@@ -173,7 +193,7 @@ class GripperStage(Stage):
         self._started_at_s = context.robot.clock.now()
 
     def poll(self, context: Context) -> Status:
-        """SUCCESS once the fingers stand still."""
+        """SUCCESS once the fingers stand still (where an opening sent them)."""
         if not self._wait:
             return Status.SUCCESS
         if not self._commanded:
@@ -191,7 +211,22 @@ class GripperStage(Stage):
                 )
                 return Status.FAILURE
             return Status.RUNNING
-        return Status.SUCCESS
+        if self._opens_to_m is None:
+            return Status.SUCCESS
+        wanted_m, width_m = self._opens_to_m(context), gripper.width()
+        if width_m >= wanted_m - self.STALL_SHORT_M:
+            return Status.SUCCESS
+        self.stalled += 1
+        if self._on_stall is not None and self.stalled == 1:
+            self._on_stall(context)
+            self._polls = 0
+            self._started_at_s = context.robot.clock.now()
+            return Status.RUNNING
+        self.reason = (
+            f"{self.name}: the fingers stopped at {width_m * 1000:.1f} mm, short of {wanted_m * 1000:.1f} mm: "
+            "the part is wedged between the pads"
+        )
+        return Status.FAILURE
 
 
 class InstantStage(Stage):

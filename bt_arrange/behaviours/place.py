@@ -112,15 +112,33 @@ class Place(StagedBehaviour):
             # part's grasp), the inertia twists it in the pads: the planner's gentler limits.
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=centred_grasp(s, kind))),
             MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
-            GripperStage(
-                stage.RELEASE_PART, lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s)
-            ),
+            self._release_stage(opening_m, free=self.release is None),
             MoveStage(
                 stage.RETREAT,
                 line_to(x, y, approach_m, yaw, free=True),
                 hand_on=line_nearly_done(s.hand_on_remaining_m),
             ),
         ]
+
+    @staticmethod
+    def _release_stage(opening_m: float, free: bool) -> GripperStage:
+        """Open the pads to ``opening_m``; a part that holds them short (wedged) is let go by opening all the way.
+
+        A free part only: among neighbours (``free`` False) the pads open no further than the layout
+        allows, and a pad may stop on a neighbour's side rather than on the part; the opening is not checked.
+        """
+        wanted = {"m": opening_m}
+
+        def open_fully(context: Context) -> None:
+            wanted["m"] = context.settings.open_width_m
+            context.robot.gripper.open(wanted["m"], speed_m_s=context.settings.finger_speed_m_s)
+
+        return GripperStage(
+            stage.RELEASE_PART,
+            lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s),
+            opens_to_m=(lambda c: wanted["m"]) if free else None,
+            on_stall=open_fully if free else None,
+        )
 
     def success_message(self) -> str:
         """Feedback once released."""

@@ -49,16 +49,18 @@ from bt_arrange.perception.outline_fit import (
     EDGE_PASSES,
     ICP_POINTS,
     MIN_EDGE_POINTS,
+    MISFIT_CAP_PX,
     OutlineFit,
     OutlineModel,
     coarse_yaws,
+    edge_residuals_m,
     gauss_newton,
     icp,
     outline_deviation_m,
     pixels_on_plane,
     resample,
 )
-from bt_arrange.perception.outline_merged import register_in_merged
+from bt_arrange.perception.outline_merged import find_in_merged, register_in_merged
 from bt_arrange.perception.segmentation import Blob
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 
@@ -71,8 +73,15 @@ def register(
     px_per_m: float,
     kernel_px: int,
     method: CornerRefinement = CornerRefinement.EDGE_LINES,
-) -> tuple[OutlineFit | None, list[OutlineFit]]:
-    """The coarse registrations of ``model`` to the face (best first), and the fine fit of the best.
+    rival_deviation_px: float | None = None,
+) -> tuple[OutlineFit | None, list[OutlineFit], list[OutlineFit]]:
+    """The fine fit of the face, its coarse registrations (best first), and the fine fits of its rivals.
+
+    The coarse registrations are distinct yaws (no symmetry turn of each other) found on the contour.
+    Every one whose contour deviation is within ``rival_deviation_px`` (default: only the best) is
+    fitted below a pixel; the fine fit returned is the one whose edge points lie closest to the model's
+    edges, the others are its rivals (best first). A near-symmetric outline is told apart here, by the
+    sub-pixel edges, where the pixel contour cannot tell its yaws apart.
 
     The fine fit is None when the edges could not be measured below a pixel. ``method`` chooses it
     (for comparison; docs/perception.md has the figures): ``EDGE_LINES``, sub-pixel edge points and
@@ -100,17 +109,33 @@ def register(
         fits.append(OutlineFit(model, pose[0], pose[1], pose[2], deviation))
     fits.sort(key=lambda f: f.deviation_px)
     if not fits:
-        return None, fits
+        return None, fits, []
     best = fits[0]
     if method is CornerRefinement.NONE:
         grid = yaws[0] if yaws else 0.0
         coarse = (float(face.centroid_m[0]), float(face.centroid_m[1]), fold_yaw(grid, model.symmetry_rad))
-        return replace(best, x_m=coarse[0], y_m=coarse[1], yaw_rad=coarse[2], rms_px=0.0), fits
+        return replace(best, x_m=coarse[0], y_m=coarse[1], yaw_rad=coarse[2], rms_px=0.0), fits, []
     if method is CornerRefinement.CONTOUR_LINES:
-        return replace(best, rms_px=0.0), fits
+        return replace(best, rms_px=0.0), fits, []
     if method is CornerRefinement.CORNER_SUBPIX:
-        return _corner_fit(view, face, best, plane_z_m, px_per_m), fits
-    pose = (best.x_m, best.y_m, best.yaw_rad)
+        return _corner_fit(view, face, best, plane_z_m, px_per_m), fits, []
+    contenders = [best] + [
+        fit for fit in fits[1:] if rival_deviation_px is not None and fit.deviation_px <= rival_deviation_px
+    ]
+    fine_fits = [_edge_fit(view, face, fit, plane_z_m, px_per_m) for fit in contenders]
+    measured = sorted((f for f in fine_fits if f is not None), key=lambda f: f.misfit_px or math.inf)
+    if not measured:
+        return None, fits, []
+    return measured[0], fits, measured[1:]
+
+
+def _edge_fit(
+    view: PreparedView, face: Face, coarse: OutlineFit, plane_z_m: float, px_per_m: float
+) -> OutlineFit | None:
+    """The sub-pixel edge fit from a coarse registration; None when the edges could not be measured."""
+    model = coarse.model
+    metre = 1.0 / px_per_m
+    pose = (coarse.x_m, coarse.y_m, coarse.yaw_rad)
     near_outside_px: float | None = None
     residual = np.empty(0)
     edges = np.empty(0, dtype=np.intp)
@@ -119,14 +144,23 @@ def register(
             view, face, model, pose, plane_z_m, half_width_px, margin_px, near_outside_px
         )
         if len(points_m) < 3 * MIN_EDGE_POINTS or not spans_two_directions(model, edges):
-            return None, fits
+            return None
         pose, residual = gauss_newton(points_m, edges, model, pose, 0.05 * metre)
         excess = max(0.0, float(_median(spread)) - SHARP_EDGE_SPREAD)
         near_outside_px = 1.0 + 4.0 * excess
     rms_px = float(np.sqrt(np.mean(residual**2))) * px_per_m if len(residual) else math.inf
+    every_px = np.minimum(np.abs(edge_residuals_m(points_m, edges, model, pose)) * px_per_m, MISFIT_CAP_PX)
+    misfit_px = float(np.sqrt(np.mean(every_px**2)))
     yaw = fold_yaw(pose[2], model.symmetry_rad)
-    fine = replace(best, x_m=pose[0], y_m=pose[1], yaw_rad=yaw, rms_px=rms_px, edge_points=len(residual))
-    return fine, fits
+    return replace(
+        coarse,
+        x_m=pose[0],
+        y_m=pose[1],
+        yaw_rad=yaw,
+        rms_px=rms_px,
+        edge_points=len(residual),
+        misfit_px=misfit_px,
+    )
 
 
 def _corner_fit(
@@ -180,6 +214,8 @@ class _Verdict:
     reason: str
     area_px: float | None = None
     expected_area_px: float | None = None
+    #: Found on its free edges in a blob it shares with other parts: the blob is not this part's alone.
+    shared: bool = False
 
 
 def _judge(
@@ -229,6 +265,32 @@ def _judge(
                     expected_px,
                 )
                 continue
+        if prior_xy_m is None and not face.touches_border and ratio > config.ambiguous_area_fraction:
+            # No expected place (Detect before picking): where in the blob the outline's free edges fit.
+            fit, places = find_in_merged(view, face, model, plane_z_m, px_per_m, config.max_reprojection_error_px)
+            if places > 1:
+                verdicts[model.name] = _Verdict(
+                    blob_xy_m,
+                    None,
+                    DetectionStatus.AMBIGUOUS,
+                    f"one {name} blob as large as {ratio:.1f} {model.name} faces, where its free edges fit at "
+                    f"{places} places: touching parts of one colour?",
+                    face.area_px,
+                    expected_px,
+                )
+                continue
+            if fit is not None:
+                verdicts[model.name] = _Verdict(
+                    blob_xy_m,
+                    fit,
+                    DetectionStatus.FOUND,
+                    f"{name} {model.name} at x={fit.x_m:.4f} m, y={fit.y_m:.4f} m, yaw={math.degrees(fit.yaw_rad):.2f} "
+                    f"deg, on its free edges (one of a blob as large as {ratio:.1f} faces)",
+                    face.area_px,
+                    expected_px,
+                    shared=True,
+                )
+                continue
         if face.touches_border:
             verdicts[model.name] = _Verdict(
                 blob_xy_m, None, DetectionStatus.PARTIAL, f"{name} face is cut by the image border", face.area_px
@@ -252,9 +314,18 @@ def _judge(
                 expected_px,
             )
         else:
-            fine, fits = register(view, face, model, plane_z_m, px_per_m, config.kernel_px, config.corner_refinement)
+            fine, fits, rivals = register(
+                view,
+                face,
+                model,
+                plane_z_m,
+                px_per_m,
+                config.kernel_px,
+                config.corner_refinement,
+                rival_deviation_px=config.max_outline_deviation_px,
+            )
             verdicts[model.name] = _verdict_of_fit(
-                name, blob_xy_m, model, fine, fits, face.area_px, expected_px, config
+                name, blob_xy_m, model, fine, fits, rivals, face.area_px, expected_px, config
             )
     return verdicts
 
@@ -265,6 +336,7 @@ def _verdict_of_fit(
     model: OutlineModel,
     fine: OutlineFit | None,
     fits: list[OutlineFit],
+    rivals: list[OutlineFit],
     area_px: float,
     expected_px: float,
     config: DetectorConfig,
@@ -284,22 +356,23 @@ def _verdict_of_fit(
             area_px,
             expected_px,
         )
-    if len(fits) > 1 and fits[1].deviation_px <= max_deviation_px:
-        second = fits[1]
+    if fine is not None and rivals and _excess_px(fine, rivals[0]) < MIN_RIVAL_EXCESS_PX:
+        second = rivals[0]
         return _Verdict(
             blob_xy_m,
-            best,
+            fine,
             DetectionStatus.AMBIGUOUS,
-            f"{name} {model.name} fits at yaw {math.degrees(best.yaw_rad):.1f} "
-            f"and {math.degrees(second.yaw_rad):.1f} deg "
-            f"(within {second.deviation_px:.1f} px): too nearly symmetric to tell apart at this resolution",
+            f"{name} {model.name} fits at yaw {math.degrees(fine.yaw_rad):.1f} "
+            f"and {math.degrees(second.yaw_rad):.1f} deg, its edges nearly as well at both "
+            f"({fine.misfit_px:.2f} and {second.misfit_px:.2f} px): too nearly symmetric to tell apart at this "
+            "resolution",
             area_px,
             expected_px,
         )
     if fine is None:
         return _Verdict(
             blob_xy_m,
-            best,
+            fits[0],
             DetectionStatus.PARTIAL,
             f"{name} {model.name} edges could not be measured below a pixel",
             area_px,
@@ -322,6 +395,18 @@ def _verdict_of_fit(
         area_px,
         expected_px,
     )
+
+
+#: A rival yaw is told apart when its edges misfit this much (px, beyond the best yaw's own misfit, in
+#: quadrature) more than the best's: the sub-pixel edges of a wrong yaw stray, those of the right one do not.
+#: docs/irregular.md has the figures (0.24 px and more for a near-symmetric outline the plan check lets by).
+MIN_RIVAL_EXCESS_PX = 0.12
+
+
+def _excess_px(fine: OutlineFit, rival: OutlineFit) -> float:
+    """How much more (px, in quadrature) the rival yaw's edges misfit than the best yaw's."""
+    best_px, rival_px = fine.misfit_px or 0.0, rival.misfit_px or math.inf
+    return math.sqrt(max(rival_px**2 - best_px**2, 0.0))
 
 
 def _detection(colour: str, verdict: _Verdict, xy: tuple[tuple[float, float], ...], table_z_m: float) -> Detection:
@@ -373,14 +458,23 @@ def detect_outlines(
             )
             judged.append({m.name: failed for m in models})
     # Each blob is the part whose outline it fits (the closest fit, if it fits several).
+    # A blob several parts share (each found on its free edges in it) is each of theirs.
     owners: list[str | None] = []
     for verdicts in judged:
-        fitting = [(v.fit.deviation_px, n) for n, v in verdicts.items() if v.status is DetectionStatus.FOUND and v.fit]
+        fitting = [
+            (v.fit.deviation_px, n)
+            for n, v in verdicts.items()
+            if v.status is DetectionStatus.FOUND and v.fit and not v.shared
+        ]
         owners.append(min(fitting)[1] if fitting else None)
     table_z_m = detector.config.table_z_m
     results: dict[str, Detection] = {}
     for model in models:
-        mine = [verdicts[model.name] for verdicts, owner in zip(judged, owners, strict=True) if owner == model.name]
+        mine = [
+            verdicts[model.name]
+            for verdicts, owner in zip(judged, owners, strict=True)
+            if owner == model.name or (owner is None and verdicts[model.name].shared)
+        ]
         rest = [verdicts[model.name] for verdicts, owner in zip(judged, owners, strict=True) if owner is None]
         if len(mine) == 1:
             results[model.name] = _detection(name, mine[0], xy, table_z_m)

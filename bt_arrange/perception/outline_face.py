@@ -163,6 +163,10 @@ def edge_points(
         distances[:, k] = np.inf
         clear = distances.min(axis=1) >= half_width_px + 2.0
         points, spread = points[clear], spread[clear]
+        # And those whose band ends outside the face's colour: a neighbour of the colour a pixel or two
+        # across the edge (a sub-millimetre gap) puts its own face in the band, and the fit off it.
+        free = _outside_is_clear(view.rgb, points, p, q, inside_px[k], face.face_chroma, half_width_px + 1.0)
+        points, spread = points[free], spread[free]
         if len(points) < MIN_EDGE_POINTS:
             continue
         if view.undistort is not None:
@@ -173,6 +177,31 @@ def edge_points(
     if not all_points:
         return np.empty((0, 2)), np.empty(0, dtype=np.intp), np.empty(0)
     return np.vstack(all_points), np.concatenate(all_edges), np.concatenate(spreads)
+
+
+#: Beyond an edge, the face's colour at most this strong (its share of the face's chroma): the outside.
+OUTSIDE_MAX_COVERAGE = 0.5
+
+
+def _outside_is_clear(
+    rgb: NDArray[np.uint8],
+    points_px: FloatArray,
+    p: FloatArray,
+    q: FloatArray,
+    inside_px: FloatArray,
+    face_chroma: FloatArray,
+    reach_px: float,
+) -> NDArray[np.bool_]:
+    """Which edge points (image px) have no face of the colour ``reach_px`` beyond them, outward."""
+    along = (q - p) / max(float(np.hypot(*(q - p))), 1e-9)
+    normal = np.array([along[1], -along[0]])
+    if float(normal @ (inside_px - (p + q) / 2)) > 0:
+        normal = -normal  # outward: away from the point inside the face
+    probes = np.round(points_px + reach_px * normal).astype(int)
+    height, width = rgb.shape[:2]
+    u, v = np.clip(probes[:, 0], 0, width - 1), np.clip(probes[:, 1], 0, height - 1)
+    coverage = chroma(rgb[v, u]) @ face_chroma / float(face_chroma @ face_chroma)
+    return np.asarray(coverage <= OUTSIDE_MAX_COVERAGE)
 
 
 def spans_two_directions(model: OutlineModel, edges: NDArray[np.intp]) -> bool:

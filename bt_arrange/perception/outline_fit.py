@@ -28,6 +28,9 @@ DISTINCT_YAW_DEG = 10.0
 EDGE_PASSES: tuple[tuple[int, float], ...] = ((5, 3.0), (4, 3.0))
 #: Fewer edge points than this on an edge: the edge is left out of the fit.
 MIN_EDGE_POINTS = 5
+#: An edge point's distance counts up to this much (px) in ``OutlineFit.misfit_px``: a stray point
+#: (a speck, a neighbour's edge) weighs no more than a point on an edge a pixel and a half away.
+MISFIT_CAP_PX = 1.5
 
 
 @dataclass(frozen=True)
@@ -108,6 +111,9 @@ class OutlineFit:
     deviation_px: float
     rms_px: float | None = None
     edge_points: int = 0
+    #: The RMS distance of *all* the measured edge points from the model's edges, each capped at
+    #: ``MISFIT_CAP_PX``: unlike ``rms_px`` nothing is trimmed, so a wrong yaw cannot hide its misfit.
+    misfit_px: float | None = None
 
 
 # -- geometry on the plane ---------------------------------------------------------------------
@@ -213,6 +219,17 @@ def coarse_yaws(points_m: FloatArray, centre_m: FloatArray, model: OutlineModel,
     scores = np.mean(np.minimum(distances.min(axis=-1), cap_m) ** 2, axis=-1)
     minima = [k for k in range(count) if scores[k] <= scores[k - 1] and scores[k] <= scores[(k + 1) % count]]
     return [float(yaws[k]) for k in sorted(minima, key=lambda k: scores[k])]
+
+
+def edge_residuals_m(
+    points_m: FloatArray, edge: NDArray[np.intp], model: OutlineModel, pose: tuple[float, float, float]
+) -> FloatArray:
+    """Each point's signed distance (metres, outward positive) from the line of its edge, the outline at ``pose``."""
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    normals = model.normals[edge]
+    world_normals = np.column_stack([c * normals[:, 0] - s * normals[:, 1], s * normals[:, 0] + c * normals[:, 1]])
+    return np.einsum("ij,ij->i", world_normals, points_m - np.array([x, y])) - model.offsets[edge]
 
 
 def gauss_newton(

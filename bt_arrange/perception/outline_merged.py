@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from bt_arrange.geometry import FloatArray, fold_yaw
-from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median
-from bt_arrange.perception.outline_face import Face, edge_points, spans_two_directions
+from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median, chroma
+from bt_arrange.perception.outline_face import Face, edge_points, project, spans_two_directions
 from bt_arrange.perception.outline_fit import (
     COARSE_POINTS,
     EDGE_PASSES,
@@ -179,3 +179,142 @@ def register_in_merged(
     rms_px = float(np.sqrt(np.mean(residual**2))) * px_per_m if len(residual) else math.inf
     fit = OutlineFit(model, pose[0], pose[1], fold_yaw(pose[2], model.symmetry_rad), 0.0)
     return replace(fit, rms_px=rms_px, edge_points=len(residual))
+
+
+# -- without an expected place -----------------------------------------------------------------
+
+#: Yaws tried by the search for where in a merged blob a part lies (degrees apart), and how many
+#: places it hands on to the registration above.
+SEARCH_STEP_DEG = 3.0
+SEARCH_CANDIDATES = 6
+#: The search's raster (m a cell), and how far either side of an edge (m) it looks for the blob's inside.
+SEARCH_CELL_M = 0.001
+SEARCH_PROBE_M = 0.0015
+
+
+def _outside(contour_m: FloatArray, margin_m: float) -> tuple[FloatArray, NDArray[np.float32]]:
+    """The blob on a grid of ``SEARCH_CELL_M``: its origin, and 1 where a cell lies outside the blob."""
+    origin = contour_m.min(axis=0) - margin_m
+    size = np.ceil((contour_m.max(axis=0) + margin_m - origin) / SEARCH_CELL_M).astype(int) + 1
+    cells = np.round((contour_m - origin) / SEARCH_CELL_M).astype(np.int32).reshape(-1, 1, 2)
+    outside = np.ones((size[1], size[0]), np.float32)
+    cv2.fillPoly(outside, [cells], 0.0)
+    return origin, outside
+
+
+def _probe_template(points: FloatArray, half: int) -> NDArray[np.float32]:
+    template = np.zeros((2 * half + 1, 2 * half + 1), np.float32)
+    cells = np.round(points / SEARCH_CELL_M).astype(int) + half
+    np.add.at(template, (cells[:, 1], cells[:, 0]), 1.0)
+    return template
+
+
+def places_in_merged(contour_m: FloatArray, model: OutlineModel) -> list[tuple[float, float]]:
+    """Where in a merged blob the part may lie (its centroid, best first), found without an expected place.
+
+    Each edge of the outline is probed ``SEARCH_PROBE_M`` either side: a free edge has the blob's
+    outside just beyond it, and no edge may have it just within. The outline, turned to every
+    ``SEARCH_STEP_DEG``, is slid over the blob by ``cv2.matchTemplate`` and each place scored by
+    the share of outer probes outside the blob, less four times the share of inner probes outside.
+    The best few places, half a part's size apart, go on to ``register_in_merged`` as expected places.
+    """
+    reach_m = float(np.max(np.hypot(*model.outline_m.T)))
+    origin, outside = _outside(contour_m, reach_m + 2 * SEARCH_PROBE_M + 2 * SEARCH_CELL_M)
+    samples, edge_of = _outline_samples(model, SEARCH_CELL_M, 2 * SEARCH_PROBE_M)
+    normals = model.normals[edge_of]
+    half = int(np.ceil((reach_m + SEARCH_PROBE_M) / SEARCH_CELL_M)) + 1
+    if 2 * half + 1 > min(outside.shape):
+        return []
+    scored: list[tuple[float, float, float]] = []
+    for yaw in np.radians(np.arange(0.0, 360.0, SEARCH_STEP_DEG)):
+        pose = (0.0, 0.0, float(yaw))
+        outer = _probe_template(_posed(samples + SEARCH_PROBE_M * normals, pose), half)
+        inner = _probe_template(_posed(samples - SEARCH_PROBE_M * normals, pose), half)
+        # Lower is better: minus the outer probes outside the blob, plus four for each inner one outside
+        # (one correlation: it is linear in the template).
+        score = cv2.matchTemplate(outside, 4.0 * inner - outer, cv2.TM_CCORR) / len(samples)
+        apart = max(2, int(0.5 * reach_m / SEARCH_CELL_M))
+        for _ in range(SEARCH_CANDIDATES):
+            row, column = np.unravel_index(int(np.argmin(score)), score.shape)
+            scored.append(
+                (
+                    float(score[row, column]),
+                    float(origin[0] + (column + half) * SEARCH_CELL_M),
+                    float(origin[1] + (row + half) * SEARCH_CELL_M),
+                )
+            )
+            score[max(0, row - apart) : row + apart + 1, max(0, column - apart) : column + apart + 1] = np.inf
+    places: list[tuple[float, float]] = []
+    for _, x, y in sorted(scored):
+        if all(math.hypot(x - px, y - py) > 0.5 * reach_m for px, py in places):
+            places.append((x, y))
+        if len(places) == SEARCH_CANDIDATES:
+            break
+    return places
+
+
+#: Two fits in one blob this far apart (m, or degrees of yaw) are two places the part could be.
+SAME_PLACE_M = 0.002
+SAME_PLACE_DEG = 2.0
+#: A fit's edges that face a neighbour must run along a seam: the face's colour at most this strong
+#: (its share of the face's chroma, least within a pixel outside the edge) on average along them.
+MAX_SEAM_COVERAGE = 0.8
+
+
+def seam_coverage(
+    view: PreparedView, face: Face, model: OutlineModel, fit: OutlineFit, plane_z_m: float, px_per_m: float
+) -> float:
+    """How much of the face's colour lies just outside the fit's edges that face a neighbour (0 a gap, 1 none).
+
+    Inside a blob two faces make, the edges that face the neighbour run along the gap between them:
+    narrower than the mask's morphology, it still shows in the image as pixels only partly the
+    face's colour. Where a wrong place put the outline, those edges cross the middle of a face.
+    Sampled every pixel along those edges, a half and one pixel outside them, the least of the
+    two; 0 when every edge is free.
+    """
+    px_m = 1.0 / px_per_m
+    pose = (fit.x_m, fit.y_m, fit.yaw_rad)
+    free = free_edges(face.contour_m, model, pose, px_m)
+    if free is None:
+        return 1.0
+    samples, edge_of = _outline_samples(model, px_m, 3.0 * px_m)
+    facing = ~free[edge_of]
+    if not facing.any():
+        return 0.0
+    samples, normals = samples[facing], model.normals[edge_of[facing]]
+    height, width = view.rgb.shape[:2]
+    face_chroma = face.face_chroma
+    least = np.full(len(samples), np.inf)
+    for offset_px in (0.5, 1.0):
+        world = _posed(samples + offset_px * px_m * normals, pose)
+        pixels = np.round(project(view, np.column_stack([world, np.full(len(world), plane_z_m)]))).astype(int)
+        u, v = np.clip(pixels[:, 0], 0, width - 1), np.clip(pixels[:, 1], 0, height - 1)
+        coverage = chroma(view.rgb[v, u]) @ face_chroma / float(face_chroma @ face_chroma)
+        least = np.minimum(least, coverage)
+    return float(np.mean(np.clip(least, 0.0, 1.0)))
+
+
+def find_in_merged(
+    view: PreparedView, face: Face, model: OutlineModel, plane_z_m: float, px_per_m: float, max_rms_px: float
+) -> tuple[OutlineFit | None, int]:
+    """The part's pose in a blob merged with others of its colour, with no expected place (Detect before picking).
+
+    Every place ``places_in_merged`` finds is registered on its free edges as if the part were
+    expected there (``register_in_merged``), and kept when its residual is under ``max_rms_px``
+    and its other edges run along a seam (``seam_coverage``). Returns the fit and how many
+    different places fit: the fit only when exactly one does, else None (two places are no answer).
+    """
+    fits: list[OutlineFit] = []
+    for place in places_in_merged(face.contour_m, model):
+        fit = register_in_merged(view, face, model, plane_z_m, px_per_m, place)
+        if fit is None or fit.rms_px is None or fit.rms_px > max_rms_px:
+            continue
+        if any(
+            math.hypot(fit.x_m - other.x_m, fit.y_m - other.y_m) < SAME_PLACE_M
+            and abs(math.degrees(fold_yaw(fit.yaw_rad - other.yaw_rad, model.symmetry_rad))) < SAME_PLACE_DEG
+            for other in fits
+        ):
+            continue
+        if seam_coverage(view, face, model, fit, plane_z_m, px_per_m) <= MAX_SEAM_COVERAGE:
+            fits.append(fit)
+    return (fits[0] if len(fits) == 1 else None), len(fits)

@@ -29,6 +29,7 @@ from bt_arrange.shapes.antipodal import MIN_GRASP_OVERLAP_M, antipodal_grasps
 from bt_arrange.shapes.base import MAX_HEIGHT_M, MIN_EDGE_M, PRISM_PUSH_OPENING_M, Grasp, PushedFace, Shape, SquarePush
 from bt_arrange.shapes.gripper import Gripper
 from bt_arrange.shapes.polygon import centroid_m, convex_pieces, outline_problem, signed_area_m2, turn_rad
+from bt_arrange.shapes.yaw_feature import yaw_feature_m
 
 #: A side between two corners shorter than this is one the camera cannot measure.
 MIN_PERCEIVED_EDGE_M = 0.010
@@ -36,6 +37,11 @@ MIN_PERCEIVED_EDGE_M = 0.010
 CORNER_TURN_RAD = math.radians(10.0)
 #: Two outlines whose vertices lie this close after a turn are the same: the turn is a symmetry.
 SYMMETRY_TOLERANCE_M = 0.0005
+#: The smallest feature that tells a part's yaws apart to the top camera: an outline that, turned to
+#: another yaw that is no symmetry, comes within this of itself everywhere (``yaw_feature_m``) is refused.
+#: The sim camera sees 0.47 mm a pixel at the table; its sub-pixel edges told a 0.2 mm feature apart on
+#: every synthetic frame tried, and not 0.1 mm (docs/irregular.md).
+MIN_YAW_FEATURE_M = 0.0003
 #: Points of the outline within this of the back-most line along a push are what the pads meet.
 PUSH_CONTACT_BAND_M = 0.001
 #: A square push needs an edge this long: the pads' span (two pads beside the opening) and 2 mm.
@@ -315,7 +321,25 @@ class Prism:
                 f"no two edges the {gripper.name.split()[-1]} can close on (facing each other, overlapping "
                 f"{MIN_GRASP_OVERLAP_M * 1000:.0f} mm or more, at most {gripper.max_grasp_width_m * 1000:.0f} mm apart)"
             )
+        if not found:
+            found.extend(self.yaw_problems())
         return found
+
+    def yaw_problems(self) -> list[str]:
+        """An outline whose yaws the camera cannot tell apart: nearly, but not quite, symmetric.
+
+        A truly symmetric outline (its vertices within 0.5 mm of themselves turned) is fine: every
+        equivalent yaw is as good. One that comes back within ``MIN_YAW_FEATURE_M`` of itself under
+        another turn is not, for the camera would take one yaw for the other.
+        """
+        feature_m, turn = yaw_feature_m(self.outline_m, self.symmetry_rad, refine_below_m=MIN_YAW_FEATURE_M)
+        if feature_m >= MIN_YAW_FEATURE_M - 1e-9:  # a written 0.6 mm is 0.6 mm
+            return []
+        return [
+            f"the outline turned by {math.degrees(turn):.0f} deg comes within {feature_m * 1000:.2f} mm of itself: the "
+            f"camera tells yaws apart by a feature of at least {MIN_YAW_FEATURE_M * 1000:.1f} mm (make the outline "
+            "differ more under that turn, or make it symmetric to within 0.5 mm)"
+        ]
 
     def size_problems(self) -> list[str]:
         """Too thin or too tall for the pads, a short edge at a corner: the checks that need no grasp search."""
@@ -446,6 +470,19 @@ class Cuboid(Prism):
         """90 degrees for a square top, 180 otherwise."""
         return math.pi / 2 if self.square_top else math.pi
 
+    def yaw_problems(self) -> list[str]:
+        """A top nearly, but not quite, square: turned a quarter it comes within half the sides' difference."""
+        if self.square_top:
+            return []
+        feature_m = abs(self.size_m[0] - self.size_m[1]) / 2
+        if feature_m >= MIN_YAW_FEATURE_M - 1e-9:  # a written 0.6 mm is 0.6 mm
+            return []
+        return [
+            f"size {self.describe()}: its top turned by 90 deg comes within {feature_m * 1000:.2f} mm of itself: the "
+            f"camera tells yaws apart by a feature of at least {MIN_YAW_FEATURE_M * 1000:.1f} mm (make the sides "
+            f"differ by {2 * MIN_YAW_FEATURE_M * 1000:.1f} mm or more, or by under {SQUARE_TOLERANCE_M * 1000:.1f} mm)"
+        ]
+
     @property
     def sweep_radius_m(self) -> float:
         """Half the top face's diagonal."""
@@ -493,6 +530,7 @@ class Cuboid(Prism):
         if min(self.size_m) <= 0:
             return found
         size = self.describe()
+        found.extend(self.yaw_problems())
         if not self.grasps(gripper):
             found.append(
                 f"size {size} has no horizontal side the gripper can span (the {gripper.name.split()[-1]} closes "

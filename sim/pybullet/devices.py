@@ -116,11 +116,17 @@ class SimGripper(CellGripper):
         self._fingers = list(cell.finger_joint_indices)
         #: The world times and finger positions of the last two ``is_moving`` polls of different times.
         self._polls: tuple[tuple[float, list[float]], ...] = ((-1.0, []), (-1.0, []))
+        #: Whether the pads' contacts have friction anchors now (the cell sets them as ``pad_contact`` says).
+        self._pads_anchored = cell.config.physics.pad_contact.friction_anchor
 
     def _drive_open(self, width_m: float, speed_m_s: float) -> None:
         import pybullet
 
         physics = self._cell.config.physics
+        # The pads' friction anchors pin a held prism; opening, they pinned a stale contact point of its
+        # hull too, whose normal no longer faced the pad, and held the fingers shut at 40 N (a kite wedged
+        # at 40.2 mm of 85). A prism is let go without them; a box's release is as it was.
+        self._anchor_pads(physics.pad_contact.friction_anchor and not self._on_unanchored_part())
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
@@ -135,10 +141,19 @@ class SimGripper(CellGripper):
     def _drive_close(self, force_n: float, speed_m_s: float) -> None:
         import pybullet
 
+        self._anchor_pads(self._cell.config.physics.pad_contact.friction_anchor)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed_m_s / 2, force=force_n
             )
+
+    def _anchor_pads(self, anchored: bool) -> None:
+        """Give the pads' contacts friction anchors, or take them away (only when that changes)."""
+        if anchored == self._pads_anchored:
+            return
+        for finger in self._fingers:
+            self._client.changeDynamics(self._body, finger, frictionAnchor=int(anchored))
+        self._pads_anchored = anchored
 
     def width(self) -> float:
         """Measured opening between the pads in metres."""

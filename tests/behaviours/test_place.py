@@ -78,3 +78,45 @@ def test_among_neighbours_a_cube_takes_the_gripper_half_turn_nearest_the_wrist(c
     first, _ = _release_yaw_rad(clock, CUBE, math.radians(20.0))
     turned, _ = _release_yaw_rad(clock, CUBE, math.radians(200.0))
     assert fold_yaw(first - turned, 2 * math.pi) == pytest.approx(0.0, abs=1e-4)
+
+
+# -- a part wedged between the pads --------------------------------------------------------------
+
+
+def test_a_release_held_short_by_a_wedged_part_opens_all_the_way_and_then_succeeds(clock) -> None:
+    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
+    gripper = fake_gripper(context)
+    gripper.wedge(CUBE_EDGE_M + 0.001, opens=1)
+    run = tick_until_done(set_up(Place("place red", "red"), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    opening_m = CUBE_EDGE_M + 2 * SETTINGS.release_clearance_per_side_m
+    # The release stopped 15 mm short: the pads were sent all the way open, and got there.
+    assert [(c.kind, c.value) for c in gripper.commands] == [
+        ("open", pytest.approx(opening_m)),
+        ("open", pytest.approx(SETTINGS.open_width_m)),
+    ]
+    assert gripper.width() == pytest.approx(SETTINGS.open_width_m)
+
+
+def test_a_part_that_stays_wedged_fails_the_place_naming_the_widths(clock) -> None:
+    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
+    fake_gripper(context).wedge(0.0402, opens=2)
+    run = tick_until_done(set_up(Place("place red", "red"), context), context)
+    assert run.status == Status.FAILURE
+    assert "the fingers stopped at 40.2 mm, short of 85.0 mm: the part is wedged between the pads" in run.feedback
+    assert stages.RETREAT not in {t.feedback for t in run.running}
+
+
+def test_among_neighbours_the_release_opens_no_further_than_the_layout_allows(clock) -> None:
+    from bt_arrange.layout import Release
+
+    context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
+    write({"/p/target": PlanarPose(0.45, -0.1, 0.0)})
+    gripper = fake_gripper(context)
+    gripper.wedge(0.041, opens=1)  # a pad stopped by a neighbour's side, or the part: the layout's limit holds
+    place = Place("place p", "p", release=Release("x", 0.05, (0.0, 0.0), (0.0, 0.0)))
+    run = tick_until_done(set_up(place, context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert [c.value for c in gripper.commands] == [pytest.approx(0.05)]

@@ -1,8 +1,10 @@
 """Two fresco pieces of one colour half a millimetre apart in the pybullet cell, seen by its top camera.
 
-Their faces are one blob in the colour mask: without an expected place the camera cannot say
-which piece is where (AMBIGUOUS); looked for at its target, as Inspect does, each is measured on
-the edges its neighbour does not touch, against the simulator's truth (evaluation only).
+The morphology closes their gap, but the image shows it (TinyRenderer's pixels are point
+samples): the mask is cut along it and each piece is a face of its own, found before picking
+(no expected place, as Detect looks) and at its target (as Inspect does), against the
+simulator's truth (evaluation only). The registration on free edges, where a blur hides the
+gap, is tested on synthetic frames (tests/test_perception_merged.py).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import pytest
 from merged_pieces import moved_towards, neighbours
 
 from bt_arrange.objects import ObjectType
-from bt_arrange.perception import DetectionStatus, PartDetector, WorldRegion
+from bt_arrange.perception import PartDetector, WorldRegion
 from bt_arrange_sim.pybullet.cell import WorkCell
 
 
@@ -29,10 +31,10 @@ def test_two_merged_pieces_are_each_measured_at_their_targets_within_a_tenth_by_
         frame = cell.robot.camera.capture()
         for name, piece in (("a", a), ("b", b)):
             detector = PartDetector().for_object(kinds[name])
-            assert detector.detect(frame, "red").status is DetectionStatus.AMBIGUOUS, "one blob in the mask"
-            detection = detector.detect(frame, "red", roi=WorldRegion.around(piece.x_m, piece.y_m, 0.05))
-            assert detection.found, detection.reason
             x, y, yaw = cell.part_planar_truth(name)
-            pose = detection.pose_world
-            assert 1000 * math.hypot(pose.x_m - x, pose.y_m - y) < 0.1
-            assert abs(math.degrees(math.remainder(pose.yaw_rad - yaw, 2 * math.pi))) < 0.1
+            for roi in (None, WorldRegion.around(piece.x_m, piece.y_m, 0.05)):
+                detection = detector.detect(frame, "red", roi=roi)
+                assert detection.found, detection.reason
+                pose = detection.pose_world
+                assert 1000 * math.hypot(pose.x_m - x, pose.y_m - y) < 0.1
+                assert abs(math.degrees(math.remainder(pose.yaw_rad - yaw, 2 * math.pi))) < 0.1
