@@ -15,11 +15,13 @@
     bt-arrange examples
     bt-arrange info
 
-Exit status: 0 when every object ends within the threshold, 1 when one does not, 2 for a usage,
-tree-file or plan error (a one-line message, never a traceback), 3 when the run finished but its
-record did not (a file of ``--record``/``--out`` could not be written: one line naming it, the results
-printed as usual), 130 when interrupted, 141 when the reader of the output went away (``| head``),
-143 when terminated (SIGTERM).
+Exit status (``cli_common.EXIT_CODES``, the table every command's ``--help`` ends with): 0 when
+every object ends within the threshold, 1 when one does not (or too few views to calibrate), 2 for
+a usage, file, plan or setup error (a one-line message, never a traceback, before anything moves),
+3 when the work finished but its record did not (a file of ``--record``/``--out`` could not be
+written: one line naming it, the results printed as usual), 4 when some of a campaign's trials
+errored (the others recorded; ``--resume`` reruns them), 130 when interrupted, 141 when the reader
+of the output went away (``| head``), 143 when terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ from bt_arrange.cli_common import (
     EXIT_OK,
     EXIT_RECORD,
     EXIT_TERMINATED,
+    EXIT_TRIALS_ERRORED,
     EXIT_USAGE,
     STACK,
     _groot_port,
@@ -55,7 +58,7 @@ from bt_arrange.cli_common import (
 )
 from bt_arrange.cli_experiment import _experiment
 from bt_arrange.cli_run import _run
-from bt_arrange.errors import BtArrangeError, RecordError
+from bt_arrange.errors import BtArrangeError, RecordError, TrialsErroredError
 from bt_arrange.foxglove.streams import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_arrange.foxglove.streams import port_argument as foxglove_port
 
@@ -245,7 +248,6 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate = add_command(
         "calibrate",
         "calibrate the top camera with a ChArUco board on the flange: intrinsics, distortion, camera to base",
-        "exit status: 0 calibrated (the file written), 2 a usage error or too few views (one line)",
     )
     calibrate.add_argument("--views", type=_whole(6), default=20, help="board poses to try (default 20, at least 6)")
     calibrate.add_argument(
@@ -265,11 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--cell", default="ideal", help=CELL_HELP)
     calibrate.set_defaults(handler=_calibrate)
 
-    show = add_command(
-        "show",
-        "draw a tree file's tree without starting a simulator",
-        "exit status: 0 drawn, 2 a usage or tree-file error",
-    )
+    show = add_command("show", "draw a tree file's tree without starting a simulator")
     show.add_argument("tree_file", metavar="TREE_FILE")
     show.add_argument(
         "--format",
@@ -285,10 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
     experiment = add_command(
         "experiment",
         "reproduce the paper's Table 1 and Fig. 4 in simulation; sweeps; local or Dask",
-        f"rows (--rows):\n{rows_help}\n\n"
-        "exit status: 0 done, 2 a usage error or trials that errored (named; --resume reruns them),\n"
-        "3 the campaign finished, its record did not (a file of --out or --record could not be written: named),\n"
-        "130 interrupted or 143 terminated (finished trials are kept; --resume continues)",
+        f"rows (--rows):\n{rows_help}\n\n{EXIT_CODES_HELP}",
     )
     experiment.add_argument(
         "--rows",
@@ -355,16 +350,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     experiment.set_defaults(handler=_experiment)
 
-    examples = add_command(
-        "examples",
-        "list the example plans shipped in the package (bt-arrange run NAME runs one)",
-        "exit status: 0 listed",
-    )
+    examples = add_command("examples", "list the example plans shipped in the package (bt-arrange run NAME runs one)")
     examples.set_defaults(handler=_examples)
 
-    info = add_command(
-        "info", "library versions, and a check that a headless cell starts", "exit status: 0 the cell starts"
-    )
+    info = add_command("info", "library versions, and a check that a headless cell starts")
     add_backend(info)
     info.set_defaults(handler=_info)
     return parser
@@ -406,6 +395,10 @@ def main(argv: list[str] | None = None) -> int:
     except RecordError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_RECORD
+    except TrialsErroredError as error:
+        # Not a usage error: the campaign ran, the other trials are recorded and their tables printed.
+        print(f"bt-arrange: error: {error}", file=sys.stderr)
+        return EXIT_TRIALS_ERRORED
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE

@@ -12,10 +12,8 @@ from typing import Any
 import numpy as np
 
 from bt_arrange import backends
-from bt_arrange.cli_common import (
-    EXIT_OK,
-)
-from bt_arrange.errors import BackendError, BtArrangeError
+from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK
+from bt_arrange.errors import BackendError, BtArrangeError, RecordError
 
 
 def _calibrate(args: argparse.Namespace) -> int:
@@ -47,8 +45,16 @@ def _calibrate(args: argparse.Namespace) -> int:
     skipped = f"{outcome.unreachable} unreachable, {outcome.not_seen} with the board not seen"
     calibration = outcome.calibration
     if calibration is None:
-        raise BtArrangeError(f"calibration failed: {outcome.reason} ({outcome.poses} poses: {skipped})")
-    write_calibration(calibration, out)
+        # The arm has moved: not a usage error (2) but work that fell short, like a part not within (1).
+        print(f"bt-arrange: error: calibration failed: {outcome.reason} ({outcome.poses} poses: {skipped})",
+              file=sys.stderr)  # fmt: skip
+        return EXIT_NOT_WITHIN
+    fault: RecordError | None = None
+    try:
+        write_calibration(calibration, out)
+    except RecordError as error:
+        # The calibration finished, its file did not: what was found is printed all the same, then the one line.
+        fault = error
     k, pose = calibration.intrinsics, calibration.camera_to_base
     result: dict[str, Any] = {
         "out": str(out),
@@ -80,6 +86,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         }
     if args.json:
         print(json.dumps(result))
+        if fault is not None:
+            raise fault
         return EXIT_OK
     print(f"{calibration.views} views of {outcome.poses} poses ({skipped})")
     print(f"intrinsics: fx {k.fx_px:.2f}, fy {k.fy_px:.2f}, cx {k.cx_px:.2f}, cy {k.cy_px:.2f} px; "
@@ -98,5 +106,8 @@ def _calibrate(args: argparse.Namespace) -> int:
             f"{t['rotation_error_mrad']:.3f} mrad; fx {t['fx_error_px']:+.2f}, fy {t['fy_error_px']:+.2f}, "
             f"cx {t['cx_error_px']:+.2f}, cy {t['cy_error_px']:+.2f} px"
         )
+    if fault is not None:
+        print(f"{out} was not written (the line on stderr says why)")
+        raise fault
     print(f"wrote {out}")
     return EXIT_OK

@@ -14,16 +14,47 @@ STACK = ("py-trees", "pybullet", "opencv-python-headless", "placo", "ruckig", "n
 EXIT_OK, EXIT_NOT_WITHIN, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, EXIT_TERMINATED = 0, 1, 2, 130, 141, 143
 #: The run finished, its record did not (a contract): a recorded file could not be written.
 EXIT_RECORD = 3
-EXIT_CODES_HELP = """exit status:
-  0    every object ended within the threshold (measured by the camera)
-  1    an object did not (outside, failed, or the time limit stopped the run)
-  2    a usage, tree-file or plan error: one line on stderr, before anything moves
-  3    the run finished, its record did not: a file of --record/--out could not be written
-       (disk full, folder removed or read-only); one line names it, the results are printed,
-       and every file is whole or absent
-  130  interrupted (Ctrl-C); what was logged so far is kept
-  141  the reader of the output went away (e.g. | head)
-  143  terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"""
+#: A campaign finished with some trials errored (an exception, a worker that died): the others are recorded.
+EXIT_TRIALS_ERRORED = 4
+
+#: Every exit status of every command, with what it means (a contract): ``--help`` of each command
+#: ends with this table, and docs/cli.md holds the same rows (tests/test_exit_codes.py compares them).
+EXIT_CODES: tuple[tuple[int, str], ...] = (
+    (EXIT_OK, "every object ended within the threshold (run, measured by the camera); every trial finished "
+     "(experiment); the camera calibrated, its file written (calibrate); listed, drawn or checked (the others)"),
+    (EXIT_NOT_WITHIN, "an object did not end within the threshold (run: outside, failed, or the time limit "
+     "stopped it); too few usable views to calibrate (calibrate): the work ran and fell short"),
+    (EXIT_USAGE, "a usage, file, plan or setup error (a bad option or file, a port in use, a missing library, "
+     "an unreachable scheduler): one line on stderr, before anything moves"),
+    (EXIT_RECORD, "the work finished, its record did not: a file of --record/--out could not be written (disk "
+     "full, folder removed or read-only); one line names it, the results are printed, every file is whole or absent"),
+    (EXIT_TRIALS_ERRORED, "some trials errored (experiment: an exception, a worker that died); the others are "
+     "recorded and their tables printed, one line names the first; --resume reruns the errored ones"),
+    (EXIT_INTERRUPTED, "interrupted (Ctrl-C); what was logged so far is kept"),
+    (EXIT_BROKEN_PIPE, "the reader of the output went away (e.g. | head)"),
+    (EXIT_TERMINATED, "terminated (SIGTERM, e.g. a cluster's job limit); what was logged so far is kept"),
+)  # fmt: skip
+
+
+def _exit_codes_help(width: int = 100) -> str:
+    import textwrap
+
+    lines = ["exit status: (the same table for every command)"]
+    for code, meaning in EXIT_CODES:
+        wrapped = textwrap.wrap(meaning, width - 7)
+        lines.append(f"  {code:<4} {wrapped[0]}")
+        lines += [f"       {line}" for line in wrapped[1:]]
+    return "\n".join(lines)
+
+
+#: The exit-status table as ``--help`` prints it (the epilog of every command).
+EXIT_CODES_HELP = _exit_codes_help()
+
+
+def exit_codes_markdown() -> str:
+    """The exit-status table as docs/cli.md holds it."""
+    rows = [f"| {code} | {meaning.replace('|', chr(92) + '|')} |" for code, meaning in EXIT_CODES]
+    return "\n".join(["| exit status | meaning |", "|---|---|", *rows])
 
 
 class _Parser(argparse.ArgumentParser):

@@ -140,3 +140,15 @@ class RecordError(BtArrangeError):
         super().__init__(message)
         self.faults = list(faults)
         self.result = result
+
+
+class TrialsErroredError(BtArrangeError):
+    """A campaign finished, but some of its trials errored (an exception, a worker that died).
+
+    The others are recorded; ``summary`` holds the summary rows of the trials that did finish. The
+    command prints them, then this one line, and exits 4 (``--resume`` reruns the errored trials).
+    """
+
+    def __init__(self, message: str, *, summary: Any = None) -> None:
+        super().__init__(message)
+        self.summary = list(summary or [])

@@ -11,6 +11,12 @@ times what the shipped files need, docs/xml.md and docs/plans.md) and documented
 | ``MAX_TREE_DEPTH``: nesting of a tree, SubTrees expanded (and of an XML file's elements) | 100 | 10 |
 | ``MAX_TARGETS``: targets (and starts) of a plan file | 200 | 9 |
 | ``MAX_COLOURS``: colours of a plan file | 64 | 2 |
+| ``MAX_OUTLINE_POINTS``: points of one outline (``outline_mm``) | 32 | 6 (``irregular_parts.toml``'s fragment) |
+| ``MAX_OBJECT_TYPES``: types of a plan file (``[objects.NAME]``) | 12 | 5 (``irregular_parts.toml``) |
+
+The last two are set by what judging a type costs: its outline's checks are O(n log n), but the
+search for where the pads can close (``bt_arrange.shapes.antipodal``) tries every closing axis at
+every half millimetre, about 0.15 s of CPU for a 32-point outline (``benchmarks/outline_limits.py``).
 
 ``read_limited(path, what)`` reads a file's text within ``MAX_FILE_BYTES``; ``check_tree_size(root,
 where)`` walks a built tree without recursion and refuses one beyond the node or depth limit.
@@ -28,6 +34,11 @@ MAX_TREE_NODES = 10_000
 MAX_TREE_DEPTH = 100
 MAX_TARGETS = 200
 MAX_COLOURS = 64
+#: Points of one outline (a prism's top face): every outline check after this one is O(n log n); the
+#: grasp search on it is not, and sets the figure.
+MAX_OUTLINE_POINTS = 32
+#: Types of a plan file (``[objects.NAME]``, the cube aside): each is judged (its grasps searched) as it loads.
+MAX_OBJECT_TYPES = 12
 
 
 def too_large(what: str, path: Path | str, size: int) -> str:

@@ -54,7 +54,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
-from bt_arrange.filelimits import MAX_COLOURS, MAX_TARGETS, read_limited
+from bt_arrange.filelimits import MAX_COLOURS, MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 from bt_arrange.shapes import Prism
@@ -291,6 +291,11 @@ class _Reader:
         types = {"cube": CUBE}
         if not isinstance(table, dict):
             raise self.fail("[objects]", f"must be a table of types, got {_shown(table)}")
+        if len(table) > MAX_OBJECT_TYPES:
+            raise self.fail(
+                "[objects]",
+                f"{len(table):,} types, over the limit of {MAX_OBJECT_TYPES} (bt_arrange.filelimits.MAX_OBJECT_TYPES)",
+            )
         for name, entry in table.items():
             where = f"[objects.{name}]"
             self.keys(entry, OBJECT_KEYS, where)

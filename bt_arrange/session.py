@@ -44,7 +44,7 @@ from bt_arrange.behaviours import (
     keys,
 )
 from bt_arrange.calibration.camera import CalibratedCamera
-from bt_arrange.calibration.file import CameraCalibration
+from bt_arrange.calibration.file import CameraCalibration, check_image_size
 from bt_arrange.checks import positive_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError, RecordError
@@ -190,6 +190,9 @@ class Session:
         #: The camera calibration the run uses, or None (the camera as it reports itself).
         self.calibration = calibration
         if calibration is not None:
+            if view is not None:
+                # Before the plan check, whose view would otherwise be wrong for a reason it cannot name.
+                check_image_size(calibration, view.intrinsics.width_px, view.intrinsics.height_px)
             view = calibration.view()
         #: The colour table of the plan: the world paints with it and the camera's detector reads it.
         self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE

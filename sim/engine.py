@@ -45,15 +45,16 @@ class CellBackend:
         one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors;
         ``calibration`` is a ``camera.toml`` (``bt-arrange calibrate``) whose camera the detector uses.
         """
+        config = self.cell_config(cell, run_seed)
         return self.open_cell_run(
             root,
             starts,
-            self.cell_config(cell, run_seed),
+            config,
             gui=gui,
             record_dir=record_dir,
             time_limit_s=time_limit_s,
             title=title,
-            calibration=read_calibration_option(calibration),
+            calibration=read_calibration_option(calibration, config.camera),
         )
 
     def open_cell_run(
@@ -90,6 +91,9 @@ class CellBackend:
         except PlanError as error:
             raise PlanError(f"--cell {cell}: {error}") from error
         return CellConfig(errors=errors.with_run_seed(run_seed)) if errors.enabled else CellConfig()
+
+    def check_ready(self) -> None:
+        """A one-line error when the engine cannot start here (a library missing); nothing by default."""
 
     def check_cells(self, cells: Sequence[str]) -> None:
         """A one-line ``PlanError`` when this engine has not every one of ``cells``."""
@@ -130,14 +134,13 @@ class CellBackend:
         return EngineExperiment(self)
 
 
-def read_calibration_option(path: str | Path | None) -> Any:
-    """``read_calibration(path)``, its error prefixed by the option; None without a path."""
+def read_calibration_option(path: str | Path | None, camera: Any = None) -> Any:
+    """``read_calibration(path)``, its error prefixed by the option; None without a path.
+
+    With ``camera`` (a ``config.CameraConfig``) the calibration must be for its image size too.
+    """
     if path is None:
         return None
-    from bt_arrange.calibration import read_calibration
-    from bt_arrange.errors import PlanError
+    from bt_arrange.calibration.file import read_calibration_option as read
 
-    try:
-        return read_calibration(path)
-    except PlanError as error:
-        raise PlanError(f"--calibration {path}: {error}") from error
+    return read(path, *((camera.width_px, camera.height_px) if camera is not None else ()))

@@ -47,6 +47,8 @@ def no_world(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(bt_arrange_sim.experiment.campaign, "run_trial", spy)
     monkeypatch.setattr(bt_arrange_sim.experiment.campaign, "ProcessPoolExecutor", spy)
     monkeypatch.setattr(bt_arrange_sim.executors, "open_executor", spy)
+    # The scheduler's address is judged here, not whether one answers there (tests/test_dask_scheduler.py).
+    monkeypatch.setattr(bt_arrange_sim.executors, "probe_scheduler", lambda scheduler: None)
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
 

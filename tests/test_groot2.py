@@ -220,12 +220,29 @@ def test_the_blackboard_of_the_requested_tree_as_msgpack(client, publisher):
         ([protocol.pack_header(ord("B"), 1)], protocol.TWO_PARTS),
         ([protocol.pack_header(ord("r"), 1)], protocol.TWO_PARTS),
         ([protocol.pack_header(ord("Z"), 1)], protocol.NOT_RECOGNIZED),
+        # Another protocol version (issue 35): an error, not the tree in a version the client cannot read.
+        ([protocol.pack_header(ord("T"), 1, protocol=1)], protocol.WRONG_PROTOCOL),
+        ([protocol.pack_header(ord("S"), 1, protocol=3)], protocol.WRONG_PROTOCOL),
+        ([protocol.pack_header(ord("T"), 1, protocol=255)], protocol.WRONG_PROTOCOL),
         ([protocol.pack_header(ord("I"), 1), b'{"uid": 2, "position": 0}'], protocol.READ_ONLY),
         ([protocol.pack_header(ord("R"), 1), b'{"uid": 2, "position": 0}'], protocol.READ_ONLY),
         ([protocol.pack_header(ord("U"), 1), b"{}"], protocol.READ_ONLY),
         ([protocol.pack_header(ord("I"), 1), b"not json"], protocol.READ_ONLY),
     ],
-    ids=["short", "long", "blackboard alone", "recording alone", "unknown", "hook", "unhook", "unlock", "garbage"],
+    ids=[
+        "short",
+        "long",
+        "blackboard alone",
+        "recording alone",
+        "unknown",
+        "protocol 1",
+        "protocol 3",
+        "protocol 255",
+        "hook",
+        "unhook",
+        "unlock",
+        "garbage",
+    ],
 )
 def test_bad_and_changing_requests_get_bt_cpps_error_reply_and_the_server_goes_on(client, frames, message):
     assert client.raw(frames) == [b"error", message.encode()]

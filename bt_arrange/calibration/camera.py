@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from bt_arrange.calibration.file import CameraCalibration
-from bt_arrange.errors import PlanError
+from bt_arrange.calibration.file import CameraCalibration, check_image_size
 from bt_arrange.geometry import Pose
 from bt_arrange.robot import Camera, CameraFrame, CameraIntrinsics, PixelWindow
 
@@ -24,13 +23,7 @@ class CalibratedCamera:
     """
 
     def __init__(self, camera: Camera, calibration: CameraCalibration) -> None:
-        own, calibrated = camera.intrinsics, calibration.intrinsics
-        if (own.width_px, own.height_px) != (calibrated.width_px, calibrated.height_px):
-            raise PlanError(
-                f"the calibration is for {calibrated.width_px}x{calibrated.height_px} px images, "
-                f"the camera takes {own.width_px}x{own.height_px} px",
-                field="width_px",
-            )
+        check_image_size(calibration, camera.intrinsics.width_px, camera.intrinsics.height_px)
         self.camera = camera
         self.calibration = calibration
 

@@ -41,7 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from bt_arrange.errors import PlanError
+from bt_arrange import files
+from bt_arrange.errors import PlanError, RecordError
+from bt_arrange.filelimits import read_limited
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.plancheck import CameraView
 from bt_arrange.robot import CameraIntrinsics
@@ -152,16 +154,52 @@ def _toml_string(text: str) -> str:
 
 
 def write_calibration(calibration: CameraCalibration, path: Path | str) -> Path:
-    """Write ``calibration`` to ``path`` (through a temporary file beside it, then renamed); the path."""
+    """Write ``calibration`` to ``path`` whole or not at all (``bt_arrange.files.write_text``); the path.
+
+    Through the project's atomic writer: a temporary name of this process's own beside it (two
+    calibrations written at once do not collide), flushed to the disk, then renamed. A file that
+    cannot be written (a full disk, a folder gone or read-only) is a ``RecordError`` naming it,
+    with ``result`` the calibration (the command prints it, then exits 3); ``path`` is then the old
+    file or absent, never cut short.
+    """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
     try:
-        tmp.write_text(calibration.to_toml(), encoding="utf-8")
-        tmp.replace(path)
+        files.write_text(path, calibration.to_toml())
     except OSError as error:
-        tmp.unlink(missing_ok=True)
-        raise PlanError(f"cannot write the calibration file {path}: {error.strerror or error}") from error
+        fault = files.Faults()
+        fault.add(path, error)
+        raise RecordError(
+            f"cannot write the calibration file {path}: {files.cause(error)}", faults=fault.faults, result=calibration
+        ) from error
     return path
+
+
+def check_image_size(calibration: CameraCalibration, width_px: int, height_px: int) -> None:
+    """A one-line ``PlanError`` when ``calibration`` holds for another image size than the camera's."""
+    k = calibration.intrinsics
+    if (k.width_px, k.height_px) != (width_px, height_px):
+        raise PlanError(
+            f"the calibration is for {k.width_px}x{k.height_px} px images, the camera takes {width_px}x{height_px} px",
+            field="width_px",
+            value=(k.width_px, k.height_px),
+            limit=(width_px, height_px),
+        )
+
+
+def read_calibration_option(
+    path: Path | str, width_px: int | None = None, height_px: int | None = None
+) -> CameraCalibration:
+    """``--calibration``'s file: ``read_calibration``, for an image of ``width_px`` x ``height_px`` when given.
+
+    Its one-line ``PlanError`` starts with the option and the path (``--calibration camera.toml: ...``).
+    """
+    try:
+        calibration = read_calibration(path)
+        if width_px is not None and height_px is not None:
+            check_image_size(calibration, width_px, height_px)
+    except PlanError as error:
+        raise PlanError(f"--calibration {path}: {error}", field=error.field, value=error.value) from error
+    return calibration
 
 
 def _toml_module() -> Any:
@@ -175,11 +213,15 @@ def _toml_module() -> Any:
 
 
 def read_calibration(path: Path | str) -> CameraCalibration:
-    """A calibration from its file; a one-line ``PlanError`` naming the field for any mistake."""
+    """A calibration from its file; a one-line ``PlanError`` naming the field for any mistake.
+
+    Read as every shared file is (``bt_arrange.filelimits.read_limited``): within ``MAX_FILE_BYTES``
+    and UTF-8, or one line saying which.
+    """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
+        text = read_limited(path, "the calibration file", PlanError)
+    except OSError as error:  # a missing file (read_limited words the other faults itself)
         raise PlanError(f"cannot read the calibration file {path}: {error.strerror or error}") from error
     try:
         data = _toml_module().loads(text)

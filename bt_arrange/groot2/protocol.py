@@ -7,7 +7,8 @@ Followed from BehaviorTree.CPP 4.10's ``include/behaviortree_cpp/loggers/groot2_
   socket (PUB, server port + 1) only announces breakpoints, which a read-only server never reaches;
 - a request's first frame is 6 bytes: protocol id (``uint8``, 2), request type (``uint8``, an ASCII
   letter), request id (``uint32``, little-endian); a reply's first frame echoes them (the protocol id
-  set to 2) followed by the 16-byte UUID of the tree; an error reply is ``["error", message]``;
+  set to 2) followed by the 16-byte UUID of the tree; an error reply is ``["error", message]``
+  (a request of another protocol id gets one, ``WRONG_PROTOCOL``, where BehaviorTree.CPP answers it);
 - the status buffer is 3 bytes per node: its UID (``uint16``, little-endian) and its status
   (``IDLE`` 0, ``RUNNING`` 1, ``SUCCESS`` 2, ``FAILURE`` 3, ``SKIPPED`` 4; a node back to ``IDLE``
   is 10 + the status it had);
@@ -65,6 +66,10 @@ CODES: dict[str, int] = {
 WRONG_HEADER = "wrong request header"
 TWO_PARTS = "must be 2 parts message"
 NOT_RECOGNIZED = "Request not recognized"
+#: Our own: BehaviorTree.CPP 4.10 does not look at a request's protocol id (it answers with its
+#: own, 2, whatever was asked); a client of another version would read a reply it cannot parse, so
+#: it is told in the protocol's error reply instead (Groot2 itself always asks with 2).
+WRONG_PROTOCOL = f"wrong protocol version: this publisher speaks protocol {PROTOCOL_ID} (BehaviorTree.CPP 4's Groot2)"
 READ_ONLY = (
     "read-only: this bt-arrange publisher does not change the running tree (no hooks, breakpoints or status overrides)"
 )

@@ -313,7 +313,9 @@ class Groot2Publisher:
     def _answer(self, frames: list[bytes]) -> list[bytes]:
         if not frames or len(frames[0]) != protocol.REQUEST_HEADER_SIZE:
             return protocol.error_reply(protocol.WRONG_HEADER)
-        _, request_type, request_id = protocol.unpack_header(frames[0])
+        protocol_id, request_type, request_id = protocol.unpack_header(frames[0])
+        if protocol_id != protocol.PROTOCOL_ID:
+            return protocol.error_reply(protocol.WRONG_PROTOCOL)
         head = protocol.reply_header(request_type, request_id, self.tree_uuid)
         if request_type == protocol.FULLTREE:
             self.tree_fetched.set()

@@ -82,15 +82,20 @@ def _grasp_along(
         return None
     step = 0.0005
     centres = np.arange(low, high + step / 2, step)
-    for centre_t in sorted((float(t) for t in centres), key=lambda t: (abs(t), t)):
+    # Every centre judged at once, roughly; only those not clearly refused are judged exactly below.
+    undecided = ~_clearly_refused(points, closing, along, centres, half_pad, max_width_m)
+    order = sorted(range(len(centres)), key=lambda k: (abs(float(centres[k])), float(centres[k])))
+    # Each point's place along the pads and across them, as the exact loop computes them (a dot each).
+    projections = ([float(p @ along) for p in points], [float(p @ closing) for p in points])
+    for centre_t in (float(centres[k]) for k in order if undecided[k]):
         band = half_pad
-        slab = _slab(points, closing, along, centre_t, band)
+        slab = _slab(points, closing, along, centre_t, band, projections)
         if slab is None:
             continue
         top, bottom = float(np.max(slab[:, 0])), float(np.min(slab[:, 0]))
         if top - bottom > max_width_m:
             continue
-        wider = _slab(points, closing, along, centre_t, band + 0.003)
+        wider = _slab(points, closing, along, centre_t, band + 0.003, projections)
         assert wider is not None
         if float(np.max(wider[:, 0])) > top + 2e-4 or float(np.min(wider[:, 0])) < bottom - 2e-4:
             continue  # the outline rises beyond the pads: their edges would meet it, not their faces
@@ -107,21 +112,121 @@ def _grasp_along(
 
 
 def _slab(
-    points: FloatArray, closing: FloatArray, along: FloatArray, centre_t: float, half_m: float
+    points: FloatArray,
+    closing: FloatArray,
+    along: FloatArray,
+    centre_t: float,
+    half_m: float,
+    projections: tuple[list[float], list[float]] | None = None,
 ) -> FloatArray | None:
-    """The outline's points (as ``[across, t]``) within ``|t - centre_t| <= half_m``, cut where its edges cross."""
+    """The outline's points (as ``[across, t]``) within ``|t - centre_t| <= half_m``, cut where its edges cross.
+
+    ``projections``: each point's ``t`` and ``across``, computed once for the closing axis (the same
+    figures as here); an edge wholly beyond the slab adds nothing and is passed over.
+    """
     count = len(points)
+    t_of, c_of = projections or ([float(p @ along) for p in points], [float(p @ closing) for p in points])
+    # Beyond these by a picometre, a point is outside the slab whatever the rounding of the tests below.
+    low_t, high_t = centre_t - half_m - 1e-12, centre_t + half_m + 1e-12
     out: list[tuple[float, float]] = []
     for k in range(count):
+        ta, tb = t_of[k], t_of[(k + 1) % count]
+        if (ta < low_t and tb < low_t) or (ta > high_t and tb > high_t):
+            continue  # neither its start within the slab nor a crossing of either side
         a, b = points[k], points[(k + 1) % count]
-        ta, tb = float(a @ along), float(b @ along)
         if abs(ta - centre_t) <= half_m:
-            out.append((float(a @ closing), ta))
+            out.append((c_of[k], ta))
         for t in (centre_t - half_m, centre_t + half_m):
             if (ta - t) * (tb - t) < 0:
                 s = (t - ta) / (tb - ta)
                 out.append((float((a + s * (b - a)) @ closing), t))
     return np.array(out) if out else None
+
+
+#: How far (metres) every rough figure of ``_clearly_refused`` must lie from each bound it is compared
+#: with for its verdict to stand: a million times the rounding that tells it from the exact figure.
+DECIDED_BY_M = 1e-9
+
+
+def _clearly_refused(
+    points: FloatArray, closing: FloatArray, along: FloatArray, centres: np.ndarray, half_pad: float, max_width_m: float
+) -> np.ndarray:
+    """For each centre along the pads, True when ``_grasp_along``'s checks refuse it by more than ``DECIDED_BY_M``.
+
+    The same checks on every centre at once (numpy, in O(centres x points)), on figures rounded
+    differently from the exact loop's (a product of matrices, not a dot per point): a centre any of
+    whose comparisons comes within ``DECIDED_BY_M`` of its bound is left to the exact loop, so the
+    grasp found is the one the loop alone finds, only without judging the centres refused plainly.
+    """
+    t = points @ along
+    c = points @ closing
+    t_next, c_next = np.roll(t, -1), np.roll(c, -1)
+    near = DECIDED_BY_M
+    mid = centres[:, None]
+    unclear = np.zeros(len(centres), dtype=bool)
+
+    def slab(half_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each centre's slab: its points' ``c`` (NaN where none) and ``t``, vertices then crossings."""
+        nonlocal unclear
+        inside = np.abs(t - mid) <= half_m
+        unclear |= np.any(np.abs(np.abs(t - mid) - half_m) <= near, axis=1)
+        values, places = [np.where(inside, c, np.nan)], [np.broadcast_to(t, inside.shape)]
+        for bound in (mid - half_m, mid + half_m):
+            crosses = (t - bound) * (t_next - bound) < 0
+            unclear |= np.any((np.abs(t - bound) <= near) | (np.abs(t_next - bound) <= near), axis=1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                share = (bound - t) / (t_next - t)
+            values.append(np.where(crosses, c + share * (c_next - c), np.nan))
+            places.append(np.broadcast_to(bound, inside.shape))
+        return np.concatenate(values, axis=1), np.concatenate(places, axis=1)
+
+    with np.errstate(invalid="ignore"):
+        values, places = slab(half_pad)
+        empty = np.all(np.isnan(values), axis=1)
+        top, bottom = (
+            np.nanmax(np.where(empty[:, None], 0.0, values), axis=1),
+            np.nanmin(np.where(empty[:, None], 0.0, values), axis=1),
+        )
+        width = top - bottom
+        unclear |= np.abs(width - max_width_m) <= near
+        wider, _ = slab(half_pad + 0.003)
+        wider_top = np.nanmax(np.where(np.isnan(wider), -np.inf, wider), axis=1)
+        wider_bottom = np.nanmin(np.where(np.isnan(wider), np.inf, wider), axis=1)
+        unclear |= (np.abs(wider_top - (top + 2e-4)) <= near) | (np.abs(wider_bottom - (bottom - 2e-4)) <= near)
+        rises = (wider_top > top + 2e-4) | (wider_bottom < bottom - 2e-4)
+        upper = values >= (top - 5e-4)[:, None]
+        lower = values <= (bottom + 5e-4)[:, None]
+        unclear |= np.any(np.abs(values - (top - 5e-4)[:, None]) <= near, axis=1)
+        unclear |= np.any(np.abs(values - (bottom + 5e-4)[:, None]) <= near, axis=1)
+
+        def span(members: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return np.where(members, places, np.inf).min(axis=1), np.where(members, places, -np.inf).max(axis=1)
+
+        (upper_low, upper_high), (lower_low, lower_high) = span(upper), span(lower)
+    facing, facing_unclear = _facing_all(upper_low, upper_high, lower_low, lower_high, near)
+    unclear |= facing_unclear
+    refused = empty | (width > max_width_m) | rises | ~facing
+    return refused & ~unclear
+
+
+def _facing_all(
+    upper_low: np.ndarray, upper_high: np.ndarray, lower_low: np.ndarray, lower_high: np.ndarray, near: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``_facing`` of every centre at once, and where one of its comparisons comes within ``near`` of its bound."""
+    corner_m, margin_m = 5e-4, 0.002
+    upper_span, lower_span = upper_high - upper_low, lower_high - lower_low
+    upper_corner, lower_corner = upper_span < corner_m, lower_span < corner_m
+    unclear = (np.abs(upper_span - corner_m) <= near) | (np.abs(lower_span - corner_m) <= near)
+    point = np.where(upper_corner, upper_low, lower_low)
+    low = np.where(upper_corner, lower_low, upper_low) + margin_m
+    high = np.where(upper_corner, lower_high, upper_high) - margin_m
+    one_corner = (low <= point) & (point <= high)
+    unclear |= (upper_corner ^ lower_corner) & ((np.abs(point - low) <= near) | (np.abs(point - high) <= near))
+    overlap = np.minimum(upper_high, lower_high) - np.maximum(upper_low, lower_low)
+    edges = overlap >= MIN_GRASP_OVERLAP_M
+    unclear |= ~upper_corner & ~lower_corner & (np.abs(overlap - MIN_GRASP_OVERLAP_M) <= near)
+    facing = np.where(upper_corner & lower_corner, False, np.where(upper_corner | lower_corner, one_corner, edges))
+    return facing, unclear
 
 
 def _facing(upper_low: float, upper_high: float, lower_low: float, lower_high: float) -> bool:

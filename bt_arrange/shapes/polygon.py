@@ -5,11 +5,13 @@ The arithmetic under :class:`~bt_arrange.shapes.Prism`; nothing here knows of pa
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
+from bt_arrange.filelimits import MAX_OUTLINE_POINTS
 from bt_arrange.geometry import FloatArray
 
 
@@ -51,7 +53,17 @@ def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArra
 
 
 def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
-    """Why ``points`` (N x 2, metres) is no simple polygon: too few points, degenerate, self-intersecting."""
+    """Why ``points`` (N x 2, metres) is no simple polygon: too many or too few points, degenerate, self-intersecting.
+
+    Over ``MAX_OUTLINE_POINTS`` is refused before anything else is computed; the other checks take
+    O(n log n) (``first_crossing``, a sweep line), so any outline within the limit is judged at once.
+    """
+    count = len(points)
+    if count > MAX_OUTLINE_POINTS:
+        return (
+            f"the outline has {count:,} points, over the limit of {MAX_OUTLINE_POINTS} "
+            "(bt_arrange.filelimits.MAX_OUTLINE_POINTS)"
+        )
     array = np.asarray(points, dtype=float)
     if array.ndim != 2 or array.shape[1] != 2 or len(array) < 3:
         return f"an outline needs at least three points [x, y], got {len(array) if array.ndim == 2 else 0}"
@@ -65,15 +77,104 @@ def outline_problem(points: Sequence[Sequence[float]]) -> str | None:
     # Points on one line first: a symmetric bow tie also has no signed area, but it crosses itself.
     if np.linalg.svd(array - array.mean(axis=0), compute_uv=False)[1] < 1e-6:
         return "the outline encloses no area (its points lie on a line)"
-    count = len(array)
-    for i in range(count):
-        for j in range(i + 1, count):
-            if j == i + 1 or (i == 0 and j == count - 1):
-                continue  # neighbours share a point
-            if segments_cross(array[i], array[(i + 1) % count], array[j], array[(j + 1) % count]):
-                return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
+    crossing = first_crossing(array)
+    if crossing is not None:
+        i, j = crossing
+        return f"the outline crosses itself (edges {i + 1} and {j + 1} meet)"
     if abs(signed_area_m2(array)) < 1e-8:
         return "the outline encloses no area"
+    return None
+
+
+def first_crossing(points: FloatArray) -> tuple[int, int] | None:
+    """Two edges ``(i, j)``, ``i < j``, that meet without being neighbours, or None: the polygon is simple.
+
+    Edge ``k`` runs from point ``k`` to point ``k + 1`` (N x 2 points, no edge of no length). Shamos
+    and Hoey's sweep line: O(n log n) comparisons and at most 3n ``segments_cross`` tests, where
+    testing every pair took n^2 / 2. First, in O(n log n), a point written twice (two edges would
+    meet there without being tested) and an edge that folds back along its neighbour; then the
+    endpoints are swept left to right (then bottom to top), the edges under the sweep kept in order
+    of height. An edge is tested against the ones just above and below it when it comes in, and
+    those two against each other when it leaves: the first meeting is always between two edges
+    that were neighbours in that order before the sweep reached it.
+    """
+    count = len(points)
+    # A point written twice (not as neighbours: the edge between them has a length).
+    order = np.lexsort((points[:, 1], points[:, 0]))
+    ranked = points[order]
+    same = np.flatnonzero(np.all(np.abs(np.diff(ranked, axis=0)) <= 1e-12, axis=1))
+    if len(same):
+        a, b = sorted((int(order[same[0]]), int(order[same[0] + 1])))
+        return (a, b - 1)  # edge a leaves the point, edge b - 1 comes back to it (b > a + 1: edges have lengths)
+    # An edge folding back along its neighbour (they overlap, which the sweep does not test).
+    after = np.roll(points, -1, axis=0) - points
+    before = np.roll(after, 1, axis=0)
+    cross = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
+    dot = np.sum(before * after, axis=1)
+    norms = np.hypot(*before.T) * np.hypot(*after.T)
+    folds = np.flatnonzero((np.abs(cross) <= 1e-12 * norms) & (dot < 0))
+    if len(folds):
+        k = int(folds[0])
+        return (k - 1, k) if k else (0, count - 1)
+    return _sweep(points)
+
+
+def _adjacent(i: int, j: int, count: int) -> bool:
+    return abs(i - j) == 1 or abs(i - j) == count - 1
+
+
+def _sweep(points: FloatArray) -> tuple[int, int] | None:
+    """The sweep of ``first_crossing`` once no point is written twice and no edge folds back."""
+    count = len(points)
+    xy = [(float(x), float(y)) for x, y in points]
+    lefts: list[tuple[float, float]] = []
+    rights: list[tuple[float, float]] = []
+    slopes: list[float] = []
+    events: list[tuple[float, float, int, int]] = []  # (x, y, 0 leaves / 1 comes in, edge)
+    for k in range(count):
+        a, b = xy[k], xy[(k + 1) % count]
+        left, right = (a, b) if a <= b else (b, a)
+        lefts.append(left)
+        rights.append(right)
+        dx = right[0] - left[0]
+        slopes.append((right[1] - left[1]) / dx if dx > 0 else math.inf)
+        events += [(left[0], left[1], 1, k), (right[0], right[1], 0, k)]
+    events.sort()  # left to right, bottom to top; at one point, edges leave before others come in
+    active: list[int] = []  # the edges under the sweep, lowest first
+
+    def height(k: int, x: float, y: float) -> tuple[float, float]:
+        """Where edge ``k`` meets the sweep at point (x, y) (a vertical edge: y, within it), then its slope."""
+        (xa, ya), (xb, yb) = lefts[k], rights[k]
+        if xb == xa:
+            return min(max(y, ya), yb), math.inf
+        if x == xb:
+            return yb, slopes[k]
+        return ya + (x - xa) * slopes[k], slopes[k]
+
+    def meet(i: int, j: int) -> tuple[int, int] | None:
+        if _adjacent(i, j, count):
+            return None
+        if segments_cross(points[i], points[(i + 1) % count], points[j], points[(j + 1) % count]):
+            return (min(i, j), max(i, j))
+        return None
+
+    for x, y, comes_in, k in events:
+        key = height(k, x, y)
+        place = bisect.bisect_left(active, key, key=lambda other: height(other, x, y))
+        if comes_in:
+            active.insert(place, k)
+            for other in (place - 1, place + 1):
+                if 0 <= other < len(active) and (found := meet(k, active[other])) is not None:
+                    return found
+            continue
+        # Edges of the same height at this point lie from ``place`` on: find this one among them.
+        while place < len(active) and active[place] != k and height(active[place], x, y) == key:
+            place += 1
+        if place >= len(active) or active[place] != k:
+            place = active.index(k)  # rounding put it a step away; the order is still right
+        del active[place]
+        if 0 < place < len(active) and (found := meet(active[place - 1], active[place])) is not None:
+            return found
     return None
 
 

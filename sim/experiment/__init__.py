@@ -16,8 +16,9 @@ its ``TrialSpec``, so the records are the same (order and wall times aside) what
 The package's rooms, each importing only those above it: ``rows`` (the rows, their labels and
 injectors), ``engines`` (a trial's engine, found by its backend's entry point), ``options`` (a
 trial's spec, the combinations, the options' parsing and checks), ``trial`` (one trial),
-``summaries`` (Table 1, the summary files, Fig. 4, the threshold figure), ``campaign`` (many
-trials on an executor, ``trials.jsonl``, resuming) and ``engine_experiment`` (a backend's
+``summaries`` (Table 1, the summary files, Fig. 4, the threshold figure), ``specification``
+(``specification.json`` and the check of ``--resume``), ``campaign`` (many trials on an executor,
+``trials.jsonl``) and ``engine_experiment`` (a backend's
 ``experiment``: the campaign in its engine). The names the command line, the executors, the
 benchmarks and the tests use are importable from here.
 """

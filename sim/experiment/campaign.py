@@ -28,16 +28,15 @@ from typing import Any
 
 from bt_arrange import files
 from bt_arrange.checks import whole_number
-from bt_arrange.errors import BtArrangeError, PlanError, RecordError
+from bt_arrange.errors import PlanError, RecordError, TrialsErroredError
 from bt_arrange.trees import check_threshold
 from bt_arrange_sim.experiment import recording
 from bt_arrange_sim.experiment.engines import DEFAULT_ENGINE, trial_engine
 from bt_arrange_sim.experiment.options import Combination, TrialSpec, _plan, check_calibration, check_object_rows
+from bt_arrange_sim.experiment.specification import SPECIFICATION, check_resume, specification
 from bt_arrange_sim.experiment.summaries import campaign_rows, plot_fig4, summarise, write_campaign, write_summary
 from bt_arrange_sim.experiment.trial import run_trial
 
-#: The campaign's specification in ``--out``: what ``--resume`` compares with the command's options.
-SPECIFICATION = "specification.json"
 #: The status of a trial that gave no measurement (an exception, a dead worker); a rerun runs it again.
 ERROR = "error"
 
@@ -55,15 +54,12 @@ def read_trials(path: Path) -> list[dict]:
     return records
 
 
-class CampaignIncompleteError(BtArrangeError):
+class CampaignIncompleteError(TrialsErroredError):
     """Some trials errored (an exception, a worker that died, the cluster gone); ``--resume`` reruns them.
 
-    ``summary`` holds what ``run_experiment`` would have returned, for the trials that did finish.
+    ``summary`` holds what ``run_experiment`` would have returned, for the trials that did finish
+    (the command line exits 4, ``bt_arrange.cli_common.EXIT_TRIALS_ERRORED``).
     """
-
-    def __init__(self, message: str, *, summary: list[dict] | None = None) -> None:
-        super().__init__(message)
-        self.summary = summary or []
 
 
 @dataclass
@@ -226,8 +222,7 @@ def run_campaign(
         raise PlanError("a flat experiment folder holds one combination; use a campaign folder for several")
     faults = files.Faults()
     wanted = specification(rows, trials, seed, combos, flat)
-    if resume:
-        check_resume(out_dir, wanted)
+    check_resume(out_dir, wanted, resume=resume)
     folders = {c: out_dir if flat else out_dir / c.folder for c in combos}
     recorder = recording.Recording(record_dir, flat)
     recorder.prepare(combos, rows)
@@ -312,91 +307,6 @@ def run_campaign(
     return CampaignResult(
         summaries, folders, sorted(lost, key=lambda item: (item[0].row, item[0].index)), list(faults.faults)
     )
-
-
-# ----------------------------------------------------------------------------------------------
-# The specification, and resuming
-# ----------------------------------------------------------------------------------------------
-
-
-def specification(rows: Sequence[str], trials: int, seed: int, combos: Sequence[Combination], flat: bool) -> dict:
-    """What makes a campaign the same campaign: ``specification.json``, compared by ``--resume``."""
-    return {
-        "rows": list(rows),
-        "trials": trials,
-        "seed": seed,
-        "thresholds_mm": list(dict.fromkeys(c.threshold_mm for c in combos)),
-        "cells": list(dict.fromkeys(c.cell for c in combos)),
-        "strategies": list(dict.fromkeys(c.strategy for c in combos)),
-        "objects": list(dict.fromkeys(c.object_name for c in combos)),
-        # One folder (one threshold, cell and type, no --thresholds) or a folder per combination.
-        "folder_per_combination": not flat,
-        # The engine, named only when not pybullet's (specifications of before a second engine read the same).
-        **({"engine": combos[0].engine} if combos and combos[0].engine != DEFAULT_ENGINE else {}),
-    }
-
-
-#: How ``--resume``'s refusal names each part of a specification.
-_SPEC_NAMES = {
-    "rows": "--rows",
-    "trials": "--trials",
-    "seed": "--seed",
-    "thresholds_mm": "thresholds (mm)",
-    "cells": "--cell",
-    "strategies": "--strategy",
-    "objects": "--object",
-    "folder_per_combination": "a folder per combination (--thresholds)",
-    "engine": "--backend",
-}
-
-
-def _same(key: str, there: Any, asked: Any) -> bool:
-    if isinstance(there, list) and isinstance(asked, list):
-        # The order of a list changes no record (a trial's seed is its row's, not its place in --rows).
-        return sorted(map(str, there)) == sorted(map(str, asked))
-    return bool(there == asked)
-
-
-def _text(value: Any) -> str:
-    if isinstance(value, list):
-        return ",".join(_text(v) for v in value) or "none"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:g}"
-    return str(value)
-
-
-def differences(there: dict, asked: dict) -> list[str]:
-    """What differs between a folder's specification and the asked one, one phrase each."""
-    return [
-        f"{_SPEC_NAMES.get(key, key)} {_text(there.get(key))} there, {_text(value)} asked"
-        for key, value in asked.items()
-        if not _same(key, there.get(key), value)
-    ]
-
-
-def check_resume(out_dir: Path, wanted: dict) -> None:
-    """A one-line ``PlanError`` when ``out_dir`` holds another campaign than ``wanted`` (``--resume``).
-
-    A folder without ``specification.json`` (empty, new, or from before it was written) is resumed:
-    its records are still checked one by one against the campaign.
-    """
-    path = out_dir / SPECIFICATION
-    if not path.exists():
-        return
-    try:
-        there = json.loads(path.read_text())
-    except (OSError, ValueError) as error:
-        raise PlanError(f"--resume: cannot read {path}: {error}") from error
-    if not isinstance(there, dict):
-        raise PlanError(f"--resume: {path} is not a campaign's specification")
-    found = differences(there, wanted)
-    if found:
-        raise PlanError(
-            f"--resume: {out_dir} holds another campaign: {'; '.join(found)}; "
-            "give its options, or another --out for a new campaign"
-        )
 
 
 # ----------------------------------------------------------------------------------------------

@@ -34,7 +34,14 @@ class EngineExperiment:
         return parse_rows(text)
 
     def check_options(self, cell: str | Sequence[str] = "ideal", **options: Any) -> None:
-        """The campaign's checks (``experiment.check_options``), the engine's cells first."""
+        """The campaign's checks (``experiment.check_options``), the engine's cells first.
+
+        First of all, that the engine starts here (``check_ready``: MuJoCo's OpenGL), so a missing
+        library is one line before the progress bar, not an errored record in every trial.
+        """
+        check_ready = getattr(self.engine, "check_ready", None)
+        if check_ready is not None:
+            check_ready()
         self.engine.check_cells(parse_cells(cell) if isinstance(cell, str) else list(cell))
         check_options(cell=cell, **options)
 

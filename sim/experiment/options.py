@@ -210,13 +210,19 @@ def check_options(
     """The options of ``run_experiment`` checked before anything runs; a one-line ``PlanError`` otherwise.
 
     ``--cell`` (one cell or several), ``--strategy``, ``--thresholds``, ``--object`` (with the
-    ``rows`` it runs in), ``--executor`` with ``--workers`` and ``--scheduler``, and ``--record``.
-    ``resume`` needs nothing checked here: ``run_experiment`` compares the folder's specification.
+    ``rows`` it runs in), ``--executor`` with ``--workers`` and ``--scheduler`` (with ``dask``:
+    installed, and the scheduler's port taking a connection), and ``--record``. ``resume`` needs
+    nothing checked here: ``run_experiment`` compares the folder's specification.
     """
     _plan(1.0, cell, strategy, thresholds, executor, workers, scheduler, object_name)
     check_object_rows(object_name, rows)
     check_calibration(calibration)
     check_record(record)
+    if executor == "dask":
+        from bt_arrange_sim.executors import check_dask
+
+        # Last: the only check that may wait (a few seconds, for a scheduler that does not answer).
+        check_dask(scheduler)
 
 
 def check_record(record: str | Path | None) -> Path | None:
@@ -240,12 +246,12 @@ def check_calibration(calibration: str | Path | None) -> str | None:
     """The ``--calibration`` file checked (``read_calibration``), as a string for the trials; None without one."""
     if calibration is None:
         return None
-    from bt_arrange.calibration import read_calibration
+    from bt_arrange.calibration.file import read_calibration_option
+    from bt_arrange_sim.config import CameraConfig
 
-    try:
-        read_calibration(calibration)
-    except PlanError as error:
-        raise PlanError(f"--calibration {calibration}: {error}") from error
+    # Every engine's cell has the same camera (``config.CameraConfig``): the calibration must be for its images.
+    camera = CameraConfig()
+    read_calibration_option(calibration, camera.width_px, camera.height_px)
     return str(calibration)
 
 

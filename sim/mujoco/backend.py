@@ -28,34 +28,35 @@ class MujocoBackend(CellBackend):
     ) -> Any:  # fmt: skip
         """A ``MujocoRun`` in a fresh cell of ``config``; ``gui`` is a one-line ``PlanError`` (headless only)."""
         from bt_arrange.errors import PlanError
-        from bt_arrange_sim.mujoco.runs import MujocoRun
+        from bt_arrange_sim.mujoco.gl import check_gl
 
         if gui:
             raise PlanError("--gui: the MuJoCo backend renders headless only; run without --gui")
+        check_gl()  # one line naming what to install, before the plan check and the world
+        from bt_arrange_sim.mujoco.runs import MujocoRun
+
         return MujocoRun(root, starts, cell_config=config, **options)
+
+    def check_ready(self) -> None:
+        """A one-line ``BackendError`` when mujoco or its OpenGL does not load (``gl.check_gl``)."""
+        from bt_arrange_sim.mujoco.gl import check_gl
+
+        check_gl()
 
     def check(self) -> Iterator[str]:
         """Build a headless MuJoCo cell, render one frame and report the TCP pose."""
-        from bt_arrange.errors import BackendError
-
-        try:
-            import mujoco
-        except ImportError as error:
-            raise BackendError(
-                f"the mujoco backend needs the mujoco package: pip install -e '.[mujoco]' ({error})"
-            ) from error
         import os
 
         from bt_arrange.motion import default_urdf_path
         from bt_arrange_sim.mujoco.cell import MujocoCell
+        from bt_arrange_sim.mujoco.gl import check_gl, gl_error, import_mujoco
 
+        mujoco = import_mujoco()
+        check_gl()
         try:
             cell = MujocoCell()
         except Exception as error:  # noqa: BLE001 - a GL library missing shows as many kinds of error
-            raise BackendError(
-                f"the MuJoCo cell cannot start (MUJOCO_GL={os.environ.get('MUJOCO_GL')}): {error}; "
-                "headless rendering needs OSMesa (apt-get install libosmesa6)"
-            ) from error
+            raise gl_error(error) from error
         with cell:
             cell.settle(0.1)
             assert cell.camera is not None

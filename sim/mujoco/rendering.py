@@ -40,7 +40,12 @@ def _gl_context(width: int, height: int):  # noqa: ANN202 - a mujoco GLContext
         # Freed at exit while its libraries are still loaded, not by ``__del__`` during the
         # interpreter's teardown (which printed a TypeError on stderr).
         shared = type("SharedGLContext", (base,), {"__del__": lambda self: None})
-        context = shared(width, height)
+        try:
+            context = shared(width, height)
+        except Exception as error:  # noqa: BLE001 - a GL library that loads but cannot start (EGL without a GPU)
+            from bt_arrange_sim.mujoco.gl import gl_error
+
+            raise gl_error(error) from error
         atexit.register(_free_quietly, context)
         _GL_CONTEXTS[key] = context
     return _GL_CONTEXTS[key]

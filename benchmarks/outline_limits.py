@@ -1,0 +1,199 @@
+"""What judging an outline costs, and how long the largest plan file within the limits takes to load.
+
+    python benchmarks/outline_limits.py [--json]
+
+1. The self-crossing check (``bt_arrange.shapes.polygon.first_crossing``, a sweep line) against
+   testing every pair of edges (the check before issue 35), on simple polygons of n points: CPU
+   seconds, and the sweep's time over n log2 n (flat if it grows as n log n) and the pairs' over n^2.
+2. The grasp search of one type (``bt_arrange.shapes.antipodal``) on 32-point outlines, with the
+   rough judgement of every centre at once and with the exact loop alone (the same grasps).
+3. Plan files at the limits (``bt_arrange.filelimits``): one type of ``MAX_OUTLINE_POINTS`` points;
+   ``MAX_OBJECT_TYPES`` such types, all different; and every shipped plan. CPU seconds of
+   ``plans.load`` (read, checked, every type judged), the figure the limits are set by (under 2 s).
+
+Times are CPU seconds of this process (``time.process_time``), so other jobs on the machine change
+them little; the ratios are measured in one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bt_arrange import plans
+from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_OUTLINE_POINTS
+from bt_arrange.shapes import antipodal
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85
+from bt_arrange.shapes.polygon import first_crossing, segments_cross
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def cpu_s(call, repeat: int = 1) -> float:  # noqa: ANN001 - any callable
+    """The least CPU time of ``repeat`` calls."""
+    best = math.inf
+    for _ in range(repeat):
+        start = time.process_time()
+        call()
+        best = min(best, time.process_time() - start)
+    return best
+
+
+def every_pair(points: np.ndarray) -> bool:
+    """The check before issue 35: every pair of edges that are not neighbours tested."""
+    count = len(points)
+    for i in range(count):
+        for j in range(i + 1, count):
+            if j == i + 1 or (i == 0 and j == count - 1):
+                continue
+            if segments_cross(points[i], points[(i + 1) % count], points[j], points[(j + 1) % count]):
+                return True
+    return False
+
+
+def wavy(count: int, seed: int = 0, radius_mm: float = 35.0) -> np.ndarray:
+    """A simple, non-convex outline of ``count`` points (metres): a circle with a random ripple."""
+    rng = np.random.default_rng(seed)
+    angles = np.linspace(0, 2 * math.pi, count, endpoint=False)
+    lobes, depth = int(rng.integers(3, 8)), rng.uniform(2.0, 5.0)
+    radii = (radius_mm + depth * np.sin(lobes * angles + rng.uniform(0, 2 * math.pi))) / 1000
+    return np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
+
+
+def crossing_rows() -> list[dict]:
+    rows = []
+    for count in (64, 256, 1024, 4096, 16384):
+        points = wavy(count)
+        sweep = cpu_s(lambda p=points: first_crossing(p), repeat=3 if count <= 1024 else 1)
+        pairs = cpu_s(lambda p=points: every_pair(p)) if count <= 1024 else None
+        rows.append(
+            {
+                "points": count,
+                "sweep_cpu_s": round(sweep, 4),
+                "sweep_us_per_n_log_n": round(sweep / (count * math.log2(count)) * 1e6, 3),
+                "every_pair_cpu_s": None if pairs is None else round(pairs, 3),
+                "every_pair_ns_per_n2": None if pairs is None else round(pairs / count**2 * 1e9, 1),
+            }
+        )
+    return rows
+
+
+def grasp_rows() -> list[dict]:
+    rows = []
+    exact = antipodal._clearly_refused
+
+    def none_refused(points, closing, along, centres, *rest):  # noqa: ANN001, ANN202
+        return np.zeros(len(centres), dtype=bool)
+
+    for seed in range(3):
+        outline = wavy(MAX_OUTLINE_POINTS, seed)
+        fast = cpu_s(lambda o=outline: antipodal._search(o, 0.02, ROBOTIQ_2F85))
+        antipodal._clearly_refused = none_refused
+        try:
+            slow = cpu_s(lambda o=outline: antipodal._search(o, 0.02, ROBOTIQ_2F85))
+            alone = antipodal._search(outline, 0.02, ROBOTIQ_2F85)
+        finally:
+            antipodal._clearly_refused = exact
+        same = antipodal._search(outline, 0.02, ROBOTIQ_2F85) == alone
+        axes = len(antipodal._closing_axes(outline))
+        rows.append({"outline": f"wavy {MAX_OUTLINE_POINTS} points, seed {seed}", "axes": axes,
+                     "grasps": len(alone), "cpu_s": round(fast, 3), "exact_loop_alone_cpu_s": round(slow, 3),
+                     "same_grasps": same})  # fmt: skip
+    return rows
+
+
+def round_part(count: int, seed: int = 0) -> np.ndarray:
+    """A part a plan may hold (metres): about 76 mm across, every direction an edge faces, ``count`` points.
+
+    Two thirds of its turns under the 10 deg that make a corner (its edges there may be short), the
+    rest corners with edges of 10 mm or more, as ``Prism.size_problems`` asks: the hardest outline
+    of ``count`` points for the type check (the most closing axes the grasp search tries).
+    """
+    rng = np.random.default_rng(seed)
+    gentle = (2 * count) // 3
+    steps = [math.radians(9.0)] * gentle + [(2 * math.pi - gentle * math.radians(9.0)) / (count - gentle)] * (
+        count - gentle
+    )
+    angles = rng.uniform(0, 2 * math.pi) + np.cumsum([0.0, *steps[:-1]])
+    radius = 0.038 + rng.uniform(-0.0003, 0.0003)
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles)])
+
+
+def plan_text(outlines: list[np.ndarray]) -> str:
+    """Every outline a type; one target (every type is judged as the plan loads, used or not)."""
+    lines = ["threshold_mm = 1.0"]
+    for k, outline in enumerate(outlines):
+        points = ", ".join(f"[{x * 1000:.3f}, {y * 1000:.3f}]" for x, y in outline)
+        lines += [f"[objects.part{k}]", f"outline_mm = [{points}]", "height_mm = 20"]
+    lines += ["[[targets]]", 'object = "part0"', 'colour = "red"', "x_mm = 500", "y_mm = 0", "yaw_deg = 90"]
+    return "\n".join(lines) + "\n"
+
+
+def load_cpu_s(text: str, folder: Path, name: str) -> tuple[float, str]:
+    path = folder / name
+    path.write_text(text)
+    outcome = "loaded"
+
+    def load() -> None:
+        nonlocal outcome
+        antipodal.antipodal_grasps.cache_clear()  # every type judged afresh
+        try:
+            plans.load(path)
+        except plans.PlanError as error:
+            outcome = f"refused: {str(error).split(': ', 2)[-1][:100]}"
+
+    return cpu_s(load), outcome
+
+
+def plan_rows() -> list[dict]:
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for label, outlines in (
+            (f"1 type of {MAX_OUTLINE_POINTS} points", [round_part(MAX_OUTLINE_POINTS, 0)]),
+            (f"{MAX_OBJECT_TYPES} types of {MAX_OUTLINE_POINTS} points, all different",
+             [round_part(MAX_OUTLINE_POINTS, seed) for seed in range(MAX_OBJECT_TYPES)]),
+        ):  # fmt: skip
+            cpu, outcome = load_cpu_s(plan_text(outlines), Path(folder), "limits.toml")
+            rows.append({"plan": label, "cpu_s": round(cpu, 3), "outcome": outcome})
+    shipped = sorted((ROOT / "bt_arrange" / "examples").glob("*.toml"))
+    for path in shipped:
+        antipodal.antipodal_grasps.cache_clear()
+        rows.append({"plan": f"shipped {path.name}", "cpu_s": round(cpu_s(lambda p=path: plans.load(p)), 3),
+                     "outcome": "loaded"})  # fmt: skip
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    args = parser.parse_args(argv)
+    result = {"crossing": crossing_rows(), "grasps": grasp_rows(), "plans": plan_rows()}
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    print("self-crossing check: sweep line against every pair (CPU s)")
+    for row in result["crossing"]:
+        pairs = "-" if row["every_pair_cpu_s"] is None else f"{row['every_pair_cpu_s']:.3f} s"
+        ratio = "" if row["every_pair_ns_per_n2"] is None else f" ({row['every_pair_ns_per_n2']} ns / n^2)"
+        print(f"  {row['points']:>6} points: sweep {row['sweep_cpu_s']:.4f} s ({row['sweep_us_per_n_log_n']} us / "
+              f"n log2 n), every pair {pairs}{ratio}")  # fmt: skip
+    print("grasp search of one type (CPU s)")
+    for row in result["grasps"]:
+        alone = row["exact_loop_alone_cpu_s"]
+        print(f"  {row['outline']}: {row['axes']} axes, {row['grasps']} grasps, {row['cpu_s']:.3f} s "
+              f"(exact loop alone {alone:.3f} s; same grasps: {row['same_grasps']})")  # fmt: skip
+    print("plan files judged by plans.load (CPU s)")
+    for row in result["plans"]:
+        print(f"  {row['plan']}: {row['cpu_s']:.3f} s, {row['outcome']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
