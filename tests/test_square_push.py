@@ -87,18 +87,30 @@ def test_within_reach_but_turned_it_is_squared_where_the_pads_stand_widest() -> 
 
 def test_among_neighbours_two_free_pushes_close_an_offset_between_them_by_their_own_shares() -> None:
     # Issue 38 item 4. With +x and the hypotenuse's push (-135 deg) free and +y blocked, an offset of
-    # (-0.5, -2) mm is 1.5 mm along +x plus 2.83 mm along -135 deg. Pushed by its whole projection
-    # (1.77 mm along -135 deg), the part would be left (0.75, -0.75) mm off: a -y push, blocked, then.
+    # (-0.25, -1) mm is 0.75 mm along +x plus 1.41 mm along -135 deg. Pushed by its whole projection
+    # (0.88 mm along -135 deg), the part would be left (0.375, -0.375) mm off: a -y push, blocked, then.
     pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     free = (names[0], names[-135])
-    name, distance = Push.choose_square_push((-0.5, -2.0), pushes, free, 0.2, False)
-    assert name == names[-135] and distance == pytest.approx(2 * math.sqrt(2))
-    name, distance = Push.choose_square_push((1.5, 0.0), pushes, free, 0.2, False)  # what is left
-    assert name == names[0] and distance == pytest.approx(1.5)
+    name, distance = Push.choose_square_push((-0.25, -1.0), pushes, free, 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(math.sqrt(2))
+    name, distance = Push.choose_square_push((0.75, 0.0), pushes, free, 0.2, False)  # what is left
+    assert name == names[0] and distance == pytest.approx(0.75)
     # Every push free (a part with no neighbour): the projection rule, as before.
-    name, distance = Push.choose_square_push((-0.5, -2.0), pushes, tuple(pushes), 0.2, False)
-    assert name == names[-135] and distance == pytest.approx(2.5 / math.sqrt(2))
+    name, distance = Push.choose_square_push((-0.25, -1.0), pushes, tuple(pushes), 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(1.25 / math.sqrt(2))
     # An offset outside the free pushes' cone: the projection rule too.
     name, distance = Push.choose_square_push((-0.5, 2.0), pushes, (names[0], names[90]), 0.2, False)
     assert name == names[90] and distance == pytest.approx(2.0)
+
+
+def test_far_from_its_target_a_part_among_neighbours_is_pushed_by_the_projection() -> None:
+    # A staged part 20 mm from home goes the way its staging chose: the layout checked that push's pads.
+    from bt_arrange.behaviours.push import CONE_MAX_OFFSET_MM
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[-135])
+    scale = 2 * CONE_MAX_OFFSET_MM / math.hypot(0.5, 2.0)
+    name, distance = Push.choose_square_push((-0.5 * scale, -2.0 * scale), pushes, free, 0.2, False)
+    assert name == names[-135] and distance == pytest.approx(2.5 * scale / math.sqrt(2))

@@ -38,6 +38,8 @@ PUSH_STRATEGIES = ("paper", "learned", "diagonal")
 DIAGONAL_ACROSS_RATIO = 0.6
 
 
+#: Among neighbours an offset at most this long (mm) between two free pushes is closed by both.
+CONE_MAX_OFFSET_MM = 2.0
 #: A squaring push of an irregular part presses its edge this far past where it belongs: a push
 #: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
 #: such pushes left a fresco piece 1.27 deg off).
@@ -354,10 +356,12 @@ class Push(StagedBehaviour):
         }
         free = [name for name in pushes if name in towards]
         best = max(pushes, key=lambda name: along[name])
-        if len(free) < len(pushes):
+        if len(free) < len(pushes) and float(np.hypot(*offset)) <= CONE_MAX_OFFSET_MM:
             # Among neighbours a push by the whole projection can carry the part past the line of a
             # second free push, into a place only a blocked push would close. Two free pushes whose
-            # headings take the offset between them close it exactly, each by its own share.
+            # headings take the offset between them close it exactly, each by its own share; near
+            # the target only, where the pads' way is the one the layout checked (a staged part far
+            # from it goes home by the push its staging chose).
             shares = _free_cone_shares(offset, pushes, free)
             if shares is not None:
                 chosen, distance_mm = max(shares, key=lambda share: share[1])
