@@ -333,8 +333,12 @@ class Session:
                 log.path.unlink()  # complete or absent: never a log that ends where the disk filled
 
     def close(self) -> None:
-        """Close the world."""
+        """Close the world and empty the blackboard: a finished run leaves none of its keys in the process.
+
+        (``run`` empties it first too; what a test or a hook wants of the blackboard it reads before closing.)
+        """
         self.world.close()
+        py_trees.blackboard.Blackboard.clear()
 
     def __enter__(self) -> Session:
         return self
