@@ -334,12 +334,14 @@ class Session:
                 log.path.unlink()  # complete or absent: never a log that ends where the disk filled
 
     def close(self) -> None:
-        """Close the world and empty the blackboard: a finished run leaves none of its keys in the process.
+        """Close the world, empty the blackboard and give back the kinematics model: a finished run leaves nothing.
 
         (``run`` empties it first too; what a test or a hook wants of the blackboard it reads before closing.)
         """
         self.world.close()
         py_trees.blackboard.Blackboard.clear()
+        # The tree and its context form cycles: the kinematics' placo model goes back now, not when collected.
+        self.context.planner.kinematics.release()
 
     def __enter__(self) -> Session:
         return self

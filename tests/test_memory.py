@@ -66,9 +66,14 @@ def test_a_prism_part_leaves_no_mesh_file_in_the_temporary_folder(tmp_path, monk
     assert cell.client is None  # the physics client is disconnected
 
 
-def test_a_closed_session_leaves_no_key_on_the_blackboard() -> None:
+def test_a_closed_session_leaves_no_key_on_the_blackboard_and_gives_its_placo_model_back() -> None:
+    from bt_arrange.motion import placo_models
+
     root = arrangement([Target("red", 0.50, 0.05)])
     with Session(root, [ObjectStart("red", 0.42, -0.22, 0.1)], FakeWorld, view=camera_view()) as run:
         run.run()
         assert py_trees.blackboard.Blackboard.storage  # the run's keys, readable until it closes
+        free = placo_models.free_models(str(default_urdf_path()))
     assert py_trees.blackboard.Blackboard.storage == {}
+    # The tree holds its context in cycles: the model goes back at close, not when the collector comes.
+    assert placo_models.free_models(str(default_urdf_path())) == free + 1

@@ -166,7 +166,7 @@ class ArmKinematics:
         self.max_iterations = int(max_iterations)
 
         # One model of the URDF per live kinematics, kept for the process: placo leaks a dropped one.
-        model = placo_models.borrow(self, str(path))
+        model, self._give_back = placo_models.borrow(self, str(path))
         self._robot = model.robot
         self._solver = model.solver
         self._task = model.task
@@ -183,6 +183,15 @@ class ArmKinematics:
             "wrist_3_link"
         )
         self._wrist_centre_in_tcp_m: FloatArray = t_tcp_wrist[:3, 3].copy()
+
+    def release(self) -> None:
+        """Give the placo model back now, for the next kinematics (a closed session's): this one is done with it.
+
+        Without it the model goes back when this object is garbage, which for one held in a cycle (a
+        tree's context) waits for the garbage collector while new runs build new models.
+        """
+        self._give_back()
+        self._robot = self._solver = self._task = None  # type: ignore[assignment]
 
     # ----------------------------------------------------------------------------------------------
     # Properties

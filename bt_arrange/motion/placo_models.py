@@ -65,8 +65,9 @@ _lock = threading.Lock()
 _free: dict[str, list[PlacoModel]] = {}
 
 
-def borrow(owner: object, path: str) -> PlacoModel:
-    """A model of the URDF at ``path`` for ``owner`` alone, returned to the free ones when ``owner`` is garbage.
+def borrow(owner: object, path: str) -> tuple[PlacoModel, weakref.finalize]:
+    """A model of the URDF at ``path`` for ``owner`` alone, and what gives it back (called once, at the latest
+    when ``owner`` is garbage: a cycle's garbage may wait for the collector, so an owner that is done can call it).
 
     Models are kept by the file's path, size and modification time: a URDF changed in place is loaded again.
     """
@@ -77,8 +78,7 @@ def borrow(owner: object, path: str) -> PlacoModel:
     if model is None:
         model = PlacoModel.build(path)
     model.reset()
-    weakref.finalize(owner, _give_back, key, model)
-    return model
+    return model, weakref.finalize(owner, _give_back, key, model)
 
 
 def _key(path: str) -> str:
