@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import errno
+import gc
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
@@ -334,14 +335,14 @@ class Session:
                 log.path.unlink()  # complete or absent: never a log that ends where the disk filled
 
     def close(self) -> None:
-        """Close the world, empty the blackboard and give back the kinematics model: a finished run leaves nothing.
-
-        (``run`` empties it first too; what a test or a hook wants of the blackboard it reads before closing.)
-        """
+        """Close the world, empty the blackboard (read it before), give the kinematics model back, collect cycles."""
         self.world.close()
         py_trees.blackboard.Blackboard.clear()
         # The tree and its context form cycles: the kinematics' placo model goes back now, not when collected.
         self.context.planner.kinematics.release()
+        # What runs left in cycles (2,000 objects a run, their native buffers) goes now: left to the
+        # collector's full passes (every ~35 runs) it grew 100 four-cube runs by 16 MB. About 20 ms.
+        gc.collect()
 
     def __enter__(self) -> Session:
         return self

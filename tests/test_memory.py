@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import gc
 import tempfile
+import weakref
 
 import numpy as np
 import py_trees
@@ -77,3 +78,23 @@ def test_a_closed_session_leaves_no_key_on_the_blackboard_and_gives_its_placo_mo
     assert py_trees.blackboard.Blackboard.storage == {}
     # The tree holds its context in cycles: the model goes back at close, not when the collector comes.
     assert placo_models.free_models(str(default_urdf_path())) == free + 1
+
+
+def test_closing_a_session_collects_what_runs_left_in_cycles() -> None:
+    class Node:
+        """A stand-in for a finished run's tree: garbage only the collector finds (it points at itself)."""
+
+    root = arrangement([Target("red", 0.50, 0.05)])
+    run = Session(root, [ObjectStart("red", 0.42, -0.22, 0.1)], FakeWorld, view=camera_view())
+    run.run()
+    left = Node()
+    left.me = left  # type: ignore[attr-defined]
+    gone = weakref.ref(left)
+    del left
+    gc.disable()  # the collector's own passes must not do the session's work here
+    try:
+        assert gone() is not None
+        run.close()
+        assert gone() is None
+    finally:
+        gc.enable()
