@@ -1,6 +1,6 @@
 """Memory benchmark: resident memory of one process over many runs, and of a campaign worker over many trials.
 
-    nice -n 10 python benchmarks/memory.py [--runs 1000] [--trials 200] [--json]
+    nice -n 10 python benchmarks/memory.py [--runs 1000] [--trials 200] [--trim] [--json]
 
 ``runs``: the four-cube tree (``trees/four_cubes.py``, scene seed = run number) run again and again
 in this process, each in a fresh pybullet cell, closed after; the resident memory (``VmRSS``) is
@@ -13,11 +13,14 @@ the URDF, the renderer's buffers): growth is counted from run 2.
 Key figures (``--json``): ``growth_pct`` of each, the resident memory after the last run over the
 one after run 2, in percent (target: under 5 % at a thousand runs). Nothing is trimmed or
 collected by hand between runs: the figure is what a user's loop or a campaign worker sees.
+``--trim`` asks glibc to hand its free memory back (``malloc_trim(0)``) before each reading: then
+the figure is the live heap, without what the allocator keeps for reuse.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 import time
@@ -28,8 +31,16 @@ TREES = Path(__file__).resolve().parent.parent / "trees"
 CHECKPOINTS = (2, 10, 100, 1000)
 
 
+#: Set by ``--trim`` (and handed to the worker): glibc's free memory handed back before a reading.
+TRIM = False
+
+
 def resident_mb() -> float:
-    """This process's resident memory (``VmRSS`` of ``/proc/self/status``), MB."""
+    """This process's resident memory (``VmRSS`` of ``/proc/self/status``), MB; first trimmed with ``--trim``."""
+    if TRIM:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
     with open("/proc/self/status", encoding="ascii") as status:
         for line in status:
             if line.startswith("VmRSS:"):
@@ -78,8 +89,10 @@ def four_cube_runs(runs: int, progress: bool = True) -> dict:
     }
 
 
-def _trial_in_worker(index: int) -> tuple[str, float]:
+def _trial_in_worker(index: int, trim: bool = False) -> tuple[str, float]:
     """One Table 1 "system" trial in the pool's worker; its status and the worker's resident memory after it."""
+    global TRIM  # noqa: PLW0603
+    TRIM = trim
     from bt_arrange_sim.experiment.options import TrialSpec
     from bt_arrange_sim.experiment.trial import run_trial
 
@@ -94,7 +107,7 @@ def worker_trials(trials: int, progress: bool = True) -> dict:
     statuses: dict[str, int] = {}
     start = time.perf_counter()
     with ProcessPoolExecutor(max_workers=1) as pool:
-        for number, (status, mb) in enumerate(pool.map(_trial_in_worker, range(trials)), start=1):
+        for number, (status, mb) in enumerate(pool.map(functools.partial(_trial_in_worker, trim=TRIM), range(trials)), start=1):
             statuses[status] = statuses.get(status, 0) + 1
             if number in wanted:
                 figures[number] = round(mb, 1)
@@ -126,17 +139,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--trials", type=int, default=200, help="trials in one campaign worker (default 200; 0 skips the worker)"
     )
+    parser.add_argument("--trim", action="store_true", help="malloc_trim(0) before each reading (glibc)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
+    global TRIM  # noqa: PLW0603
+    TRIM = args.trim
     if args.trials < 0:
         parser.error(f"--trials {args.trials} must be 0 or more")
-    result = {"runs": four_cube_runs(args.runs)}
+    result: dict = {"trimmed": args.trim, "runs": four_cube_runs(args.runs)}
     if args.trials:
         result["worker"] = worker_trials(args.trials)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
     for name, figures in result.items():
+        if not isinstance(figures, dict):
+            continue
         count = figures.get("runs", figures.get("trials"))
         memory = ", ".join(f"{mb:.1f} MB after {n}" for n, mb in figures["resident_mb"].items())
         print(f"{name}: {count} in one process ({figures['wall_s']} s): {memory}; growth {figures['growth_pct']} %")
