@@ -36,7 +36,7 @@ TRIM = False
 
 
 def resident_mb() -> float:
-    """This process's resident memory (``VmRSS`` of ``/proc/self/status``), MB; first trimmed with ``--trim``."""
+    """The resident memory of this process (``VmRSS``), MB; first trimmed with ``--trim``."""
     if TRIM:
         import ctypes
 
@@ -101,13 +101,14 @@ def _trial_in_worker(index: int, trim: bool = False) -> tuple[str, float]:
 
 
 def worker_trials(trials: int, progress: bool = True) -> dict:
-    """``trials`` trials, one after the other, in one worker of a process pool; its resident memory at the checkpoints."""
+    """``trials`` trials one after the other in one worker of a process pool; its resident memory at the checkpoints."""
     wanted = set(checkpoints(trials))
     figures: dict[int, float] = {}
     statuses: dict[str, int] = {}
     start = time.perf_counter()
     with ProcessPoolExecutor(max_workers=1) as pool:
-        for number, (status, mb) in enumerate(pool.map(functools.partial(_trial_in_worker, trim=TRIM), range(trials)), start=1):
+        trial = functools.partial(_trial_in_worker, trim=TRIM)
+        for number, (status, mb) in enumerate(pool.map(trial, range(trials)), start=1):
             statuses[status] = statuses.get(status, 0) + 1
             if number in wanted:
                 figures[number] = round(mb, 1)

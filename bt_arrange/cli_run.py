@@ -180,7 +180,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             else "camera only: this world has no ground truth"
         )
         print(
-            f"offsets in mm: placed and pushed measured by the camera after placing (the first time) and after pushing; "
+            "offsets in mm: placed and pushed measured by the camera after placing (the first time) and after "
+            "pushing; "
             f"regrasps: picked up again after placing; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )

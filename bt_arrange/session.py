@@ -388,7 +388,8 @@ class Session:
         # The Inspects after placing, by their own flag rather than their names; a regrasp's next look.
         stem = None
         if isinstance(node, Inspect) and isinstance(self.root, Arrangement):
-            stem = self.placements.inspected(node.obj, node.after_placing, lambda first: self._placement(node.obj, first))
+            obj = node.obj
+            stem = self.placements.inspected(obj, node.after_placing, lambda first: self._placement(obj, first))
         if self.record_dir is None:
             return
         if stem is not None:
@@ -399,7 +400,8 @@ class Session:
     def _placement(self, obj: str, first: bool) -> Placement:
         """The camera's figures of ``obj`` now (those after placing, for the first placing) and the ground truth's."""
         board = py_trees.blackboard.Client(name="report")
-        offset, yaw = (keys.PLACED_OFFSET_MM, keys.PLACED_YAW_ERROR_DEG) if first else (keys.OFFSET_MM, keys.YAW_ERROR_DEG)
+        placed = (keys.PLACED_OFFSET_MM, keys.PLACED_YAW_ERROR_DEG)
+        offset, yaw = placed if first else (keys.OFFSET_MM, keys.YAW_ERROR_DEG)
         assert isinstance(self.root, Arrangement)
         target = next((t for t in self.root.targets if t.obj == obj), None)
         truth = self._truth_offset_mm(target) if target is not None else None

@@ -125,7 +125,7 @@ def _fresco(*extra: str) -> tuple[list[dict], str]:
 
 
 def fresco() -> list[str]:
-    """The README's frescoes: six pieces with 2 mm gaps, three seeds, plain and with Table 1's pick translation error."""
+    """The README's frescoes: six pieces, 2 mm gaps, three seeds, plain and with Table 1's pick translation error."""
     lines = []
     for extra, label in (((), "a fresco"), (("--inject", "pick_translation"), "with the pick translation error")):
         runs, source = _fresco(*extra)
@@ -174,7 +174,7 @@ BEFORE_WINDOWS = "d509651"
 
 
 def records() -> list[str]:
-    """The README's "399 of 400 trial records identical" (Table 1 against the code before the windowed depth estimator)."""
+    """The README's "399 of 400 trial records identical" (Table 1, against the code before windowed depth)."""
     source = f"python benchmarks/campaign_wall.py --against {BEFORE_WINDOWS} --trials 100 --json"
     data = _json("benchmarks/campaign_wall.py", "--against", BEFORE_WINDOWS, "--trials", "100", "--json")
     differing = f"; differing: {', '.join(data['differing_records'])}" if data["differing_records"] else ""
@@ -294,7 +294,8 @@ def _names(text: str, parser: argparse.ArgumentParser, option: str) -> list[str]
 def main(argv: list[str] | None = None) -> int:
     """Print the figures asked for."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help=f"leave out the experiment campaigns ({', '.join(CAMPAIGNS)})")
+    campaigns = ", ".join(CAMPAIGNS)
+    parser.add_argument("--quick", action="store_true", help=f"leave out the experiment campaigns ({campaigns})")
     parser.add_argument("--only", help=f"comma-separated, of {', '.join(FIGURES)}")
     parser.add_argument("--skip", help="comma-separated figures to leave out")
     parser.add_argument("--list", action="store_true", help="list the figures and exit")
@@ -304,7 +305,8 @@ def main(argv: list[str] | None = None) -> int:
             doc = (figure.__doc__ or "").strip().splitlines()[0]
             print(f"{name:12s} {doc}{' (a campaign)' if name in CAMPAIGNS else ''}")
         return 0
-    names = _names(args.only, parser, "--only") if args.only else [n for n in FIGURES if not (args.quick and n in CAMPAIGNS)]
+    everything = [n for n in FIGURES if not (args.quick and n in CAMPAIGNS)]
+    names = _names(args.only, parser, "--only") if args.only else everything
     skipped = set(_names(args.skip, parser, "--skip")) if args.skip else set()
     for name in names:
         if name in skipped:

@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import json
 
-from fakeworld import FakeWorld, camera_view
-
 import py_trees
+from fakeworld import FakeWorld, camera_view
 
 from bt_arrange.behaviours import Inspect, Pick, Place
 from bt_arrange.objects import ObjectStart

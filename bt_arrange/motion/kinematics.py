@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from bt_arrange.errors import GeometryError, MotionError, OutOfRangeError, UnreachableError
+from bt_arrange.errors import GeometryError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import FloatArray, Pose, wrap_angle
 from bt_arrange.motion import placo_models
-from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
+from bt_arrange.motion.urdf import ARM_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 
 # UR5 (CB3) DH parameters, which the bundled URDF's joint origins reproduce (tests/test_kinematics.py
@@ -191,7 +191,7 @@ class ArmKinematics:
         tree's context) waits for the garbage collector while new runs build new models.
         """
         self._give_back()
-        self._robot = self._solver = self._task = None  # type: ignore[assignment]
+        self._robot = self._solver = self._task = None
 
     # ----------------------------------------------------------------------------------------------
     # Properties

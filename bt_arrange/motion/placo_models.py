@@ -66,8 +66,10 @@ _free: dict[str, list[PlacoModel]] = {}
 
 
 def borrow(owner: object, path: str) -> tuple[PlacoModel, weakref.finalize]:
-    """A model of the URDF at ``path`` for ``owner`` alone, and what gives it back (called once, at the latest
-    when ``owner`` is garbage: a cycle's garbage may wait for the collector, so an owner that is done can call it).
+    """A model of the URDF at ``path`` for ``owner`` alone, and what gives it back.
+
+    The second is called once: by ``owner`` when it is done, at the latest when ``owner`` is garbage
+    (a cycle's garbage may wait for the collector).
 
     Models are kept by the file's path, size and modification time: a URDF changed in place is loaded again.
     """
