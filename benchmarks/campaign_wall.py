@@ -6,7 +6,8 @@ Runs ``bt-arrange experiment --workers 1`` with the same rows, trials and seed t
 once with the code of ``--against`` (a git revision, checked out into a temporary worktree) and
 once with this checkout, alternating, each in a fresh process. Prints each run's wall and CPU time
 (the child's user + system), the ratio this / reference of each, and how many trial records are
-identical (all fields but the wall time). The default revision ``f7bbbaf`` is the code before the
+identical (all the reference's fields but the wall time; fields added since are named, not
+compared). The default revision ``f7bbbaf`` is the code before the
 cycle-time work of issue 23 (Table 1 wall time target: this / reference <= 0.6).
 
 Wall time depends on the machine and on what else runs on it: read the ratio of one run, and
@@ -84,6 +85,11 @@ def _records(out: Path) -> dict[tuple[str, int], dict]:
     }
 
 
+def _same(ours: dict, theirs: dict | None) -> bool:
+    """Equal in every field of the reference's record: a field the record gained since is new, not different."""
+    return theirs is not None and all(key in ours and ours[key] == value for key, value in theirs.items())
+
+
 def _by_row(records: dict[tuple[str, int], dict]) -> dict[str, dict]:
     """Per row: trials, mean offset after pushing (camera, mm) and trials within the threshold."""
     rows: dict[str, list[dict]] = {}
@@ -128,7 +134,8 @@ def main() -> None:
                 for side, packages in sides.items():
                     runs[side].append(_campaign(packages, base / f"{side}-{repeat}", args))
             ours, theirs = _records(Path(runs["this"][0]["out"])), _records(Path(runs["reference"][0]["out"]))
-            differing = sorted(key for key in ours if ours[key] != theirs.get(key))
+            differing = sorted(key for key in ours if not _same(ours[key], theirs.get(key)))
+            added = sorted({k for record in ours.values() for k in record} - {k for r in theirs.values() for k in r})
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(reference)], check=False)
 
@@ -147,6 +154,7 @@ def main() -> None:
         "records": len(ours),
         "identical_records": len(ours) - len(differing),
         "differing_records": [f"{row} #{trial}" for row, trial in differing][:20],
+        "added_fields": added,
         "by_row": {"reference": _by_row(theirs), "this": _by_row(ours)},
     }
     if args.json:
@@ -158,6 +166,8 @@ def main() -> None:
         print(f"  {side:9s} {shown}")
     print(f"  this / reference: wall {result['wall_ratio']:.3f}, CPU {result['cpu_ratio']:.3f}")
     print(f"  trial records identical: {result['identical_records']} of {result['records']}")
+    if added:
+        print(f"  fields added since (not compared): {', '.join(added)}")
     if differing:
         print(f"  differing (first 20): {', '.join(result['differing_records'])}")
     print("  after pushing, mean mm and trials within (reference / this):")

@@ -137,7 +137,18 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
     has_truth = getattr(report, "ground_truth", True)
     truth_columns = (4, 6) if not has_truth else ()
     rows: list[tuple[str, ...]] = [
-        ("object", "target x, y (mm), yaw (deg)", "placed", "pushed", "truth", "yaw", "yaw truth", "pushes", "status")
+        (
+            "object",
+            "target x, y (mm), yaw (deg)",
+            "placed",
+            "pushed",
+            "truth",
+            "yaw",
+            "yaw truth",
+            "pushes",
+            "regrasps",
+            "status",
+        )
     ]
     for o in report.objects:
         x, y, yaw = o.target
@@ -152,6 +163,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
                 deg(getattr(o, "final_yaw_error_deg", None)),
                 deg(getattr(o, "final_yaw_error_truth_deg", None)),
                 str(o.pushes),
+                str(getattr(o, "regrasps_after_placing", 0)),
                 status,
             )
         )
@@ -168,7 +180,9 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             else "camera only: this world has no ground truth"
         )
         print(
-            f"offsets in mm: placed and pushed measured by the camera after placing and after pushing; "
+            "offsets in mm: placed and pushed measured by the camera after placing (the first time) and after "
+            "pushing; "
+            f"regrasps: picked up again after placing; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
         source = getattr(report, "camera_margin_source", "")

@@ -7,6 +7,7 @@ evaluation only, None when the world has none (the report is then camera only).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 from py_trees.common import Status
@@ -40,6 +41,14 @@ class ObjectOutcome:
     #: by the camera (``Recheck``), and by ground truth at the same moments; None when never looked at again.
     moved_by_later_mm: float | None = None
     moved_by_later_truth_mm: float | None = None
+    #: Times the part was picked up again after it was placed (``PlacementLog``): turned too far, its
+    #: pushes stalled, or a push needed a blocked side. The ``placed_*`` figures stay the first placing's.
+    regrasps_after_placing: int = 0
+    #: The figures of the last placing again, at the first look after it (camera, ground truth; degrees
+    #: for the yaw); None when the part was never picked up again.
+    placed_again_offset_mm: float | None = None
+    placed_again_offset_truth_mm: float | None = None
+    placed_again_yaw_error_deg: float | None = None
 
 
 @dataclass
@@ -93,6 +102,50 @@ class SessionReport:
         if not self.ground_truth:
             data["ground_truth"] = False
         return data
+
+
+@dataclass(frozen=True)
+class Placement:
+    """A look at a part just placed: the camera's offset (mm) and yaw error (deg), the ground truth's offset (mm)."""
+
+    offset_mm: float | None
+    yaw_error_deg: float | None
+    offset_truth_mm: float | None
+
+
+class PlacementLog:
+    """Each part's placings as the tree runs: the first one's figures, the regrasps, the last placing again.
+
+    The first placing is measured by the first Inspect after placing of the part to succeed; a Pick
+    of the part started after it is a regrasp (a turned part picked up again, a stalled correction's
+    fallback, a release on a free side); the first Inspect of the part to succeed after a regrasp
+    measures its placing again. A later Inspect after placing with no regrasp before it (a tree that
+    places a part twice its own way) counts as a placing again too. An Inspect that merely looks
+    again (after a push) measures nothing here.
+    """
+
+    def __init__(self) -> None:
+        self.first: dict[str, Placement] = {}
+        self.again: dict[str, Placement] = {}
+        self.regrasps: dict[str, int] = {}
+        self._awaiting: set[str] = set()
+
+    def pick_started(self, obj: str | None) -> None:
+        """A Pick of ``obj`` started: after the part's first placing, a regrasp."""
+        if obj is not None and obj in self.first:
+            self.regrasps[obj] = self.regrasps.get(obj, 0) + 1
+            self._awaiting.add(obj)
+
+    def inspected(self, obj: str, after_placing: bool, measure: Callable[[bool], Placement]) -> str | None:
+        """An Inspect of ``obj`` succeeded; ``measure(first)`` reads the figures. The recorded image's stem, or None."""
+        if after_placing and obj not in self.first:
+            self.first[obj] = measure(True)
+            return f"after_placing_{obj}"
+        if obj in self._awaiting or after_placing:
+            self._awaiting.discard(obj)
+            self.again[obj] = measure(False)
+            return f"after_placing_{obj}_again_{self.regrasps.get(obj, 0)}"
+        return None
 
 
 # ----------------------------------------------------------------------------------------------

@@ -1,8 +1,10 @@
 """Reprint every deterministic figure of the README (and docs/dense.md's table), each beside its source.
 
-    python scripts/figures.py            # everything: about 10 minutes on 2 cores with nothing else running
-    python scripts/figures.py --quick    # without the two experiment campaigns (Table 1, the real cell): ~2 min
+    python scripts/figures.py            # everything: about 40 minutes on 2 cores with nothing else running
+    python scripts/figures.py --quick    # without the experiment campaigns (Table 1, the real cell, records)
     python scripts/figures.py --only four_cubes,pick_error
+    python scripts/figures.py --skip fresco,records
+    python scripts/figures.py --list     # the figures' names, what each reprints, and whether it is a campaign
 
 Each figure is printed by the benchmark or command named beside it in the README; this script
 runs them (each in its own process, as a reader would) and prints the README's wording with the
@@ -48,6 +50,17 @@ def cell() -> list[str]:
     ]
 
 
+def cycle_time() -> list[str]:
+    """The four-cube row's world time per cube against the lower bound for its waypoints."""
+    source = "python benchmarks/throughput.py --json"
+    data = _json("benchmarks/throughput.py", "--json")
+    return [
+        f"four-cube arrangement: {data['world_s_per_object']:.1f} s of world time per cube, "
+        f"{data['bound_ratio']:.2f}x the lower bound for its waypoints ({data['bound_s_per_object']:.2f} s per cube)  "
+        f"[{source}; keys world_s_per_object, bound_ratio]"
+    ]
+
+
 def four_cubes() -> list[str]:
     """The README's four-cube row."""
     source = "bt-arrange run trees/four_cubes.py --seed 0"
@@ -84,6 +97,91 @@ def perception() -> list[str]:
     return [
         f"cube detection in rendered scenes: xy {xy['mean']:.3f} mm mean, {xy['p95']:.3f} mm p95; yaw "
         f"{yaw['mean']:.3f} deg; {data['misses']} misses in {data['detections']}  [{source}]"
+    ]
+
+
+def irregular() -> list[str]:
+    """The README's irregular parts: five outlines, three seeds, counted by ground truth here (and by the camera)."""
+    source = "python benchmarks/irregular.py --seeds 0 1 2 --json"
+    rows = _json("benchmarks/irregular.py", "--seeds", "0", "1", "2", "--json")
+    within = sum(r["within_truth"] for r in rows)
+    by_camera = sum(r["status"] == "within" for r in rows)
+    worst_mm = max(r["pushed_truth_mm"] for r in rows)
+    worst_deg = max(abs(r["yaw_error_truth_deg"]) for r in rows)
+    regrasps = sum(r.get("regrasps_after_placing", 0) for r in rows)
+    parts = len({r["part"] for r in rows})
+    seeds = len({r["seed"] for r in rows})
+    return [
+        f"irregular parts, {parts} outlines, {seeds} seeds: {within} of {len(rows)} within "
+        f"{rows[0]['threshold_mm']:g} mm and {rows[0]['yaw_threshold_deg']:g} deg by ground truth ({by_camera} by the "
+        f"camera), worst {worst_mm:.2f} mm and {worst_deg:.2f} deg; {regrasps} regrasps after placing  [{source}]"
+    ]
+
+
+def _fresco(*extra: str) -> tuple[list[dict], str]:
+    argv = ["benchmarks/fresco.py", "--seeds", "0", "1", "2", *extra]
+    runs = [json.loads(line) for line in _run(*argv).splitlines() if line.startswith("{")]
+    return runs, "python " + " ".join(argv)
+
+
+def fresco() -> list[str]:
+    """The README's frescoes: six pieces, 2 mm gaps, three seeds, plain and with Table 1's pick translation error."""
+    lines = []
+    for extra, label in (((), "a fresco"), (("--inject", "pick_translation"), "with the pick translation error")):
+        runs, source = _fresco(*extra)
+        pieces = sum(r["pieces"] for r in runs)
+        within = sum(r["within"] for r in runs)
+        by_camera = sum(r["within_by_camera"] for r in runs)
+        worst = max(r["max_final_offset_truth_mm"] for r in runs)
+        worst_deg = max(r["max_yaw_error_truth_deg"] for r in runs)
+        gap = min(r["min_gap_truth_mm"] for r in runs)
+        lines.append(
+            f"{label}, {runs[0]['pieces']} pieces with {runs[0]['gap_mm']:g} mm gaps, {len(runs)} seeds: {within} of "
+            f"{pieces} within 1 mm and 1 deg by ground truth ({by_camera} by the camera), worst {worst:.2f} mm and "
+            f"{worst_deg:.2f} deg; smallest gap at the end {gap:.2f} mm"
+            f"{' (no two pieces touching)' if gap > 0 else ' (touching)'}  [{source}]"
+        )
+    return lines
+
+
+def outlines() -> list[str]:
+    """The README's outline detection in the cell's camera."""
+    source = "python benchmarks/outlines.py --poses 100 --cell --no-synthetic --json"
+    data = _json("benchmarks/outlines.py", "--poses", "100", "--cell", "--no-synthetic", "--json")
+    everything = data["results"]["cell"]["all"]
+    return [
+        f"outline detection in the cell's camera: {everything['xy_error_mm']['mean']:.3f} mm and "
+        f"{everything['yaw_error_deg']['mean']:.3f} deg mean, {everything['misses']} misses in "
+        f"{everything['detections']}  [{source}; the synthetic renders of --cell without --no-synthetic aside]"
+    ]
+
+
+def calibration() -> list[str]:
+    """The README's real-cell calibration figures."""
+    source = "python benchmarks/calibration.py --cell real --views 28 --json"
+    data = _json("benchmarks/calibration.py", "--cell", "real", "--views", "28", "--json")
+    measured = data["detection_calibrated"]
+    return [
+        f"calibration of the real cell's camera: reprojection {data['reprojection_error_px']:.3f} px, camera pose "
+        f"{data['camera_to_base_error_mm']:.2f} mm and {data['camera_to_base_error_mrad']:.2f} mrad off the true one, "
+        f"cubes measured {measured['mean_mm']:.2f} mm off (mean, max {measured['max_mm']:.2f}) over the usable area "
+        f"({measured['found']} of {measured['cubes']} found)  [{source}]"
+    ]
+
+
+#: The code just before the depth estimator rendered windows instead of the whole frame (ab10168's parent).
+BEFORE_WINDOWS = "d509651"
+
+
+def records() -> list[str]:
+    """The README's "399 of 400 trial records identical" (Table 1, against the code before windowed depth)."""
+    source = f"python benchmarks/campaign_wall.py --against {BEFORE_WINDOWS} --trials 100 --json"
+    data = _json("benchmarks/campaign_wall.py", "--against", BEFORE_WINDOWS, "--trials", "100", "--json")
+    differing = f"; differing: {', '.join(data['differing_records'])}" if data["differing_records"] else ""
+    added = f"; fields added since, not compared: {', '.join(data['added_fields'])}" if data.get("added_fields") else ""
+    return [
+        f"Table 1's trial records identical to those of {BEFORE_WINDOWS} (before the windowed depth estimator): "
+        f"{data['identical_records']} of {data['records']}{differing}{added}  [{source}; its wall ratios are measured]"
     ]
 
 
@@ -168,26 +266,51 @@ def real_cell() -> list[str]:
 FIGURES: dict[str, Callable[[], list[str]]] = {
     "cell": cell,
     "four_cubes": four_cubes,
+    "cycle_time": cycle_time,
     "pick_error": pick_error,
     "perception": perception,
+    "irregular": irregular,
+    "fresco": fresco,
+    "outlines": outlines,
+    "calibration": calibration,
     "plan_limits": plan_limits,
     "dense": dense,
     "table1": table1,
     "real_cell": real_cell,
+    "records": records,
 }
-CAMPAIGNS = ("table1", "real_cell")
+#: The figures that run whole experiment campaigns (minutes each): left out by ``--quick``.
+CAMPAIGNS = ("table1", "real_cell", "records")
+
+
+def _names(text: str, parser: argparse.ArgumentParser, option: str) -> list[str]:
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    for name in names:
+        if name not in FIGURES:
+            parser.error(f"{option}: unknown figure {name!r}; choose from {', '.join(FIGURES)}")
+    return names
 
 
 def main(argv: list[str] | None = None) -> int:
     """Print the figures asked for."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="leave out the experiment campaigns")
+    campaigns = ", ".join(CAMPAIGNS)
+    parser.add_argument("--quick", action="store_true", help=f"leave out the experiment campaigns ({campaigns})")
     parser.add_argument("--only", help=f"comma-separated, of {', '.join(FIGURES)}")
+    parser.add_argument("--skip", help="comma-separated figures to leave out")
+    parser.add_argument("--list", action="store_true", help="list the figures and exit")
     args = parser.parse_args(argv)
-    names = args.only.split(",") if args.only else [n for n in FIGURES if not (args.quick and n in CAMPAIGNS)]
+    if args.list:
+        for name, figure in FIGURES.items():
+            doc = (figure.__doc__ or "").strip().splitlines()[0]
+            print(f"{name:12s} {doc}{' (a campaign)' if name in CAMPAIGNS else ''}")
+        return 0
+    everything = [n for n in FIGURES if not (args.quick and n in CAMPAIGNS)]
+    names = _names(args.only, parser, "--only") if args.only else everything
+    skipped = set(_names(args.skip, parser, "--skip")) if args.skip else set()
     for name in names:
-        if name not in FIGURES:
-            parser.error(f"unknown figure {name!r}; choose from {', '.join(FIGURES)}")
+        if name in skipped:
+            continue
         for line in FIGURES[name]():
             print(line, flush=True)
     return 0

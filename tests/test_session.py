@@ -121,7 +121,8 @@ def test_an_inspect_named_otherwise_still_records_the_after_placing_figures(tmp_
         Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "0.10 mm", str(inspect.id), "red")
     )
     start_mm = math.hypot(RED_START.x_m - RED.x_m, RED_START.y_m - RED.y_m) * 1000
-    assert run._placed_truth_mm["red"] == pytest.approx(start_mm, abs=1e-3)  # the cube still at its start
+    placed = run.placements.first["red"].offset_truth_mm
+    assert placed == pytest.approx(start_mm, abs=1e-3)  # the cube still at its start
     assert (tmp_path / "after_placing_red.png").is_file()
 
 
@@ -130,7 +131,7 @@ def test_an_inspect_that_does_not_record_placing_is_not_taken_for_one() -> None:
     root = Arrangement("mine", [set_target(RED), inspect], [RED], 1.0)
     run = session(root, [RED_START], Opener(truth=True))
     run._on_transition(Transition(1.0, inspect.name, "Inspect", "RUNNING", "SUCCESS", "", str(inspect.id), "red"))
-    assert run._placed_truth_mm == {}
+    assert run.placements.first == {}
 
 
 def test_an_object_stopped_by_the_time_limit_says_so() -> None:

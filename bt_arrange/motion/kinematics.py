@@ -17,12 +17,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-import placo
 from numpy.typing import ArrayLike
 
-from bt_arrange.errors import GeometryError, MotionError, OutOfRangeError, UnreachableError
+from bt_arrange.errors import GeometryError, OutOfRangeError, UnreachableError
 from bt_arrange.geometry import FloatArray, Pose, wrap_angle
-from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, TCP_FRAME, default_urdf_path
+from bt_arrange.motion import placo_models
+from bt_arrange.motion.urdf import ARM_JOINT_NAMES, TCP_FRAME, default_urdf_path
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 
 # UR5 (CB3) DH parameters, which the bundled URDF's joint origins reproduce (tests/test_kinematics.py
@@ -165,17 +165,11 @@ class ArmKinematics:
         self.table_clearance_m = float(table_clearance_m)
         self.max_iterations = int(max_iterations)
 
-        self._robot = placo.RobotWrapper(str(path), placo.Flags.ignore_collisions)
-        missing = [n for n in (*ARM_JOINT_NAMES, *FINGER_JOINT_NAMES) if n not in self._robot.joint_names()]
-        if missing:
-            raise MotionError(f"URDF {path} lacks the joints {missing}")
-        self._solver = placo.KinematicsSolver(self._robot)
-        self._solver.mask_fbase(True)
-        for name in FINGER_JOINT_NAMES:
-            self._solver.mask_dof(name)
-        self._solver.enable_joint_limits(True)
-        self._task = self._solver.add_frame_task(TCP_FRAME, np.eye(4))
-        self._task.configure(TCP_FRAME, "soft", 1.0, 1.0)
+        # One model of the URDF per live kinematics, kept for the process: placo leaks a dropped one.
+        model, self._give_back = placo_models.borrow(self, str(path))
+        self._robot = model.robot
+        self._solver = model.solver
+        self._task = model.task
         self._q_index = np.array([self._robot.get_joint_offset(n) for n in ARM_JOINT_NAMES])
         self._v_index = np.array([self._robot.get_joint_v_offset(n) for n in ARM_JOINT_NAMES])
         limits = np.array([self._robot.get_joint_limits(n) for n in ARM_JOINT_NAMES])
@@ -189,6 +183,15 @@ class ArmKinematics:
             "wrist_3_link"
         )
         self._wrist_centre_in_tcp_m: FloatArray = t_tcp_wrist[:3, 3].copy()
+
+    def release(self) -> None:
+        """Give the placo model back now, for the next kinematics (a closed session's): this one is done with it.
+
+        Without it the model goes back when this object is garbage, which for one held in a cycle (a
+        tree's context) waits for the garbage collector while new runs build new models.
+        """
+        self._give_back()
+        self._robot = self._solver = self._task = None
 
     # ----------------------------------------------------------------------------------------------
     # Properties

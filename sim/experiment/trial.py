@@ -95,6 +95,10 @@ def _run_trial(spec: TrialSpec) -> dict:
         "pushes": outcome.pushes,
         "regrasps": len(bad_grasps),
         "regrasp_reasons": bad_grasps,
+        # Picked up again after it was placed (turned, pushes stalled): "placed_mm" stays the first placing's.
+        "regrasps_after_placing": outcome.regrasps_after_placing,
+        "placed_again_mm": outcome.placed_again_offset_mm,
+        "placed_again_truth_mm": outcome.placed_again_offset_truth_mm,
         # Picks that squared a cube pinched across its corners instead of letting go (Pick's "squaring").
         "squarings": len(squarings),
         "status": outcome.status,

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import hashlib
+import tempfile
+from pathlib import Path
+
 import numpy as np
 
-from bt_arrange.files import shared_temp_file
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, SIDE_RGB, ColourRange, ColourTable
 from bt_arrange.shapes import Prism
@@ -36,12 +39,12 @@ def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Cont
     return create_object(client, CUBE, colour, position_m, orientation_xyzw, contact)
 
 
-def prism_mesh_files(shape: Prism) -> tuple[str, str, str]:
-    """OBJ files of a prism, centred on its centre of mass: collision, sides and top plate.
+def prism_mesh_files(shape: Prism, folder: Path) -> tuple[str, str, str]:
+    """OBJ files of a prism in ``folder``, centred on its centre of mass: collision, sides and top plate.
 
     The collision file holds one object per convex piece (``Prism.convex_pieces``): Bullet makes a
     compound of their convex hulls, exact for a non-convex outline. The files are named by their
-    content in the temporary directory and written once, whole or absent (``files.shared_temp_file``).
+    content (pybullet caches a mesh by its file name: one name never stands for two meshes).
     """
     half = shape.height_m / 2
     pieces = shape.convex_pieces()
@@ -54,9 +57,12 @@ def prism_mesh_files(shape: Prism) -> tuple[str, str, str]:
     )
     sides = _obj([("sides", outline, -half, half - TOP_PLATE_M, pieces)])
     top = _obj([("top", outline, half - TOP_PLATE_M, half, pieces)])
-    collision_path, sides_path, top_path = (
-        str(shared_temp_file("bt_arrange_mesh_", ".obj", text)) for text in (collision, sides, top)
-    )
+    paths = []
+    for text in (collision, sides, top):
+        path = folder / f"{hashlib.sha1(text.encode()).hexdigest()[:16]}.obj"
+        path.write_text(text, encoding="utf-8")
+        paths.append(str(path))
+    collision_path, sides_path, top_path = paths
     return collision_path, sides_path, top_path
 
 
@@ -127,19 +133,17 @@ def create_object(  # noqa: PLR0913
             halfExtents=[[hx, hy, hz - TOP_PLATE_M / 2], [hx, hy, TOP_PLATE_M / 2]],
             visualFramePositions=[[0, 0, -TOP_PLATE_M / 2], [0, 0, hz - TOP_PLATE_M / 2]],
         )
+        body = _multi_body(client, object_type, collision, visual, position_m, orientation_xyzw)
     else:
-        collision_obj, sides_obj, top_obj = prism_mesh_files(shape)
-        collision = client.createCollisionShape(pybullet.GEOM_MESH, fileName=collision_obj)
-        visual = client.createVisualShapeArray(
-            shapeTypes=[pybullet.GEOM_MESH, pybullet.GEOM_MESH], fileNames=[sides_obj, top_obj]
-        )
-    body = client.createMultiBody(
-        baseMass=mass_of(object_type),
-        baseCollisionShapeIndex=collision,
-        baseVisualShapeIndex=visual,
-        basePosition=list(position_m),
-        baseOrientation=list(orientation_xyzw),
-    )
+        # The meshes live only while pybullet loads them (the renderer reads the visual ones in
+        # createMultiBody): a campaign of fractured parts leaves no file behind in the temporary folder.
+        with tempfile.TemporaryDirectory(prefix="bt_arrange_mesh_") as folder:
+            collision_obj, sides_obj, top_obj = prism_mesh_files(shape, Path(folder))
+            collision = client.createCollisionShape(pybullet.GEOM_MESH, fileName=collision_obj)
+            visual = client.createVisualShapeArray(
+                shapeTypes=[pybullet.GEOM_MESH, pybullet.GEOM_MESH], fileNames=[sides_obj, top_obj]
+            )
+            body = _multi_body(client, object_type, collision, visual, position_m, orientation_xyzw)
     # A visual shape array takes one colour per body in createMultiBody; colour each part after.
     client.changeVisualShape(body, -1, shapeIndex=0, rgbaColor=[*SIDE_RGB, 1.0])
     client.changeVisualShape(body, -1, shapeIndex=1, rgbaColor=[*rgb, 1.0])
@@ -147,3 +151,16 @@ def create_object(  # noqa: PLR0913
         contact = dataclasses.replace(contact, lateral_friction=object_type.lateral_friction)
     apply_contact(contact, client, body)
     return int(body)
+
+
+def _multi_body(client, object_type: ObjectType, collision: int, visual: int, position_m, orientation_xyzw) -> int:  # noqa: ANN001
+    """A body of the part's mass from its collision and visual shapes, at a pose."""
+    return int(
+        client.createMultiBody(
+            baseMass=mass_of(object_type),
+            baseCollisionShapeIndex=collision,
+            baseVisualShapeIndex=visual,
+            basePosition=list(position_m),
+            baseOrientation=list(orientation_xyzw),
+        )
+    )
