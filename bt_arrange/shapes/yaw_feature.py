@@ -108,5 +108,11 @@ def yaw_feature_m(outline_m: FloatArray, symmetry_rad: float, refine_below_m: fl
     with ``refine_below_m`` only a minimum that could lie under it is refined (the others are exact to
     the grid's step), which is all a check against a limit needs.
     """
-    key = tuple((float(x), float(y)) for x, y in np.asarray(outline_m, dtype=float))
+    points = np.asarray(outline_m, dtype=float)
+    # The feature is the shape's, whatever way its frame is turned: cached turned so that its first
+    # vertex lies on +x (a fresco piece is judged as cut and again turned to its grasp's frame).
+    angle = math.atan2(float(points[0, 1]), float(points[0, 0]))
+    c, s = math.cos(angle), math.sin(angle)
+    canonical = points @ np.array([[c, -s], [s, c]])
+    key = tuple((round(float(x), 12), round(float(y), 12)) for x, y in canonical)
     return _feature(key, float(symmetry_rad), float(refine_below_m))
