@@ -57,8 +57,8 @@ from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.filelimits import MAX_COLOURS, MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
-from bt_arrange.shapes import Prism
 from bt_arrange.settings import DEFAULT_TARGET_GAP_M, ManipulationSettings
+from bt_arrange.shapes import Prism
 from bt_arrange.shapes.fracture import MAX_PIECES, MIN_GAP_M, MIN_PIECES, fracture
 from bt_arrange.suggest import did_you_mean
 

@@ -218,13 +218,11 @@ class ManipulationSettings:
         ``gap_for_threshold_m``. A threshold of 1 mm or more keeps these settings.
         """
         fitting_m = threshold_mm / 1000 / math.sqrt(2.0)
-        changes: dict[str, float] = {}
-        if fitting_m < self.min_push_m:
-            changes["min_push_m"] = max(fitting_m, self.finest_push_m)
-        gap_m = self.gap_for_threshold_m(threshold_mm)
-        if gap_m < self.min_target_gap_m:
-            changes["min_target_gap_m"] = gap_m
-        return replace(self, **changes) if changes else self
+        min_push_m = max(fitting_m, self.finest_push_m) if fitting_m < self.min_push_m else self.min_push_m
+        gap_m = min(self.gap_for_threshold_m(threshold_mm), self.min_target_gap_m)
+        if min_push_m == self.min_push_m and gap_m == self.min_target_gap_m:
+            return self
+        return replace(self, min_push_m=min_push_m, min_target_gap_m=gap_m)
 
     def gap_for_threshold_m(self, threshold_mm: float) -> float:
         """The least gap two targets need at ``threshold_mm`` (m): twice it, within ``finest_gap_m`` and 2 mm.

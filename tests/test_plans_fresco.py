@@ -115,9 +115,18 @@ def test_a_plan_needs_targets_or_a_fresco(tmp_path) -> None:
         plans.load(write(tmp_path, "threshold_mm = 1.0\n"))
 
 
-@pytest.mark.parametrize(("threshold_mm", "gap_mm", "refused"), [(0.25, 0.5, False), (0.25, 0.45, True), (0.5, 0.9, True),
-                                                           (0.5, 1.0, False), (0.1, 0.5, False), (0.1, 0.4, True),
-                                                           (3.0, 2.0, False)])
+@pytest.mark.parametrize(
+    ("threshold_mm", "gap_mm", "refused"),
+    [
+        (0.25, 0.5, False),
+        (0.25, 0.45, True),
+        (0.5, 0.9, True),
+        (0.5, 1.0, False),
+        (0.1, 0.5, False),
+        (0.1, 0.4, True),
+        (3.0, 2.0, False),
+    ],
+)
 def test_the_least_gap_is_twice_the_plans_threshold_from_half_a_millimetre_to_two(
     tmp_path, threshold_mm: float, gap_mm: float, refused: bool
 ) -> None:

@@ -69,7 +69,7 @@ def _keep_gaps(mask: Mask, cleaned: Mask, kernel: NDArray[np.uint8]) -> Mask:
     boundary[1:, :] |= down.astype(np.uint8)
     near_gap = cv2.dilate(boundary, kernel) > 0
     kept = np.where(near_gap, opened, cleaned).astype(np.uint8)
-    cut = _gap_cut(mask, nearest, across, down)
+    cut = _gap_cut(mask, np.asarray(nearest, dtype=np.int32), across, down)
     if cut is not None:
         kept[cv2.dilate(cut, np.ones((3, 3), np.uint8)) > 0] = 0
     return kept
@@ -80,9 +80,7 @@ def _keep_gaps(mask: Mask, cleaned: Mask, kernel: NDArray[np.uint8]) -> Mask:
 GAP_CUT_SHARE = 0.6
 
 
-def _gap_cut(
-    mask: Mask, nearest: NDArray[np.int32], across: NDArray[np.bool_], down: NDArray[np.bool_]
-) -> Mask | None:
+def _gap_cut(mask: Mask, nearest: NDArray[np.int32], across: NDArray[np.bool_], down: NDArray[np.bool_]) -> Mask | None:
     """The middles of the gaps between regions (label pairs) that the image shows as a gap, or None."""
     rows_a, cols_a = np.nonzero(across)
     rows_d, cols_d = np.nonzero(down)

@@ -70,7 +70,7 @@ def _feature(
 ) -> tuple[float, float]:
     points = np.asarray(outline, dtype=float)
     samples = _samples(points)
-    turns = np.arange(0.0, 2 * math.pi, COARSE_TURN_RAD)
+    turns: FloatArray = np.arange(0.0, 2 * math.pi, COARSE_TURN_RAD, dtype=np.float64)
     strays = _strays_m(points, samples, turns)
     # The rival yaws: the turns where the outline comes back nearest itself, away from its symmetry turns
     # (a small turn strays little because it is small, not because it looks the same).
@@ -92,7 +92,9 @@ def _feature(
     for k in sorted(rivals, key=lambda k: strays[k])[:4]:
         if strays[k] - reach_m > refine_below_m:
             continue
-        fine = np.arange(turns[k] - COARSE_TURN_RAD, turns[k] + COARSE_TURN_RAD, FINE_TURN_RAD)
+        fine: FloatArray = np.arange(
+            turns[k] - COARSE_TURN_RAD, turns[k] + COARSE_TURN_RAD, FINE_TURN_RAD, dtype=np.float64
+        )
         values = _strays_m(points, samples, fine)
         if float(values.min()) < best:
             best, best_turn = float(values.min()), float(fine[int(np.argmin(values))])
