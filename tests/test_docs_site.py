@@ -164,11 +164,29 @@ class DevTools:
         assert "exceptionDetails" not in result, result["exceptionDetails"]
         return result["result"].get("value")
 
+    def click(self, selector: str) -> None:
+        """Click the first element ``selector`` finds, once this evaluation has returned.
+
+        A click that navigates at once can end the page's context before the evaluation answers
+        ("Inspected target navigated or closed"): the click is left to the page's next task.
+        """
+        found = self.evaluate(
+            f"(() => {{ const e = document.querySelector({json.dumps(selector)}); "
+            "if (e) setTimeout(() => e.click(), 0); return !!e; })()"
+        )
+        assert found, f"nothing matches {selector}"
+
     def wait_for(self, expression: str, what: str) -> Any:
         """Poll ``expression`` until it is truthy (the page's own scripts run meanwhile)."""
         deadline = time.monotonic() + BROWSER_WAIT_S
         while time.monotonic() < deadline:
-            value = self.evaluate(expression)
+            try:
+                value = self.evaluate(expression)
+            except AssertionError as error:
+                # Evaluated while a click navigates: the old page's context is gone, the new one not yet there.
+                if "navigated or closed" not in str(error) and "context" not in str(error).lower():
+                    raise
+                value = None
             if value:
                 return value
             time.sleep(0.1)
@@ -285,13 +303,13 @@ def test_the_navigation_opens_a_guide_and_an_api_page(browser: tuple[DevTools, s
     # The navigation shows where the page is, and a click on a guide's entry opens that guide.
     active = tools.evaluate("document.querySelector('.md-nav__link--active').textContent.trim()")
     assert active == "decorators"
-    tools.evaluate("document.querySelector('.md-nav__link[href$=\"trees.html\"]').click()")
+    tools.click(".md-nav__link[href$='trees.html']")
     tools.wait_for("location.pathname.endsWith('/trees.html') && document.readyState === 'complete'", "the guide")
     assert tools.heading() == "Arrangement trees"
     # And from a guide back into the reference: the API overview, then a module by its link.
-    tools.evaluate("document.querySelector('.md-nav__link[href$=\"api/index.html\"]').click()")
+    tools.click(".md-nav__link[href$='api/index.html']")
     tools.wait_for("location.pathname.endsWith('/api/index.html') && document.readyState === 'complete'", "overview")
-    tools.evaluate("document.querySelector('article a[href$=\"bt_arrange_sim.pybullet.backend.html\"]').click()")
+    tools.click("article a[href$='bt_arrange_sim.pybullet.backend.html']")
     tools.wait_for("location.pathname.endsWith('/bt_arrange_sim.pybullet.backend.html')", "the backend's page")
     tools.wait_for("document.readyState === 'complete'", "the backend's page loaded")
     assert tools.evaluate("!!document.getElementById('bt_arrange_sim.pybullet.backend.SimBackend')")
