@@ -28,6 +28,7 @@ import numpy as np
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
+from bt_arrange.shapes.polygon import boundary_samples, distance_to_outline_m
 from bt_arrange.shapes.prism import Prism, outline_problem
 
 #: A fresco is broken into this many pieces at least and at most.
@@ -133,25 +134,6 @@ def _area_centroid(points: FloatArray) -> FloatArray:
     )
 
 
-def _boundary_samples(points: FloatArray, count: int = 160) -> FloatArray:
-    """``count`` points spaced evenly along the closed outline."""
-    closed = np.vstack([points, points[:1]])
-    edges = np.diff(closed, axis=0)
-    lengths = np.hypot(edges[:, 0], edges[:, 1])
-    start = np.concatenate([[0.0], np.cumsum(lengths)])
-    at = np.linspace(0.0, start[-1], count, endpoint=False)
-    k = np.searchsorted(start, at, side="right") - 1
-    return closed[k] + edges[k] * ((at - start[k]) / lengths[k])[:, None]
-
-
-def _distance_to_outline_m(queries: FloatArray, points: FloatArray) -> FloatArray:
-    """Each query point's distance to the closed outline (its nearest edge)."""
-    a, d = points, np.roll(points, -1, axis=0) - points
-    t = np.clip(np.einsum("qkj,kj->qk", queries[:, None, :] - a[None], d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
-    nearest = a[None] + t[..., None] * d[None]
-    return np.min(np.linalg.norm(queries[:, None, :] - nearest, axis=2), axis=1)
-
-
 def yaw_cue_m(prism: Prism) -> float:
     """How clearly the outline shows its yaw: its least misfit, turned about its centroid to any other yaw.
 
@@ -160,13 +142,13 @@ def yaw_cue_m(prism: Prism) -> float:
     under a half turn) scores low: the camera's registration could not tell those two yaws apart.
     """
     points = prism.outline_m
-    samples = _boundary_samples(points)
+    samples = boundary_samples(points)
     best = math.inf
     for degrees in range(20, 341, 2):
         turn = math.radians(degrees)
         c, s = math.cos(turn), math.sin(turn)
         turned = samples @ np.array([[c, s], [-s, c]])
-        best = min(best, float(np.percentile(_distance_to_outline_m(turned, points), 80)))
+        best = min(best, float(np.percentile(distance_to_outline_m(turned, points), 80)))
     return best
 
 

@@ -31,6 +31,26 @@ def centroid_m(points: FloatArray) -> FloatArray:
     return np.array([cx, cy])
 
 
+def boundary_samples(points: FloatArray, count: int = 160) -> FloatArray:
+    """``count`` points spaced evenly along the closed outline through ``points`` (N x 2)."""
+    closed = np.vstack([points, points[:1]])
+    edges = np.diff(closed, axis=0)
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    start = np.concatenate([[0.0], np.cumsum(lengths)])
+    at = np.linspace(0.0, start[-1], count, endpoint=False)
+    k = np.searchsorted(start, at, side="right") - 1
+    return closed[k] + edges[k] * ((at - start[k]) / lengths[k])[:, None]
+
+
+def distance_to_outline_m(queries: FloatArray, points: FloatArray) -> FloatArray:
+    """Each query point's distance (queries ... x 2) to the closed outline through ``points`` (its nearest edge)."""
+    a, d = points, np.roll(points, -1, axis=0) - points
+    relative = queries[..., None, :] - a
+    t = np.clip(np.einsum("...kj,kj->...k", relative, d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
+    nearest = a + t[..., None] * d
+    return np.min(np.linalg.norm(queries[..., None, :] - nearest, axis=-1), axis=-1)
+
+
 def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
     """True when the closed segments p1-p2 and q1-q2 meet (touching counts)."""
 

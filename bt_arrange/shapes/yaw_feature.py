@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from bt_arrange.geometry import FloatArray, fold_yaw
+from bt_arrange.shapes.polygon import boundary_samples, distance_to_outline_m
 
 #: Turns this close to a symmetry turn (or to none) are the same yaw to the registration.
 SAME_YAW_RAD = math.radians(10.0)
@@ -25,28 +26,6 @@ COARSE_TURN_RAD = math.radians(2.0)
 FINE_TURN_RAD = math.radians(0.05)
 #: Points along the outline, evenly spaced, at which the distance is measured (the vertices too).
 SAMPLES = 120
-
-
-def _samples(points: FloatArray, count: int = SAMPLES) -> FloatArray:
-    closed = np.vstack([points, points[:1]])
-    edges = np.diff(closed, axis=0)
-    lengths = np.hypot(edges[:, 0], edges[:, 1])
-    start = np.concatenate([[0.0], np.cumsum(lengths)])
-    at = np.linspace(0.0, start[-1], count, endpoint=False)
-    k = np.clip(np.searchsorted(start, at, side="right") - 1, 0, len(points) - 1)
-    along = closed[k] + edges[k] * ((at - start[k]) / np.maximum(lengths[k], 1e-12))[:, None]
-    return np.vstack([points, along])
-
-
-def _distances(queries: FloatArray, points: FloatArray) -> FloatArray:
-    """Each query's distance (queries ... x 2) to the closed outline through ``points``."""
-    a = points
-    d = np.roll(points, -1, axis=0) - points
-    squared_length = np.maximum(np.einsum("kj,kj->k", d, d), 1e-24)
-    relative = queries[..., None, :] - a  # (..., Q, K, 2)
-    t = np.clip(np.einsum("...kj,kj->...k", relative, d) / squared_length, 0.0, 1.0)
-    gap = relative - t[..., None] * d
-    return np.sqrt(np.min(np.einsum("...j,...j->...", gap, gap), axis=-1))
 
 
 def _strays_m(points: FloatArray, samples: FloatArray, turns: FloatArray) -> FloatArray:
@@ -60,7 +39,7 @@ def _strays_m(points: FloatArray, samples: FloatArray, turns: FloatArray) -> Flo
         ],
         axis=-1,
     )
-    one_way = _distances(turned, points).max(axis=1)
+    one_way = distance_to_outline_m(turned, points).max(axis=1)
     return np.maximum(one_way[: len(turns)], one_way[len(turns) :])
 
 
@@ -69,7 +48,7 @@ def _feature(
     outline: tuple[tuple[float, float], ...], symmetry_rad: float, refine_below_m: float
 ) -> tuple[float, float]:
     points = np.asarray(outline, dtype=float)
-    samples = _samples(points)
+    samples = np.vstack([points, boundary_samples(points, SAMPLES)])
     turns: FloatArray = np.arange(0.0, 2 * math.pi, COARSE_TURN_RAD, dtype=np.float64)
     strays = _strays_m(points, samples, turns)
     # The rival yaws: the turns where the outline comes back nearest itself, away from its symmetry turns
