@@ -22,6 +22,10 @@ from bt_arrange.shapes.gripper import Gripper
 ANTIPODAL_HALF_ANGLE_RAD = math.atan(0.3)
 #: A grasp needs the two edges to overlap this much along the pads (a third of a 22 mm pad).
 MIN_GRASP_OVERLAP_M = 0.008
+#: Beside the pads, this much further along them each way, the outline may rise no more than
+#: ``MAX_RISE_M`` above (or below) what the pads hold: else the pads' edges, not their faces, meet it.
+BESIDE_PADS_M = 0.003
+MAX_RISE_M = 2e-4
 
 
 @functools.lru_cache(maxsize=1024)
@@ -95,9 +99,9 @@ def _grasp_along(
         top, bottom = float(np.max(slab[:, 0])), float(np.min(slab[:, 0]))
         if top - bottom > max_width_m:
             continue
-        wider = _slab(points, closing, along, centre_t, band + 0.003, projections)
+        wider = _slab(points, closing, along, centre_t, band + BESIDE_PADS_M, projections)
         assert wider is not None
-        if float(np.max(wider[:, 0])) > top + 2e-4 or float(np.min(wider[:, 0])) < bottom - 2e-4:
+        if float(np.max(wider[:, 0])) > top + MAX_RISE_M or float(np.min(wider[:, 0])) < bottom - MAX_RISE_M:
             continue  # the outline rises beyond the pads: their edges would meet it, not their faces
         upper = slab[slab[:, 0] >= top - 5e-4, 1]
         lower = slab[slab[:, 0] <= bottom + 5e-4, 1]
@@ -189,11 +193,12 @@ def _clearly_refused(
         )
         width = top - bottom
         unclear |= np.abs(width - max_width_m) <= near
-        wider, _ = slab(half_pad + 0.003)
+        wider, _ = slab(half_pad + BESIDE_PADS_M)
         wider_top = np.nanmax(np.where(np.isnan(wider), -np.inf, wider), axis=1)
         wider_bottom = np.nanmin(np.where(np.isnan(wider), np.inf, wider), axis=1)
-        unclear |= (np.abs(wider_top - (top + 2e-4)) <= near) | (np.abs(wider_bottom - (bottom - 2e-4)) <= near)
-        rises = (wider_top > top + 2e-4) | (wider_bottom < bottom - 2e-4)
+        high, low = top + MAX_RISE_M, bottom - MAX_RISE_M
+        unclear |= (np.abs(wider_top - high) <= near) | (np.abs(wider_bottom - low) <= near)
+        rises = (wider_top > high) | (wider_bottom < low)
         upper = values >= (top - 5e-4)[:, None]
         lower = values <= (bottom + 5e-4)[:, None]
         unclear |= np.any(np.abs(values - (top - 5e-4)[:, None]) <= near, axis=1)

