@@ -4,7 +4,9 @@
 
 Runs, in one process and one after the other: the bare robot (the URDF with nothing on the
 table, holding its home pose) stepped for a few seconds of world time, for reference; a
-single-cube trial (``trees/single_cube.py``); the four-cube tree (``trees/four_cubes.py``).
+single-cube trial (``trees/single_cube.py``); the four-cube tree (``trees/four_cubes.py``); and
+the shipped examples of irregular parts (``--examples``, default ``irregular_parts,fresco``:
+``bt-arrange run irregular_parts``, ``bt-arrange run fresco``).
 For each trial the wall time of the run is split into exclusive sections: ``render`` (camera
 captures), ``physics`` (inside the world's stepping), ``perception`` (the detector),
 ``planning`` (inverse kinematics and trajectories), ``tree`` (the rest of the ticks) and
@@ -25,28 +27,35 @@ Key figures (``--json`` keys; the last three a contract): ``render_share`` (rend
 the single-cube trial's wall time), ``floor_ratio`` (that trial's wall time over the time spent
 stepping its physics: 1.0 would mean nothing but physics costs anything), and for the four-cube
 tree ``world_s_per_object``, ``bound_s_per_object`` and ``bound_ratio`` (world time over the bound).
+``examples`` holds the same keys per example, with ``real_time_factor`` (world time over wall
+time), ``real_time_factor_cpu`` (over the process's CPU time, which other jobs on a shared machine
+do not stretch) and ``perception_share`` (the detector's fraction of the wall time); every trial
+has them.
 Wall-clock figures depend on the machine and on what else runs on it: compare ratios from one run.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
 import time
 from collections import defaultdict
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange import treefile
+from bt_arrange import examples, treefile
 from bt_arrange.behaviours import Context
 from bt_arrange.behaviours.base import GripperStage, MoveStage, OnlyIf, StagedBehaviour
 from bt_arrange.motion import LinearMotion
 from bt_arrange.motion.bounds import finger_bound_s, joint_move_bound_s, line_bound_s
+from bt_arrange.perception import PartDetector
 from bt_arrange.runner import Runner
 from bt_arrange.timing import SectionTimers
 from bt_arrange_sim.pybullet.cell import WorkCell
@@ -54,6 +63,24 @@ from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 TREES = Path(__file__).resolve().parent.parent / "trees"
 SECTIONS = ("render", "physics", "perception", "planning", "tree", "rest")
+#: The shipped examples of irregular parts measured beside the cubes (``bt-arrange examples``).
+EXAMPLES = ("irregular_parts", "fresco")
+#: The detector's entry points: timed on the class, so the copies a look makes for one part type
+#: (``PartDetector.for_object``) are timed too.
+DETECTOR_METHODS = ("detect", "detect_all", "locate")
+
+
+@contextlib.contextmanager
+def timed_on_class(timers: SectionTimers, cls: type, methods: tuple[str, ...], section: str) -> Iterator[None]:
+    """Time ``methods`` of every instance of ``cls`` as ``section`` while inside; the class restored after."""
+    own = {name: cls.__dict__[name] for name in methods if name in cls.__dict__}
+    try:
+        for name, function in own.items():
+            setattr(cls, name, timers.wrap(section, function))
+        yield
+    finally:
+        for name, function in own.items():
+            setattr(cls, name, function)
 
 
 def bare_stepping(seconds: float = 4.0) -> dict:
@@ -174,14 +201,14 @@ def run_trial(tree_file: Path, seed: int) -> dict:
     timers = SectionTimers()
     world_by_category: dict[str, float] = defaultdict(float)
     world_by_stage: dict[str, float] = defaultdict(float)
-    with SimulatedRun(root, treefile.scene(module, seed)) as run:
+    with (
+        timed_on_class(timers, PartDetector, DETECTOR_METHODS, "perception"),
+        SimulatedRun(root, treefile.scene(module, seed)) as run,
+    ):
         cell, context = run.cell, run.context
         period_s = cell.config.physics.control_period_s
         timers.wrap_method(cell, "step", "physics")
         timers.wrap_method(cell.camera, "capture", "render")
-        for method in ("detect", "detect_all", "locate"):
-            if hasattr(context.detector, method):
-                timers.wrap_method(context.detector, method, "perception")
         for method in ("move_joints", "move_to_pose", "move_line"):
             timers.wrap_method(context.planner, method, "planning")
 
@@ -199,9 +226,12 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         # The benchmark's own bookkeeping is timed apart and left out of the trial's wall time.
         run.tick_hooks.append(timers.wrap("benchmark", on_tick))
         run.runner_hooks.append(time_ticks)
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         report = run.run()
         wall_s = time.perf_counter() - start - timers.seconds.get("benchmark", 0.0)
+        # The process's CPU time, which other jobs on a shared machine do not stretch (the
+        # benchmark's bookkeeping, timed in wall time, left out as well).
+        cpu_s = time.process_time() - start_cpu - timers.seconds.get("benchmark", 0.0)
         captures = timers.calls.get("render", 0)
     bound_by_stage = recorder.bounds_by_stage()
     bound_s = sum(bound_by_stage.values())
@@ -224,6 +254,10 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         "bound_s_per_object": round(bound_s / max(1, len(objects)), 3),
         "bound_ratio": round(report.sim_seconds / bound_s, 3) if bound_s > 0 else None,
         "wall_s": round(wall_s, 3),
+        "real_time_factor": round(report.sim_seconds / wall_s, 2) if wall_s > 0 else None,
+        "cpu_s": round(cpu_s, 3),
+        "real_time_factor_cpu": round(report.sim_seconds / cpu_s, 2) if cpu_s > 0 else None,
+        "perception_share": round(seconds["perception"] / wall_s, 4) if wall_s > 0 else None,
         "wall_s_by_section": {name: round(value, 3) for name, value in seconds.items()},
         "share_by_section": {name: round(value / wall_s, 4) for name, value in seconds.items()},
         "floor_ratio": round(wall_s / physics_s, 3) if physics_s > 0 else math.inf,
@@ -248,15 +282,38 @@ def _stage_rows(trial: dict) -> list[tuple[str, float, float]]:
     return sorted(rows, key=lambda row: -row[1])
 
 
+def _example_summary(trial: dict) -> dict:
+    """The four-cube figures' keys for one example, and its speed and perception share."""
+    keys = (
+        "world_s_per_object",
+        "bound_s_per_object",
+        "bound_ratio",
+        "real_time_factor",
+        "real_time_factor_cpu",
+        "perception_share",
+    )
+    return {key: trial[key] for key in ("status", "all_within", *keys)}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=0, help="scene seed of both trials (default 0)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
+        "--examples",
+        default=",".join(EXAMPLES),
+        help=f"shipped examples measured after the cubes, comma-separated, or 'none' (default {','.join(EXAMPLES)})",
+    )
     args = parser.parse_args(argv)
+    names = [] if args.examples == "none" else [n for n in args.examples.split(",") if n]
+    unknown = [n for n in names if examples.path_of(n) is None]
+    if unknown:
+        parser.error(f"no example {', '.join(unknown)} (bt-arrange examples lists them)")
 
     bare = bare_stepping()
     single = run_trial(TREES / "single_cube.py", args.seed)
     four = run_trial(TREES / "four_cubes.py", args.seed)
+    measured = {name: run_trial(examples.path_of(name), args.seed) for name in names}  # type: ignore[arg-type]
     summary = {
         "benchmark": "throughput",
         "note": "wall times on this machine (shared with other jobs if so): compare the ratios",
@@ -268,15 +325,19 @@ def main(argv: list[str] | None = None) -> int:
         "bare_robot": bare,
         "single_cube": single,
         "four_cubes": four,
+        "examples": {name: _example_summary(trial) for name, trial in measured.items()},
+        "example_trials": measured,
     }
     if args.json:
         print(json.dumps(summary))
     else:
-        for trial in (single, four):
+        for trial in (single, four, *measured.values()):
             split = ", ".join(f"{k} {v:.0%}" for k, v in trial["share_by_section"].items())
             print(
                 f"{trial['tree']}: {trial['world_s']} s of world time ({trial['world_s_per_object']} s per object) "
-                f"in {trial['wall_s']} s of wall time: {split}; wall / physics {trial['floor_ratio']}"
+                f"in {trial['wall_s']} s of wall time ({trial['real_time_factor']}x real time; "
+                f"{trial['real_time_factor_cpu']}x by CPU time): {split}; "
+                f"wall / physics {trial['floor_ratio']}"
             )
             print(f"  world time by activity: {trial['world_s_by_activity']}")
             print(

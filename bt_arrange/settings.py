@@ -106,7 +106,9 @@ class ManipulationSettings:
     #: The carry of a held part above its target: as fast as a move with empty pads. Its inertia asks
     #: little of the grip (a 5 cm wooden cube at the 13 m/s^2 that 16 rad/s^2 gives at the UR5's reach:
     #: 1.6 N of the pads' 96 N of friction at 40 N); measured in Table 1 (40 trials a row) and the
-    #: four-cube tree, the parts landed as close as at 2 rad/s and 8 rad/s^2.
+    #: four-cube tree, the parts landed as close as at 2 rad/s and 8 rad/s^2. A part held off its
+    #: centre of mass (an irregular part's grasp) takes it too: the irregular and fresco benchmarks
+    #: (three seeds each) held 15 of 15 and 18 of 18 within, as at the planner's limits (issue 36).
     carry_joint_limits: JointLimits = JointLimits(
         velocity_rad_s=HARDWARE_JOINT_VELOCITY_RAD_S, acceleration_rad_s2=16.0, jerk_rad_s3=200.0
     )
@@ -131,6 +133,11 @@ class ManipulationSettings:
     #: the pads turn the part as they meet it. Measured: at 75 to 150 mm/s a cube turned 33 degrees
     #: was held up to 6 degrees off square after the wrist turn; at 50 mm/s under 5 (both ways).
     squaring_finger_speed_m_s: float = 0.05
+    #: A close that meets a part at ``squaring_finger_speed_m_s`` (an off-centre grasp's, whose pads
+    #: meeting the outline fast turn the part) runs at ``finger_speed_m_s`` until the pads stand this
+    #: far (m) from the grasped side on each side: the pads meet the part as slowly as before, without
+    #: crossing the rest of the stroke slowly (85 mm to a 50 mm side took 0.7 s; issue 36).
+    slow_close_clearance_per_side_m: float = 0.003
     #: A first close wider than the grasped side by more than this (m) left the part a little turned
     #: in the pads (a 5 cm cube about 1.1 degrees): Pick opens just clear of it and closes again slowly.
     square_grip_tolerance_m: float = 0.001

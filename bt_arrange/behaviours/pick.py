@@ -24,6 +24,7 @@ from bt_arrange.behaviours.moves import (
     max_grip_width_m,
     min_held_width_m,
     open_stage,
+    slow_close_from_m,
     to_pose,
     wrist_yaw_rad,
 )
@@ -153,8 +154,14 @@ class Pick(StagedBehaviour):
             GripperStage(stage.WAIT_FOR_OPEN_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.DESCEND_TO_PART, line_to(x, y, grasp_m, yaw, free=True)),
             # An irregular part is held off its centre: pads meeting its outline fast turn it, so they
-            # close at the squaring speed; a cuboid's centred grasp at the fingers' full speed.
-            close_stage(stage.CLOSE_ON_PART, s.grip_force_n, squaring=not centred_grasp(s, kind)),
+            # meet it at the squaring speed (crossing the free stroke before at full speed); a cuboid's
+            # centred grasp closes at the fingers' full speed.
+            close_stage(
+                stage.CLOSE_ON_PART,
+                s.grip_force_n,
+                squaring=not centred_grasp(s, kind),
+                slow_from_m=(lambda c: slow_close_from_m(c.settings, kind)) if self.grasp is None else None,
+            ),
             InstantStage(stage.CHECK_GRASP, self._check_grasp),
             *self._reclose_stages(s, opening_m),
             *squaring,

@@ -11,7 +11,6 @@ from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
-    centred_grasp,
     free_grasp_pose,
     heights_m,
     line_nearly_done,
@@ -108,9 +107,9 @@ class Place(StagedBehaviour):
             yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), symmetry_rad)
             opening_m = self.release.opening_m
         return [
-            # Held through its centre of mass, a part takes the carry's speed; held off it (an irregular
-            # part's grasp), the inertia twists it in the pads: the planner's gentler limits.
-            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=centred_grasp(s, kind))),
+            # At the UR5's joint speeds, whether the grasp holds the part through its centre of mass
+            # or off it (an irregular part's): measured, the inertia did not turn a part in the pads.
+            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=True)),
             MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
             self._release_stage(opening_m, free=self.release is None),
             MoveStage(

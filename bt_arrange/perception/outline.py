@@ -74,6 +74,7 @@ def register(
     kernel_px: int,
     method: CornerRefinement = CornerRefinement.EDGE_LINES,
     rival_deviation_px: float | None = None,
+    max_deviation_px: float | None = None,
 ) -> tuple[OutlineFit | None, list[OutlineFit], list[OutlineFit]]:
     """The fine fit of the face, its coarse registrations (best first), and the fine fits of its rivals.
 
@@ -83,7 +84,9 @@ def register(
     edges, the others are its rivals (best first). A near-symmetric outline is told apart here, by the
     sub-pixel edges, where the pixel contour cannot tell its yaws apart.
 
-    The fine fit is None when the edges could not be measured below a pixel. ``method`` chooses it
+    The fine fit is None when the edges could not be measured below a pixel, and, without measuring
+    them, when the best contour strays more than ``max_deviation_px`` from its fit (the face is no
+    such outline whatever its edges say: most faces of another part of the colour). ``method`` chooses it
     (for comparison; docs/perception.md has the figures): ``EDGE_LINES``, sub-pixel edge points and
     least squares on the model's edge lines (the default); ``CORNER_SUBPIX``, ``cv2.cornerSubPix``
     at the outline's vertices on the face-coverage image and a rigid fit of the vertices;
@@ -119,6 +122,8 @@ def register(
         return replace(best, rms_px=0.0), fits, []
     if method is CornerRefinement.CORNER_SUBPIX:
         return _corner_fit(view, face, best, plane_z_m, px_per_m), fits, []
+    if max_deviation_px is not None and best.deviation_px > max_deviation_px:
+        return None, fits, []
     contenders = [best] + [
         fit for fit in fits[1:] if rival_deviation_px is not None and fit.deviation_px <= rival_deviation_px
     ]
@@ -323,6 +328,7 @@ def _judge(
                 config.kernel_px,
                 config.corner_refinement,
                 rival_deviation_px=config.max_outline_deviation_px,
+                max_deviation_px=config.max_outline_deviation_px,
             )
             verdicts[model.name] = _verdict_of_fit(
                 name, blob_xy_m, model, fine, fits, rivals, face.area_px, expected_px, config

@@ -97,9 +97,14 @@ def _coarse(contour_m: FloatArray, model: OutlineModel, prior_xy_m: tuple[float,
     turn = min(model.symmetry_rad, 2 * math.pi)
     count = max(1, int(round(math.degrees(turn) / MERGED_STEP_DEG)))
     yaws = np.arange(count) * (turn / count)
-    scores = np.array(
-        [np.mean(_nearest_m(_posed(samples, (*prior_xy_m, float(y))), contour, MERGED_CAP_M) ** 2) for y in yaws]
+    # Every yaw's samples in one query of the tree (the same distances as a query a yaw).
+    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+    posed = np.stack(
+        [samples[:, 0] * c - samples[:, 1] * s + prior_xy_m[0], samples[:, 0] * s + samples[:, 1] * c + prior_xy_m[1]],
+        axis=-1,
     )
+    nearest = _nearest_m(posed.reshape(-1, 2), contour, MERGED_CAP_M).reshape(count, len(samples))
+    scores = np.mean(nearest**2, axis=1)
     minima = [k for k in range(count) if scores[k] <= scores[k - 1] and scores[k] <= scores[(k + 1) % count]]
     return [float(yaws[k]) for k in sorted(minima, key=lambda k: scores[k])]
 
@@ -128,10 +133,14 @@ def free_edges(
     """Which edges of the posed outline the contour follows; None when the outline does not lie inside the blob."""
     samples, edge_of = _outline_samples(model, 0.5 * px_m, 3.0 * px_m)
     world = _posed(samples, pose)
-    on_contour = _nearest_m(world, cKDTree(contour_m)) <= FREE_EDGE_PX * px_m
+    to_contour_m = _nearest_m(world, cKDTree(contour_m))
+    on_contour = to_contour_m <= FREE_EDGE_PX * px_m
     scale = 1.0 / px_m  # pointPolygonTest on a contour scaled to pixels on the plane
     polygon = (contour_m * scale).astype(np.float32).reshape(-1, 1, 2)
-    inside = np.array([cv2.pointPolygonTest(polygon, (float(p[0]), float(p[1])), True) for p in world * scale])
+    # A sample within a pixel of a contour point is nearer the contour than FREE_EDGE_PX, inside
+    # or out: only the others can lie that far outside the blob, and only they are tested.
+    far = world[to_contour_m > px_m] * scale
+    inside = np.array([cv2.pointPolygonTest(polygon, (float(p[0]), float(p[1])), True) for p in far])
     if np.any(inside < -FREE_EDGE_PX):
         return None  # part of the outline lies outside the blob: not this part, or not here
     share = np.array(

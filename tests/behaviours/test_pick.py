@@ -147,3 +147,54 @@ def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(cl
     np.testing.assert_allclose(grasp.position_m, [0.5, 0.1, BAR_GRASP_HEIGHT_M], atol=1e-6)
     # The closing axis (the gripper's yaw) lies along the bar's y axis, across its 40 mm side.
     assert fold_yaw(grasp.yaw_rad - (yaw + math.pi / 2), math.pi) == pytest.approx(0.0, abs=1e-4)
+
+
+# -- the close of a part held off its centre (issue 36) --------------------------------------------
+
+
+def _recorded_closes(clock, object_type, object_width_m: float) -> list[tuple[float, float | None]]:
+    """Pick a part and return each close command's (opening when sent, speed)."""
+    from bt_arrange.geometry import Pose
+
+    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=object_width_m)
+    write({"/red/pose": Pose.from_planar(0.5, 0.1, math.radians(17.0), object_type.shape.height_m / 2)})
+    gripper = fake_gripper(context)
+    closes: list[tuple[float, float | None]] = []
+    close = gripper.close
+
+    def recording_close(force_n: float, speed_m_s: float | None = None) -> None:
+        closes.append((gripper.width(), speed_m_s))
+        close(force_n, speed_m_s)
+
+    gripper.close = recording_close  # type: ignore[method-assign]
+    run = tick_until_done(set_up(Pick("pick red", "red", object_type=object_type), context), context)
+    assert run.status == Status.SUCCESS, run.feedback
+    return closes
+
+
+def test_an_off_centre_grasp_crosses_the_stroke_fast_and_meets_the_part_at_the_slow_speed(clock) -> None:
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.shapes import Prism
+
+    fragment = ObjectType(
+        "fragment",
+        shape=Prism.from_outline([[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.005, 0.04]], 0.02),
+    )
+    grasp = preferred_grasp(fragment.shape, ROBOTIQ_2F85)
+    assert grasp.centre_m != (0.0, 0.0), "held off its centre"
+    closes = _recorded_closes(clock, fragment, grasp.width_m)
+    slow_from_m = grasp.width_m + 2 * SETTINGS.slow_close_clearance_per_side_m
+    # Sent from the full opening at the fingers' speed, slowed once the pads stand the clearance off
+    # the grasped side (the fake's fingers move 1 mm or so a control period), before they meet it.
+    assert closes[0] == (pytest.approx(SETTINGS.open_width_m), SETTINGS.finger_speed_m_s)
+    assert closes[1][1] == SETTINGS.squaring_finger_speed_m_s
+    assert grasp.width_m + 0.004 < closes[1][0] <= slow_from_m
+    assert len(closes) == 2
+
+
+def test_a_cubes_centred_grasp_closes_once_at_the_fingers_speed(clock) -> None:
+    from bt_arrange.objects import CUBE
+
+    assert _recorded_closes(clock, CUBE, CUBE_EDGE_M) == [
+        (pytest.approx(SETTINGS.open_width_m), SETTINGS.finger_speed_m_s)
+    ]
