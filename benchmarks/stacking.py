@@ -37,6 +37,7 @@ import numpy as np
 
 from bt_arrange import examples, treefile
 from bt_arrange.runner import Transition
+from bt_arrange.trees import Arrangement
 
 PLANS = ("tower", "pyramid", "pallet")
 #: The issue's targets.
@@ -57,6 +58,11 @@ def _run_class(backend: str) -> Any:
     return SimulatedRun
 
 
+def centre_m(target: Any) -> np.ndarray:
+    """Where the part's centre lies at its target (m, world)."""
+    return np.array([target.x_m, target.y_m, target.z_m + target.object_type.shape.height_m / 2])
+
+
 class BelowWatch:
     """Ground truth (evaluation only) of the parts placed before each raised part, as it is placed and corrected."""
 
@@ -73,14 +79,16 @@ class BelowWatch:
         """The true positions of the world's parts that lie at the targets done so far.
 
         Identical parts are told apart by where they lie, not by name: the tree's ``red 1`` may have
-        picked the world's ``red 3``.
+        picked the world's ``red 3``. Where is a 3-D centre (a tower's parts share x and y), and each
+        world part answers one target.
         """
         cell = self.run.cell
         world = {name: np.array(cell.part_pose_truth(name).position_m) for name in cell.parts}
-        out = {}
+        out: dict[str, np.ndarray] = {}
         for obj in self.done:
-            target = self.targets[obj]
-            name = min(world, key=lambda n: math.hypot(world[n][0] - target.x_m, world[n][1] - target.y_m))
+            centre = centre_m(self.targets[obj])
+            free = [n for n in world if n not in out]
+            name = min(free, key=lambda n: float(np.linalg.norm(world[n] - centre)))
             out[name] = world[name]
         return out
 
@@ -128,7 +136,7 @@ class Displace:
             if transition.behaviour == f"place {obj}" and transition.new == "SUCCESS" and obj not in self.done:
                 self.done.add(obj)
                 cell = self.run.cell
-                centre = np.array([target.x_m, target.y_m, target.z_m + target.object_type.shape.height_m / 2])
+                centre = centre_m(target)
                 name = min(cell.parts, key=lambda n: float(np.linalg.norm(cell.part_pose_truth(n).position_m - centre)))
                 angle = float(self.rng.uniform(-math.pi, math.pi))
                 cell.displace_part(name, self.mm / 1000 * math.cos(angle), self.mm / 1000 * math.sin(angle))
@@ -156,6 +164,7 @@ def run_once(
     assert path is not None, plan
     module = treefile.load(path)
     root, scene = treefile.build_root(module), treefile.scene(module, seed)
+    assert isinstance(root, Arrangement), plan
     record_dir = None
     if record is not None:
         record_dir = record / f"{plan}_s{seed}{'_' + inject if inject else ''}_{backend}"
