@@ -27,6 +27,7 @@ run's images (``DIR/PLAN_sSEED[_inject]/``: before picking, after placing each p
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import time
@@ -37,6 +38,7 @@ import numpy as np
 
 from bt_arrange import examples, treefile
 from bt_arrange.runner import Transition
+from bt_arrange.trees import Arrangement
 
 PLANS = ("tower", "pyramid", "pallet")
 #: The issue's targets.
@@ -45,6 +47,8 @@ THRESHOLD_MM, YAW_THRESHOLD_DEG, MOVED_BELOW_LIMIT_MM = 1.0, 1.0, 0.1
 FALLEN_MM = 5.0
 #: A part whose top face tilts more than this (deg) is tipped.
 TIPPED_DEG = 2.0
+#: A bumped part stays this far (mm) from its layer's other targets (``Displace``).
+BUMP_CLEARANCE_MM = 0.5
 
 
 def _run_class(backend: str) -> Any:
@@ -55,6 +59,11 @@ def _run_class(backend: str) -> Any:
     from bt_arrange_sim.pybullet.runs import SimulatedRun
 
     return SimulatedRun
+
+
+def centre_m(target: Any) -> np.ndarray:
+    """Where the part's centre lies at its target (m, world)."""
+    return np.array([target.x_m, target.y_m, target.z_m + target.object_type.shape.height_m / 2])
 
 
 class BelowWatch:
@@ -73,14 +82,16 @@ class BelowWatch:
         """The true positions of the world's parts that lie at the targets done so far.
 
         Identical parts are told apart by where they lie, not by name: the tree's ``red 1`` may have
-        picked the world's ``red 3``.
+        picked the world's ``red 3``. Where is a 3-D centre (a tower's parts share x and y), and each
+        world part answers one target.
         """
         cell = self.run.cell
         world = {name: np.array(cell.part_pose_truth(name).position_m) for name in cell.parts}
-        out = {}
+        out: dict[str, np.ndarray] = {}
         for obj in self.done:
-            target = self.targets[obj]
-            name = min(world, key=lambda n: math.hypot(world[n][0] - target.x_m, world[n][1] - target.y_m))
+            centre = centre_m(self.targets[obj])
+            free = [n for n in world if n not in out]
+            name = min(free, key=lambda n: float(np.linalg.norm(world[n] - centre)))
             out[name] = world[name]
         return out
 
@@ -112,15 +123,38 @@ class Displace:
     """Error injection (a bump, as ``cell.displace_part`` makes one): each raised part moved ``mm`` once placed.
 
     Right after ``place <obj>`` succeeds the world's part at that target is shifted ``mm`` along its
-    support in a direction drawn from ``seed``, so the inspection after placing finds it off and the
+    support in a direction drawn from ``seed`` (one that keeps it clear of its layer's neighbours), so the inspection after placing finds it off and the
     correction of a raised part (a gentle push, or a regrasp beyond ``REGRASP_OFFSET_MM``) has work.
     """
 
     def __init__(self, run: Any, targets: list[Any], mm: float, seed: int) -> None:
         self.run, self.mm = run, mm
+        self.plan = list(targets)
         self.targets = {t.obj: t for t in targets if t.z_m > 0}
         self.rng = np.random.default_rng(seed)
         self.done: set[str] = set()
+
+    def direction_rad(self, target: Any) -> float:
+        """A direction drawn around the circle in which the shifted part keeps clear of its layer's other targets.
+
+        A bump cannot push a part into a neighbour 2 mm away (a shift by error injection would put the
+        two inside each other); the draw is repeated until the shifted footprint stays
+        ``BUMP_CLEARANCE_MM`` from every other target of its height.
+        """
+        from bt_arrange.footprints import overlap
+        from bt_arrange.settings import ManipulationSettings
+        from bt_arrange.stacking import footprint_of
+        from bt_arrange.trees.layers import same_layer
+
+        settings = ManipulationSettings()
+        others = [footprint_of(t, settings) for t in self.plan if t.obj != target.obj and same_layer(t, target)]
+        for _ in range(100):
+            angle = float(self.rng.uniform(-math.pi, math.pi))
+            dx_m, dy_m = self.mm / 1000 * math.cos(angle), self.mm / 1000 * math.sin(angle)
+            shifted = footprint_of(dataclasses.replace(target, x_m=target.x_m + dx_m, y_m=target.y_m + dy_m), settings)
+            if not any(overlap(shifted, other, BUMP_CLEARANCE_MM / 1000) for other in others):
+                return angle
+        raise SystemExit(f"--displace-mm {self.mm:g}: no direction keeps {target.obj} clear of its neighbours")
 
     def __call__(self, transition: Transition) -> None:
         """Shift the part once its first placing ends."""
@@ -128,9 +162,9 @@ class Displace:
             if transition.behaviour == f"place {obj}" and transition.new == "SUCCESS" and obj not in self.done:
                 self.done.add(obj)
                 cell = self.run.cell
-                centre = np.array([target.x_m, target.y_m, target.z_m + target.object_type.shape.height_m / 2])
+                centre = centre_m(target)
                 name = min(cell.parts, key=lambda n: float(np.linalg.norm(cell.part_pose_truth(n).position_m - centre)))
-                angle = float(self.rng.uniform(-math.pi, math.pi))
+                angle = self.direction_rad(target)
                 cell.displace_part(name, self.mm / 1000 * math.cos(angle), self.mm / 1000 * math.sin(angle))
 
 
@@ -156,6 +190,7 @@ def run_once(
     assert path is not None, plan
     module = treefile.load(path)
     root, scene = treefile.build_root(module), treefile.scene(module, seed)
+    assert isinstance(root, Arrangement), plan
     record_dir = None
     if record is not None:
         record_dir = record / f"{plan}_s{seed}{'_' + inject if inject else ''}_{backend}"
@@ -222,7 +257,7 @@ def table(lines: list[dict]) -> str:
         finals = [v for r in runs for v in r["final_offset_truth_mm"].values()]
         yaws = [abs(v) for r in runs for v in r["final_yaw_error_truth_deg"].values()]
         raised = [n for n in runs[0]["height_error_truth_mm"] if n in runs[0]["moved_below_placing_truth_mm"]]
-        placed = [r["placed_offset_mm"][n] for r in runs for n in raised]
+        placed = [v for r in runs for n in raised if (v := r["placed_offset_mm"][n]) is not None]
         pushes = sum(r["pushes"][n] for r in runs for n in raised)
         rows.append(
             f"| {plan} | {backend} | {inject} | {bump:g} | {len(runs)} | {sum(r['within'] for r in runs)} of "

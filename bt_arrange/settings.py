@@ -39,6 +39,11 @@ class ManipulationSettings:
     approach_clearance_m: float = 0.05
     #: The held part is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
+    #: Layers (issue 33): a part released on others is let go at least this far above its support. A
+    #: held part sinks along the pads in the carry (about 0.4 mm in MuJoCo's soft pads), so at 0.5 mm it
+    #: could be let go already standing on its support, and the opening pads dragged it and its
+    #: support with it by friction; at 2 mm the drop moved the support 0.2 mm (docs/stacking.md).
+    raised_release_clearance_m: float = 0.001
     grip_force_n: float = 40.0
     #: The arm's payload (the UR5's 5 kg): the gripper and the part it carries together.
     arm_payload_kg: float = 5.0
@@ -138,6 +143,10 @@ class ManipulationSettings:
     #: far (m) from the grasped side on each side: the pads meet the part as slowly as before, without
     #: crossing the rest of the stroke slowly (85 mm to a 50 mm side took 0.7 s; issue 36).
     slow_close_clearance_per_side_m: float = 0.003
+    #: Layers (issue 33): the finger speed of a release on others (the datasheet's slowest). Two pads
+    #: never leave a part at the same instant: the later one drags it, and a part standing on others
+    #: drags its support with it by friction.
+    raised_release_finger_speed_m_s: float = 0.02
     #: A first close wider than the grasped side by more than this (m) left the part a little turned
     #: in the pads (a 5 cm cube about 1.1 degrees): Pick opens just clear of it and closes again slowly.
     square_grip_tolerance_m: float = 0.001
@@ -159,6 +168,7 @@ class ManipulationSettings:
         for name, speed in (
             ("finger speed", self.finger_speed_m_s),
             ("squaring finger speed", self.squaring_finger_speed_m_s),
+            ("raised release finger speed", self.raised_release_finger_speed_m_s),
         ):
             if not low_speed <= speed <= high_speed:
                 raise OutOfRangeError(
@@ -172,6 +182,7 @@ class ManipulationSettings:
         for name, value in (
             ("hand-on distance", self.hand_on_remaining_m),
             ("release clearance per side", self.release_clearance_per_side_m),
+            ("raised release clearance", self.raised_release_clearance_m),
         ):
             if not value >= 0.0:
                 raise OutOfRangeError(f"{name} {value * 1000:g} mm must not be negative")

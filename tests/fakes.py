@@ -141,6 +141,8 @@ class GripperCommand:
     time_s: float
     kind: str
     value: float
+    #: The finger speed asked for (None: the gripper's own).
+    speed_m_s: float | None = None
 
 
 class FakeGripper:
@@ -181,7 +183,7 @@ class FakeGripper:
         """Move to ``width_m`` (at the fake's own speed: ``speed_m_s`` is recorded, not modelled)."""
         if not 0.0 <= width_m <= GRIPPER_MAX_WIDTH_M:
             raise OutOfRangeError(f"gripper width {width_m * 1000:.1f} mm is outside 0 to 85 mm")
-        self.commands.append(GripperCommand(self._clock.now(), "open", width_m))
+        self.commands.append(GripperCommand(self._clock.now(), "open", width_m, speed_m_s))
         self._closing = False
         if self._wedged_m is not None and self._wedged_opens > 0 and width_m > self._wedged_m:
             self._wedged_opens -= 1
@@ -197,7 +199,7 @@ class FakeGripper:
         low, high = GRIPPER_FORCE_RANGE_N
         if not low <= force_n <= high:
             raise OutOfRangeError(f"grip force {force_n:.1f} N is outside {low:.0f} to {high:.0f} N")
-        self.commands.append(GripperCommand(self._clock.now(), "close", force_n))
+        self.commands.append(GripperCommand(self._clock.now(), "close", force_n, speed_m_s))
         self._closing = True
         self._move_to(self._closed_width())
 

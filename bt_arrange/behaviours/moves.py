@@ -246,3 +246,13 @@ def release_opening_m(settings: ManipulationSettings, object_type: ObjectType) -
     """How far a release opens the pads: the held side plus the release clearance each side, within the stroke."""
     held_m = grasp_width_m(settings, object_type)
     return min(settings.open_width_m, held_m + 2.0 * settings.release_clearance_per_side_m)
+
+
+def release_clearance_m(settings: ManipulationSettings, z_m: float) -> float:
+    """How far above its support (m) a part is let go: ``release_clearance_m``, on parts ``raised_release_clearance_m``.
+
+    The larger of the two on parts, so an injected release height (``release_height``) still counts.
+    """
+    if z_m <= 0.0:
+        return settings.release_clearance_m
+    return max(settings.release_clearance_m, settings.raised_release_clearance_m)

@@ -15,6 +15,7 @@ from bt_arrange.behaviours.moves import (
     heights_m,
     line_nearly_done,
     line_to,
+    release_clearance_m,
     release_opening_m,
     to_pose,
     wrist_yaw_rad,
@@ -110,8 +111,8 @@ class Place(StagedBehaviour):
             # At the UR5's joint speeds, whether the grasp holds the part through its centre of mass
             # or off it (an irregular part's): measured, the inertia did not turn a part in the pads.
             MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=True)),
-            MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + s.release_clearance_m, yaw)),
-            self._release_stage(opening_m, free=self.release is None),
+            MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + release_clearance_m(s, self.z_m), yaw)),
+            self._release_stage(opening_m, free=self.release is None, raised=self.z_m > 0.0),
             MoveStage(
                 stage.RETREAT,
                 line_to(x, y, approach_m, yaw, free=True),
@@ -120,21 +121,26 @@ class Place(StagedBehaviour):
         ]
 
     @staticmethod
-    def _release_stage(opening_m: float, free: bool) -> GripperStage:
+    def _release_stage(opening_m: float, free: bool, raised: bool = False) -> GripperStage:
         """Open the pads to ``opening_m``; a part that holds them short (wedged) is let go by opening all the way.
 
         A free part only: among neighbours (``free`` False) the pads open no further than the layout
         allows, and a pad may stop on a neighbour's side rather than on the part; the opening is not checked.
+        On others (``raised``) the pads open at ``raised_release_finger_speed_m_s``.
         """
         wanted = {"m": opening_m}
 
+        def speed_m_s(context: Context) -> float:
+            s = context.settings
+            return s.raised_release_finger_speed_m_s if raised else s.finger_speed_m_s
+
         def open_fully(context: Context) -> None:
             wanted["m"] = context.settings.open_width_m
-            context.robot.gripper.open(wanted["m"], speed_m_s=context.settings.finger_speed_m_s)
+            context.robot.gripper.open(wanted["m"], speed_m_s=speed_m_s(context))
 
         return GripperStage(
             stage.RELEASE_PART,
-            lambda c: c.robot.gripper.open(opening_m, speed_m_s=c.settings.finger_speed_m_s),
+            lambda c: c.robot.gripper.open(opening_m, speed_m_s=speed_m_s(c)),
             opens_to_m=(lambda c: wanted["m"]) if free else None,
             on_stall=open_fully if free else None,
         )

@@ -2,6 +2,7 @@
 
 A row is a name (``ROWS``; its position seeds the row's trials), a label for the tables and
 figures, the injectors it attaches and, for Table 1's rows, the paper's simulated figures.
+``RAISED_ROWS`` place the trial's cube on top of another (issue 33, arrangements in layers).
 """
 
 from __future__ import annotations
@@ -20,7 +21,13 @@ ROWS = (
     "release",
     "tilt",
     "all",
+    "raised",
+    "raised-translation",
 )
+
+#: Rows whose target stands on another part: a support cube ("green") at the trial's target, turned,
+#: and the trial's cube ("red") on it; the figures are the raised cube's (``trial.raised_plan``).
+RAISED_ROWS = ("raised", "raised-translation")
 
 
 #: The default rows: the paper's Table 1.
@@ -43,6 +50,8 @@ ROW_LABELS = {
     "release": "Release error, height (Fig. 2g)",
     "tilt": "Tilting error (Fig. 2h)",
     "all": "All errors at once (Fig. 2a-h)",
+    "raised": "Raised target: system accuracy (on another cube)",
+    "raised-translation": "Raised target: translation error (on another cube)",
 }
 
 
@@ -69,6 +78,9 @@ ROW_INJECTORS: dict[str, tuple[str, ...]] = {
         "release_height",
         "release_tilt",
     ),
+    # On the raised cube only: the support is placed without injected errors.
+    "raised": (),
+    "raised-translation": ("pick_translation",),
 }
 
 

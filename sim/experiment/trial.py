@@ -18,8 +18,9 @@ from bt_arrange.files import WriteFault
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.experiment.engines import trial_engine
 from bt_arrange_sim.experiment.options import TrialSpec, parse_object
+from bt_arrange_sim.experiment.raised import SupportWatch, raised_plan
 from bt_arrange_sim.experiment.recording import record_keys
-from bt_arrange_sim.experiment.rows import ROWS, row_injectors
+from bt_arrange_sim.experiment.rows import RAISED_ROWS, ROWS, row_injectors
 from bt_arrange_sim.realcell import parse_cell
 
 #: Targets of the trials: inside the camera's view and the arm's comfortable reach.
@@ -54,11 +55,13 @@ def _run_trial(spec: TrialSpec) -> dict:
         float(rng.uniform(-math.pi / 4, math.pi / 4)),
         object_type=kind,
     )
-    starts = scatter(["red"], int(rng.integers(2**31)), avoid=[target], object_types=[kind])
+    plan = raised_plan(target, rng) if spec.row in RAISED_ROWS else [target]
+    starts = scatter([t.colour for t in plan], int(rng.integers(2**31)), avoid=plan, object_types=[kind] * len(plan))
     if spec.row == "grasp-estimator":
         root = _depth_grasp_tree(target, spec.threshold_mm, int(rng.integers(2**31)), spec.strategy)
     else:
-        root = arrangement([target], threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
+        root = arrangement(plan, threshold_mm=spec.threshold_mm, max_pushes=10, strategy=spec.strategy)
+        target = plan[-1]
     injectors = row_injectors(spec.row)
     injection_seed = int(rng.integers(2**31))
     calibration = None
@@ -76,12 +79,13 @@ def _run_trial(spec: TrialSpec) -> dict:
             from bt_arrange_sim.injection import attach_all
 
             attach_all(run, "red", injectors, injection_seed)
+        below = SupportWatch(run, *plan) if len(plan) > 1 else None
         try:
             report = run.run()
         except RecordError as error:  # the trial's MCAP only (a trial records nothing else): its measurement stands
             report = error.result
             mcap_fault = error.faults[0] if error.faults else WriteFault(Path(str(spec.mcap)), str(error))
-    (outcome,) = report.objects
+    outcome = next(o for o in report.objects if o.name == target.obj)
     bad_grasps = [t.feedback for t in report.transitions if t.kind == "Pick" and t.new == "FAILURE"]
     # Pick states what its grip was as facts (``Pick.facts``), not only in its feedback text.
     squarings = [t for t in report.transitions if t.kind == "Pick" and t.new == "SUCCESS" and t.facts.get("squared")]
@@ -104,6 +108,7 @@ def _run_trial(spec: TrialSpec) -> dict:
         "status": outcome.status,
         "reason": outcome.reason,
         "injected": {injector.name: injector.record() for injector in injectors},
+        **(below.fields(report) if below is not None else {}),
         "sim_seconds": round(report.sim_seconds, 3),
         "wall_seconds": round(time.perf_counter() - wall_start, 3),
         **(record_keys(Path(spec.mcap), mcap_fault) if spec.mcap is not None else {}),

@@ -36,6 +36,7 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
     assert [(c.kind, c.value) for c in gripper.commands] == [("open", pytest.approx(opening_m))]
     release = arm.tcp_pose_at(command_at(arm.commands, gripper.commands[0].time_s).positions_rad)
     expected_z_m = CUBE_GRASP_HEIGHT_M + SETTINGS.release_clearance_m
+    assert gripper.commands[0].speed_m_s == SETTINGS.finger_speed_m_s, "on the table: the usual release"
     np.testing.assert_allclose(release.position_m, [0.45, -0.1, expected_z_m], atol=1e-6)
     assert fold_yaw(release.yaw_rad - target.yaw_rad) == pytest.approx(0.0, abs=1e-4)
     np.testing.assert_allclose(arm.tcp_pose().position_m, [0.45, -0.1, SETTINGS.approach_height_m], atol=1e-6)
