@@ -267,6 +267,8 @@ class Arrangement(py_trees.composites.Sequence):
         #: A plan's scene, for the simulator: the seed its parts are scattered from, or where they start (None: so).
         self.scene_seed = scene_seed
         self.starts = starts
+        #: The plan's puzzles (``bt_arrange.puzzle.PuzzleSpec``): their pieces join ``targets`` once solved.
+        self.puzzles: list[Any] = []
 
 
 def arrangement(
@@ -283,6 +285,7 @@ def arrangement(
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     colours: ColourTable | Mapping[str, object] | None = None,
     settings: ManipulationSettings | None = None,
+    puzzles: Sequence[Any] = (),
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -303,7 +306,27 @@ def arrangement(
     user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
     ``settings`` (default ``ManipulationSettings()``) are the handling settings the plan is checked
     and built with; the tree keeps them (``Arrangement.settings``) and a run hands them to the context.
+    ``puzzles`` (``bt_arrange.puzzle.PuzzleSpec``s) are slabs reassembled after the targets, each from
+    the camera alone (``bt_arrange.trees.puzzle``); with puzzles, ``targets`` may be empty.
     """
+    if puzzles:
+        return _with_puzzles(
+            list(targets),
+            list(puzzles),
+            dict(
+                threshold_mm=threshold_mm,
+                max_pushes=max_pushes,
+                max_regrasps=max_regrasps,
+                keep_going=keep_going,
+                strategy=strategy,
+                yaw_threshold_deg=yaw_threshold_deg,
+                colours=colours,
+                settings=settings,
+            ),
+            correct=correct,
+            locate=locate,
+            order=order,
+        )
     settings = settings or ManipulationSettings()
     check_strategy(strategy)
     if correct not in CORRECT_MODES:
@@ -351,9 +374,7 @@ def arrangement(
                     restage_releases(steps_by_obj[name].part, placed, pads),
                 )
                 for name in step.neighbours
-            ] + [
-                (part, *_sides_in_layer(part, steps[:index], by_obj, pads)) for part in below
-            ]
+            ] + [(part, *_sides_in_layer(part, steps[:index], by_obj, pads)) for part in below]
             subtree = arrange_one(
                 target,
                 threshold_mm,
@@ -444,3 +465,34 @@ def arrangement(
         colours=table,
         settings=settings,
     )
+
+
+def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, Any], **plan_only: Any) -> Arrangement:
+    """The targets' arrangement (if any), then each puzzle's subtree; the root knows the puzzles."""
+    from bt_arrange.trees.puzzle import arrange_puzzle
+
+    if plan_only["correct"] != "each":
+        raise PlanError(f"correct={plan_only['correct']!r}: a plan with a [puzzle] is corrected part by part (each)")
+    if targets:
+        root = arrangement(targets, **options, **plan_only)
+        steps = list(root.children[:-1])
+        for child in steps:
+            root.remove_child(child)
+    else:
+        root = arrangement([Target("red", 0.5, 0.0)], **options)  # the options checked, its steps dropped
+        steps = []
+        root.targets = []
+    keep_going = options["keep_going"]
+    for spec in puzzles:
+        subtree = arrange_puzzle(spec, {**options, "keep_going": keep_going})
+        steps.append(
+            py_trees.decorators.FailureIsSuccess(name=f"then the next ({spec.name})", child=subtree)
+            if keep_going
+            else subtree
+        )
+    park = root.children[-1]
+    root.remove_child(park)
+    for child in [*steps, park]:
+        root.add_child(child)
+    root.puzzles = list(puzzles)
+    return root

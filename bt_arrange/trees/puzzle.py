@@ -1,0 +1,101 @@
+"""The subtree of a puzzle (issue 32): survey the pieces, solve the puzzle, arrange what the solve found.
+
+Its shape::
+
+    ArrangePuzzle "reassemble slab"
+    ├── SurveyPieces "survey slab"        camera -> /slab/pieces (outlines nobody gave)
+    ├── SolvePuzzle "solve slab"          /slab/pieces -> /slab/solved (targets from the outlines alone)
+    └── ArrangeSolved "arrange slab"      built once solved: Algorithm 1 per piece, as a fresco's
+
+``ArrangeSolved`` builds its children when it first runs, from ``/slab/solved``, with the very
+builder of a plan's arrangement (``bt_arrange.trees.arrangement``): the layout among neighbours,
+the staged releases, the corrections and the looks again are a fresco's. The solved targets join
+the root ``Arrangement``'s plan then, so the report, the live view and the records name every piece.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import py_trees
+from py_trees.common import Status
+
+from bt_arrange.behaviours import keys
+from bt_arrange.behaviours.puzzle import SOLVED, SolvePuzzle, SurveyPieces
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.puzzle.spec import PuzzleSpec
+
+
+class ArrangeSolved(py_trees.composites.Sequence):
+    """Arrange the pieces where the solve put them: its children are built from ``/<puzzle>/solved`` when it first runs.
+
+    ``options`` are the keyword arguments of ``bt_arrange.trees.arrangement`` the puzzle's plan was
+    built with (thresholds, pushes, strategy, colours, settings). A solved plan the arrangement
+    refuses (two pieces' targets too close, one out of reach) is a FAILURE saying so.
+    """
+
+    def __init__(self, name: str, spec: PuzzleSpec, options: dict[str, Any]) -> None:
+        super().__init__(name=name, memory=True, children=[])
+        self.spec = spec
+        self.obj = spec.name
+        self.options = dict(options)
+        self._setup_kwargs: dict[str, Any] = {}
+        self.blackboard = self.attach_blackboard_client(name=name)
+        self.blackboard.register_key(keys.key(spec.name, SOLVED), access=py_trees.common.Access.READ)
+
+    def setup(self, **kwargs: Any) -> None:
+        """Keep what the tree's setup hands out (the context): the children built later receive it too."""
+        self._setup_kwargs = dict(kwargs)
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Build the children on the first tick, then tick them as a sequence with memory."""
+        if self.status != Status.RUNNING and not self.children:
+            problem = self._build()
+            if problem is not None:
+                self.feedback_message = problem
+                self.stop(Status.FAILURE)
+                yield self
+                return
+        yield from super().tick()
+
+    def _build(self) -> str | None:
+        from bt_arrange.trees.arrangement import Arrangement, arrangement
+
+        solved_key = keys.key(self.spec.name, SOLVED)
+        if not self.blackboard.exists(solved_key):
+            return f"{self.spec.name}: not solved (no {solved_key})"
+        targets = list(self.blackboard.get(solved_key))
+        try:
+            built = arrangement(targets, **self.options)
+        except BtArrangeError as error:
+            return f"{self.spec.name}: the solved places cannot be arranged: {error}"
+        steps = list(built.children[:-1])  # without its "park the arm": the root parks once, at the end
+        for child in steps:
+            built.remove_child(child)
+            self.add_child(child)
+            for node in child.iterate():
+                node.setup(**self._setup_kwargs)
+        root = self
+        while root.parent is not None:
+            root = root.parent  # type: ignore[assignment]
+        if isinstance(root, Arrangement):
+            known = {t.obj for t in root.targets}
+            root.targets.extend(t for t in targets if t.obj not in known)
+        return None
+
+
+def arrange_puzzle(spec: PuzzleSpec, options: dict[str, Any]) -> py_trees.behaviour.Behaviour:
+    """The subtree that reassembles ``spec``'s slab: survey, solve, then arrange the solved pieces (``options``)."""
+    return py_trees.composites.Sequence(
+        name=f"reassemble {spec.name}",
+        memory=True,
+        children=[
+            SurveyPieces(f"survey {spec.name}", spec),
+            SolvePuzzle(f"solve {spec.name}", spec),
+            ArrangeSolved(f"arrange {spec.name}", spec, options),
+        ],
+    )
+
+
+__all__ = ["ArrangeSolved", "arrange_puzzle"]
