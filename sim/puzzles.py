@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from bt_arrange.errors import PlanError
-from bt_arrange.objects import ObjectStart, ObjectType
+from bt_arrange.objects import ObjectStart, ObjectType, PartOnTable
 from bt_arrange.shapes.fracture import fracture
 
 #: The break's seed is the run's seed mixed with this, so that a puzzle's break and its scatter differ.
@@ -43,7 +43,6 @@ def puzzle_scene(
 
     The pieces are scattered clear of the targets, of every whole slab's place and of each other.
     """
-    from bt_arrange.trees import Target
     from bt_arrange_sim.scenes import scatter
 
     colours, kinds, names, homes = [], [], [], []
@@ -63,9 +62,7 @@ def puzzle_scene(
             kinds.append(ObjectType(fragment_name(spec.name, piece.index), shape=piece.prism))
             names.append(fragment_name(spec.name, piece.index))
             homes.append((spec.name, (piece.x_m, piece.y_m, piece.yaw_rad)))
-    wholes = [
-        Target(s.colour, s.x_m, s.y_m, s.yaw_rad, name=f"{s.name} (whole)", object_type=s.whole_type) for s in puzzles
-    ]
+    wholes = [spot for spec in puzzles for spot in _whole_spots(spec)]
     if starts is not None:
         own = list(starts)
         avoid = [*targets, *wholes, *own]
@@ -90,19 +87,22 @@ def puzzle_scene(
     return [*own, *pieces_out]
 
 
+def _whole_spots(spec: Any, spacing_m: float = 0.04) -> list[PartOnTable]:
+    """Points over a whole slab's place, each kept clear as a cube would be: no piece starts on the slab's place."""
+    length, width, _ = spec.size_m
+    along = max(2, math.ceil(length / spacing_m) + 1)
+    across = max(2, math.ceil(width / spacing_m) + 1)
+    spots = []
+    for i in range(along):
+        for j in range(across):
+            x, y = spec.to_table(-length / 2 + length * i / (along - 1), -width / 2 + width * j / (across - 1))
+            spots.append(PartOnTable(spec.colour, x, y))
+    return spots
+
+
 def homes_of(starts: Sequence[Any]) -> dict[str, tuple[str, tuple[float, float, float]]]:
     """Each piece's puzzle and home by its world name, from a scene's starts (empty without puzzles)."""
     return {s.name: (s.puzzle, s.home) for s in starts if isinstance(s, PieceStart)}
 
 
-def half_turned(
-    home: tuple[float, float, float], centre: tuple[float, float], turn_rad: float
-) -> tuple[float, float, float]:
-    """A home turned by ``turn_rad`` about the whole's centre: where it belongs in the slab turned so."""
-    c, s = math.cos(turn_rad), math.sin(turn_rad)
-    dx, dy = home[0] - centre[0], home[1] - centre[1]
-    yaw = home[2] + turn_rad
-    return centre[0] + c * dx - s * dy, centre[1] + s * dx + c * dy, math.atan2(math.sin(yaw), math.cos(yaw))
-
-
-__all__ = ["PieceStart", "fragment_name", "half_turned", "homes_of", "puzzle_scene"]
+__all__ = ["PieceStart", "fragment_name", "homes_of", "puzzle_scene"]

@@ -23,8 +23,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from bt_arrange.objects import ObjectType
-
 #: A puzzle has this many pieces at least and at most.
 MIN_PUZZLE_PIECES, MAX_PUZZLE_PIECES = 2, 16
 #: The keys of a ``[puzzle.NAME]`` table.
@@ -53,11 +51,6 @@ class PuzzleSpec:
     def height_m(self) -> float:
         """The slab's (and every piece's) height."""
         return self.size_m[2]
-
-    @property
-    def whole_type(self) -> ObjectType:
-        """The whole slab as a box: what the scene keeps clear of, and the camera's view must hold."""
-        return ObjectType(f"{self.name} (whole)", self.size_m)
 
     def to_table(self, x_m: float, y_m: float) -> tuple[float, float]:
         """A point of the slab's frame (centred on the origin, length along x) on the table."""
