@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from bt_arrange.errors import PlanError
-from bt_arrange.objects import ObjectStart, ObjectType, PartOnTable
+from bt_arrange.objects import ObjectStart, ObjectType
 from bt_arrange.shapes.fracture import fracture
 
 #: The break's seed is the run's seed mixed with this, so that a puzzle's break and its scatter differ.
@@ -62,42 +62,98 @@ def puzzle_scene(
             kinds.append(ObjectType(fragment_name(spec.name, piece.index), shape=piece.prism))
             names.append(fragment_name(spec.name, piece.index))
             homes.append((spec.name, (piece.x_m, piece.y_m, piece.yaw_rad)))
-    wholes = [spot for spec in puzzles for spot in _whole_spots(spec)]
     if starts is not None:
         own = list(starts)
-        avoid = [*targets, *wholes, *own]
+        avoid = [*targets, *own]
     else:
         own = (
             scatter(
                 [t.colour for t in targets],
                 seed,
-                avoid=[*targets, *wholes],
+                avoid=targets,
                 object_types=[t.object_type for t in targets],
                 names=[t.name for t in targets],
             )
             if targets
             else []
         )
-        avoid = [*targets, *wholes, *own]
-    scattered = scatter(colours, seed + 1, avoid=avoid, object_types=kinds, names=names)
+        avoid = [*targets, *own]
+    spots = _free_spots(kinds, avoid, puzzles, seed)
     pieces_out = [
-        PieceStart(s.colour, s.x_m, s.y_m, s.yaw_rad, s.name, s.object_type, home=home, puzzle=puzzle)
-        for s, (puzzle, home) in zip(scattered, homes, strict=True)
+        PieceStart(colour, x, y, yaw, name, kind, home=home, puzzle=puzzle)
+        for colour, kind, name, (puzzle, home), (x, y, yaw) in zip(colours, kinds, names, homes, spots, strict=True)
     ]
     return [*own, *pieces_out]
 
 
-def _whole_spots(spec: Any, spacing_m: float = 0.04) -> list[PartOnTable]:
-    """Points over a whole slab's place, each kept clear as a cube would be: no piece starts on the slab's place."""
-    length, width, _ = spec.size_m
-    along = max(2, math.ceil(length / spacing_m) + 1)
-    across = max(2, math.ceil(width / spacing_m) + 1)
-    spots = []
-    for i in range(along):
-        for j in range(across):
-            x, y = spec.to_table(-length / 2 + length * i / (along - 1), -width / 2 + width * j / (across - 1))
-            spots.append(PartOnTable(spec.colour, x, y))
-    return spots
+def _free_spots(
+    kinds: Sequence[ObjectType], avoid: Sequence[Any], puzzles: Sequence[Any], seed: int
+) -> list[tuple[float, float, float]]:
+    """A start per piece, drawn from ``seed``, each turned at random.
+
+    The starts are sites of a hexagonal grid over the scatter's table at the spacing the pads need
+    between the largest two pieces, clear of ``avoid`` (as ``scenes.scatter`` keeps them), of every
+    whole slab's place (as the plan check keeps a start from a target's footprint) and in the
+    camera's view. Random sequential placement fills about half the room a grid does.
+    """
+    import numpy as np
+
+    from bt_arrange.layout import Pads, start_clearance_m
+    from bt_arrange.objects import object_type_of
+    from bt_arrange.settings import ManipulationSettings
+    from bt_arrange_sim.config import CameraConfig
+    from bt_arrange_sim.scenes import MAX_RADIUS_M, X_RANGE_M, Y_RANGE_M, clearance_m
+
+    if not kinds:
+        return []
+    view = CameraConfig().view()
+    largest = max(kinds, key=lambda k: k.shape.sweep_radius_m)
+    spacing = clearance_m(largest, largest)
+    rng = np.random.default_rng([seed, BREAK_SALT])
+    # The grid's offset is drawn too, so that seeds differ in more than the order of the sites.
+    x0, y0 = rng.uniform(0.0, spacing, size=2)
+    sites = []
+    row = 0
+    y = Y_RANGE_M[0] + y0 * math.sqrt(3) / 2
+    while y <= Y_RANGE_M[1]:
+        x = X_RANGE_M[0] + (x0 + (spacing / 2 if row % 2 else 0.0)) % spacing
+        while x <= X_RANGE_M[1]:
+            sites.append((x, y))
+            x += spacing
+        y += spacing * math.sqrt(3) / 2
+        row += 1
+    order = rng.permutation(len(sites))
+    taken = [(float(a.x_m), float(a.y_m), object_type_of(a)) for a in avoid]
+    pads = Pads.from_settings(ManipulationSettings())
+
+    def off_the_wholes(x: float, y: float, kind: ObjectType) -> bool:
+        need = start_clearance_m(kind.shape.sweep_radius_m, pads)
+        for spec in puzzles:
+            c, s_ = math.cos(spec.yaw_rad), math.sin(spec.yaw_rad)
+            u, v = c * (x - spec.x_m) + s_ * (y - spec.y_m), -s_ * (x - spec.x_m) + c * (y - spec.y_m)
+            outside = math.hypot(max(abs(u) - spec.size_m[0] / 2, 0.0), max(abs(v) - spec.size_m[1] / 2, 0.0))
+            if outside < need:
+                return False
+        return True
+
+    out: list[tuple[float, float, float]] = []
+    for kind in kinds:
+        x_m, y_m = kind.shape.extent_m
+        radius_m = 0.5 * math.hypot(x_m + 2 * view.margin_m, y_m + 2 * view.margin_m) + 0.001
+        for index in order:
+            x, y = sites[index]
+            if (
+                math.hypot(x, y) <= MAX_RADIUS_M
+                and all(math.hypot(x - u, y - v) >= clearance_m(kind, other) for u, v, other in taken)
+                and off_the_wholes(x, y, kind)
+                and view.sees_disc(x, y, radius_m, kind.shape.height_m)
+            ):
+                break
+        else:
+            raise PlanError(f"no room left on the table for {len(kinds)} pieces: ask for fewer or a smaller slab")
+        taken.append((x, y, kind))
+        out.append((x, y, float(rng.uniform(-math.pi, math.pi))))
+    return out
 
 
 def homes_of(starts: Sequence[Any]) -> dict[str, tuple[str, tuple[float, float, float]]]:

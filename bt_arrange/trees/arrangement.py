@@ -473,15 +473,13 @@ def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, 
 
     if plan_only["correct"] != "each":
         raise PlanError(f"correct={plan_only['correct']!r}: a plan with a [puzzle] is corrected part by part (each)")
-    if targets:
-        root = arrangement(targets, **options, **plan_only)
-        steps = list(root.children[:-1])
-        for child in steps:
-            root.remove_child(child)
-    else:
-        root = arrangement([Target("red", 0.5, 0.0)], **options)  # the options checked, its steps dropped
-        steps = []
-        root.targets = []
+    # Without targets, a stand-in's arrangement checks the options; its steps are dropped.
+    root = arrangement(targets or [Target("red", 0.5, 0.0)], **options, **plan_only)
+    steps = list(root.children[:-1])
+    for child in steps:
+        root.remove_child(child)
+    if not targets:
+        steps, root.targets = [], []
     keep_going = options["keep_going"]
     for spec in puzzles:
         subtree = arrange_puzzle(spec, {**options, "keep_going": keep_going})
