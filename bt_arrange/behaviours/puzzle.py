@@ -25,8 +25,12 @@ from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.ports import Port
-from bt_arrange.puzzle.spec import PuzzleSpec
+from bt_arrange.puzzle.spec import PuzzleSpec, puzzle_port_type
 
+#: The port every node of a puzzle takes: the puzzle's whole (its spec), as text.
+PUZZLE_PORT = Port(
+    "puzzle", puzzle_port_type(), description="name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad"
+)
 #: ``/<puzzle>/pieces``: the pieces the camera measured (``MeasuredPiece``s, in the order of their names).
 PIECES = "pieces"
 #: ``/<puzzle>/solved``: each piece's ``Target`` where the solve puts it (its measured outline as its type).
@@ -56,7 +60,32 @@ def _area_centre(outline_m: FloatArray) -> tuple[float, float]:
     return float(cx), float(cy)
 
 
-class SurveyPieces(StagedBehaviour):
+class PuzzleNode(StagedBehaviour):
+    """A behaviour of one puzzle: built from its ``puzzle`` port (XML) or its ``PuzzleSpec``."""
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The puzzle's whole (BehaviorTree.CPP's ``providedPorts``)."""
+        return (PUZZLE_PORT,)
+
+    @classmethod
+    def from_ports(cls, name: str, values: dict[str, object], children: Sequence[object]) -> PuzzleNode:
+        """The node of an XML tree."""
+        spec = values["puzzle"]
+        assert isinstance(spec, PuzzleSpec)
+        return cls(name, spec)
+
+    def __init__(self, name: str, spec: PuzzleSpec) -> None:
+        super().__init__(name)
+        self.spec = spec
+        self.obj = spec.name
+
+    def port_values(self) -> dict[str, object]:
+        """The port's value read back (the XML writer)."""
+        return {"puzzle": self.spec}
+
+
+class SurveyPieces(PuzzleNode):
     """Measure every piece of a puzzle on the table from one photograph; FAILURE says what the camera could not tell.
 
     The count must be the puzzle's: fewer or more pieces (one hidden, two touching, another part of
@@ -66,15 +95,8 @@ class SurveyPieces(StagedBehaviour):
     #: The node's description in the XML ``TreeNodesModel``.
     node_description = "camera -> /<puzzle>/pieces: unknown outlines measured"
 
-    @classmethod
-    def provided_ports(cls) -> tuple[Port, ...]:
-        """None of its own: a puzzle's survey is built by its ``ArrangePuzzle``."""
-        return ()
-
     def __init__(self, name: str, spec: PuzzleSpec) -> None:
-        super().__init__(name)
-        self.spec = spec
-        self.obj = spec.name
+        super().__init__(name, spec)
         self.pieces: tuple[SurveyedPiece, ...] = ()
         self.writes(keys.key(spec.name, PIECES))
 
@@ -113,21 +135,14 @@ class SurveyPieces(StagedBehaviour):
         return f"{len(self.pieces)} pieces of {self.spec.name} measured ({counts} vertices)"
 
 
-class SolvePuzzle(StagedBehaviour):
+class SolvePuzzle(PuzzleNode):
     """Solve the puzzle from the surveyed outlines alone; FAILURE names the pieces when it cannot, or cannot choose."""
 
     #: The node's description in the XML ``TreeNodesModel``.
     node_description = "/<puzzle>/pieces -> /<puzzle>/solved: where each piece goes"
 
-    @classmethod
-    def provided_ports(cls) -> tuple[Port, ...]:
-        """None of its own: a puzzle's solve is built by its ``ArrangePuzzle``."""
-        return ()
-
     def __init__(self, name: str, spec: PuzzleSpec) -> None:
-        super().__init__(name)
-        self.spec = spec
-        self.obj = spec.name
+        super().__init__(name, spec)
         self.solved: tuple[object, ...] = ()
         self.solve_s = math.nan
         self.reads(keys.key(spec.name, PIECES), written_by=f"SurveyPieces of {spec.name}")
@@ -157,4 +172,4 @@ class SolvePuzzle(StagedBehaviour):
         return f"{self.spec.name} solved: {len(self.solved)} pieces placed in the whole in {self.solve_s:.2f} s"
 
 
-__all__ = ["PIECES", "SOLVED", "SOLVE_S", "SolvePuzzle", "SurveyPieces", "SurveyedPiece"]
+__all__ = ["PIECES", "PUZZLE_PORT", "SOLVED", "SOLVE_S", "PuzzleNode", "SolvePuzzle", "SurveyPieces", "SurveyedPiece"]

@@ -66,6 +66,36 @@ class PuzzleSpec:
         return (0.0, math.pi)
 
 
+def _format_spec(spec: PuzzleSpec) -> str:
+    numbers = ",".join(f"{v:.9g}" for v in spec.size_m)
+    pose = ",".join(f"{v:.9g}" for v in (spec.x_m, spec.y_m, spec.yaw_rad))
+    return f"{spec.name};{numbers};{spec.pieces};{spec.gap_m:.9g};{spec.colour};{pose}"
+
+
+def _parse_spec(text: str) -> PuzzleSpec:
+    fields = text.split(";")
+    if len(fields) != 6:
+        raise ValueError("a puzzle is name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad")
+    name, size, pieces, gap, colour, pose = (f.strip() for f in fields)
+    edges = [float(v) for v in size.split(",")]
+    where = [float(v) for v in pose.split(",")]
+    count = int(pieces)
+    if not name or "/" in name or len(edges) != 3 or len(where) != 3 or not colour:
+        raise ValueError("a puzzle is name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad")
+    if not all(math.isfinite(v) and v > 0 for v in [*edges, float(gap)]) or not all(math.isfinite(v) for v in where):
+        raise ValueError("its size and gap must be positive and its pose finite")
+    if not MIN_PUZZLE_PIECES <= count <= MAX_PUZZLE_PIECES:
+        raise ValueError(f"a puzzle has {MIN_PUZZLE_PIECES} to {MAX_PUZZLE_PIECES} pieces")
+    return PuzzleSpec(name, (edges[0], edges[1], edges[2]), count, float(gap), colour, *where)
+
+
+def puzzle_port_type() -> Any:
+    """The XML port type of a puzzle: ``name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad``."""
+    from bt_arrange.ports import PortType
+
+    return PortType("std::string", _parse_spec, _format_spec)
+
+
 def read_puzzles(reader: Any, table: Any, colours: Any, taken: set[str], metres_below_mm: float) -> list[PuzzleSpec]:
     """Each ``[puzzle.NAME]`` of a plan, checked by ``reader`` (``bt_arrange.plans._Reader``), one line per mistake.
 

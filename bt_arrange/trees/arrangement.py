@@ -227,10 +227,15 @@ class Arrangement(py_trees.composites.Sequence):
     ) -> Arrangement:
         """The node of an XML tree: its plan is checked (``validate_targets``) against its colours first."""
         colours: ColourTable = values["colours"]
+        from bt_arrange.behaviours.puzzle import SurveyPieces
+
+        # A tree of puzzles alone has no targets until its solves (its pieces join them then).
+        puzzles = any(isinstance(n, SurveyPieces) for child in children for n in child.iterate())
+        targets = values["targets"]
         return cls(
             name,
             children,
-            validate_targets(values["targets"], colours=colours.names),
+            validate_targets(targets, colours=colours.names) if targets or not puzzles else [],
             values["threshold_mm"],
             yaw_threshold_deg=values["yaw_threshold_deg"],
             colours=colours,
@@ -267,8 +272,13 @@ class Arrangement(py_trees.composites.Sequence):
         #: A plan's scene, for the simulator: the seed its parts are scattered from, or where they start (None: so).
         self.scene_seed = scene_seed
         self.starts = starts
-        #: The plan's puzzles (``bt_arrange.puzzle.PuzzleSpec``): their pieces join ``targets`` once solved.
-        self.puzzles: list[Any] = []
+
+    @property
+    def puzzles(self) -> list[Any]:
+        """The tree's puzzles (``PuzzleSpec``, one per ``SurveyPieces``): their pieces join ``targets`` once solved."""
+        from bt_arrange.behaviours.puzzle import SurveyPieces
+
+        return [node.spec for node in self.iterate() if isinstance(node, SurveyPieces)]
 
 
 def arrangement(
@@ -469,6 +479,7 @@ def arrangement(
 
 def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, Any], **plan_only: Any) -> Arrangement:
     """The targets' arrangement (if any), then each puzzle's subtree; the root knows the puzzles."""
+    from bt_arrange.trees.puzzle import OPTIONS as PUZZLE_OPTIONS
     from bt_arrange.trees.puzzle import arrange_puzzle
 
     if plan_only["correct"] != "each":
@@ -482,7 +493,7 @@ def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, 
         steps, root.targets = [], []
     keep_going = options["keep_going"]
     for spec in puzzles:
-        subtree = arrange_puzzle(spec, {**options, "keep_going": keep_going})
+        subtree = arrange_puzzle(spec, {k: v for k, v in options.items() if k in PUZZLE_OPTIONS})
         steps.append(
             py_trees.decorators.FailureIsSuccess(name=f"then the next ({spec.name})", child=subtree)
             if keep_going
@@ -492,5 +503,4 @@ def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, 
     root.remove_child(park)
     for child in [*steps, park]:
         root.add_child(child)
-    root.puzzles = list(puzzles)
     return root

@@ -22,24 +22,62 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.behaviours import keys
-from bt_arrange.behaviours.puzzle import SOLVED, SolvePuzzle, SurveyPieces
-from bt_arrange.errors import BtArrangeError
+from bt_arrange.behaviours.puzzle import PUZZLE_PORT, SOLVED, SolvePuzzle, SurveyPieces
+from bt_arrange.errors import BtArrangeError, XmlTreeError
+from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, STRING, Port
 from bt_arrange.puzzle.spec import PuzzleSpec
+
+#: The options of ``bt_arrange.trees.arrangement`` an ``ArrangeSolved`` builds its pieces' subtrees with.
+OPTIONS = ("threshold_mm", "yaw_threshold_deg", "max_pushes", "max_regrasps", "strategy", "keep_going")
 
 
 class ArrangeSolved(py_trees.composites.Sequence):
     """Arrange the pieces where the solve put them: its children are built from ``/<puzzle>/solved`` when it first runs.
 
     ``options`` are the keyword arguments of ``bt_arrange.trees.arrangement`` the puzzle's plan was
-    built with (thresholds, pushes, strategy, colours, settings). A solved plan the arrangement
-    refuses (two pieces' targets too close, one out of reach) is a FAILURE saying so.
+    built with (``OPTIONS``: thresholds, pushes, strategy); the colours and the handling settings are
+    the root ``Arrangement``'s. A solved plan the arrangement refuses (two pieces' targets too close,
+    one out of reach) is a FAILURE saying so. In XML its children are never written: they are built.
     """
+
+    #: In XML a leaf: what runs inside it is decided by the solve, so no file can list it.
+    node_category = "Action"
+    #: The node's description in the XML ``TreeNodesModel``.
+    node_description = "/<puzzle>/solved -> Algorithm 1 per piece (children built when it first runs)"
+
+    @classmethod
+    def provided_ports(cls) -> tuple[Port, ...]:
+        """The puzzle and the options its pieces are arranged with (BehaviorTree.CPP's ``providedPorts``)."""
+        return (
+            PUZZLE_PORT,
+            Port("threshold_mm", DOUBLE, 1.0, "each piece's accuracy threshold [mm]"),
+            Port("yaw_threshold_deg", OFF_DOUBLE, 1.0, "each piece's yaw threshold [deg] (0: position only)"),
+            Port("max_pushes", INT, 10, "pushes per piece at most"),
+            Port("max_regrasps", INT, 3, "picks again per piece at most"),
+            Port("strategy", STRING, "paper", "the pushes: paper, learned or diagonal"),
+        )
+
+    @classmethod
+    def from_ports(cls, name: str, values: dict[str, Any], children: list[Any]) -> ArrangeSolved:
+        """The node of an XML tree: without children, which the solve decides."""
+        if children:
+            raise XmlTreeError(f"<ArrangeSolved name={name!r}> takes no children: they are built from the solve")
+        spec = values.pop("puzzle")
+        return cls(name, spec, values)
+
+    def port_values(self) -> dict[str, Any]:
+        """The ports read back (the XML writer)."""
+        return {"puzzle": self.spec, **{k: self.options[k] for k in OPTIONS if k != "keep_going"}}
 
     def __init__(self, name: str, spec: PuzzleSpec, options: dict[str, Any]) -> None:
         super().__init__(name=name, memory=True, children=[])
         self.spec = spec
         self.obj = spec.name
-        self.options = dict(options)
+        unknown = set(options) - set(OPTIONS)
+        if unknown:
+            raise BtArrangeError(f"ArrangeSolved: unknown options {', '.join(sorted(unknown))}")
+        self.options = {"threshold_mm": 1.0, "yaw_threshold_deg": 1.0, "max_pushes": 10, "max_regrasps": 3}
+        self.options.update({"strategy": "paper", "keep_going": True, **options})
         self._setup_kwargs: dict[str, Any] = {}
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(keys.key(spec.name, SOLVED), access=py_trees.common.Access.READ)
@@ -66,8 +104,12 @@ class ArrangeSolved(py_trees.composites.Sequence):
         if not self.blackboard.exists(solved_key):
             return f"{self.spec.name}: not solved (no {solved_key})"
         targets = list(self.blackboard.get(solved_key))
+        root: py_trees.behaviour.Behaviour = self
+        while root.parent is not None:
+            root = root.parent
+        shared = {"colours": root.colours, "settings": root.settings} if isinstance(root, Arrangement) else {}
         try:
-            built = arrangement(targets, **self.options)
+            built = arrangement(targets, **self.options, **shared)
         except BtArrangeError as error:
             return f"{self.spec.name}: the solved places cannot be arranged: {error}"
         steps = list(built.children[:-1])  # without its "park the arm": the root parks once, at the end
@@ -76,9 +118,6 @@ class ArrangeSolved(py_trees.composites.Sequence):
             self.add_child(child)
             for node in child.iterate():
                 node.setup(**self._setup_kwargs)
-        root = self
-        while root.parent is not None:
-            root = root.parent  # type: ignore[assignment]
         if isinstance(root, Arrangement):
             known = {t.obj for t in root.targets}
             root.targets.extend(t for t in targets if t.obj not in known)
