@@ -179,8 +179,8 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
             margin = min(3.0, 0.25 * lengths[k])
             chosen.append(points[(along > margin) & (along < lengths[k] - margin) & (np.abs(across) < 1.5)])
         side = np.vstack(chosen)
-        if len(side) < 3:
-            return None
+        if len(side) < 4:
+            continue  # a chamfer of a few pixels: its neighbours meet instead
         point, direction = line_of_points(side)
         # Trim the pixels a rounded corner pulls off the line, once.
         residual = np.abs((side - point) @ np.array([-direction[1], direction[0]]))
@@ -190,6 +190,8 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
         if outward @ (point - centre) < 0:
             outward = -outward
         lines.append((point + 0.5 * outward, direction))
+    if len(lines) < 3:
+        return None
     corners = [intersect(lines[k - 1], lines[k]) for k in range(len(lines))]
     if any(c is None for c in corners):
         return None
@@ -345,7 +347,7 @@ def _measure_region(
     px_per_m = math.sqrt(area_px / area_m2)
     corners = _pixel_polygon(region.contour_px, min_edge_m * px_per_m, kernel_px)
     if corners is None:
-        return None, f"a {name} blob at {where} has fewer than 3 sides of {1000 * min_edge_m:.0f} mm or more"
+        return None, f"a {name} blob at {where} has no polygon of 3 or more straight sides"
     if len(corners) > max_vertices:
         return None, f"a {name} blob at {where} has {len(corners)} sides, more than {max_vertices}: not one piece?"
     if region.face_chroma is None:
