@@ -169,6 +169,7 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
         return None
     centre = points.mean(axis=0)
     lines = []
+    lengths_of_runs = []
     for run in runs:
         chosen = []
         for k in run:
@@ -190,6 +191,8 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
         if outward @ (point - centre) < 0:
             outward = -outward
         lines.append((point + 0.5 * outward, direction))
+        lengths_of_runs.append(float(sum(lengths[k] for k in run)))
+    lines = _without_chamfers(lines, lengths_of_runs, 2.5 * kernel_px, 3.0 * kernel_px)
     if len(lines) < 3:
         return None
     corners = [intersect(lines[k - 1], lines[k]) for k in range(len(lines))]
@@ -201,6 +204,29 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
     if float(off.max()) > 3.0 * kernel_px:
         return None
     return found
+
+
+def _without_chamfers(lines: list[Line], lengths: list[float], short_px: float, tolerance_px: float) -> list[Line]:
+    """The lines without those of runs shorter than ``short_px`` whose neighbours meet within ``tolerance_px`` of them.
+
+    Such a run is the morphology's chamfer at a corner (or a side too short for the bands to measure):
+    the corner is where its neighbours meet. Shortest first, never below three lines.
+    """
+    lines, lengths = list(lines), list(lengths)
+    while len(lines) > 3:
+        order = sorted(range(len(lines)), key=lambda k: lengths[k])
+        for k in order:
+            if lengths[k] >= short_px:
+                return lines
+            before, after = lines[k - 1], lines[(k + 1) % len(lines)]
+            met = intersect(before, after)
+            point, direction = lines[k]
+            if met is not None and abs(float((met - point) @ np.array([-direction[1], direction[0]]))) <= tolerance_px:
+                del lines[k], lengths[k]
+                break
+        else:
+            return lines
+    return lines
 
 
 # -- sub-pixel sides ----------------------------------------------------------------------------
