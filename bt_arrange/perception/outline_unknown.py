@@ -231,6 +231,7 @@ def _without_chamfers(lines: list[Line], lengths: list[float], short_px: float, 
 
 # -- sub-pixel sides ----------------------------------------------------------------------------
 
+
 def _sub_pixel(
     view: PreparedView,
     corners_px: FloatArray,
