@@ -17,7 +17,11 @@ from typing import Any
 
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import ObjectStart, ObjectType
+from bt_arrange.puzzle.spec import MAX_PUZZLE_PIECES, MIN_PUZZLE_PIECES
 from bt_arrange.shapes.fracture import fracture
+
+#: A puzzle's slab breaks into as many pieces as its plan may ask for.
+LIMITS = (MIN_PUZZLE_PIECES, MAX_PUZZLE_PIECES)
 
 #: The break's seed is the run's seed mixed with this, so that a puzzle's break and its scatter differ.
 BREAK_SALT = 7919
@@ -54,6 +58,7 @@ def puzzle_scene(
                 spec.gap_m,
                 seed * BREAK_SALT + spec.pieces,
                 (spec.x_m, spec.y_m, spec.yaw_rad),
+                piece_limits=LIMITS,
             )
         except PlanError as error:
             raise PlanError(f"[puzzle.{spec.name}]: {error}") from None
