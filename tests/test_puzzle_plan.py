@@ -107,3 +107,15 @@ def test_the_tree_never_receives_the_break(tmp_path: Path) -> None:
         for value in vars(node).values():
             assert not isinstance(value, PieceStart)
     assert not hasattr(root.puzzles[0], "seed")
+
+
+def test_the_xml_twin_is_the_plan_s_tree_and_scene() -> None:
+    """trees/puzzle.xml (``bt-arrange show puzzle --format xml``) keeps the puzzle's ports and its scene."""
+    from bt_arrange import treefile, xmltree
+
+    trees = Path(__file__).resolve().parents[1] / "trees"
+    plan, xml = treefile.load(trees / "puzzle.toml"), treefile.load(trees / "puzzle.xml")
+    plan_root, xml_root = treefile.build_root(plan), treefile.build_root(xml)
+    assert xml_root.puzzles == plan_root.puzzles
+    assert xmltree.to_xml(xml_root, tree_id="puzzle") == xmltree.to_xml(plan_root, tree_id="puzzle")
+    assert treefile.scene(xml, 2) == treefile.scene(plan, 2)
