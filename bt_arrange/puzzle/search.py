@@ -19,9 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bt_arrange.geometry import FloatArray
+from bt_arrange.puzzle.refine import fit
 from bt_arrange.puzzle.shapes import Shape, penetration, rotation, signed_area
 
 TWO_PI = 2 * math.pi
+#: A first placement, before the joint fit, may be off by this many times the tolerance: its
+#: neighbours may still slide (a pair of pieces sharing a corner of the slab, say).
+PLACE_SLACK = 2.0
 
 
 @dataclass(frozen=True)
@@ -33,6 +37,7 @@ class Tolerances:
     cluster_m: float
     angle_rad: float
     side_m: float
+    residual_m: float
 
 
 @dataclass
@@ -70,6 +75,7 @@ class Search:
     shapes: list[Shape]
     half_l: float
     half_w: float
+    gap: float
     tol: Tolerances
     max_nodes: int
     max_solutions: int
@@ -271,19 +277,21 @@ class Search:
             shift = rotation(d_turn) @ (placed.shift - placed.centre) + placed.centre + d_shift
             placed = self.make_placed(i, placed.turn + d_turn, shift)
         rows = self._contacts(placed)
-        if rows is None or not self._fits(placed):
+        if rows is None or not self._fits(placed, self.placed, PLACE_SLACK):
             return None
         misfit = float(np.sqrt(np.mean([r[2] ** 2 for r in rows]))) if rows else 0.0
         return misfit, placed
 
-    def _fits(self, placed: Placed) -> bool:
+    def _fits(self, placed: Placed, others: list[Placed], slack: float) -> bool:
+        """Whether the cell stays in the rectangle and out of the others, within ``slack`` times the tolerance."""
+        limit = slack * self.tol.overlap_m
         for normal, offset, _ in self.sides():
-            if float(np.max(placed.cell @ normal)) - offset > self.tol.overlap_m:
+            if float(np.max(placed.cell @ normal)) - offset > limit:
                 return False
-        for other in self.placed:
+        for other in others:
             if float(np.hypot(*(placed.centre - other.centre))) > placed.radius + other.radius:
                 continue
-            if penetration(placed.cell, other.cell) > self.tol.overlap_m:
+            if penetration(placed.cell, other.cell) > limit:
                 return False
         return True
 
@@ -325,7 +333,8 @@ class Search:
                     hi = max(float((c - a) @ direction), float((d - a) @ direction))
                     if min(hi, float((b - a) @ direction)) - max(lo, 0.0) <= tol.length_m:
                         continue
-                    if float(np.hypot(*(a - d))) > 2 * tol.length_m or float(np.hypot(*(b - c))) > 2 * tol.length_m:
+                    ends = (PLACE_SLACK + 1) * tol.length_m
+                    if float(np.hypot(*(a - d))) > ends or float(np.hypot(*(b - c))) > ends:
                         return None
                     other_normal = np.array([other_dir[1], -other_dir[0]])
                     for p, q in ((a, d), (b, c)):
@@ -369,16 +378,59 @@ class Search:
             if result is not None:
                 fits.append(result)
         fits.sort(key=lambda item: item[0])
+        before = self.placed
         for _, placed in fits:
-            self.placed.append(placed)
+            refitted = self.refit([*before, placed])
+            if refitted is None:
+                continue
+            self.placed = refitted
             self._grow([i for i in free if i != placed.shape])
-            self.placed.pop()
+            self.placed = before
+
+    def refit(self, placed: list[Placed]) -> list[Placed] | None:
+        """The placed pieces fitted jointly on their measured outlines; None when their contacts misfit.
+
+        Each place made from the ones before carries their errors; fitting them all again at each
+        step keeps the free corners where the next piece's cell really is.
+        """
+        shapes = [self.shapes[p.shape] for p in placed]
+        fitted = fit(
+            shapes,
+            np.array([p.turn for p in placed]),
+            np.array([p.shift for p in placed]),
+            self.half_l,
+            self.half_w,
+            self.gap,
+        )
+        if not fitted.residual_m <= self.tol.residual_m:
+            return None
+        refitted = [
+            self.make_placed(p.shape, float(turn), shift)
+            for p, turn, shift in zip(placed, fitted.turns, fitted.shifts, strict=True)
+        ]
+        if not self._apart(refitted[-1], refitted[:-1]):
+            return None
+        return refitted
+
+    def _apart(self, placed: Placed, others: list[Placed]) -> bool:
+        """Whether the piece itself (not its cell) lies in the rectangle and overlaps no other piece, within tolerance."""
+        points = self.shapes[placed.shape].points @ rotation(placed.turn).T + placed.shift
+        for normal, offset, _ in self.sides():
+            if float(np.max(points @ normal)) - offset > self.tol.overlap_m:
+                return False
+        for other in others:
+            if float(np.hypot(*(placed.centre - other.centre))) > placed.radius + other.radius:
+                continue
+            other_points = self.shapes[other.shape].points @ rotation(other.turn).T + other.shift
+            if penetration(points, other_points) > self.tol.overlap_m - self.gap:
+                return False
+        return True
 
 
 def _length_fits(lengths: FloatArray, kind: str, target: float, tolerance: float) -> bool:
     if kind == "cell":
         return bool(np.min(np.abs(lengths - target)) <= tolerance)
-    return bool(np.min(lengths) <= target + tolerance)
+    return bool(np.min(lengths) <= target + PLACE_SLACK * tolerance)
 
 
 def _fit_step(rows: list[tuple[FloatArray, FloatArray, float]], centre: FloatArray) -> tuple[float, FloatArray] | None:

@@ -200,8 +200,9 @@ def solve(
         cluster_m=2 * tolerance_m,
         angle_rad=ANGLE_TOLERANCE_RAD,
         side_m=2 * tolerance_m,
+        residual_m=tolerance_m / 2,
     )
-    search = Search(shapes, length / 2, width / 2, tolerances, MAX_NODES, MAX_SOLUTIONS)
+    search = Search(shapes, length / 2, width / 2, gap_m, tolerances, MAX_NODES, MAX_SOLUTIONS)
     search.run()
     if not search.solutions:
         capped = "" if search.exhausted else f", gave up after {search.nodes} tries"
