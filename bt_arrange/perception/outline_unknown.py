@@ -46,6 +46,7 @@ from bt_arrange.perception.outline_unknown_edges import (
     MIN_SIDE_POINTS,
     Line,
     SideSampler,
+    aliased_line,
     colour_sampler,
     edge_colours,
     fit_line,
@@ -276,6 +277,7 @@ def _sub_pixel(
                 points, spread = points[clear], spread[clear]
             if len(points) < MIN_SIDE_POINTS:
                 return vertices, math.inf, f"side {k + 1} of {count} has {len(points)} edge points", k
+            points = aliased_line(points, p, q)
             if view.undistort is not None:
                 points = view.undistort(points)
             on_plane = pixels_on_plane(view.intrinsics, view.T_W_C, points, plane_z_m)

@@ -200,3 +200,80 @@ def _bilinear(rgb: NDArray[np.uint8], points: FloatArray) -> FloatArray:
     top = (1 - a) * rgb[v0, u0] + a * rgb[v0, u0 + 1]
     bottom = (1 - a) * rgb[v0 + 1, u0] + a * rgb[v0 + 1, u0 + 1]
     return np.asarray(((1 - b) * top + b * bottom) / 255.0, dtype=float)
+
+
+#: Edge points this near a pixel boundary (px) are quantised: the image samples pixel centres.
+QUANTISED_PX = 0.02
+#: The share of a side's points that must be quantised for it to be read as an aliased staircase.
+QUANTISED_SHARE = 0.9
+#: A staircase of more runs than this is fitted by least squares (its many steps fix the line).
+MAX_RUNS = 16
+
+
+def aliased_line(points: FloatArray, p: FloatArray, q: FloatArray) -> FloatArray:
+    """An aliased side's points replaced by points on the centre of the lines its staircase allows.
+
+    Sampled at pixel centres (pybullet's TinyRenderer), each column's edge lies on a pixel boundary
+    ``b``, the true line within half a pixel of it, ``b - 0.5 < v(u) <= b + 0.5``: a staircase whose
+    runs say little and whose steps say much (where it steps, the line crosses a row of pixel centres
+    between two columns). The lines ``v = a + c u`` that keep to every column's half pixel form a convex
+    polygon in ``(a, c)``; its centroid is the line returned (the mean of the lines the image allows).
+    A least-squares fit would weigh the runs' quantisation instead, and tilt a side that steps once or
+    twice (a side within a few degrees of a row or column) by the runs at its ends. Points that are
+    not quantised (an anti-aliased, blurred or noisy image) are kept as they are.
+    """
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    along, across = (points[:, 0], points[:, 1]) if by_columns else (points[:, 1], points[:, 0])
+    if len(points) < 6:
+        return points
+    quantised = np.abs((across - 0.5) - np.round(across - 0.5)) < QUANTISED_PX
+    if float(np.mean(quantised)) < QUANTISED_SHARE:
+        return points
+    order = np.argsort(along[quantised])
+    u, b = along[quantised][order], np.round(across[quantised][order] - 0.5) + 0.5
+    centre = float(u.mean())
+    x = u - centre
+    # Within a run of one boundary the line is linear: its two ends bind, the columns between do not.
+    change = np.r_[True, b[1:] != b[:-1]] | np.r_[b[:-1] != b[1:], True]
+    if int(change.sum()) > 2 * MAX_RUNS:
+        return points  # many steps: least squares over them is as good, and the clipping would be slow
+    x, b = x[change], b[change]
+    base = float(b.mean())
+    polygon = np.array([[-1.5, -1.5], [1.5, -1.5], [1.5, 1.5], [-1.5, 1.5]])  # (a - base, c)
+    for xi, bi in zip(x, b - base, strict=True):
+        polygon = _clip_half_plane(polygon, np.array([-1.0, -xi]), -(bi - 0.5))
+        polygon = _clip_half_plane(polygon, np.array([1.0, xi]), bi + 0.5)
+        if len(polygon) < 3:
+            return points
+    a, c = _polygon_centroid(polygon)
+    span = np.linspace(along.min(), along.max(), 12)
+    line = base + a + c * (span - centre)
+    return np.column_stack([span, line]) if by_columns else np.column_stack([line, span])
+
+
+def _clip_half_plane(polygon: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
+    """The part of a convex polygon where ``normal . x <= offset``."""
+    distance = polygon @ normal - offset
+    nxt = np.roll(polygon, -1, axis=0)
+    nxt_distance = np.roll(distance, -1)
+    out = []
+    for k in range(len(polygon)):
+        if distance[k] <= 0:
+            out.append(polygon[k])
+        if distance[k] * nxt_distance[k] < 0:
+            t = distance[k] / (distance[k] - nxt_distance[k])
+            out.append(polygon[k] + t * (nxt[k] - polygon[k]))
+    return np.array(out) if out else np.zeros((0, 2))
+
+
+def _polygon_centroid(polygon: FloatArray) -> tuple[float, float]:
+    x, y = polygon[:, 0], polygon[:, 1]
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = 0.5 * float(cross.sum())
+    if abs(area) < 1e-15:
+        centre = polygon.mean(axis=0)
+        return float(centre[0]), float(centre[1])
+    cx = float(np.sum((x + np.roll(x, -1)) * cross)) / (6 * area)
+    cy = float(np.sum((y + np.roll(y, -1)) * cross)) / (6 * area)
+    return cx, cy
