@@ -67,6 +67,8 @@ POLYGON_TOLERANCE_PX = 1.25
 MAX_CONCAVITY_PX = 2.5
 #: The sub-pixel passes: (band half width, px; margin at the side's ends, px).
 UNKNOWN_EDGE_PASSES: tuple[tuple[int, float], ...] = ((5, 2.0), (4, 2.0))
+#: An edge point is kept this much (px) beyond its outside distance from every other side.
+REACH_MARGIN_PX = 2.0
 #: A sub-pixel vertex this far (px) from the pixel-level corner: a band fitted something else.
 MAX_VERTEX_SHIFT_PX = 3.0
 #: Two consecutive sides turning less than this are one side (Douglas-Peucker split it on noise).
@@ -272,7 +274,7 @@ def _sub_pixel(
                 distances, _ = segment_distances(points, segments)
                 distances[:, k] = np.inf
                 # The pixels a point's edge reads lie within its outside distance: clear of other sides.
-                reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + 3.0
+                reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + REACH_MARGIN_PX
                 clear = distances.min(axis=1) >= reach_px
                 points, spread = points[clear], spread[clear]
             if len(points) < MIN_SIDE_POINTS:

@@ -206,8 +206,8 @@ def _bilinear(rgb: NDArray[np.uint8], points: FloatArray) -> FloatArray:
 QUANTISED_PX = 0.02
 #: The share of a side's points that must be quantised for it to be read as an aliased staircase.
 QUANTISED_SHARE = 0.9
-#: A staircase of more runs than this is fitted by least squares (its many steps fix the line).
-MAX_RUNS = 16
+#: Slopes tried across the staircase's allowed range (8 px over its length).
+SLOPE_GRID = 801
 
 
 def aliased_line(points: FloatArray, p: FloatArray, q: FloatArray) -> FloatArray:
@@ -217,9 +217,10 @@ def aliased_line(points: FloatArray, p: FloatArray, q: FloatArray) -> FloatArray
     ``b``, the true line within half a pixel of it, ``b - 0.5 < v(u) <= b + 0.5``: a staircase whose
     runs say little and whose steps say much (where it steps, the line crosses a row of pixel centres
     between two columns). The lines ``v = a + c u`` that keep to every column's half pixel form a convex
-    polygon in ``(a, c)``; its centroid is the line returned (the mean of the lines the image allows).
-    A least-squares fit would weigh the runs' quantisation instead, and tilt a side that steps once or
-    twice (a side within a few degrees of a row or column) by the runs at its ends. Points that are
+    region in ``(a, c)``: for each slope ``c`` on a fine grid, ``a`` lies between the columns' highest
+    floor and lowest ceiling. Its centroid is the line returned (the mean of the lines the image
+    allows). A least-squares fit would weigh the runs' quantisation instead, and tilt a side that steps
+    once or twice (within a few degrees of a row or column) by the runs at its ends. Points that are
     not quantised (an anti-aliased, blurred or noisy image) are kept as they are.
     """
     direction = q - p
@@ -236,44 +237,23 @@ def aliased_line(points: FloatArray, p: FloatArray, q: FloatArray) -> FloatArray
     x = u - centre
     # Within a run of one boundary the line is linear: its two ends bind, the columns between do not.
     change = np.r_[True, b[1:] != b[:-1]] | np.r_[b[:-1] != b[1:], True]
-    if int(change.sum()) > 2 * MAX_RUNS:
-        return points  # many steps: least squares over them is as good, and the clipping would be slow
     x, b = x[change], b[change]
-    base = float(b.mean())
-    polygon = np.array([[-1.5, -1.5], [1.5, -1.5], [1.5, 1.5], [-1.5, 1.5]])  # (a - base, c)
-    for xi, bi in zip(x, b - base, strict=True):
-        polygon = _clip_half_plane(polygon, np.array([-1.0, -xi]), -(bi - 0.5))
-        polygon = _clip_half_plane(polygon, np.array([1.0, xi]), bi + 0.5)
-        if len(polygon) < 3:
-            return points
-    a, c = _polygon_centroid(polygon)
-    span = np.linspace(along.min(), along.max(), 12)
-    line = base + a + c * (span - centre)
-    return np.column_stack([span, line]) if by_columns else np.column_stack([line, span])
-
-
-def _clip_half_plane(polygon: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
-    """The part of a convex polygon where ``normal . x <= offset``."""
-    distance = polygon @ normal - offset
-    nxt = np.roll(polygon, -1, axis=0)
-    nxt_distance = np.roll(distance, -1)
-    out = []
-    for k in range(len(polygon)):
-        if distance[k] <= 0:
-            out.append(polygon[k])
-        if distance[k] * nxt_distance[k] < 0:
-            t = distance[k] / (distance[k] - nxt_distance[k])
-            out.append(polygon[k] + t * (nxt[k] - polygon[k]))
-    return np.array(out) if out else np.zeros((0, 2))
-
-
-def _polygon_centroid(polygon: FloatArray) -> tuple[float, float]:
-    x, y = polygon[:, 0], polygon[:, 1]
-    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
-    area = 0.5 * float(cross.sum())
-    if abs(area) < 1e-15:
-        centre = polygon.mean(axis=0)
-        return float(centre[0]), float(centre[1])
-    cx = float(np.sum((x + np.roll(x, -1)) * cross)) / (6 * area)
-    cy = float(np.sum((y + np.roll(y, -1)) * cross)) / (6 * area)
-    return cx, cy
+    span = max(float(x.max() - x.min()), 1.0)
+    slope = float(np.polyfit(x, b, 1)[0]) if len(x) >= 2 else 0.0
+    low, high = slope - 4.0 / span, slope + 4.0 / span
+    for _ in range(2):  # the allowed range, then the grid again across it alone
+        slopes = np.linspace(low, high, SLOPE_GRID)
+        floor = np.max((b - 0.5)[None, :] - slopes[:, None] * x[None, :], axis=1)
+        ceiling = np.min((b + 0.5)[None, :] - slopes[:, None] * x[None, :], axis=1)
+        width = np.maximum(ceiling - floor, 0.0)
+        total = float(width.sum())
+        if total <= 0.0:
+            return points  # no line keeps to every column: not a clean staircase
+        allowed = np.nonzero(width > 0)[0]
+        step = slopes[1] - slopes[0]
+        low, high = slopes[allowed[0]] - step, slopes[allowed[-1]] + step
+    c = float((slopes * width).sum()) / total
+    a = float(((floor + ceiling) / 2 * width).sum()) / total
+    span_u = np.linspace(along.min(), along.max(), 12)
+    line = a + c * (span_u - centre)
+    return np.column_stack([span_u, line]) if by_columns else np.column_stack([line, span_u])
