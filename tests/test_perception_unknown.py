@@ -93,9 +93,10 @@ def test_a_blurred_noisy_camera_keeps_every_vertex_within_a_tenth() -> None:
     check_all(outlines, truth, 0.1)
 
 
-def test_an_aliased_camera_leaves_a_near_axis_side_to_half_a_pixel() -> None:
-    # Pixel centres only, as pybullet's TinyRenderer: a side within a pixel of a row or column over its
-    # length shows no step, and is known to half a pixel (0.23 mm) at most. The rest stay within a tenth.
+def test_an_aliased_camera_leaves_a_side_of_simple_slope_to_a_fraction_of_a_pixel() -> None:
+    # Pixel centres only, as pybullet's TinyRenderer: a side's staircase allows a range of lines, and a side
+    # whose slope is a simple fraction p / q (a row or column, a diagonal) repeats it every q pixels, so it is
+    # known to about 1 / (2 q) px however long (0.23 mm for a row). Most vertices stay within a tenth.
     parts, truth = scattered(4)
     outlines, problems = measure_unknown_outlines(PartDetector(), render_frame(parts, supersample=1), "red", TOP_Z_M)
     assert problems == []

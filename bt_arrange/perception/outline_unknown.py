@@ -46,6 +46,7 @@ from bt_arrange.perception.outline_unknown_edges import (
     MIN_SIDE_POINTS,
     Line,
     SideSampler,
+    aliased_line,
     colour_sampler,
     edge_colours,
     fit_line,
@@ -66,6 +67,8 @@ POLYGON_TOLERANCE_PX = 1.25
 MAX_CONCAVITY_PX = 2.5
 #: The sub-pixel passes: (band half width, px; margin at the side's ends, px).
 UNKNOWN_EDGE_PASSES: tuple[tuple[int, float], ...] = ((5, 2.0), (4, 2.0))
+#: An edge point is kept this much (px) beyond its outside distance from every other side.
+REACH_MARGIN_PX = 2.0
 #: A sub-pixel vertex this far (px) from the pixel-level corner: a band fitted something else.
 MAX_VERTEX_SHIFT_PX = 3.0
 #: Two consecutive sides turning less than this are one side (Douglas-Peucker split it on noise).
@@ -192,7 +195,7 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
             outward = -outward
         lines.append((point + 0.5 * outward, direction))
         lengths_of_runs.append(float(sum(lengths[k] for k in run)))
-    lines = _without_chamfers(lines, lengths_of_runs, 2.5 * kernel_px, 3.0 * kernel_px)
+    lines = _without_chamfers(lines, lengths_of_runs, 2.5 * kernel_px, kernel_px)
     if len(lines) < 3:
         return None
     corners = [intersect(lines[k - 1], lines[k]) for k in range(len(lines))]
@@ -206,11 +209,24 @@ def _pixel_polygon(contour: NDArray[np.int32], min_edge_px: float, kernel_px: in
     return found
 
 
-def _without_chamfers(lines: list[Line], lengths: list[float], short_px: float, tolerance_px: float) -> list[Line]:
-    """The lines without those of runs shorter than ``short_px`` whose neighbours meet within ``tolerance_px`` of them.
+def _chamfer_depth_px(before: FloatArray, after: FloatArray, kernel_px: int) -> float:
+    """How far (px) a corner between sides along ``before`` and ``after`` may lie beyond the mask's rounding of it.
 
-    Such a run is the morphology's chamfer at a corner (or a side too short for the bands to measure):
-    the corner is where its neighbours meet. Shortest first, never below three lines.
+    The opening with a disc of radius ``r`` rounds a corner of interior angle ``b`` to an arc ``r / sin(b / 2) - r``
+    inside it; a pixel and a half more for the contour's steps.
+    """
+    radius = kernel_px / 2
+    turn = math.acos(float(np.clip(before @ after, -1.0, 1.0)))
+    interior = max(math.pi - turn, math.radians(10.0))
+    return radius / math.sin(interior / 2) - radius + 1.5
+
+
+def _without_chamfers(lines: list[Line], lengths: list[float], short_px: float, kernel_px: int) -> list[Line]:
+    """The lines without those of runs shorter than ``short_px`` whose neighbours meet near them.
+
+    Such a run is the morphology's chamfer at a corner: the corner is where its neighbours meet, no
+    farther beyond its line than the rounding reaches (``_chamfer_depth_px``). A short true side lies
+    farther. Shortest first, never below three lines.
     """
     lines, lengths = list(lines), list(lengths)
     while len(lines) > 3:
@@ -221,7 +237,8 @@ def _without_chamfers(lines: list[Line], lengths: list[float], short_px: float, 
             before, after = lines[k - 1], lines[(k + 1) % len(lines)]
             met = intersect(before, after)
             point, direction = lines[k]
-            if met is not None and abs(float((met - point) @ np.array([-direction[1], direction[0]]))) <= tolerance_px:
+            depth = _chamfer_depth_px(before[1], after[1], kernel_px)
+            if met is not None and abs(float((met - point) @ np.array([-direction[1], direction[0]]))) <= depth:
                 del lines[k], lengths[k]
                 break
         else:
@@ -257,11 +274,12 @@ def _sub_pixel(
                 distances, _ = segment_distances(points, segments)
                 distances[:, k] = np.inf
                 # The pixels a point's edge reads lie within its outside distance: clear of other sides.
-                reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + 3.0
+                reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + REACH_MARGIN_PX
                 clear = distances.min(axis=1) >= reach_px
                 points, spread = points[clear], spread[clear]
             if len(points) < MIN_SIDE_POINTS:
                 return vertices, math.inf, f"side {k + 1} of {count} has {len(points)} edge points", k
+            points = aliased_line(points, p, q)
             if view.undistort is not None:
                 points = view.undistort(points)
             on_plane = pixels_on_plane(view.intrinsics, view.T_W_C, points, plane_z_m)
@@ -295,12 +313,16 @@ def _measure_sides(
     """``_sub_pixel``, a short side that cannot be fitted (or measures under ``min_edge_m``) left out.
 
     A side shorter than ``2.5 * kernel_px`` (a chamfer the morphology cut at a corner, or a side too
-    short for the bands) whose edge cannot be measured is dropped: its neighbours meet instead, within
-    ``3 * kernel_px`` of its middle. A longer side that cannot be measured is reported.
+    short for the bands) whose edge cannot be measured is dropped: its neighbours meet instead, no
+    farther beyond it than the morphology's rounding of the corner reaches (``_chamfer_depth_px``). A
+    measured side under ``min_edge_m`` is dropped as long as its neighbours meet within that length of
+    it. A longer side that cannot be measured is reported.
     """
     corners = corners_px
-    weak_px = max(min_edge_m * px_per_m, 2.5 * kernel_px)
+    min_edge_px = min_edge_m * px_per_m
+    weak_px = max(min_edge_px, 2.5 * kernel_px)
     while True:
+        slack_px = 0.0
         vertices, residual_px, why, side = _sub_pixel(view, corners, sampler, plane_z_m, px_per_m)
         count = len(corners)
         if why is None:
@@ -309,25 +331,31 @@ def _measure_sides(
                 return vertices, residual_px, None
             side = int(np.argmin(lengths))
             corners = project(view, np.column_stack([vertices, np.full(count, plane_z_m)]))
+            slack_px, why = min_edge_px, f"side {side + 1} of {count} is under {1000 * min_edge_m:g} mm"
         elif side is None or count <= 3:
             return vertices, residual_px, why
         length_px = float(np.hypot(*(corners[(side + 1) % count] - corners[side])))
         if length_px >= weak_px:
             return vertices, residual_px, why
-        dropped = _without_side(corners, side, 3.0 * kernel_px)
+        dropped = _without_side(corners, side, kernel_px, slack_px)
         if dropped is None:
             return vertices, residual_px, f"{why}; its neighbours meet far from it"
         corners = dropped
 
 
-def _without_side(corners: FloatArray, side: int, tolerance_px: float) -> FloatArray | None:
-    """The polygon with side ``side`` (corner ``side`` to ``side + 1``) left out: its neighbours' lines met."""
+def _without_side(corners: FloatArray, side: int, kernel_px: int, slack_px: float) -> FloatArray | None:
+    """The polygon with side ``side`` (corner ``side`` to ``side + 1``) left out: its neighbours' lines met.
+
+    None when they meet farther beyond the side than a chamfer's depth (or ``slack_px``) allows.
+    """
     count = len(corners)
     a, b, c, d = (corners[(side + offset) % count] for offset in (-1, 0, 1, 2))
     before = (a, (b - a) / max(float(np.hypot(*(b - a))), 1e-9))
     after = (c, (d - c) / max(float(np.hypot(*(d - c))), 1e-9))
     met = intersect(before, after)
-    if met is None or float(np.hypot(*(met - (b + c) / 2))) > tolerance_px:
+    direction = (c - b) / max(float(np.hypot(*(c - b))), 1e-9)
+    beyond = abs(float((met - b) @ np.array([-direction[1], direction[0]]))) if met is not None else math.inf
+    if met is None or beyond > max(_chamfer_depth_px(before[1], after[1], kernel_px), slack_px):
         return None
     kept = [corners[k] for k in range(count) if k not in (side, (side + 1) % count)]
     kept.insert(side if side + 1 < count else 0, met)

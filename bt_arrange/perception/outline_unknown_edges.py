@@ -200,3 +200,60 @@ def _bilinear(rgb: NDArray[np.uint8], points: FloatArray) -> FloatArray:
     top = (1 - a) * rgb[v0, u0] + a * rgb[v0, u0 + 1]
     bottom = (1 - a) * rgb[v0 + 1, u0] + a * rgb[v0 + 1, u0 + 1]
     return np.asarray(((1 - b) * top + b * bottom) / 255.0, dtype=float)
+
+
+#: Edge points this near a pixel boundary (px) are quantised: the image samples pixel centres.
+QUANTISED_PX = 0.02
+#: The share of a side's points that must be quantised for it to be read as an aliased staircase.
+QUANTISED_SHARE = 0.9
+#: Slopes tried across the staircase's allowed range (8 px over its length).
+SLOPE_GRID = 801
+
+
+def aliased_line(points: FloatArray, p: FloatArray, q: FloatArray) -> FloatArray:
+    """An aliased side's points replaced by points on the centre of the lines its staircase allows.
+
+    Sampled at pixel centres (pybullet's TinyRenderer), each column's edge lies on a pixel boundary
+    ``b``, the true line within half a pixel of it, ``b - 0.5 < v(u) <= b + 0.5``: a staircase whose
+    runs say little and whose steps say much (where it steps, the line crosses a row of pixel centres
+    between two columns). The lines ``v = a + c u`` that keep to every column's half pixel form a convex
+    region in ``(a, c)``: for each slope ``c`` on a fine grid, ``a`` lies between the columns' highest
+    floor and lowest ceiling. Its centroid is the line returned (the mean of the lines the image
+    allows). A least-squares fit would weigh the runs' quantisation instead, and tilt a side that steps
+    once or twice (within a few degrees of a row or column) by the runs at its ends. Points that are
+    not quantised (an anti-aliased, blurred or noisy image) are kept as they are.
+    """
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    along, across = (points[:, 0], points[:, 1]) if by_columns else (points[:, 1], points[:, 0])
+    if len(points) < 6:
+        return points
+    quantised = np.abs((across - 0.5) - np.round(across - 0.5)) < QUANTISED_PX
+    if float(np.mean(quantised)) < QUANTISED_SHARE:
+        return points
+    order = np.argsort(along[quantised])
+    u, b = along[quantised][order], np.round(across[quantised][order] - 0.5) + 0.5
+    centre = float(u.mean())
+    x = u - centre
+    # Within a run of one boundary the line is linear: its two ends bind, the columns between do not.
+    change = np.r_[True, b[1:] != b[:-1]] | np.r_[b[:-1] != b[1:], True]
+    x, b = x[change], b[change]
+    span = max(float(x.max() - x.min()), 1.0)
+    slope = float(np.polyfit(x, b, 1)[0]) if len(x) >= 2 else 0.0
+    low, high = slope - 4.0 / span, slope + 4.0 / span
+    for _ in range(2):  # the allowed range, then the grid again across it alone
+        slopes = np.linspace(low, high, SLOPE_GRID)
+        floor = np.max((b - 0.5)[None, :] - slopes[:, None] * x[None, :], axis=1)
+        ceiling = np.min((b + 0.5)[None, :] - slopes[:, None] * x[None, :], axis=1)
+        width = np.maximum(ceiling - floor, 0.0)
+        total = float(width.sum())
+        if total <= 0.0:
+            return points  # no line keeps to every column: not a clean staircase
+        allowed = np.nonzero(width > 0)[0]
+        step = slopes[1] - slopes[0]
+        low, high = slopes[allowed[0]] - step, slopes[allowed[-1]] + step
+    c = float((slopes * width).sum()) / total
+    a = float(((floor + ceiling) / 2 * width).sum()) / total
+    span_u = np.linspace(along.min(), along.max(), 12)
+    line = a + c * (span_u - centre)
+    return np.column_stack([span_u, line]) if by_columns else np.column_stack([line, span_u])

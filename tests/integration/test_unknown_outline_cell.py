@@ -2,9 +2,12 @@
 
 The pieces are the cell's bodies, all of one colour, turned at random; the camera's frame alone gives
 their top faces' vertices, checked against the simulator's pose of each body (evaluation only).
-TinyRenderer samples pixel centres: a side within a pixel of a row or column over its whole length
-shows no step and is known to half a pixel, so the scatter's yaws keep every side at least 1.5
-degrees off the image axes (docs: the benchmark, benchmarks/unknown_outlines.py, measures all yaws).
+
+TinyRenderer samples pixel centres, so a side's edge is a staircase: the lines it allows are
+measured (``outline_unknown_edges.aliased_line``), but a side whose slope in the image is a simple
+fraction ``p / q`` (a row or column, a diagonal, 1 in 2) repeats its pattern every ``q`` pixels and
+is known to about ``1 / (2 q)`` px only, however long. So most vertices are within a tenth of a
+millimetre, and every one within a quarter (benchmarks/unknown_outlines.py has the distribution).
 """
 
 from __future__ import annotations
@@ -21,32 +24,17 @@ from bt_arrange.shapes.fracture import fracture
 from bt_arrange_sim.pybullet.cell import WorkCell
 
 PLACES = [(0.38, -0.25), (0.38, 0.0), (0.38, 0.25), (0.62, -0.25), (0.62, 0.0), (0.62, 0.25)]
-#: No side within this of an image axis (the camera looks straight down, image axes along world x and y).
-AXIS_CLEARANCE_DEG = 1.5
-
-
-def off_axis_yaw(rng: np.random.Generator, outline: np.ndarray) -> float:
-    """A random yaw that keeps every side of ``outline`` at least ``AXIS_CLEARANCE_DEG`` off the axes."""
-    sides = np.roll(outline, -1, axis=0) - outline
-    angles = np.degrees(np.arctan2(sides[:, 1], sides[:, 0]))
-    while True:
-        yaw = float(rng.uniform(-math.pi, math.pi))
-        off = (angles + math.degrees(yaw)) % 90.0
-        if np.all(np.minimum(off, 90.0 - off) >= AXIS_CLEARANCE_DEG):
-            return yaw
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_every_vertex_of_six_scattered_pieces_is_within_a_tenth_by_truth(seed: int) -> None:
+def test_every_vertex_of_six_scattered_pieces_is_measured_by_truth(seed: int) -> None:
     pieces = fracture((0.20, 0.15, 0.02), 6, 0.002, seed)
     rng = np.random.default_rng(seed)
     with WorkCell() as cell:
         for piece, (x, y) in zip(pieces, PLACES, strict=True):
-            x, y = x + rng.uniform(-0.01, 0.01), y + rng.uniform(-0.02, 0.02)
-            yaw = off_axis_yaw(rng, piece.prism.outline_m)
-            cell.add_object(
-                ObjectType(f"piece {piece.index}", shape=piece.prism), "red", x, y, yaw, name=str(piece.index)
-            )
+            x, y, yaw = x + rng.uniform(-0.01, 0.01), y + rng.uniform(-0.02, 0.02), rng.uniform(-math.pi, math.pi)
+            kind = ObjectType(f"piece {piece.index}", shape=piece.prism)
+            cell.add_object(kind, "red", x, y, yaw, name=str(piece.index))
         cell.settle(0.3)
         frame = cell.camera.capture()
         truth = []
@@ -61,8 +49,11 @@ def test_every_vertex_of_six_scattered_pieces_is_within_a_tenth_by_truth(seed: i
         true = min(truth, key=lambda t: float(np.hypot(*(t.mean(axis=0) - outline.centroid_m))))
         assert len(outline.outline_m) == len(true)
         distances = np.hypot(*(outline.outline_m[:, None, :] - true[None, :, :]).transpose(2, 0, 1))
+        assert len(set(np.argmin(distances, axis=1).tolist())) == len(true)  # each vertex its own
         errors.append(1000 * distances.min(axis=1))
         x, y = outline.outline_m.T
         assert np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0  # counter-clockwise
     every = np.concatenate(errors)
-    assert np.all(every < 0.1), [np.round(e, 3) for e in errors]
+    shown = [np.round(e, 3).tolist() for e in errors]
+    assert np.all(every < 0.25), shown
+    assert np.mean(every < 0.1) >= 0.9 and float(every.mean()) < 0.04, shown
