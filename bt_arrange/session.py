@@ -64,6 +64,7 @@ from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import Arrangement, Target
+from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY, camera_margin_mm
 
 #: The longest the scene settles before the tree starts (parts put on the table come to rest), seconds.
@@ -80,6 +81,7 @@ REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
     GraspGuard,
     SurveyPieces,  # a puzzle's (its obj: the puzzle's name)
     SolvePuzzle,
+    ArrangeSolved,
 )
 
 

@@ -20,6 +20,8 @@ from bt_arrange.objects import ObjectStart, ObjectType
 from bt_arrange.puzzle.spec import MAX_PUZZLE_PIECES, MIN_PUZZLE_PIECES
 from bt_arrange.shapes.fracture import fracture
 
+#: Breaks drawn for a puzzle before its scene is refused (each from the next sub-seed).
+MAX_REDRAWS = 20
 #: A puzzle's slab breaks into as many pieces as its plan may ask for.
 LIMITS = (MIN_PUZZLE_PIECES, MAX_PUZZLE_PIECES)
 
@@ -51,17 +53,7 @@ def puzzle_scene(
 
     colours, kinds, names, homes = [], [], [], []
     for spec in puzzles:
-        try:
-            pieces = fracture(
-                spec.size_m,
-                spec.pieces,
-                spec.gap_m,
-                seed * BREAK_SALT + spec.pieces,
-                (spec.x_m, spec.y_m, spec.yaw_rad),
-                piece_limits=LIMITS,
-            )
-        except PlanError as error:
-            raise PlanError(f"[puzzle.{spec.name}]: {error}") from None
+        pieces = buildable_break(spec, seed)
         for piece in pieces:
             colours.append(spec.colour)
             kinds.append(ObjectType(fragment_name(spec.name, piece.index), shape=piece.prism))
@@ -159,6 +151,50 @@ def _free_spots(
         taken.append((x, y, kind))
         out.append((x, y, float(rng.uniform(-math.pi, math.pi))))
     return out
+
+
+def buildable_break(spec: Any, seed: int) -> list[Any]:
+    """The slab of ``spec`` broken from ``seed``: the first of ``MAX_REDRAWS`` breaks whose pieces can be built.
+
+    A break whose pieces no order and approach can put back at their homes (the pads find no room
+    between two of them) is redrawn, as a fresco's break with a piece the gripper cannot handle is.
+    The check is the arrangement's own, at the finest threshold the gap allows (half of it, at most
+    1 mm). Only the simulator sees the homes it checks.
+    """
+    from bt_arrange.trees import Target, arrangement
+
+    threshold_mm = min(1.0, spec.gap_m * 1000 / 2)
+    last = ""
+    for redraw in range(MAX_REDRAWS):
+        try:
+            pieces = fracture(
+                spec.size_m,
+                spec.pieces,
+                spec.gap_m,
+                (seed * BREAK_SALT + spec.pieces) * MAX_REDRAWS + redraw,
+                (spec.x_m, spec.y_m, spec.yaw_rad),
+                piece_limits=LIMITS,
+            )
+        except PlanError as error:
+            raise PlanError(f"[puzzle.{spec.name}]: {error}") from None
+        homes = [
+            Target(
+                "red",  # a built-in colour stands in for the plan's: the layout does not look at colours
+                p.x_m,
+                p.y_m,
+                p.yaw_rad,
+                name=f"piece {p.index}",
+                object_type=ObjectType(f"piece {p.index}", shape=p.prism),
+            )
+            for p in pieces
+        ]
+        try:
+            arrangement(homes, threshold_mm=threshold_mm)
+        except PlanError as error:
+            last = str(error)
+            continue
+        return pieces
+    raise PlanError(f"[puzzle.{spec.name}]: no break from seed {seed} in {MAX_REDRAWS} draws can be built: {last}")
 
 
 def homes_of(starts: Sequence[Any]) -> dict[str, tuple[str, tuple[float, float, float]]]:
