@@ -73,18 +73,19 @@ def run_once(pieces: int, seed: int, gap_mm: float) -> dict:
         evaluation = run.puzzle_truth
         # Solved right: every solved target within 1 mm of its piece's true home (one turn of the whole for all).
         solved_error_mm = None
-        outlines = {}
         for target in root.targets:
             home = evaluation.home(target, root.targets)
             if home is not None:
                 error = math.hypot(home[0] - target.x_m, home[1] - target.y_m) * 1000
                 solved_error_mm = max(solved_error_mm or 0.0, error)
-            part = evaluation.parts.get(target.obj, target.obj)
-            x, y, yaw = run.cell.part_planar_truth(part)
-            shape = target.object_type.shape
+        # The pieces as the simulator made them (true outlines, own frames), where they ended: their gaps.
+        outlines = {}
+        for start in scene:
+            x, y, yaw = run.cell.part_planar_truth(start.name)
+            shape = start.object_type.shape
             assert isinstance(shape, Prism)
             convex = tuple(tuple((float(px), float(py)) for px, py in piece) for piece in shape.convex_pieces())
-            outlines[target.obj] = Outline(x, y, yaw, convex)
+            outlines[start.name] = Outline(x, y, yaw, convex)
     names = list(outlines)
     gaps = [gap_m(outlines[a], outlines[b]) for i, a in enumerate(names) for b in names[i + 1 :]]
     objects = report.to_dict()["objects"]
