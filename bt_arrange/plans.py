@@ -58,7 +58,7 @@ from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
 from bt_arrange.plan_colours import read_colour_table
-from bt_arrange.puzzle.spec import read_puzzles
+from bt_arrange.puzzle.spec import painted_colours, read_puzzles
 from bt_arrange.settings import DEFAULT_TARGET_GAP_M, ManipulationSettings
 from bt_arrange.shapes import Prism
 from bt_arrange.shapes.fracture import MAX_PIECES, MIN_GAP_M, MIN_PIECES, fracture
@@ -299,6 +299,7 @@ class _Reader:
             targets.append(target)
         taken = {t.obj for t in targets} | set(types)
         puzzles = read_puzzles(self, data.get("puzzle", {}), colours, taken, LOOKS_LIKE_METRES_MM)
+        colours = painted_colours(self, puzzles, targets, colours)
         seed, starts = self.scene(data.get("scene", {}), types, colours, targets)
         return Plan(self.path, targets, colours, types, seed=seed, starts=starts, raw=data, puzzles=puzzles, **options)
 

@@ -35,6 +35,9 @@ class PieceStart(ObjectStart):
 
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
     puzzle: str = ""
+    #: A painted slab's picture file, and each outline vertex's place in it (u, v in 0..1), or None: plain.
+    picture: str | None = None
+    picture_uv: tuple[tuple[float, float], ...] = ()
 
 
 def fragment_name(puzzle: str, index: int) -> str:
@@ -51,10 +54,11 @@ def puzzle_scene(
     """
     from bt_arrange_sim.scenes import scatter
 
-    colours, kinds, names, homes = [], [], [], []
+    colours, kinds, names, homes, paints = [], [], [], [], []
     for spec in puzzles:
         pieces = buildable_break(spec, seed)
         for piece in pieces:
+            paints.append(_paint_of(spec, piece))
             colours.append(spec.colour)
             kinds.append(ObjectType(fragment_name(spec.name, piece.index), shape=piece.prism))
             names.append(fragment_name(spec.name, piece.index))
@@ -77,8 +81,10 @@ def puzzle_scene(
         avoid = [*targets, *own]
     spots = _free_spots(kinds, avoid, puzzles, seed)
     pieces_out = [
-        PieceStart(colour, x, y, yaw, name, kind, home=home, puzzle=puzzle)
-        for colour, kind, name, (puzzle, home), (x, y, yaw) in zip(colours, kinds, names, homes, spots, strict=True)
+        PieceStart(colour, x, y, yaw, name, kind, home=home, puzzle=puzzle, picture=paint[0], picture_uv=paint[1])
+        for colour, kind, name, (puzzle, home), (x, y, yaw), paint in zip(
+            colours, kinds, names, homes, spots, paints, strict=True
+        )
     ]
     return [*own, *pieces_out]
 
@@ -151,6 +157,23 @@ def _free_spots(
         taken.append((x, y, kind))
         out.append((x, y, float(rng.uniform(-math.pi, math.pi))))
     return out
+
+
+def _paint_of(spec: Any, piece: Any) -> tuple[str | None, tuple[tuple[float, float], ...]]:
+    """A painted slab's piece: the picture's file and where each vertex of its outline lies in it."""
+    if spec.picture is None:
+        return None, ()
+    import numpy as np
+
+    from bt_arrange.puzzle.picture import picture_file, slab_uv
+
+    own = piece.prism.outline_m
+    c, s = math.cos(piece.yaw_rad), math.sin(piece.yaw_rad)
+    on_table = own @ np.array([[c, s], [-s, c]]) + [piece.x_m, piece.y_m]
+    c0, s0 = math.cos(spec.yaw_rad), math.sin(spec.yaw_rad)
+    in_slab = (on_table - [spec.x_m, spec.y_m]) @ np.array([[c0, -s0], [s0, c0]])
+    uv = slab_uv(in_slab, spec.size_m)
+    return str(picture_file(spec.picture)), tuple((float(u), float(v)) for u, v in uv)
 
 
 def buildable_break(spec: Any, seed: int) -> list[Any]:

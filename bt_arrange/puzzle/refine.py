@@ -65,9 +65,10 @@ def _rows(
             direction = (b - a) / float(np.hypot(*(b - a)))
             for normal, offset in _sides(half_l, half_w):
                 along = np.array([-normal[1], normal[0]])
-                if float(direction @ along) > cos_tol and max(
-                    abs(float(normal @ a) - offset), abs(float(normal @ b) - offset)
-                ) < 2 * CONTACT_GAP_M:
+                if (
+                    float(direction @ along) > cos_tol
+                    and max(abs(float(normal @ a) - offset), abs(float(normal @ b) - offset)) < 2 * CONTACT_GAP_M
+                ):
                     for local in (shape.points[k], shape.points[(k + 1) % shape.count]):
                         rows.append((i, local, -1, normal * offset, normal, 0.0))
             for j, other in enumerate(shapes):
@@ -127,8 +128,12 @@ def fit(
         px = pc * local[:, 0] - ps * local[:, 1] + poses[piece, 1]
         py = ps * local[:, 0] + pc * local[:, 1] + poses[piece, 2]
         oc, os_ = c[other_index], s[other_index]
-        lx = np.where(has_other, oc * line_point[:, 0] - os_ * line_point[:, 1] + poses[other_index, 1], line_point[:, 0])
-        ly = np.where(has_other, os_ * line_point[:, 0] + oc * line_point[:, 1] + poses[other_index, 2], line_point[:, 1])
+        lx = np.where(
+            has_other, oc * line_point[:, 0] - os_ * line_point[:, 1] + poses[other_index, 1], line_point[:, 0]
+        )
+        ly = np.where(
+            has_other, os_ * line_point[:, 0] + oc * line_point[:, 1] + poses[other_index, 2], line_point[:, 1]
+        )
         nx = np.where(has_other, oc * line_normal[:, 0] - os_ * line_normal[:, 1], line_normal[:, 0])
         ny = np.where(has_other, os_ * line_normal[:, 0] + oc * line_normal[:, 1], line_normal[:, 1])
         contact = nx * (px - lx) + ny * (py - ly) - target

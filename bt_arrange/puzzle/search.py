@@ -106,9 +106,10 @@ class Search:
             on = False
             for normal, offset, _ in self.sides():
                 along = np.array([-normal[1], normal[0]])
-                if float(directions[k] @ along) > cos_tol and max(
-                    abs(float(normal @ a) - offset), abs(float(normal @ b) - offset)
-                ) < self.tol.side_m:
+                if (
+                    float(directions[k] @ along) > cos_tol
+                    and max(abs(float(normal @ a) - offset), abs(float(normal @ b) - offset)) < self.tol.side_m
+                ):
                     on = True
             flags.append(on)
         return tuple(flags)
@@ -243,7 +244,9 @@ class Search:
                     continue
                 border_out = sector.kind_a == "side"
                 border_in = closing and sector.kind_b == "side"
-                out_lengths = shape.cell_lengths[k, [4 * border_in + 2 * border_out, 4 * border_in + 2 * border_out + 1]]
+                out_lengths = shape.cell_lengths[
+                    k, [4 * border_in + 2 * border_out, 4 * border_in + 2 * border_out + 1]
+                ]
                 if not _length_fits(out_lengths, sector.kind_a, sector.length_a, tol.length_m):
                     continue
                 if closing:

@@ -205,7 +205,9 @@ def make_shape(
     lengths = np.hypot(edges[:, 0], edges[:, 1])
     directions = edges / lengths[:, None]
     before = np.roll(directions, 1, axis=0)
-    turns = np.arctan2(before[:, 0] * directions[:, 1] - before[:, 1] * directions[:, 0], np.sum(before * directions, 1))
+    turns = np.arctan2(
+        before[:, 0] * directions[:, 1] - before[:, 1] * directions[:, 0], np.sum(before * directions, 1)
+    )
     angles = math.pi - turns
     samples, colours = _colour_samples(raw - centre, colours_by_edge)
     return Shape(

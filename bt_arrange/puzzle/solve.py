@@ -148,7 +148,9 @@ def _differing(first: Fitted, second: Fitted, symmetries: list[float]) -> list[i
     return best or []
 
 
-def _area_problem(shapes: Sequence[Shape], raw: Sequence[FloatArray], length: float, width: float, gap: float) -> str | None:
+def _area_problem(
+    shapes: Sequence[Shape], raw: Sequence[FloatArray], length: float, width: float, gap: float
+) -> str | None:
     area = sum(abs(signed_area(np.asarray(r, dtype=float).reshape(-1, 2))) for r in raw)
     perimeter = sum(float(np.sum(s.lengths)) for s in shapes)
     fractures = max(0.0, perimeter - 2 * (length + width))

@@ -10,6 +10,7 @@ A plan's ``[puzzle.NAME]`` table says only what the whole is and where it goes::
     x_mm = 500                  # where the whole goes (its centre)
     y_mm = 0
     yaw_deg = 0                 # optional, default 0
+    # or, instead of colour, picture = "PATH.png" (or "fresco", the built-in one) painted on its top
 
 There is no seed and no outline. In a simulator the scene breaks the slab from the run's seed
 and scatters the pieces; the tree sees them with the camera, measures their outlines, solves the
@@ -23,10 +24,14 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from bt_arrange.errors import PlanError
+
 #: A puzzle has this many pieces at least and at most.
 MIN_PUZZLE_PIECES, MAX_PUZZLE_PIECES = 2, 16
 #: The keys of a ``[puzzle.NAME]`` table.
-PUZZLE_KEYS = ("size_mm", "pieces", "gap_mm", "colour", "x_mm", "y_mm", "yaw_deg")
+PUZZLE_KEYS = ("size_mm", "pieces", "gap_mm", "colour", "picture", "x_mm", "y_mm", "yaw_deg")
+#: The colour of a painted puzzle's pieces: any saturated hue (``painted_range``), the table and the sides are grey.
+PAINTED = "painted"
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,8 @@ class PuzzleSpec:
     x_m: float
     y_m: float
     yaw_rad: float = 0.0
+    #: The picture painted on the slab's top face: a file, or a built-in's name (``picture.picture_file``); None: plain.
+    picture: str | None = None
 
     @property
     def piece_names(self) -> list[str]:
@@ -61,6 +68,8 @@ class PuzzleSpec:
     def symmetry_turns_rad(self) -> tuple[float, ...]:
         """The turns about its centre that leave the slab's rectangle as it is: the pieces cannot tell them apart."""
         length, width, _ = self.size_m
+        if self.picture is not None:
+            return (0.0,)  # the picture tells the whole's turns apart
         if math.isclose(length, width, rel_tol=0.0, abs_tol=1e-6):
             return (0.0, math.pi / 2, math.pi, -math.pi / 2)
         return (0.0, math.pi)
@@ -69,14 +78,16 @@ class PuzzleSpec:
 def _format_spec(spec: PuzzleSpec) -> str:
     numbers = ",".join(f"{v:.9g}" for v in spec.size_m)
     pose = ",".join(f"{v:.9g}" for v in (spec.x_m, spec.y_m, spec.yaw_rad))
-    return f"{spec.name};{numbers};{spec.pieces};{spec.gap_m:.9g};{spec.colour};{pose}"
+    text = f"{spec.name};{numbers};{spec.pieces};{spec.gap_m:.9g};{spec.colour};{pose}"
+    return text if spec.picture is None else f"{text};{spec.picture}"
 
 
 def _parse_spec(text: str) -> PuzzleSpec:
     fields = text.split(";")
-    if len(fields) != 6:
-        raise ValueError("a puzzle is name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad")
-    name, size, pieces, gap, colour, pose = (f.strip() for f in fields)
+    if len(fields) not in (6, 7):
+        raise ValueError("a puzzle is name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad[;picture]")
+    name, size, pieces, gap, colour, pose = (f.strip() for f in fields[:6])
+    picture = fields[6].strip() or None if len(fields) == 7 else None
     edges = [float(v) for v in size.split(",")]
     where = [float(v) for v in pose.split(",")]
     count = int(pieces)
@@ -86,7 +97,7 @@ def _parse_spec(text: str) -> PuzzleSpec:
         raise ValueError("its size and gap must be positive and its pose finite")
     if not MIN_PUZZLE_PIECES <= count <= MAX_PUZZLE_PIECES:
         raise ValueError(f"a puzzle has {MIN_PUZZLE_PIECES} to {MAX_PUZZLE_PIECES} pieces")
-    return PuzzleSpec(name, (edges[0], edges[1], edges[2]), count, float(gap), colour, *where)
+    return PuzzleSpec(name, (edges[0], edges[1], edges[2]), count, float(gap), colour, *where, picture=picture)
 
 
 def puzzle_port_type() -> Any:
@@ -94,6 +105,47 @@ def puzzle_port_type() -> Any:
     from bt_arrange.ports import PortType
 
     return PortType("std::string", _parse_spec, _format_spec)
+
+
+def _picture_of(reader: Any, entry: dict[str, Any], where: str) -> str | None:
+    """A puzzle's picture file (a path beside the plan, or a built-in's drawn file), checked; None without one."""
+    from bt_arrange.puzzle.picture import BUILT_IN, check_picture, picture_file
+
+    if "picture" not in entry:
+        if "colour" not in entry:
+            raise reader.fail(where, "missing colour (or picture)")
+        return None
+    if "colour" in entry:
+        raise reader.fail(where, "give colour or picture, not both: a painted slab's colours are its picture's")
+    value = entry["picture"]
+    if not isinstance(value, str) or not value.strip():
+        raise reader.fail(where, f"picture = {value!r} is not a file name or a built-in ({', '.join(BUILT_IN)})")
+    chosen = value if value in BUILT_IN else str((reader.path.parent / value).resolve())
+    try:
+        check_picture(picture_file(chosen))
+    except PlanError as error:
+        raise reader.fail(where, str(error)) from None
+    return chosen
+
+
+def painted_range() -> Any:
+    """The camera's colour of a painted puzzle's pieces: every hue, saturated (``picture.MIN_SATURATION``)."""
+    from bt_arrange.perception.colours import ColourRange
+
+    return ColourRange(PAINTED, ((0.0, 360.0),), (0.3, 1.0), (0.2, 1.0), (1.0, 1.0, 1.0))
+
+
+def painted_colours(reader: Any, puzzles: list[PuzzleSpec], targets: list[Any], colours: Any) -> Any:
+    """The plan's colour table, with the painted colour when a puzzle is painted (then it is the plan's only part)."""
+    painted = [spec for spec in puzzles if spec.picture is not None]
+    if not painted:
+        return colours
+    if targets or len(puzzles) > 1:
+        raise reader.fail(
+            f"[puzzle.{painted[0].name}]",
+            "a painted slab is found by its saturated colours: a plan with one holds no other target or puzzle",
+        )
+    return colours.with_colour(painted_range())
 
 
 def read_puzzles(reader: Any, table: Any, colours: Any, taken: set[str], metres_below_mm: float) -> list[PuzzleSpec]:
@@ -113,9 +165,10 @@ def read_puzzles(reader: Any, table: Any, colours: Any, taken: set[str], metres_
         reader.keys(entry, PUZZLE_KEYS, where)
         if not name.strip() or "/" in name:
             raise reader.fail(where, "a puzzle's name must be a non-empty text without '/'")
-        for key in ("size_mm", "pieces", "colour", "x_mm", "y_mm"):
+        for key in ("size_mm", "pieces", "x_mm", "y_mm"):
             if key not in entry:
                 raise reader.fail(where, f"missing {key}")
+        picture = _picture_of(reader, entry, where)
         size = entry["size_mm"]
         if not isinstance(size, list) or len(size) != 3:
             raise reader.fail(where, f"size_mm = {size!r} is not three numbers [length, width, height] in mm")
@@ -131,8 +184,8 @@ def read_puzzles(reader: Any, table: Any, colours: Any, taken: set[str], metres_
         gap_mm = reader.number(entry.get("gap_mm", DEFAULT_TARGET_GAP_M * 1000), where, "gap_mm")
         if gap_mm < MIN_GAP_M * 1000 - 1e-9:
             raise reader.fail(where, f"gap_mm = {gap_mm:g}: two pieces need at least {MIN_GAP_M * 1000:g} mm")
-        colour = entry["colour"]
-        if not isinstance(colour, str) or colour not in colours:
+        colour = PAINTED if picture is not None else entry["colour"]
+        if picture is None and (not isinstance(colour, str) or colour not in colours):
             raise reader.fail(
                 where,
                 f"unknown colour {colour!r}{did_you_mean(str(colour), colours.names)}: not in the table "
@@ -152,6 +205,7 @@ def read_puzzles(reader: Any, table: Any, colours: Any, taken: set[str], metres_
             x_mm / 1000,
             y_mm / 1000,
             math.radians(yaw_deg),
+            picture,
         )
         for piece in spec.piece_names:
             if piece in taken:
