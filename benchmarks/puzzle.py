@@ -80,12 +80,12 @@ def run_once(pieces: int, seed: int, gap_mm: float) -> dict:
                 solved_error_mm = max(solved_error_mm or 0.0, error)
         # The pieces as the simulator made them (true outlines, own frames), where they ended: their gaps.
         outlines = {}
-        for start in scene:
-            x, y, yaw = run.cell.part_planar_truth(start.name)
-            shape = start.object_type.shape
+        for piece in scene:
+            x, y, yaw = run.cell.part_planar_truth(piece.name)
+            shape = piece.object_type.shape
             assert isinstance(shape, Prism)
             convex = tuple(tuple((float(px), float(py)) for px, py in piece) for piece in shape.convex_pieces())
-            outlines[start.name] = Outline(x, y, yaw, convex)
+            outlines[piece.name] = Outline(x, y, yaw, convex)
     names = list(outlines)
     gaps = [gap_m(outlines[a], outlines[b]) for i, a in enumerate(names) for b in names[i + 1 :]]
     objects = report.to_dict()["objects"]
