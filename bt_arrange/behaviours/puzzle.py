@@ -21,9 +21,10 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours.base import InstantStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
-from bt_arrange.behaviours.looking import is_parked, park_stage
+from bt_arrange.behaviours.looking import Detect, is_parked, park_stage
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray
+from bt_arrange.objects import ObjectType
 from bt_arrange.ports import Port
 from bt_arrange.puzzle.spec import PuzzleSpec, puzzle_port_type
 
@@ -58,6 +59,33 @@ def _area_centre(outline_m: FloatArray) -> tuple[float, float]:
     cx = ((x + np.roll(x, -1)) * cross).sum() / (6 * area)
     cy = ((y + np.roll(y, -1)) * cross).sum() / (6 * area)
     return float(cx), float(cy)
+
+
+class DetectSurveyed(Detect):
+    """Detect a puzzle's piece where the survey saw it, until it is first placed; at its target after.
+
+    A puzzle's pieces share a colour and their measured outlines may fit each other's faces within
+    the registration's tolerance: looked for in a window around where it lies, a piece is the only
+    face there.
+    """
+
+    def __init__(
+        self, name: str, obj: str, colour: str, object_type: ObjectType, surveyed_xy_m: tuple[float, float]
+    ) -> None:
+        super().__init__(name, obj, colour, object_type)
+        self.surveyed_xy_m = surveyed_xy_m
+        self.reads(keys.key(obj, keys.TARGET), keys.key(obj, keys.PLACED_OFFSET_MM))
+
+    def expected_xy_m(self) -> tuple[float, float] | None:
+        """Where the survey saw it, before it was placed; its target after (a regrasp)."""
+        if not self.blackboard.exists(keys.key(self.obj, keys.PLACED_OFFSET_MM)):
+            return self.surveyed_xy_m
+        target = (
+            self.blackboard.get(keys.key(self.obj, keys.TARGET))
+            if self.blackboard.exists(keys.key(self.obj, keys.TARGET))
+            else None
+        )
+        return None if target is None else (target.x_m, target.y_m)
 
 
 class PuzzleNode(StagedBehaviour):
@@ -172,4 +200,14 @@ class SolvePuzzle(PuzzleNode):
         return f"{self.spec.name} solved: {len(self.solved)} pieces placed in the whole in {self.solve_s:.2f} s"
 
 
-__all__ = ["PIECES", "PUZZLE_PORT", "SOLVED", "SOLVE_S", "PuzzleNode", "SolvePuzzle", "SurveyPieces", "SurveyedPiece"]
+__all__ = [
+    "DetectSurveyed",
+    "PIECES",
+    "PUZZLE_PORT",
+    "SOLVED",
+    "SOLVE_S",
+    "PuzzleNode",
+    "SolvePuzzle",
+    "SurveyPieces",
+    "SurveyedPiece",
+]

@@ -21,8 +21,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.behaviours import keys
-from bt_arrange.behaviours.puzzle import PUZZLE_PORT, SOLVED, SolvePuzzle, SurveyPieces
+from bt_arrange.behaviours import Detect, keys
+from bt_arrange.behaviours.puzzle import PIECES, PUZZLE_PORT, SOLVED, DetectSurveyed, SolvePuzzle, SurveyPieces
 from bt_arrange.errors import BtArrangeError, XmlTreeError
 from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, STRING, Port
 from bt_arrange.puzzle.spec import PuzzleSpec
@@ -81,6 +81,7 @@ class ArrangeSolved(py_trees.composites.Sequence):
         self._setup_kwargs: dict[str, Any] = {}
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(keys.key(spec.name, SOLVED), access=py_trees.common.Access.READ)
+        self.blackboard.register_key(keys.key(spec.name, PIECES), access=py_trees.common.Access.READ)
 
     def setup(self, **kwargs: Any) -> None:
         """Keep what the tree's setup hands out (the context): the children built later receive it too."""
@@ -97,6 +98,15 @@ class ArrangeSolved(py_trees.composites.Sequence):
                 return
         yield from super().tick()
 
+    def _surveyed(self) -> dict[str, tuple[float, float]]:
+        """Where the survey saw each piece (its centre on the table)."""
+        pieces = (
+            self.blackboard.get(keys.key(self.spec.name, PIECES))
+            if self.blackboard.exists(keys.key(self.spec.name, PIECES))
+            else ()
+        )
+        return {piece.name: piece.centre_m for piece in pieces}
+
     def _build(self) -> str | None:
         from bt_arrange.trees.arrangement import Arrangement, arrangement
 
@@ -108,8 +118,17 @@ class ArrangeSolved(py_trees.composites.Sequence):
         while root.parent is not None:
             root = root.parent
         shared = {"colours": root.colours, "settings": root.settings} if isinstance(root, Arrangement) else {}
+        surveyed = self._surveyed()
+
+        def locate(target: Any) -> py_trees.behaviour.Behaviour:
+            if target.obj not in surveyed:  # solved by hand (a test, a user's tree): found as any part is
+                return Detect(f"detect {target.obj}", target.obj, target.colour, target.object_type)
+            return DetectSurveyed(
+                f"detect {target.obj}", target.obj, target.colour, target.object_type, surveyed[target.obj]
+            )
+
         try:
-            built = arrangement(targets, **self.options, **shared)
+            built = arrangement(targets, **self.options, **shared, locate=locate)
         except BtArrangeError as error:
             return f"{self.spec.name}: the solved places cannot be arranged: {error}"
         steps = list(built.children[:-1])  # without its "park the arm": the root parks once, at the end
