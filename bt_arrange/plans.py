@@ -54,9 +54,11 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
-from bt_arrange.filelimits import MAX_COLOURS, MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
+from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
-from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.perception.colours import ColourTable
+from bt_arrange.plan_colours import read_colour_table
+from bt_arrange.puzzle.spec import painted_colours, read_puzzles
 from bt_arrange.settings import DEFAULT_TARGET_GAP_M, ManipulationSettings
 from bt_arrange.shapes import Prism
 from bt_arrange.shapes.fracture import MAX_PIECES, MIN_GAP_M, MIN_PIECES, fracture
@@ -80,10 +82,10 @@ TOP_KEYS = (
     "colours",
     "targets",
     "fresco",
+    "puzzle",
     "scene",
 )
 OBJECT_KEYS = ("size_mm", "outline_mm", "height_mm", "mass_kg", "friction")
-COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
 TARGET_KEYS = ("object", "colour", "x_mm", "y_mm", "yaw_deg", "name", "z_mm")
 SCENE_KEYS = ("seed", "starts")
 FRESCO_KEYS = ("size_mm", "pieces", "gap_mm", "seed", "colour", "x_mm", "y_mm", "yaw_deg")
@@ -114,6 +116,8 @@ class Plan:
     seed: int = 0
     starts: list[ObjectStart] | None = None
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
+    #: The plan's ``[puzzle.NAME]`` tables (``bt_arrange.puzzle.PuzzleSpec``): slabs solved from the camera alone.
+    puzzles: list[Any] = field(default_factory=list)
 
     def create_root(
         self,
@@ -133,6 +137,7 @@ class Plan:
                 correct=self.correct if correct is None else correct,
                 yaw_threshold_deg=self.yaw_threshold_deg if yaw_threshold_deg is None else yaw_threshold_deg,
                 colours=self.colours,
+                puzzles=self.puzzles,
             )
         except PlanError as error:
             raise self.source.locate(error) from error
@@ -178,7 +183,7 @@ class Plan:
 
         ``backend`` is the one the run uses; without one, the default backend (loaded only then).
         """
-        if self.starts is not None:
+        if self.starts is not None and not self.puzzles:
             return list(self.starts)
         chosen = self.seed if seed is None else seed
         if backend is None:
@@ -186,6 +191,12 @@ class Plan:
 
             backend = backends.load()
         try:
+            if self.puzzles:
+                # The slab is broken and its pieces scattered by the backend alone: the tree never learns how.
+                breaking = getattr(backend, "puzzle_scene", None)
+                if breaking is None:
+                    raise PlanError(f"backend {getattr(backend, 'name', backend)!r} cannot break a [puzzle] slab")
+                return list(breaking(self.targets, self.puzzles, chosen, starts=self.starts))
             return list(
                 backend.scatter(
                     [t.colour for t in self.targets],
@@ -277,15 +288,20 @@ class _Reader:
             options["max_pushes"] = value
         types = self.object_types(data.get("objects", {}))
         colours = self.colour_table(data.get("colours", {}))
-        if "targets" not in data and "fresco" not in data:
-            raise self.fail("the top level", "no [[targets]] and no [fresco.NAME]: a plan needs at least one")
+        if "targets" not in data and "fresco" not in data and "puzzle" not in data:
+            raise self.fail(
+                "the top level", "no [[targets]], no [fresco.NAME] and no [puzzle.NAME]: a plan needs at least one"
+            )
         targets = self.targets(data["targets"], types, colours) if "targets" in data else []
         threshold_mm = options.get("threshold_mm", Plan.threshold_mm)
         for kind, target in self.frescoes(data.get("fresco", {}), types, colours, targets, threshold_mm):
             types[kind.name] = kind
             targets.append(target)
+        taken = {t.obj for t in targets} | set(types)
+        puzzles = read_puzzles(self, data.get("puzzle", {}), colours, taken, LOOKS_LIKE_METRES_MM)
+        colours = painted_colours(self, puzzles, targets, colours)
         seed, starts = self.scene(data.get("scene", {}), types, colours, targets)
-        return Plan(self.path, targets, colours, types, seed=seed, starts=starts, raw=data, **options)
+        return Plan(self.path, targets, colours, types, seed=seed, starts=starts, raw=data, puzzles=puzzles, **options)
 
     def object_types(self, table: Any) -> dict[str, ObjectType]:
         types = {"cube": CUBE}
@@ -431,49 +447,7 @@ class _Reader:
         return out
 
     def colour_table(self, table: Any) -> ColourTable:
-        colours = DEFAULT_COLOUR_TABLE
-        if not isinstance(table, dict):
-            raise self.fail("[colours]", f"must be a table of colours, got {_shown(table)}")
-        if len(table) > MAX_COLOURS:
-            raise self.fail(
-                "[colours]",
-                f"{len(table)} colours, over the limit of {MAX_COLOURS} (bt_arrange.filelimits.MAX_COLOURS)",
-            )
-        for name, entry in table.items():
-            where = f"[colours.{name}]"
-            self.keys(entry, COLOUR_KEYS, where)
-            rgb = None
-            if "rgb" in entry:
-                value = entry["rgb"]
-                if not isinstance(value, list) or len(value) != 3:
-                    raise self.fail(where, f"rgb = {_shown(value)} is not three numbers in 0..1")
-                channels = [self.number(v, where, "rgb") for v in value]
-                if not all(0.0 <= c <= 1.0 for c in channels):
-                    raise self.fail(where, f"rgb = {_shown(value)}: each channel must be in 0..1")
-                rgb = (channels[0], channels[1], channels[2])
-            has_hsv = any(key in entry for key in ("hue_deg", "saturation", "value"))
-            try:
-                if has_hsv:
-                    if "hue_deg" not in entry:
-                        raise self.fail(where, "an HSV range needs hue_deg = [low, high] (saturation, value optional)")
-                    hue = self.pair(entry["hue_deg"], where, "hue_deg")
-                    low, high = hue
-                    hues = ((low, high),) if low <= high else ((0.0, high), (low, 360.0))
-                    saturation = self.pair(entry.get("saturation", [0.4, 1.0]), where, "saturation")
-                    value_range = self.pair(entry.get("value", [0.15, 1.0]), where, "value")
-                    colour = ColourRange(name, hues, saturation, value_range, rgb)
-                elif rgb is not None:
-                    colour = ColourRange.around_rgb(name, rgb)
-                else:
-                    raise self.fail(
-                        where, "a colour needs rgb = [r, g, b] (0..1) or an HSV range (hue_deg = [low, high])"
-                    )
-            except BtArrangeError as error:
-                if isinstance(error, PlanError) and str(error).startswith(str(self.path)):
-                    raise
-                raise self.fail(where, str(error)) from None
-            colours = colours.with_colour(colour)
-        return colours
+        return read_colour_table(self, table)
 
     def entry(
         self,

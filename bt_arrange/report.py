@@ -49,6 +49,9 @@ class ObjectOutcome:
     placed_again_offset_mm: float | None = None
     placed_again_offset_truth_mm: float | None = None
     placed_again_yaw_error_deg: float | None = None
+    #: A puzzle's piece (issue 32): where it belongs by the simulator's break, (x mm, y mm, yaw deg),
+    #: evaluation only; its ``*_truth_*`` offsets are measured from there. Absent from the JSON otherwise.
+    truth_home_mm: tuple[float, float, float] | None = None
 
 
 @dataclass
@@ -84,7 +87,7 @@ class SessionReport:
             # as the table shows it.
             "objects": [
                 {
-                    **asdict(o),
+                    **{k: v for k, v in asdict(o).items() if k != "truth_home_mm" or v is not None},
                     "target_mm": [round(o.target[0] * 1000, 3), round(o.target[1] * 1000, 3)],
                     "target_yaw_deg": round(math.degrees(o.target[2]), 3),
                 }

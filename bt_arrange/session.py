@@ -44,6 +44,7 @@ from bt_arrange.behaviours import (
     Recheck,
     keys,
 )
+from bt_arrange.behaviours.puzzle import SolvePuzzle, SurveyPieces
 from bt_arrange.calibration.camera import CalibratedCamera
 from bt_arrange.calibration.file import CameraCalibration, check_image_size
 from bt_arrange.checks import positive_number
@@ -54,14 +55,16 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
 from bt_arrange.plancheck import CameraView, check_plan, check_scene
+from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
 from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
-from bt_arrange.session_checks import check_colours_apart, prepare_record_dir
+from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import Arrangement, Target
+from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY, camera_margin_mm
 
 #: The longest the scene settles before the tree starts (parts put on the table come to rest), seconds.
@@ -76,6 +79,9 @@ REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
     Push,
     RepeatUntilWithin,
     GraspGuard,
+    SurveyPieces,  # a puzzle's (its obj: the puzzle's name)
+    SolvePuzzle,
+    ArrangeSolved,
 )
 
 
@@ -200,14 +206,18 @@ class Session:
         self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
         if isinstance(root, Arrangement):
             try:
-                check_plan(
-                    root.targets,
-                    threshold_mm=root.threshold_mm,
-                    starts=scene,
-                    view=view,
-                    colours=self.colours,
-                    settings=settings,
-                )
+                if root.targets or not root.puzzles:
+                    check_plan(
+                        root.targets,
+                        threshold_mm=root.threshold_mm,
+                        starts=scene,
+                        view=view,
+                        colours=self.colours,
+                        settings=settings,
+                    )
+                else:  # a puzzle's targets come from its solve: its scene and its whole's place are checked
+                    check_scene(scene, view=view, colours=self.colours, settings=settings)
+                check_puzzles_in_view(root.puzzles, view)
                 check_colours_apart(root.targets, self.colours)
             except PlanError as error:
                 # A plan file's errors name its file and entries ([[targets]] 3, [colours.teal]).
@@ -228,6 +238,8 @@ class Session:
         self.world.settle(settle_s)
         #: Ground truth of the world (evaluation only), or None: the report is then camera only.
         self.truth: GroundTruth | None = self.world.truth
+        #: A puzzle's truth (evaluation only): each named piece's part of the world and true home.
+        self.puzzle_truth = PuzzleTruth(root.puzzles if isinstance(root, Arrangement) else [], self.truth)
         #: World time when the tree starts: the report and the live view count from here.
         self.start_s = self.world.clock.now()
         robot = self.world.robot
@@ -364,6 +376,8 @@ class Session:
 
     def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
         """The behaviour of the tree a transition is about (by its ``node_id``), or None."""
+        if transition.node_id not in self.nodes:  # a node built while the tree runs (a solved puzzle's)
+            self.nodes = {str(node.id): node for node in self.root.iterate()}
         return self.nodes.get(transition.node_id)
 
     def part_of(self, target: Target) -> str:
@@ -372,6 +386,8 @@ class Session:
         The one of its name, or, for identical parts, the one of its kind nearest the target.
         """
         assert isinstance(self.root, Arrangement)
+        if target.obj in self.puzzle_truth.parts:
+            return self.puzzle_truth.parts[target.obj]
         siblings = [t for t in self.root.targets if t.colour == target.colour and t.object_type == target.object_type]
         if len(siblings) <= 1 or self.truth is None:
             return target.obj
@@ -395,6 +411,8 @@ class Session:
             self.placements.pick_started(node.obj)  # a Pick starts: after a placing, a regrasp
         if transition.new != Status.SUCCESS.value:
             return
+        if isinstance(node, SurveyPieces):
+            self.puzzle_truth.surveyed(node.spec, node.pieces)
         if self._rechecks and isinstance(node, Inspect):
             self._track_truth(node)
         # The Inspects after placing, by their own flag rather than their names; a regrasp's next look.
@@ -493,8 +511,35 @@ class Session:
                     placed_again_offset_mm=_rounded(again.offset_mm),
                     placed_again_offset_truth_mm=_rounded(again.offset_truth_mm),
                     placed_again_yaw_error_deg=_rounded(again.yaw_error_deg),
+                    truth_home_mm=self._truth_home_mm(target),
                 )
             )
+        return outcomes + self._unsolved_pieces(transitions, stopped)
+
+    def _truth_home_mm(self, target: Target) -> tuple[float, float, float] | None:
+        """A puzzle piece's true home (x mm, y mm, yaw deg; evaluation only), None for other targets."""
+        assert isinstance(self.root, Arrangement)
+        home = self.puzzle_truth.home(target, self.root.targets)
+        return (
+            None
+            if home is None
+            else (round(home[0] * 1000, 3), round(home[1] * 1000, 3), round(math.degrees(home[2]), 3))
+        )
+
+    def _unsolved_pieces(self, transitions: list[Transition], stopped: str) -> list[ObjectOutcome]:
+        """A failed outcome for each piece of a puzzle that was never solved, with the puzzle's reason."""
+        assert isinstance(self.root, Arrangement)
+        named = {t.obj for t in self.root.targets}
+        outcomes = []
+        for spec in self.root.puzzles:
+            reason = self._last_failure(transitions, spec.name) or stopped or "the puzzle was not solved"
+            for name in spec.piece_names:
+                if name not in named:
+                    outcomes.append(
+                        ObjectOutcome(
+                            name, (spec.x_m, spec.y_m, spec.yaw_rad), None, None, None, None, 0, "failed", reason
+                        )
+                    )
         return outcomes
 
     def _last_failure(self, transitions: list[Transition], obj: str) -> str:
@@ -527,15 +572,20 @@ class Session:
         return "within" if within and yaw_within else "outside"
 
     def _truth_offset_mm(self, target: Target) -> float | None:
+        """From the part to its target; a puzzle's piece, to its true home (``truth_home_mm``)."""
         if self.truth is None:
             return None
         x, y, _ = self.truth.planar_pose(self.part_of(target))
+        assert isinstance(self.root, Arrangement)
+        target = self.puzzle_truth.home_target(target, self.root.targets)
         return PlanarPose(x, y).distance_to(target.planar) * 1000
 
     def _truth_yaw_error_deg(self, target: Target) -> float | None:
         if self.truth is None:
             return None
         _, _, yaw = self.truth.planar_pose(self.part_of(target))
+        assert isinstance(self.root, Arrangement)
+        target = self.puzzle_truth.home_target(target, self.root.targets)
         return math.degrees(yaw_error_rad(target.object_type.shape, yaw, target.yaw_rad))
 
 

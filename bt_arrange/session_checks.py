@@ -52,6 +52,25 @@ def _colours_apart_text(holder: Any, held: Any) -> str:
     )
 
 
+def check_puzzles_in_view(puzzles: Iterable[Any], view: Any) -> None:
+    """A ``PlanError`` when a puzzle's whole slab, grown by the view's margin, is not all inside the camera's image."""
+    import math
+
+    import numpy as np
+
+    if view is None:
+        return
+    for spec in puzzles:
+        half_l, half_w = spec.size_m[0] / 2 + view.margin_m, spec.size_m[1] / 2 + view.margin_m
+        corners = np.array([spec.to_table(sx * half_l, sy * half_w) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+        if not view.sees_outline(corners, spec.height_m):
+            raise PlanError(
+                f"[puzzle.{spec.name}]: the whole slab at ({spec.x_m * 1000:.0f}, {spec.y_m * 1000:.0f}) mm, turned "
+                f"{math.degrees(spec.yaw_rad):g} deg, is not all in the camera's view: its pieces could be placed "
+                "there but never inspected"
+            )
+
+
 def prepare_record_dir(path: Path | str) -> Path:
     """Make the folder ``--record`` writes to, or a ``PlanError`` saying why it cannot be used."""
     folder = Path(path)

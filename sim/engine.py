@@ -116,6 +116,14 @@ class CellBackend:
 
         return scatter(list(colours), seed, avoid=list(avoid), object_types=object_types, names=names)
 
+    def puzzle_scene(
+        self, targets: Sequence[Any], puzzles: Sequence[Any], seed: int, *, starts: Sequence[Any] | None = None
+    ) -> list[Any]:
+        """``bt_arrange_sim.puzzles.puzzle_scene``: each puzzle's slab broken from ``seed``, its pieces scattered."""
+        from bt_arrange_sim.puzzles import puzzle_scene
+
+        return puzzle_scene(targets, puzzles, seed, starts=starts)
+
     def check(self) -> Iterator[str]:
         """Lines for ``bt-arrange info``: the engine starts."""
         raise NotImplementedError(f"backend {self.name!r} has no check")

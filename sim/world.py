@@ -34,6 +34,8 @@ class CellWorld:
 
     def __init__(self, cell: Any) -> None:
         self.cell = cell
+        #: Each puzzle piece's puzzle and home by its part's name (evaluation only; ``bt_arrange_sim.puzzles``).
+        self.homes: dict[str, tuple[str, tuple[float, float, float]]] = {}
 
     @property
     def robot(self) -> Robot:
@@ -52,8 +54,11 @@ class CellWorld:
 
     def place(self, starts: Sequence[Any], colours: ColourTable) -> None:
         """Paint with ``colours`` and put the parts on the table, resting, where they start."""
+        from bt_arrange_sim.puzzles import homes_of
+
         self.cell.colours = colours
         self.cell.add_parts(starts)
+        self.homes = homes_of(starts)
 
     def settle(self, seconds: float) -> None:
         """Run the physics for ``seconds`` of world time with the arm holding still."""
@@ -84,6 +89,10 @@ class CellWorld:
         """The camera's measured error (mm, ``bt_arrange.uncertainty``): the ideal cell's; None in a real cell."""
         errors = self.cell.config.errors
         return None if errors.enabled else IDEAL_CELL_CAMERA_MM
+
+    def home_pose(self, name: str) -> tuple[str, tuple[float, float, float]] | None:
+        """A puzzle piece's puzzle and home ``(x_m, y_m, yaw_rad)`` (where the break says it belongs), else None."""
+        return self.homes.get(name)
 
     def pose_truth(self, name: str) -> Pose:
         """The simulator's true 6-D pose of a part's centre (the Foxglove recording draws parts lifted too)."""

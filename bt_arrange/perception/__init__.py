@@ -28,6 +28,11 @@ from bt_arrange.perception.detection import (
     PartDetector,
     WorldRegion,
 )
+from bt_arrange.perception.outline_unknown import (
+    MeasuredOutline,
+    measure_unknown_outlines,
+    measure_unknown_outlines_in_mask,
+)
 from bt_arrange.perception.pose import PoseModel
 
 __all__ = [
@@ -40,9 +45,12 @@ __all__ = [
     "Detection",
     "DetectionStatus",
     "DetectorConfig",
+    "MeasuredOutline",
     "PartDetector",
     "PoseModel",
     "WorldRegion",
+    "measure_unknown_outlines",
+    "measure_unknown_outlines_in_mask",
 ]
 
 # Deprecated: the names that said "cube" for any part, kept one release (CHANGELOG.md).

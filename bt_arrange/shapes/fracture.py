@@ -251,16 +251,17 @@ def fracture(
     seed: int,
     pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     gripper: Gripper = ROBOTIQ_2F85,
+    piece_limits: tuple[int, int] = (MIN_PIECES, MAX_PIECES),
 ) -> list[Piece]:
     """The slab ``size_m = (length, width, height)`` broken into ``pieces`` with ``gap_m`` along each fracture.
 
     ``pose`` (x, y, yaw) is where the whole goes on the table. The same arguments give the same
     pieces. A ``PlanError`` says why when no draw within ``MAX_DRAWS`` gives pieces the gripper
-    can all handle.
+    can all handle. ``piece_limits`` are the fewest and most pieces (a fresco's; a puzzle's are its own).
     """
     length, width, height = size_m
-    if not MIN_PIECES <= pieces <= MAX_PIECES:
-        raise PlanError(f"{pieces} pieces: a fresco breaks into {MIN_PIECES} to {MAX_PIECES}")
+    if not piece_limits[0] <= pieces <= piece_limits[1]:
+        raise PlanError(f"{pieces} pieces: a fresco breaks into {piece_limits[0]} to {piece_limits[1]}")
     if gap_m < MIN_GAP_M - 1e-12:
         raise PlanError(f"a gap of {gap_m * 1000:g} mm is under the {MIN_GAP_M * 1000:g} mm two parts need")
     half_l, half_w = length / 2, width / 2

@@ -227,10 +227,15 @@ class Arrangement(py_trees.composites.Sequence):
     ) -> Arrangement:
         """The node of an XML tree: its plan is checked (``validate_targets``) against its colours first."""
         colours: ColourTable = values["colours"]
+        from bt_arrange.behaviours.puzzle import SurveyPieces
+
+        # A tree of puzzles alone has no targets until its solves (its pieces join them then).
+        puzzles = any(isinstance(n, SurveyPieces) for child in children for n in child.iterate())
+        targets = values["targets"]
         return cls(
             name,
             children,
-            validate_targets(values["targets"], colours=colours.names),
+            validate_targets(targets, colours=colours.names) if targets or not puzzles else [],
             values["threshold_mm"],
             yaw_threshold_deg=values["yaw_threshold_deg"],
             colours=colours,
@@ -268,6 +273,13 @@ class Arrangement(py_trees.composites.Sequence):
         self.scene_seed = scene_seed
         self.starts = starts
 
+    @property
+    def puzzles(self) -> list[Any]:
+        """The tree's puzzles (``PuzzleSpec``, one per ``SurveyPieces``): their pieces join ``targets`` once solved."""
+        from bt_arrange.behaviours.puzzle import SurveyPieces
+
+        return [node.spec for node in self.iterate() if isinstance(node, SurveyPieces)]
+
 
 def arrangement(
     targets: Iterable[Target],
@@ -283,6 +295,7 @@ def arrangement(
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     colours: ColourTable | Mapping[str, object] | None = None,
     settings: ManipulationSettings | None = None,
+    puzzles: Sequence[Any] = (),
 ) -> Arrangement:
     """An arrangement of several objects, checked before anything moves.
 
@@ -303,7 +316,27 @@ def arrangement(
     user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
     ``settings`` (default ``ManipulationSettings()``) are the handling settings the plan is checked
     and built with; the tree keeps them (``Arrangement.settings``) and a run hands them to the context.
+    ``puzzles`` (``bt_arrange.puzzle.PuzzleSpec``s) are slabs reassembled after the targets, each from
+    the camera alone (``bt_arrange.trees.puzzle``); with puzzles, ``targets`` may be empty.
     """
+    if puzzles:
+        return _with_puzzles(
+            list(targets),
+            list(puzzles),
+            dict(
+                threshold_mm=threshold_mm,
+                max_pushes=max_pushes,
+                max_regrasps=max_regrasps,
+                keep_going=keep_going,
+                strategy=strategy,
+                yaw_threshold_deg=yaw_threshold_deg,
+                colours=colours,
+                settings=settings,
+            ),
+            correct=correct,
+            locate=locate,
+            order=order,
+        )
     settings = settings or ManipulationSettings()
     check_strategy(strategy)
     if correct not in CORRECT_MODES:
@@ -351,9 +384,7 @@ def arrangement(
                     restage_releases(steps_by_obj[name].part, placed, pads),
                 )
                 for name in step.neighbours
-            ] + [
-                (part, *_sides_in_layer(part, steps[:index], by_obj, pads)) for part in below
-            ]
+            ] + [(part, *_sides_in_layer(part, steps[:index], by_obj, pads)) for part in below]
             subtree = arrange_one(
                 target,
                 threshold_mm,
@@ -444,3 +475,32 @@ def arrangement(
         colours=table,
         settings=settings,
     )
+
+
+def _with_puzzles(targets: list[Target], puzzles: list[Any], options: dict[str, Any], **plan_only: Any) -> Arrangement:
+    """The targets' arrangement (if any), then each puzzle's subtree; the root knows the puzzles."""
+    from bt_arrange.trees.puzzle import OPTIONS as PUZZLE_OPTIONS
+    from bt_arrange.trees.puzzle import arrange_puzzle
+
+    if plan_only["correct"] != "each":
+        raise PlanError(f"correct={plan_only['correct']!r}: a plan with a [puzzle] is corrected part by part (each)")
+    # Without targets, a stand-in's arrangement checks the options; its steps are dropped.
+    root = arrangement(targets or [Target("red", 0.5, 0.0)], **options, **plan_only)
+    steps = list(root.children[:-1])
+    for child in steps:
+        root.remove_child(child)
+    if not targets:
+        steps, root.targets = [], []
+    keep_going = options["keep_going"]
+    for spec in puzzles:
+        subtree = arrange_puzzle(spec, {k: v for k, v in options.items() if k in PUZZLE_OPTIONS})
+        steps.append(
+            py_trees.decorators.FailureIsSuccess(name=f"then the next ({spec.name})", child=subtree)
+            if keep_going
+            else subtree
+        )
+    park = root.children[-1]
+    root.remove_child(park)
+    for child in [*steps, park]:
+        root.add_child(child)
+    return root

@@ -7,8 +7,10 @@ here. The tag is the class name, except where a file format already fixed anothe
 from __future__ import annotations
 
 from bt_arrange.behaviours import CheckStanding, Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Recheck
+from bt_arrange.behaviours.puzzle import SolvePuzzle, SurveyPieces
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.trees import Arrangement
+from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.xmltree.registry import register_node
 
 for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard, CheckStanding):
@@ -16,3 +18,6 @@ for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard,
 # The tag keeps the decorator's former name: XML files written with it stay readable.
 register_node(RepeatUntilWithin, "RetryUntilThreshold")
 register_node(Arrangement)
+# A puzzle (issue 32): its survey, its solve, and the arrangement its solve decides.
+for _node in (SurveyPieces, SolvePuzzle, ArrangeSolved):
+    register_node(_node)

@@ -55,9 +55,11 @@ def load_module(path: str | Path) -> ModuleType:
             from bt_arrange import backends  # the default backend, loaded only to run
 
             backend = backends.load()
+        targets = text_root.targets
+        if text_root.puzzles:  # each slab broken from the seed by the backend (its pieces' outlines stay there)
+            return list(backend.puzzle_scene(targets, text_root.puzzles, seed, starts=text_root.starts))
         if text_root.starts is not None:
             return list(text_root.starts)
-        targets = text_root.targets
         return backend.scatter(
             [t.colour for t in targets],
             seed,

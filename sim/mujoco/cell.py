@@ -185,6 +185,12 @@ class MujocoCell(CellBase):
     def add_parts(self, starts: Iterable[Any]) -> None:
         """Put several parts on the table (a scene from ``scenes.scatter``): one rebuild for all."""
         for start in starts:
+            if getattr(start, "picture", None):
+                from bt_arrange.errors import PlanError
+
+                raise PlanError(
+                    "a painted puzzle (picture) needs the pybullet engine: the MuJoCo cell paints no pictures"
+                )
             kind = getattr(start, "object_type", None) or CUBE
             self._new_part(kind, start.colour, start.x_m, start.y_m, start.yaw_rad, start.name)
         self._rebuild()

@@ -13,7 +13,7 @@ import contextlib
 import dataclasses
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -229,8 +229,12 @@ class WorkCell(CellBase):
         y_m: float,
         yaw_rad: float = 0.0,
         name: str | None = None,
+        picture: str | None = None,
+        picture_uv: Sequence[tuple[float, float]] = (),
     ) -> str:
         """Put a cuboid of ``object_type`` on the table, resting at (x, y, yaw), top face ``colour``; returns its name.
+
+        ``picture`` (a file) is printed on a prism's top instead, each outline vertex at ``picture_uv``.
 
         ``colour`` is a name of ``self.colours`` (the table the camera reads) or a ``ColourRange``
         (painted with its ``paint_rgb``); the name defaults to the colour's.
@@ -252,6 +256,8 @@ class WorkCell(CellBase):
             pose.quaternion_xyzw,
             self.config.physics.cube_contact if built.shape.rectangular else self.config.physics.prism_contact,
             self.colours,
+            picture=picture,
+            picture_uv=picture_uv,
         )
         self.object_types[name] = object_type
         if self.config.physics.parts_sleep:
@@ -324,7 +330,11 @@ class WorkCell(CellBase):
         """Put several cubes on the table (a scene from ``scenes.scatter``)."""
         for start in starts:
             kind = getattr(start, "object_type", None) or CUBE
-            self.add_object(kind, start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name)
+            # A painted puzzle's piece carries its picture and where its outline lies in it.
+            painted = (
+                {"picture": start.picture, "picture_uv": start.picture_uv} if getattr(start, "picture", None) else {}
+            )
+            self.add_object(kind, start.colour, start.x_m, start.y_m, start.yaw_rad, name=start.name, **painted)
 
     def part_in_gripper_truth(self, name: str) -> bool:
         """True when both finger pads touch the cube."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -39,12 +40,13 @@ def create_cube(client, colour: str, position_m, orientation_xyzw, contact: Cont
     return create_object(client, CUBE, colour, position_m, orientation_xyzw, contact)
 
 
-def prism_mesh_files(shape: Prism, folder: Path) -> tuple[str, str, str]:
+def prism_mesh_files(shape: Prism, folder: Path, top_uv: np.ndarray | None = None) -> tuple[str, str, str]:
     """OBJ files of a prism in ``folder``, centred on its centre of mass: collision, sides and top plate.
 
     The collision file holds one object per convex piece (``Prism.convex_pieces``): Bullet makes a
     compound of their convex hulls, exact for a non-convex outline. The files are named by their
     content (pybullet caches a mesh by its file name: one name never stands for two meshes).
+    ``top_uv`` (one per outline vertex) gives the top plate texture coordinates (a painted piece).
     """
     half = shape.height_m / 2
     pieces = shape.convex_pieces()
@@ -56,7 +58,7 @@ def prism_mesh_files(shape: Prism, folder: Path) -> tuple[str, str, str]:
         [(f"piece{k}", piece, -half + HULL_MARGIN_M, half - HULL_MARGIN_M, [piece]) for k, piece in enumerate(inner)]
     )
     sides = _obj([("sides", outline, -half, half - TOP_PLATE_M, pieces)])
-    top = _obj([("top", outline, half - TOP_PLATE_M, half, pieces)])
+    top = _obj([("top", outline, half - TOP_PLATE_M, half, pieces)], uv=top_uv)
     paths = []
     for text in (collision, sides, top):
         path = folder / f"{hashlib.sha1(text.encode()).hexdigest()[:16]}.obj"
@@ -76,12 +78,24 @@ def _shrunk(polygon: np.ndarray, margin_m: float) -> np.ndarray:
     return polygon - margin_m * miter
 
 
-def _obj(objects: list[tuple[str, np.ndarray, float, float, list[np.ndarray]]]) -> str:
+def _obj(objects: list[tuple[str, np.ndarray, float, float, list[np.ndarray]]], uv: np.ndarray | None = None) -> str:
     """OBJ text of polygons (counter-clockwise) extruded from ``z_low`` to ``z_high``, one object each.
 
     Each object's caps are fanned over its convex ``pieces`` (vertices of the polygon), its sides
-    are one quad per edge; faces wind outward.
+    are one quad per edge; faces wind outward. ``uv`` (one object only: a row per polygon vertex)
+    are texture coordinates, the same at both heights.
     """
+    if uv is not None:
+        text = _obj(objects)
+        body = "\n".join(f"vt {u:.9f} {v:.9f}" for u, v in uv)
+        count = len(uv)
+
+        def textured(line: str) -> str:
+            if not line.startswith("f "):
+                return line
+            return "f " + " ".join(f"{i}/{(int(i) - 1) % count + 1}" for i in line.split()[1:])
+
+        return body + "\n" + "\n".join(textured(line) for line in text.splitlines()) + "\n"
     lines: list[str] = []
     offset = 1  # OBJ numbers vertices from 1, across the whole file
     for name, polygon, z_low, z_high, pieces in objects:
@@ -111,13 +125,17 @@ def create_object(  # noqa: PLR0913
     orientation_xyzw,  # noqa: ANN001
     contact: Contact,
     colours: ColourTable = DEFAULT_COLOUR_TABLE,
+    *,
+    picture: str | None = None,
+    picture_uv: Sequence[tuple[float, float]] = (),
 ) -> int:
     """Add a part of the type's shape with a top face painted ``colour``; returns its body id.
 
     A cuboid's collision shape is one primitive box (no mesh margin); the visual is a near-white
     box with a thin coloured plate on top, so only the top face reads as the part's colour. The
     paint comes from the colour table perception reads (``ColourRange.paint_rgb``). The type's
-    ``lateral_friction`` replaces the contact's when given.
+    ``lateral_friction`` replaces the contact's when given. A prism's ``picture`` (a file) is printed on
+    its top plate instead of the paint, each outline vertex at its ``picture_uv`` (a painted puzzle).
     """
     import dataclasses
 
@@ -138,7 +156,8 @@ def create_object(  # noqa: PLR0913
         # The meshes live only while pybullet loads them (the renderer reads the visual ones in
         # createMultiBody): a campaign of fractured parts leaves no file behind in the temporary folder.
         with tempfile.TemporaryDirectory(prefix="bt_arrange_mesh_") as folder:
-            collision_obj, sides_obj, top_obj = prism_mesh_files(shape, Path(folder))
+            top_uv = np.asarray(picture_uv, dtype=float) if picture is not None else None
+            collision_obj, sides_obj, top_obj = prism_mesh_files(shape, Path(folder), top_uv)
             collision = client.createCollisionShape(pybullet.GEOM_MESH, fileName=collision_obj)
             visual = client.createVisualShapeArray(
                 shapeTypes=[pybullet.GEOM_MESH, pybullet.GEOM_MESH], fileNames=[sides_obj, top_obj]
@@ -146,7 +165,11 @@ def create_object(  # noqa: PLR0913
             body = _multi_body(client, object_type, collision, visual, position_m, orientation_xyzw)
     # A visual shape array takes one colour per body in createMultiBody; colour each part after.
     client.changeVisualShape(body, -1, shapeIndex=0, rgbaColor=[*SIDE_RGB, 1.0])
-    client.changeVisualShape(body, -1, shapeIndex=1, rgbaColor=[*rgb, 1.0])
+    if picture is not None and not shape.rectangular:
+        texture = client.loadTexture(str(picture))
+        client.changeVisualShape(body, -1, shapeIndex=1, textureUniqueId=texture, rgbaColor=[1.0, 1.0, 1.0, 1.0])
+    else:
+        client.changeVisualShape(body, -1, shapeIndex=1, rgbaColor=[*rgb, 1.0])
     if object_type.lateral_friction is not None:
         contact = dataclasses.replace(contact, lateral_friction=object_type.lateral_friction)
     apply_contact(contact, client, body)
