@@ -123,7 +123,8 @@ class Displace:
     """Error injection (a bump, as ``cell.displace_part`` makes one): each raised part moved ``mm`` once placed.
 
     Right after ``place <obj>`` succeeds the world's part at that target is shifted ``mm`` along its
-    support in a direction drawn from ``seed`` (one that keeps it clear of its layer's neighbours), so the inspection after placing finds it off and the
+    support in a direction drawn from ``seed`` (one that keeps it clear of its layer's neighbours), so the
+    inspection after placing finds it off and the
     correction of a raised part (a gentle push, or a regrasp beyond ``REGRASP_OFFSET_MM``) has work.
     """
 

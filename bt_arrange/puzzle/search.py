@@ -257,7 +257,7 @@ class Search:
         return found
 
     def place(self, sector: Sector, candidate: tuple[int, int, bool, bool, bool]) -> tuple[float, Placed] | None:
-        """The candidate placed in the free corner, fitted to its neighbours, and its misfit; None if it does not fit."""
+        """The candidate placed in the free corner, fitted to its neighbours, its misfit; None: no fit."""
         i, k, border_in, border_out, closing = candidate
         shape = self.shapes[i]
         corner = shape.cell_corner(k, border_in, border_out)
@@ -299,7 +299,7 @@ class Search:
         return True
 
     def _contacts(self, placed: Placed) -> list[tuple[FloatArray, FloatArray, float]] | None:
-        """Rows (point on the new cell, unit normal, misfit) of its contacts; None when an edge meets another off its ends.
+        """Rows (point on the cell, normal, misfit) of its contacts; None: an edge meets another off its ends.
 
         A contact is a cell edge along a placed cell's edge (antiparallel, within the length
         tolerance): both ends must meet that edge's ends (edge to edge), each giving a row across
@@ -416,7 +416,7 @@ class Search:
         return refitted
 
     def _apart(self, placed: Placed, others: list[Placed]) -> bool:
-        """Whether the piece itself (not its cell) lies in the rectangle and overlaps no other piece, within tolerance."""
+        """Whether the piece (not its cell) lies in the rectangle and overlaps no other piece, within tolerance."""
         points = self.shapes[placed.shape].points @ rotation(placed.turn).T + placed.shift
         for normal, offset, _ in self.sides():
             if float(np.max(points @ normal)) - offset > self.tol.overlap_m:

@@ -9,8 +9,8 @@ import pytest
 
 from bt_arrange import treefile
 from bt_arrange.layout import Outline, gap_m
-from bt_arrange_sim.pybullet.runs import SimulatedRun
 from bt_arrange_sim.puzzles import PieceStart
+from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 
 @pytest.fixture(scope="module")
