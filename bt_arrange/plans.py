@@ -57,6 +57,7 @@ from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
+from bt_arrange.plan_colours import COLOUR_KEYS as COLOUR_KEYS  # the plan format's names, kept here
 from bt_arrange.plan_colours import read_colour_table
 from bt_arrange.puzzle.spec import painted_colours, read_puzzles
 from bt_arrange.settings import DEFAULT_TARGET_GAP_M, ManipulationSettings
