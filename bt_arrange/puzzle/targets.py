@@ -89,7 +89,7 @@ def solved_targets(
     a fresco piece's) to its place. A ``PuzzleError`` (a ``PlanError``) says why there is none.
     """
     from bt_arrange.puzzle.solve import MeasuredPiece, solve
-    from bt_arrange.shapes.fracture import _in_grasp_frame
+    from bt_arrange.shapes.fracture import in_grasp_frame
     from bt_arrange.trees import Target
 
     del settings  # the gripper's figures are the cell's; kept for a gripper in the settings later
@@ -104,7 +104,7 @@ def solved_targets(
         placement = by_name[piece.name]
         in_slab = placement.to_slab(np.asarray(piece.outline_m, dtype=float)) @ np.array([[c, s], [-s, c]])
         centre = _centroid(in_slab)
-        framed = _in_grasp_frame(in_slab - centre, spec.height_m, ROBOTIQ_2F85)
+        framed = in_grasp_frame(in_slab - centre, spec.height_m, ROBOTIQ_2F85)
         if framed is None:
             raise PlanError(f"piece {piece.name}: as measured, not a part the gripper can grasp across its frame's x")
         prism, turn = framed

@@ -244,6 +244,15 @@ def _judged(cells: list[FloatArray], height_m: float, gripper: Gripper) -> list[
     return framed
 
 
+def in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper = ROBOTIQ_2F85) -> tuple[Prism, float] | None:
+    """One outline as a fresco's piece (``_judged`` of it alone): the prism in its grasp's frame and that frame's turn.
+
+    None when it is no part the gripper handles. A puzzle's solved piece is framed so.
+    """
+    judged = _judged([np.asarray(outline, dtype=float)], height_m, gripper)
+    return judged[0] if judged is not None else None
+
+
 def fracture(
     size_m: tuple[float, float, float],
     pieces: int,
