@@ -27,7 +27,8 @@ from typing import Any
 from bt_arrange.errors import PlanError
 
 #: A puzzle has this many pieces at least and at most.
-MIN_PUZZLE_PIECES, MAX_PUZZLE_PIECES = 2, 16
+MIN_PUZZLE_PIECES = 2
+MAX_PUZZLE_PIECES = 16
 #: The keys of a ``[puzzle.NAME]`` table.
 PUZZLE_KEYS = ("size_mm", "pieces", "gap_mm", "colour", "picture", "x_mm", "y_mm", "yaw_deg")
 #: The colour of a painted puzzle's pieces: any saturated hue (``painted_range``), the table and the sides are grey.
