@@ -29,6 +29,7 @@ SAMPLE_TEXT = {
     "Directions": "+x,-y",
     "Targets": "red,0.5,0.0,0.0;blue,0.5,0.1,0.0",
     "Colours": "teal:rgb:0.0,0.5,0.5",
+    "Puzzle": "slab;0.16,0.12,0.02;6;0.002;red;0.5,0,0",
 }
 #: Ports whose values are one of a few words.
 SAMPLE_PORT_TEXT = {"where": "pick", "strategy": "learned", "opening_m": "0.03", "offset_key": "/red/offset_mm"}
@@ -53,6 +54,7 @@ def every_port_set(tag: str) -> dict[str, str]:
 
 def test_the_project_registers_its_nodes_by_their_classes():
     assert OURS == [
+        "ArrangeSolved",
         "Arrangement",
         "CheckStanding",
         "Detect",
@@ -64,6 +66,8 @@ def test_the_project_registers_its_nodes_by_their_classes():
         "Push",
         "Recheck",
         "RetryUntilThreshold",
+        "SolvePuzzle",
+        "SurveyPieces",
     ]
 
 
@@ -90,7 +94,8 @@ def test_a_nodes_xml_ports_are_its_class_declaration(tag):
 def test_a_nodes_constructor_takes_its_ports_unless_the_class_builds_itself(tag):
     cls = REGISTRY[tag].cls
     if hasattr(cls, "from_ports"):
-        assert tag == "Arrangement", "only the plan's root builds itself (its plan is checked first)"
+        # The plan's root (its plan is checked first) and a puzzle's nodes (one port holds the puzzle's whole).
+        assert tag in ("Arrangement", "ArrangeSolved", "SolvePuzzle", "SurveyPieces"), "only these build themselves"
         return
     parameters = inspect.signature(cls).parameters
     assert {port.name for port in cls.provided_ports()} <= set(parameters)

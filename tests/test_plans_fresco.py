@@ -111,7 +111,7 @@ def test_a_fresco_whose_piece_names_are_taken_is_refused(tmp_path) -> None:
 
 
 def test_a_plan_needs_targets_or_a_fresco(tmp_path) -> None:
-    with pytest.raises(PlanError, match=r"no \[\[targets\]\] and no \[fresco.NAME\]"):
+    with pytest.raises(PlanError, match=r"no \[\[targets\]\], no \[fresco.NAME\] and no \[puzzle.NAME\]"):
         plans.load(write(tmp_path, "threshold_mm = 1.0\n"))
 
 

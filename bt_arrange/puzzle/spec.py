@@ -105,7 +105,7 @@ def puzzle_port_type() -> Any:
     """The XML port type of a puzzle: ``name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad``."""
     from bt_arrange.ports import PortType
 
-    return PortType("std::string", _parse_spec, _format_spec)
+    return PortType("Puzzle", _parse_spec, _format_spec)
 
 
 def _picture_of(reader: Any, entry: dict[str, Any], where: str) -> str | None:
