@@ -16,8 +16,6 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours.base import InstantStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.context import Context
@@ -27,6 +25,7 @@ from bt_arrange.geometry import FloatArray
 from bt_arrange.objects import ObjectType
 from bt_arrange.ports import Port
 from bt_arrange.puzzle.spec import PuzzleSpec, puzzle_port_type
+from bt_arrange.shapes.polygon import centroid_m
 
 #: The port every node of a puzzle takes: the puzzle's whole (its spec), as text.
 PUZZLE_PORT = Port(
@@ -48,17 +47,6 @@ class SurveyedPiece:
     outline_m: FloatArray
     centre_m: tuple[float, float]
     edge_colours: tuple[FloatArray, ...] = ()
-
-
-def _area_centre(outline_m: FloatArray) -> tuple[float, float]:
-    x, y = outline_m[:, 0], outline_m[:, 1]
-    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
-    area = cross.sum() / 2
-    if abs(area) < 1e-12:
-        return float(x.mean()), float(y.mean())
-    cx = ((x + np.roll(x, -1)) * cross).sum() / (6 * area)
-    cy = ((y + np.roll(y, -1)) * cross).sum() / (6 * area)
-    return float(cx), float(cy)
 
 
 class DetectSurveyed(Detect):
@@ -147,7 +135,7 @@ class SurveyPieces(PuzzleNode):
                 f"{self.spec.name}: the camera sees {len(outlines)} pieces of {self.spec.colour}, "
                 f"the puzzle has {self.spec.pieces}"
             )
-        found = [(m, _area_centre(m.outline_m)) for m in outlines]
+        found = [(m, tuple(float(v) for v in centroid_m(m.outline_m))) for m in outlines]
         # Numbered by where they lie, so that a run's names are the same from the same scene.
         found.sort(key=lambda item: (round(item[1][0], 3), round(item[1][1], 3)))
         self.pieces = tuple(

@@ -14,16 +14,7 @@ from bt_arrange.objects import ObjectType
 from bt_arrange.puzzle.spec import PuzzleSpec
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85
-
-
-def _centroid(points: FloatArray) -> FloatArray:
-    x, y = points[:, 0], points[:, 1]
-    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
-    area = cross.sum() / 2
-    return np.array(
-        [((x + np.roll(x, -1)) * cross).sum() / (6 * area), ((y + np.roll(y, -1)) * cross).sum() / (6 * area)]
-    )
-
+from bt_arrange.shapes.polygon import centroid_m
 
 #: The camera's pixel on the table, about (m): where ``edge_colours`` took their samples, in metres.
 _PIXEL_M = 0.00047
@@ -103,7 +94,7 @@ def solved_targets(
     for piece in surveyed:
         placement = by_name[piece.name]
         in_slab = placement.to_slab(np.asarray(piece.outline_m, dtype=float)) @ np.array([[c, s], [-s, c]])
-        centre = _centroid(in_slab)
+        centre = centroid_m(in_slab)
         framed = in_grasp_frame(in_slab - centre, spec.height_m, ROBOTIQ_2F85)
         if framed is None:
             raise PlanError(f"piece {piece.name}: as measured, not a part the gripper can grasp across its frame's x")
