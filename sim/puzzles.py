@@ -220,9 +220,50 @@ def buildable_break(spec: Any, seed: int) -> list[Any]:
     raise PlanError(f"[puzzle.{spec.name}]: no break from seed {seed} in {MAX_REDRAWS} draws can be built: {last}")
 
 
+@dataclass(frozen=True)
+class MeasuredBreak:
+    """A slab broken as the scene breaks it, its pieces' outlines as a camera might give them (evaluation only).
+
+    ``outlines[k]`` is piece k's top face turned by ``turns_rad[k]`` about the origin, shifted, and
+    each vertex moved ``noise_m`` in a random direction; ``labels[k]`` its name (shuffled: label
+    order is no clue). ``truths[k]`` is the piece's outline as cut, in the slab's frame.
+    """
+
+    labels: tuple[str, ...]
+    outlines: tuple[Any, ...]
+    truths: tuple[Any, ...]
+    turns_rad: tuple[float, ...]
+
+
+def measured_break(spec: Any, seed: int, noise_m: float = 0.00005, *, scatter_seed: int = 0) -> MeasuredBreak:
+    """``buildable_break`` of ``spec`` from ``seed``, its pieces turned, moved, shuffled, noised (``scatter_seed``).
+
+    For the solver's tests and benchmark: the outlines stand in for a survey's, the truths judge
+    the solve. Only the evaluation side may call this.
+    """
+    import numpy as np
+
+    pieces = buildable_break(spec, seed)
+    rng = np.random.default_rng([seed, scatter_seed, BREAK_SALT])
+    order = rng.permutation(len(pieces))
+    labels, outlines, truths, turns = [], [], [], []
+    for rank, index in enumerate(order):
+        truth = np.asarray(pieces[index].slab_outline_m, dtype=float)
+        turn = float(rng.uniform(-math.pi, math.pi))
+        c, s = math.cos(turn), math.sin(turn)
+        shift = rng.uniform(-0.3, 0.3, size=2)
+        angles = rng.uniform(-math.pi, math.pi, size=len(truth))
+        noise = noise_m * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+        outlines.append(truth @ np.array([[c, s], [-s, c]]) + shift + noise)
+        truths.append(truth)
+        turns.append(turn)
+        labels.append(f"{spec.name} {rank + 1}")
+    return MeasuredBreak(tuple(labels), tuple(outlines), tuple(truths), tuple(turns))
+
+
 def homes_of(starts: Sequence[Any]) -> dict[str, tuple[str, tuple[float, float, float]]]:
     """Each piece's puzzle and home by its world name, from a scene's starts (empty without puzzles)."""
     return {s.name: (s.puzzle, s.home) for s in starts if isinstance(s, PieceStart)}
 
 
-__all__ = ["PieceStart", "fragment_name", "homes_of", "puzzle_scene"]
+__all__ = ["MeasuredBreak", "PieceStart", "fragment_name", "homes_of", "measured_break", "puzzle_scene"]

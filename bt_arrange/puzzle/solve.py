@@ -38,6 +38,7 @@ from bt_arrange.geometry import FloatArray
 from bt_arrange.puzzle.refine import Fitted, fit
 from bt_arrange.puzzle.search import Search, Tolerances
 from bt_arrange.puzzle.shapes import Shape, make_shape, rotation, signed_area, wrap
+from bt_arrange.shapes.polygon import outline_problem
 
 #: The default tolerance: how far a cell's edge may be from its neighbour's, in length and place.
 TOLERANCE_M = 0.0006
@@ -135,14 +136,31 @@ def _turned(fitted: Fitted, symmetry: float) -> tuple[FloatArray, FloatArray]:
     return turns, fitted.shifts @ rotation(symmetry).T
 
 
-def _differing(first: Fitted, second: Fitted, symmetries: list[float]) -> list[int]:
-    """The shapes whose places differ between two assemblies, under the symmetry that makes the fewest differ."""
+def _same_face(shape: Shape, first_turn: float, second_turn: float) -> bool:
+    """Whether the piece turned by either turn covers the same place: its outline's own symmetry (a rectangle's)."""
+    one = shape.points @ rotation(first_turn).T
+    two = shape.points @ rotation(second_turn).T
+    return bool(
+        np.max(np.min(np.hypot(*(one[:, None, :] - two[None, :, :]).transpose(2, 0, 1)), axis=1)) <= SAME_PLACE_M
+    )
+
+
+def _differing(first: Fitted, second: Fitted, symmetries: list[float], shapes: Sequence[Shape]) -> list[int]:
+    """The shapes whose places differ between two assemblies, under the symmetry that makes the fewest differ.
+
+    A piece turned differently still has the same place when its outline looks the same so turned.
+    """
     best: list[int] | None = None
     for symmetry in symmetries:
         turns, shifts = _turned(second, symmetry)
         moved = np.hypot(*(shifts - first.shifts).T)
         turned = np.abs([wrap(a - b) for a, b in zip(turns, first.turns, strict=True)])
-        differ = [i for i in range(len(turns)) if moved[i] > SAME_PLACE_M or turned[i] > SAME_TURN_RAD]
+        differ = [
+            i
+            for i in range(len(turns))
+            if moved[i] > SAME_PLACE_M
+            or (turned[i] > SAME_TURN_RAD and not _same_face(shapes[i], float(turns[i]), float(first.turns[i])))
+        ]
         if best is None or len(differ) < len(best):
             best = differ
     return best or []
@@ -179,16 +197,21 @@ def solve(
     """The assembly of ``pieces`` into the slab ``size_m`` (length, width; a height is ignored) with ``gap_m`` between.
 
     ``tolerance_m`` is how far a piece's edge may be from where its neighbour's says it should be
-    (length and place) while searching. Raises ``PuzzleUnsolved`` when no assembly fills the slab
-    and ``PuzzleAmbiguous`` when two different ones fit equally well.
+    (length and place) while searching. Raises ``PuzzleError`` for input no puzzle is made of (fewer
+    than 2 pieces, two sharing a label, an outline that is no simple polygon), ``PuzzleUnsolved``
+    when no assembly fills the slab and ``PuzzleAmbiguous`` when two different ones fit equally well.
     """
     started = time.process_time()
     length, width = float(size_m[0]), float(size_m[1])
-    if not pieces:
-        raise PuzzleUnsolved(f"no pieces to fill the {_size(size_m)} slab")
+    if len(pieces) < 2:
+        raise PuzzleError(f"a puzzle needs 2 pieces or more to fill the {_size(size_m)} slab, got {len(pieces)}")
     labels = [p.label for p in pieces]
     if len(set(labels)) != len(labels):
-        raise PuzzleUnsolved(f"two pieces share a label: {sorted(labels, key=_natural)}")
+        raise PuzzleError(f"two pieces share a label: {sorted(labels, key=_natural)}")
+    for piece in pieces:
+        problem = outline_problem(np.asarray(piece.outline_m, dtype=float).reshape(-1, 2).tolist())
+        if problem is not None:
+            raise PuzzleError(f"piece {piece.label}: {problem}", parts=(("piece", piece.label),))
     shapes = [make_shape(i, p.label, p.outline_m, gap_m / 2, p.edge_colours) for i, p in enumerate(pieces)]
     problem = _area_problem(shapes, [p.outline_m for p in pieces], length, width, gap_m)
     if problem is not None:
@@ -228,7 +251,7 @@ def solve(
     symmetries = _symmetries(length, width)
     distinct: list[Fitted] = []
     for candidate in sorted(fitted, key=lambda f: f.residual_m):
-        if all(_differing(candidate, kept, symmetries) for kept in distinct):
+        if all(_differing(candidate, kept, symmetries, shapes) for kept in distinct):
             distinct.append(candidate)
     best = distinct[0]
     runner_up = distinct[1] if len(distinct) > 1 else None
@@ -244,7 +267,7 @@ def solve(
         ):
             best, runner_up = first, second
         else:
-            differ = _differing(first, second, symmetries)
+            differ = _differing(first, second, symmetries, shapes)
             names = ", ".join(sorted((shapes[i].label for i in differ), key=_natural))
             raise PuzzleAmbiguous(
                 f"{len(ties)}{'+' if not search.exhausted else ''} different assemblies fit equally well "
