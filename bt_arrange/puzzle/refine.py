@@ -171,4 +171,20 @@ def colour_misfit(shapes: Sequence[Shape], turns: FloatArray, shifts: FloatArray
     return float(np.mean(np.sum(difference**2, axis=1)))
 
 
-__all__ = ["Fitted", "colour_misfit", "fit"]
+def fit_step(rows: list[tuple[FloatArray, FloatArray, float]], centre: FloatArray) -> tuple[float, FloatArray] | None:
+    """The small turn (about ``centre``) and shift that best cancel the rows' misfits, or None if under-determined."""
+    if len(rows) < 3:
+        return None
+    a = np.zeros((len(rows), 3))
+    b = np.zeros(len(rows))
+    for r, (point, normal, misfit) in enumerate(rows):
+        arm = point - centre
+        a[r] = (float(normal @ np.array([-arm[1], arm[0]])), normal[0], normal[1])
+        b[r] = -misfit
+    solution, _, rank, _ = np.linalg.lstsq(a, b, rcond=None)
+    if rank < 3:
+        return None
+    return float(solution[0]), np.asarray(solution[1:], dtype=float)
+
+
+__all__ = ["Fitted", "colour_misfit", "fit", "fit_step"]

@@ -8,6 +8,12 @@ corners are tried at the free corner with the fewest candidates (angles and edge
 cell's frame first, then the placement: inside the rectangle, overlapping no placed cell, edge to
 edge with its neighbours); depth first, the closest fits first. Each complete tiling is a solution.
 
+A piece may touch a side of the rectangle at a corner only: its cell's border edge was shorter than
+the gap, and shrinking it along its fractures left a corner short of the side. Its cell is then cut
+by the side (a short border edge of the cell, none of the piece's). Such a cell fills a free corner
+between a side and a neighbour's edge with no corner of the piece: it is placed edge to edge along
+that neighbour's edge instead, its cell corner beyond the side cut away (a "cut" candidate).
+
 Everything is in metres and radians, the slab frame centred on the rectangle, length along x.
 """
 
@@ -19,13 +25,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bt_arrange.geometry import FloatArray
-from bt_arrange.puzzle.refine import fit
+from bt_arrange.puzzle.refine import fit, fit_step
 from bt_arrange.puzzle.shapes import Shape, penetration, rotation, signed_area
 
 TWO_PI = 2 * math.pi
+#: A cell crossing a side by less than this is left uncut; cut corners closer than this are one.
+CUT_MARGIN_M = 1e-6
+#: (shape, corner, border in, border out, closing, cut): a piece's corner tried at a free corner.
+Candidate = tuple[int, int, bool, bool, bool, bool]
 #: A first placement, before the joint fit, may be off by this many times the tolerance: its
 #: neighbours may still slide (a pair of pieces sharing a corner of the slab, say).
 PLACE_SLACK = 2.0
+#: A cell edge may differ from the neighbour's it meets by this many times the tolerance: where four
+#: pieces nearly meet at a point, the short fracture between two of them vanished when the gap shrank them.
+LENGTH_SLACK = 1.5
 
 
 @dataclass(frozen=True)
@@ -47,12 +60,14 @@ class Placed:
     shape: int
     turn: float
     shift: FloatArray
-    border: tuple[bool, ...]
+    border: tuple[bool, ...]  # per cell edge (the cell cut by the rectangle's sides)
     cell: FloatArray
     cell_lengths: FloatArray
     out_angles: FloatArray  # direction of each cell edge in the slab frame
     centre: FloatArray
     radius: float
+    corner_angles: FloatArray  # the cell's interior angle at each of its corners
+    cut: tuple[bool, ...]  # per cell edge: made by a side cutting the cell (no edge of the piece)
 
 
 @dataclass
@@ -66,6 +81,31 @@ class Sector:
     length_a: float  # the cell edge's length, or the room left along the side
     kind_b: str
     length_b: float
+    #: Along a cell's edge: that edge's corner at the apex and its far corner (None along a side).
+    near_a: FloatArray | None = None
+    far_a: FloatArray | None = None
+    near_b: FloatArray | None = None
+    far_b: FloatArray | None = None
+
+    def corner(self) -> FloatArray:
+        """Where a corner filling the whole free angle goes: the apex, or where a side meets a cell's edge.
+
+        A cell's corner within the cluster tolerance of a side is taken onto the side for the apex;
+        the edge's own line meets the side beyond it when the cell filling the corner is cut by that side.
+        """
+        first = np.array([math.cos(self.start), math.sin(self.start)])
+        second = np.array([math.cos(self.start + self.span), math.sin(self.start + self.span)])
+        if self.kind_a == "side" and self.kind_b == "cell" and self.near_b is not None:
+            side, edge, near = first, second, self.near_b
+        elif self.kind_a == "cell" and self.kind_b == "side" and self.near_a is not None:
+            side, edge, near = second, first, self.near_a
+        else:
+            return self.apex
+        cross = float(side[0] * edge[1] - side[1] * edge[0])
+        if abs(cross) < 1e-6:
+            return self.apex
+        t = float((near - self.apex)[0] * edge[1] - (near - self.apex)[1] * edge[0]) / cross
+        return np.asarray(self.apex + t * side, dtype=float)
 
 
 @dataclass
@@ -118,13 +158,51 @@ class Search:
         """The piece placed at ``turn`` and ``shift``, its border found and its cell built."""
         shape = self.shapes[index]
         flags = self.border_flags(shape, turn, shift)
-        cell = shape.cell(flags) @ rotation(turn).T + shift
+        cell, border, cut = self._cut(shape.cell(flags) @ rotation(turn).T + shift, flags)
         edges = np.roll(cell, -1, axis=0) - cell
         lengths = np.hypot(edges[:, 0], edges[:, 1])
         angles = np.arctan2(edges[:, 1], edges[:, 0])
+        turns = (angles - np.roll(angles, 1) + math.pi) % TWO_PI - math.pi
         centre = cell.mean(axis=0)
         radius = float(np.max(np.hypot(*(cell - centre).T)))
-        return Placed(index, turn, shift, flags, cell, lengths, angles, centre, radius)
+        return Placed(index, turn, shift, border, cell, lengths, angles, centre, radius, math.pi - turns, cut)
+
+    def _cut(self, cell: FloatArray, border: tuple[bool, ...]) -> tuple[FloatArray, tuple[bool, ...], tuple[bool, ...]]:
+        """The cell cut by every side it crosses and has no border edge on, its border and cut flags per edge.
+
+        A side the piece has a border edge on is left alone: that edge is the cell's, fitted later.
+        """
+        cut = tuple(False for _ in border)
+        cos_tol = math.cos(2 * self.tol.angle_rad)
+        for normal, offset, _ in self.sides():
+            heights = cell @ normal - offset
+            if float(np.max(heights)) <= CUT_MARGIN_M:
+                continue
+            along = np.array([-normal[1], normal[0]])
+            directions = np.roll(cell, -1, axis=0) - cell
+            if any(
+                flag and float(d @ along) > cos_tol * float(np.hypot(*d))
+                for flag, d in zip(border, directions, strict=True)
+            ):
+                continue
+            points, flags, cuts = [], [], []
+            count = len(cell)
+            for k in range(count):
+                here, after = float(heights[k]), float(heights[(k + 1) % count])
+                if here <= 0:
+                    points.append(cell[k])
+                    flags.append(border[k])
+                    cuts.append(cut[k])
+                if (here <= 0) != (after <= 0):
+                    meet = cell[k] + (cell[(k + 1) % count] - cell[k]) * (here / (here - after))
+                    points.append(meet)
+                    flags.append(here <= 0 or border[k])  # leaving: the side's edge follows
+                    cuts.append(here <= 0 or cut[k])
+            kept = [k for k in range(len(points)) if float(np.hypot(*(points[k] - points[k - 1]))) > CUT_MARGIN_M]
+            cell = np.array([points[k] for k in kept])
+            border = tuple(flags[k] for k in kept)
+            cut = tuple(cuts[k] for k in kept)
+        return cell, border, cut
 
     # ---- free corners -------------------------------------------------------------------------
     def sectors(self) -> list[Sector]:
@@ -162,11 +240,11 @@ class Search:
                 apex = apex - normal * (float(normal @ apex) - offset)
                 intervals.append((angle - math.pi / 2, angle + math.pi / 2, "side", float(s)))
         cell_edges: dict[tuple[float, str], float] = {}
-        for i, k in group:
+        for member, (i, k) in enumerate(group):
             placed = self.placed[i]
             start = float(placed.out_angles[k])
-            alpha = float(self.shapes[placed.shape].angles[k])
-            intervals.append((start, start + alpha, "cell", 0.0))
+            alpha = float(placed.corner_angles[k])
+            intervals.append((start, start + alpha, "cell", float(member)))  # which member of the group
             # the interval's start runs along edge k (out), its end along edge k-1 (in)
             cell_edges[(start % TWO_PI, "out")] = float(placed.cell_lengths[k])
             cell_edges[((start + alpha) % TWO_PI, "in")] = float(placed.cell_lengths[k - 1])
@@ -188,7 +266,15 @@ class Search:
                 continue
             length_a = self._edge_length(a, kind_a, ref_a, "in", cell_edges, apex, points)
             length_b = self._edge_length(b, kind_b, ref_b, "out", cell_edges, apex, points)
-            sectors.append(Sector(apex, a, span, kind_a, length_a, kind_b, length_b))
+            sector = Sector(apex, a, span, kind_a, length_a, kind_b, length_b)
+            if kind_a == "cell":  # the end of a cell's corner: along its edge k-1, reversed
+                i, k = group[int(ref_a)]
+                sector.near_a, sector.far_a = self.placed[i].cell[k], self.placed[i].cell[k - 1]
+            if kind_b == "cell":  # the start of a cell's corner: along its edge k
+                i, k = group[int(ref_b)]
+                cell = self.placed[i].cell
+                sector.near_b, sector.far_b = cell[k], cell[(k + 1) % len(cell)]
+            sectors.append(sector)
         return sectors
 
     def _edge_length(
@@ -226,8 +312,11 @@ class Search:
         return room
 
     # ---- candidates ---------------------------------------------------------------------------
-    def prefilter(self, sector: Sector, free: list[int]) -> list[tuple[int, int, bool, bool, bool]]:
-        """(shape, corner, border in, border out, closing) of every piece corner that can fill the free corner."""
+    def prefilter(self, sector: Sector, free: list[int]) -> list[Candidate]:
+        """(shape, corner, border in, border out, closing, cut) of every piece corner that can fill the free corner.
+
+        Cut candidates (the last flag) come after the others: a corner of the piece beyond the side.
+        """
         tol = self.tol
         least_angle = {i: float(np.min(self.shapes[i].angles)) for i in free}
         found = []
@@ -247,33 +336,71 @@ class Search:
                 out_lengths = shape.cell_lengths[
                     k, [4 * border_in + 2 * border_out, 4 * border_in + 2 * border_out + 1]
                 ]
-                if not _length_fits(out_lengths, sector.kind_a, sector.length_a, tol.length_m):
+                if not _length_fits(
+                    out_lengths, sector.kind_a, sector.length_a, tol.length_m, self._on_side(sector.far_a)
+                ):
                     continue
                 if closing:
                     in_lengths = shape.cell_lengths[k - 1, [2 * border_in + border_out, 4 + 2 * border_in + border_out]]
-                    if not _length_fits(in_lengths, sector.kind_b, sector.length_b, tol.length_m):
+                    if not _length_fits(
+                        in_lengths, sector.kind_b, sector.length_b, tol.length_m, self._on_side(sector.far_b)
+                    ):
                         continue
-                found.append((i, k, border_in, border_out, closing))
+                found.append((i, k, border_in, border_out, closing, False))
+        return found + self._cut_candidates(sector, free)
+
+    def _on_side(self, point: FloatArray | None) -> bool:
+        """Whether a neighbour's far corner lies on a side: the cell edge along it may be cut there."""
+        return point is not None and any(abs(float(n @ point) - o) < self.tol.cluster_m for n, o, _ in self.sides())
+
+    def _cut_candidates(self, sector: Sector, free: list[int]) -> list[Candidate]:
+        """The piece corners that may lie beyond the side bounding the free corner, their cell cut by it.
+
+        The free corner lies between a side and a neighbour's edge; the piece's edge along that
+        neighbour's, longer than it in the cell, runs past the side, at an angle less than the free one.
+        """
+        if {sector.kind_a, sector.kind_b} != {"cell", "side"}:
+            return []
+        along_first = sector.kind_a == "cell"
+        room = sector.length_a if along_first else sector.length_b
+        found: list[Candidate] = []
+        for i in free:
+            shape = self.shapes[i]
+            for k in range(shape.count):
+                if float(shape.angles[k]) >= sector.span - self.tol.angle_rad:
+                    continue
+                edge = k if along_first else k - 1
+                if float(shape.cell_lengths[edge, 0]) < room - self.tol.length_m:
+                    continue
+                found.append((i, k, False, False, False, True))
         return found
 
-    def place(self, sector: Sector, candidate: tuple[int, int, bool, bool, bool]) -> tuple[float, Placed] | None:
+    def place(self, sector: Sector, candidate: Candidate) -> tuple[float, Placed] | None:
         """The candidate placed in the free corner, fitted to its neighbours, its misfit; None: no fit."""
-        i, k, border_in, border_out, closing = candidate
+        i, k, border_in, border_out, closing, cut = candidate
         shape = self.shapes[i]
-        corner = shape.cell_corner(k, border_in, border_out)
-        turn = sector.start - math.atan2(shape.directions[k, 1], shape.directions[k, 0])
-        if closing:
-            d_in = shape.directions[k - 1]
-            other = sector.start + sector.span + math.pi - math.atan2(d_in[1], d_in[0])
-            delta = (other - turn + math.pi) % TWO_PI - math.pi
-            turn += delta / 2
-        shift = sector.apex - rotation(turn) @ corner
+        if cut:
+            turn, shift = self._cut_pose(sector, shape, k)
+        else:
+            corner = shape.cell_corner(k, border_in, border_out)
+            turn = sector.start - math.atan2(shape.directions[k, 1], shape.directions[k, 0])
+            if closing:
+                d_in = shape.directions[k - 1]
+                other = sector.start + sector.span + math.pi - math.atan2(d_in[1], d_in[0])
+                delta = (other - turn + math.pi) % TWO_PI - math.pi
+                turn += delta / 2
+            anchor = sector.corner() if closing else sector.apex
+            if float(np.hypot(*(anchor - sector.apex))) > 2 * self.tol.cluster_m:
+                anchor = sector.apex
+            shift = anchor - rotation(turn) @ corner
         placed = self.make_placed(i, turn, shift)
+        if cut and not self._cut_at(placed, sector.apex):
+            return None  # no side cuts the cell at the free corner: the piece's corner falls short of it
         for _ in range(2):
             rows = self._contacts(placed)
             if rows is None:
                 return None
-            step = _fit_step(rows, placed.centre)
+            step = fit_step(rows, placed.centre)
             if step is None:
                 break
             d_turn, d_shift = step
@@ -285,11 +412,35 @@ class Search:
         misfit = float(np.sqrt(np.mean([r[2] ** 2 for r in rows]))) if rows else 0.0
         return misfit, placed
 
+    def _cut_pose(self, sector: Sector, shape: Shape, k: int) -> tuple[float, FloatArray]:
+        """A cut candidate's turn and shift: its edge along the neighbour's, their far ends together."""
+        if sector.kind_a == "cell":  # edge k runs out along the first side, to the neighbour's far corner
+            direction = shape.directions[k]
+            turn = sector.start - math.atan2(direction[1], direction[0])
+            far = shape.cell_corner((k + 1) % shape.count, False, False)
+            end = sector.far_a
+        else:  # edge k-1 runs in along the second side, from the neighbour's far corner
+            direction = shape.directions[k - 1]
+            turn = sector.start + sector.span + math.pi - math.atan2(direction[1], direction[0])
+            far = shape.cell_corner((k - 1) % shape.count, False, False)
+            end = sector.far_b
+        assert end is not None  # a cut candidate's free corner lies along a cell's edge
+        return turn, end - rotation(turn) @ far
+
+    def _cut_at(self, placed: Placed, apex: FloatArray) -> bool:
+        """Whether a side cuts the placed cell at ``apex``: a corner of a cut edge there."""
+        count = len(placed.cell)
+        return any(
+            (placed.cut[k] or placed.cut[k - 1]) and float(np.hypot(*(placed.cell[k] - apex))) < self.tol.cluster_m
+            for k in range(count)
+        )
+
     def _fits(self, placed: Placed, others: list[Placed], slack: float) -> bool:
-        """Whether the cell stays in the rectangle and out of the others, within ``slack`` times the tolerance."""
+        """Whether the piece and its cell stay in the rectangle and out of the others, within ``slack`` x tolerance."""
         limit = slack * self.tol.overlap_m
+        points = self.shapes[placed.shape].points @ rotation(placed.turn).T + placed.shift
         for normal, offset, _ in self.sides():
-            if float(np.max(placed.cell @ normal)) - offset > limit:
+            if max(float(np.max(placed.cell @ normal)), float(np.max(points @ normal))) - offset > limit:
                 return False
         for other in others:
             if float(np.hypot(*(placed.centre - other.centre))) > placed.radius + other.radius:
@@ -312,6 +463,8 @@ class Search:
         for k in range(count):
             a, b = placed.cell[k], placed.cell[(k + 1) % count]
             direction = (b - a) / max(float(np.hypot(*(b - a))), 1e-12)
+            if placed.cut[k]:
+                continue  # on its side by construction: it says nothing of the pose
             if placed.border[k]:
                 for normal, offset, _ in self.sides():
                     if float(direction @ np.array([-normal[1], normal[0]])) > cos_tol:
@@ -365,7 +518,7 @@ class Search:
             if abs(covered - 4 * self.half_l * self.half_w) <= slack:
                 self.solutions.append(list(self.placed))
             return
-        best: tuple[Sector, list[tuple[int, int, bool, bool, bool]]] | None = None
+        best: tuple[Sector, list[Candidate]] | None = None
         for sector in self.sectors():
             candidates = self.prefilter(sector, free)
             if best is None or len(candidates) < len(best[1]):
@@ -430,26 +583,13 @@ class Search:
         return True
 
 
-def _length_fits(lengths: FloatArray, kind: str, target: float, tolerance: float) -> bool:
+def _length_fits(lengths: FloatArray, kind: str, target: float, tolerance: float, cut: bool = False) -> bool:
+    """Whether a cell edge fits along the free corner's side: a cell's edge (longer where a side cuts it) or a side."""
+    if kind == "cell" and cut:
+        return bool(np.max(lengths) >= target - LENGTH_SLACK * tolerance)
     if kind == "cell":
-        return bool(np.min(np.abs(lengths - target)) <= tolerance)
+        return bool(np.min(np.abs(lengths - target)) <= LENGTH_SLACK * tolerance)
     return bool(np.min(lengths) <= target + PLACE_SLACK * tolerance)
-
-
-def _fit_step(rows: list[tuple[FloatArray, FloatArray, float]], centre: FloatArray) -> tuple[float, FloatArray] | None:
-    """The small turn (about ``centre``) and shift that best cancel the rows' misfits, or None if under-determined."""
-    if len(rows) < 3:
-        return None
-    a = np.zeros((len(rows), 3))
-    b = np.zeros(len(rows))
-    for r, (point, normal, misfit) in enumerate(rows):
-        arm = point - centre
-        a[r] = (float(normal @ np.array([-arm[1], arm[0]])), normal[0], normal[1])
-        b[r] = -misfit
-    solution, _, rank, _ = np.linalg.lstsq(a, b, rcond=None)
-    if rank < 3:
-        return None
-    return float(solution[0]), solution[1:]
 
 
 __all__ = ["Placed", "Search", "Sector", "Tolerances"]
