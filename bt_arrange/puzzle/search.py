@@ -26,7 +26,8 @@ import numpy as np
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.puzzle.refine import fit, fit_step
-from bt_arrange.puzzle.shapes import Shape, penetration, rotation, signed_area
+from bt_arrange.puzzle.shapes import Shape, penetration, rotation
+from bt_arrange.shapes.polygon import signed_area_m2
 
 TWO_PI = 2 * math.pi
 #: A cell crossing a side by less than this is left uncut; cut corners closer than this are one.
@@ -513,7 +514,7 @@ class Search:
         self.nodes += 1
         self.deepest = max(self.deepest, len(self.placed))
         if not free:
-            covered = sum(signed_area(p.cell) for p in self.placed)
+            covered = sum(signed_area_m2(p.cell) for p in self.placed)
             slack = self.tol.length_m * 2 * (self.half_l + self.half_w)
             if abs(covered - 4 * self.half_l * self.half_w) <= slack:
                 self.solutions.append(list(self.placed))

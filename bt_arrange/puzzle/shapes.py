@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_arrange.geometry import FloatArray
+from bt_arrange.shapes.polygon import centroid_m, signed_area_m2
 
 #: A measured edge shorter than this is taken for a camera artefact and merged into its neighbours.
 MIN_EDGE_M = 0.0025
@@ -26,24 +27,6 @@ MIN_EDGE_M = 0.0025
 MIN_CORNER_TURN_RAD = math.radians(2.0)
 #: A vertex nearer than this to the chord of its neighbours is taken for a point on a straight edge.
 COLLINEAR_M = 0.0002
-
-
-def signed_area(points: FloatArray) -> float:
-    """The signed area of a polygon (positive counter-clockwise)."""
-    x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-
-
-def area_centroid(points: FloatArray) -> FloatArray:
-    """The area centroid of a simple polygon."""
-    x, y = points[:, 0], points[:, 1]
-    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
-    area = 0.5 * float(np.sum(cross))
-    if abs(area) < 1e-12:
-        return np.asarray(points.mean(axis=0), dtype=float)
-    return np.array([float(np.sum((x + np.roll(x, -1)) * cross)), float(np.sum((y + np.roll(y, -1)) * cross))]) / (
-        6.0 * area
-    )
 
 
 def rotation(turn: float) -> FloatArray:
@@ -74,7 +57,7 @@ def clean_outline(points: FloatArray) -> FloatArray:
     camera rounded off), or by its midpoint when those meet far away.
     """
     array = np.asarray(points, dtype=float).reshape(-1, 2)
-    if signed_area(array) < 0:
+    if signed_area_m2(array) < 0:
         array = array[::-1]
     changed = True
     while changed and len(array) > 3:
@@ -194,12 +177,12 @@ def make_shape(
     """The search's view of a measured outline (table frame) and its optional colour samples."""
     raw = np.asarray(outline, dtype=float).reshape(-1, 2)
     colours_by_edge = list(edge_colours) if edge_colours is not None else None
-    if signed_area(raw) < 0:
+    if signed_area_m2(raw) < 0:
         raw = raw[::-1]
         if colours_by_edge is not None:  # edge k of the reversed outline is edge n-2-k reversed
             n = len(colours_by_edge)
             colours_by_edge = [np.asarray(colours_by_edge[(n - 2 - k) % n])[::-1] for k in range(n)]
-    centre = area_centroid(raw)
+    centre = centroid_m(raw)
     points = clean_outline(raw) - centre
     edges = np.roll(points, -1, axis=0) - points
     lengths = np.hypot(edges[:, 0], edges[:, 1])
@@ -218,7 +201,7 @@ def make_shape(
         angles,
         directions,
         lengths,
-        signed_area(points),
+        signed_area_m2(points),
         samples,
         colours,
         half_gap,
@@ -267,11 +250,9 @@ def penetration(first: FloatArray, second: FloatArray) -> float:
 __all__ = [
     "MIN_EDGE_M",
     "Shape",
-    "area_centroid",
     "clean_outline",
     "make_shape",
     "penetration",
     "rotation",
-    "signed_area",
     "wrap",
 ]

@@ -37,8 +37,8 @@ from bt_arrange.errors import PlanError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.puzzle.refine import Fitted, fit
 from bt_arrange.puzzle.search import Search, Tolerances
-from bt_arrange.puzzle.shapes import Shape, make_shape, rotation, signed_area, wrap
-from bt_arrange.shapes.polygon import outline_problem
+from bt_arrange.puzzle.shapes import Shape, make_shape, rotation, wrap
+from bt_arrange.shapes.polygon import outline_problem, signed_area_m2
 
 #: The default tolerance: how far a cell's edge may be from its neighbour's, in length and place.
 TOLERANCE_M = 0.0006
@@ -169,7 +169,7 @@ def _differing(first: Fitted, second: Fitted, symmetries: list[float], shapes: S
 def _area_problem(
     shapes: Sequence[Shape], raw: Sequence[FloatArray], length: float, width: float, gap: float
 ) -> str | None:
-    area = sum(abs(signed_area(np.asarray(r, dtype=float).reshape(-1, 2))) for r in raw)
+    area = sum(abs(signed_area_m2(np.asarray(r, dtype=float).reshape(-1, 2))) for r in raw)
     perimeter = sum(float(np.sum(s.lengths)) for s in shapes)
     fractures = max(0.0, perimeter - 2 * (length + width))
     expected = length * width - gap / 2 * fractures
