@@ -234,6 +234,29 @@ class MeasuredBreak:
     truths: tuple[Any, ...]
     turns_rad: tuple[float, ...]
 
+    def errors(self, placements: Sequence[Any], symmetry_turns_rad: Sequence[float]) -> tuple[float, float]:
+        """A solve's worst centroid error (m) and turn error (rad), under the slab's symmetric turn that fits best.
+
+        ``placements`` are a solve's, in the order of ``labels``.
+        """
+        import numpy as np
+
+        from bt_arrange.shapes.polygon import centroid_m
+
+        best = (math.inf, math.inf)
+        for symmetry in symmetry_turns_rad:
+            c, s = math.cos(symmetry), math.sin(symmetry)
+            turned = np.array([[c, -s], [s, c]])
+            places, turns = [], []
+            for placement, truth, turn in zip(placements, self.truths, self.turns_rad, strict=True):
+                places.append(math.hypot(*(np.asarray(placement.centroid_m) - turned @ centroid_m(truth))))
+                # the outline was turned by ``turn`` from the slab: the solve turns it back, then by the symmetry
+                off = placement.turn_rad - (symmetry - turn)
+                turns.append(abs(math.atan2(math.sin(off), math.cos(off))))
+            if max(places) < best[0]:
+                best = (max(places), max(turns))
+        return best
+
 
 def measured_break(spec: Any, seed: int, noise_m: float = 0.00005, *, scatter_seed: int = 0) -> MeasuredBreak:
     """``buildable_break`` of ``spec`` from ``seed``, its pieces turned, moved, shuffled, noised (``scatter_seed``).

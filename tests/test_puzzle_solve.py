@@ -36,30 +36,13 @@ def pieces_of(broken: MeasuredBreak) -> list[MeasuredPiece]:
     return [MeasuredPiece(label, outline) for label, outline in zip(broken.labels, broken.outlines, strict=True)]
 
 
-def worst_errors(spec: PuzzleSpec, broken: MeasuredBreak, assembly) -> tuple[float, float]:
-    """The worst centroid error (m) and turn error (rad) of the solve, under the slab's best symmetric turn."""
-    best = (math.inf, math.inf)
-    for symmetry in spec.symmetry_turns_rad:
-        c, s = math.cos(symmetry), math.sin(symmetry)
-        turned = np.array([[c, -s], [s, c]])
-        places, turns = [], []
-        for placement, truth, turn in zip(assembly.placements, broken.truths, broken.turns_rad, strict=True):
-            places.append(math.hypot(*(np.asarray(placement.centroid_m) - turned @ centroid_m(truth))))
-            # the outline was turned by ``turn`` from the slab: the solve must turn it back, then by the symmetry
-            off = placement.turn_rad - (symmetry - turn)
-            turns.append(abs(math.atan2(math.sin(off), math.cos(off))))
-        if max(places) < best[0]:
-            best = (max(places), max(turns))
-    return best
-
-
 @pytest.mark.parametrize(("pieces", "seed"), [(4, 0), (6, 0), (6, 1)])
 def test_the_solver_puts_every_piece_of_a_break_back_where_it_was_cut(pieces: int, seed: int) -> None:
     spec = spec_of(pieces)
     broken = measured_break(spec, seed, NOISE_M)
     assembly = solve(pieces_of(broken), spec.size_m, spec.gap_m)
     assert [p.label for p in assembly.placements] == list(broken.labels)
-    place_m, turn_rad = worst_errors(spec, broken, assembly)
+    place_m, turn_rad = broken.errors(assembly.placements, spec.symmetry_turns_rad)
     assert place_m < 0.0002, place_m
     assert turn_rad < math.radians(0.3), math.degrees(turn_rad)
     assert 0 < assembly.residual_m < 0.0001
@@ -103,7 +86,7 @@ def test_a_piece_touching_the_border_only_at_a_corner_is_placed_too(pieces: int,
     )
     assert np.any((short > 0.0002) & (short < 0.002)), short  # the case is still there
     assembly = solve(pieces_of(broken), spec.size_m, spec.gap_m)
-    place_m, turn_rad = worst_errors(spec, broken, assembly)
+    place_m, turn_rad = broken.errors(assembly.placements, spec.symmetry_turns_rad)
     assert place_m < 0.0002, place_m
     assert turn_rad < math.radians(0.3), math.degrees(turn_rad)
 
