@@ -179,10 +179,12 @@ def standing(run: Any, target: Any) -> tuple[float, float]:
 
 #: The oblique picture (``--picture``): its size (px), and where it looks from, around the plan's centre.
 PICTURE_SIZE_PX = (640, 480)
-PICTURE_DISTANCE_M, PICTURE_YAW_DEG, PICTURE_PITCH_DEG = 0.45, 35.0, -35.0
+PICTURE_DISTANCE_M, PICTURE_PITCH_DEG = 0.45, -35.0
+#: From where each plan is seen (deg about the vertical): the pyramid across its rows, the others at a corner.
+PICTURE_YAW_DEG = {"tower": 35.0, "pyramid": 125.0, "pallet": 35.0}
 
 
-def picture(run: Any, targets: list[Any], path: Path) -> None:
+def picture(run: Any, targets: list[Any], path: Path, yaw_deg: float = 35.0) -> None:
     """An oblique view of the built arrangement (pybullet's renderer, a picture for the docs only).
 
     The top camera sees only the top faces; this view, from the side and above the plan's centre,
@@ -197,7 +199,7 @@ def picture(run: Any, targets: list[Any], path: Path) -> None:
     view = client.computeViewMatrixFromYawPitchRoll(
         cameraTargetPosition=[*centre, height_m / 2],
         distance=PICTURE_DISTANCE_M,
-        yaw=PICTURE_YAW_DEG,
+        yaw=yaw_deg,
         pitch=PICTURE_PITCH_DEG,
         roll=0.0,
         upAxisIndex=2,
@@ -247,7 +249,8 @@ def run_once(
         report = run.run()
         heights = {t.obj: standing(run, t) for t in root.targets}
         if picture_dir is not None:
-            picture(run, list(root.targets), picture_dir / f"{plan}_s{seed}{'_' + inject if inject else ''}.png")
+            name = f"{plan}_s{seed}{'_' + inject if inject else ''}.png"
+            picture(run, list(root.targets), picture_dir / name, PICTURE_YAW_DEG.get(plan, 35.0))
     objects = report.to_dict()["objects"]
     fallen = [n for n, (dz, tilt) in heights.items() if abs(dz) > FALLEN_MM or tilt > TIPPED_DEG]
     moved = list(watch.placing_mm.values()) + list(watch.correcting_mm.values())
