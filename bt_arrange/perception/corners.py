@@ -123,11 +123,27 @@ SHARP_EDGE_SPREAD = 0.25
 INITIAL_OUTSIDE_PX = 2.0
 
 
-def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
-    """Fraction of each pixel (columns, band) covered by the face, unmixed from ``outside``."""
+def _unmixed(x: FloatArray, face: FloatArray, outside: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Each pixel's (columns, band) face fraction unmixed from ``outside`` (columns, 2), and its distance off that mix."""
     contrast = face[None, :] - outside
     contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
-    return np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    c = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    mixed = outside[:, None, :] + c[..., None] * contrast[:, None, :]
+    return c, np.linalg.norm(x - mixed, axis=-1)
+
+
+def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
+    """Fraction of each pixel (columns, band) covered by the face, unmixed from ``outside`` or from grey.
+
+    Each pixel is taken as the mix that explains it better: the face with the column's outside
+    colour, or the face with grey (a part's side, the table; chroma zero). A raised part's side
+    seen as a grey strip between its face and a coloured face below (a pallet's upper bar over
+    the red layer) is no mix of blue and red: unmixed from red, each of its pixels counted half
+    the face, and the edge came out a pixel too far (0.23 mm on the pallet's bars).
+    """
+    c_outside, off_outside = _unmixed(x, face, outside)
+    c_grey, off_grey = _unmixed(x, face, np.zeros_like(outside))
+    return np.where(off_grey < off_outside, c_grey, c_outside)
 
 
 def _side_edge_points(
