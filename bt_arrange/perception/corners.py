@@ -11,7 +11,9 @@ four fitted lines:
   ``c * face + (1 - c) * outside`` where ``c`` is the fraction of the pixel the face covers.
   The mix is linear in RGB; solving it for ``c`` in the chroma plane (RGB minus its grey part)
   makes any grey neighbour (the table, the white part sides, the robot) count as "outside"
-  whatever its brightness, and a coloured neighbour is unmixed with its own colour.
+  whatever its brightness, and a coloured neighbour is unmixed with its own colour (each pixel
+  from that colour or from grey, whichever mix lies nearer it: a grey side strip between the
+  face and a coloured face beyond is outside too).
 * Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
   height at the column's centre exactly, whatever the slope (the area under a straight line
   over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
