@@ -207,7 +207,10 @@ def _side_edge_points(
     first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 0, first_out - 1)
     outside = x[np.arange(len(x)), first_out]
     window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
-    covered = np.where(window, _covered(x, face, outside), 0.0)
+    # A pixel covers between none and all of itself: an outside read on a mix beyond (a twin's
+    # face across a 1 mm gap, anti-aliased) would otherwise give the pixels before it negative
+    # coverages and pull the edge inwards (0.15 mm on the pyramid's green 2 in MuJoCo).
+    covered = np.where(window, np.clip(_covered(x, face, outside), 0.0, 1.0), 0.0)
     edge = first_mixed + covered.sum(axis=1)
     spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
     v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
