@@ -13,7 +13,7 @@ four fitted lines:
   makes any grey neighbour (the table, the white part sides, the robot) count as "outside"
   whatever its brightness, and a coloured neighbour is unmixed with its own colour (each pixel
   from that colour or from grey, whichever mix lies nearer it: a grey side strip between the
-  face and a coloured face beyond is outside too).
+  face and a coloured face beyond is outside too; ``_covered``).
 * Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
   height at the column's centre exactly, whatever the slope (the area under a straight line
   over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
@@ -125,6 +125,14 @@ SHARP_EDGE_SPREAD = 0.25
 INITIAL_OUTSIDE_PX = 2.0
 
 
+#: A pixel's unmixed coverage this far below none or above all (a fraction of the pixel) is no
+#: mix of the face and the outside read (camera noise moves it a few hundredths): set to none or all.
+GROSS_COVERAGE = 0.25
+#: An outside colour counts as coloured (a neighbour's face, not the table or a part's side) when its
+#: chroma is at least this fraction of the face's (the simulator's table: 0.03 of a face's).
+COLOURED_OUTSIDE = 0.3
+
+
 def _unmixed(x: FloatArray, face: FloatArray, outside: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Each pixel's (columns, band) face fraction unmixed from ``outside`` (columns, 2), and its distance off that mix."""
     contrast = face[None, :] - outside
@@ -142,10 +150,14 @@ def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray
     seen as a grey strip between its face and a coloured face below (a pallet's upper bar over
     the red layer) is no mix of blue and red: unmixed from red, each of its pixels counted half
     the face, and the edge came out a pixel too far (0.23 mm on the pallet's bars).
+
+    Only beside a coloured outside (chroma at least ``COLOURED_OUTSIDE`` of the face's): beside
+    the table, itself a grey, the choice would only follow the camera noise.
     """
     c_outside, off_outside = _unmixed(x, face, outside)
     c_grey, off_grey = _unmixed(x, face, np.zeros_like(outside))
-    return np.where(off_grey < off_outside, c_grey, c_outside)
+    coloured = np.linalg.norm(outside, axis=-1) >= COLOURED_OUTSIDE * float(np.linalg.norm(face))
+    return np.where(coloured[:, None] & (off_grey < off_outside), c_grey, c_outside)
 
 
 def _side_edge_points(
@@ -208,9 +220,13 @@ def _side_edge_points(
     outside = x[np.arange(len(x)), first_out]
     window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
     # A pixel covers between none and all of itself: an outside read on a mix beyond (a twin's
-    # face across a 1 mm gap, anti-aliased) would otherwise give the pixels before it negative
-    # coverages and pull the edge inwards (0.15 mm on the pyramid's green 2 in MuJoCo).
-    covered = np.where(window, np.clip(_covered(x, face, outside), 0.0, 1.0), 0.0)
+    # face across a 1 mm gap, anti-aliased) would otherwise give the pixels before it coverages
+    # of -1 or less and pull the edge inwards (0.15 mm on the pyramid's green 2 in MuJoCo). Only
+    # such gross ones are set to none or all: clipping the camera noise's small excursions too
+    # would bias every noisy edge outwards.
+    c = _covered(x, face, outside)
+    c = np.where(c < -GROSS_COVERAGE, 0.0, np.where(c > 1.0 + GROSS_COVERAGE, 1.0, c))
+    covered = np.where(window, c, 0.0)
     edge = first_mixed + covered.sum(axis=1)
     spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
     v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
