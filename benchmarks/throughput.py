@@ -29,7 +29,9 @@ stepping its physics: 1.0 would mean nothing but physics costs anything), and fo
 tree ``world_s_per_object``, ``bound_s_per_object`` and ``bound_ratio`` (world time over the bound).
 ``examples`` holds the same keys per example, with ``real_time_factor`` (world time over wall
 time), ``real_time_factor_cpu`` (over the process's CPU time, which other jobs on a shared machine
-do not stretch) and ``perception_share`` (the detector's fraction of the wall time); every trial
+do not stretch), ``perception_share`` (the detector's fraction of the wall time) and
+``perception_share_cpu`` (its fraction of the CPU time: the detector's OpenCV and NumPy may use
+several threads, so on a shared machine its wall share moves with the other jobs); every trial
 has them.
 Wall-clock figures depend on the machine and on what else runs on it: compare ratios from one run.
 """
@@ -199,10 +201,13 @@ def run_trial(tree_file: Path, seed: int) -> dict:
     module = treefile.load(tree_file)
     root = treefile.build_root(module)
     timers = SectionTimers()
+    # The detector's CPU time too: a share of wall time depends on what else the machine runs.
+    cpu_timers = SectionTimers(clock=time.process_time)
     world_by_category: dict[str, float] = defaultdict(float)
     world_by_stage: dict[str, float] = defaultdict(float)
     with (
         timed_on_class(timers, PartDetector, DETECTOR_METHODS, "perception"),
+        timed_on_class(cpu_timers, PartDetector, DETECTOR_METHODS, "perception"),
         SimulatedRun(root, treefile.scene(module, seed)) as run,
     ):
         cell, context = run.cell, run.context
@@ -262,6 +267,7 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         "cpu_s": round(cpu_s, 3),
         "real_time_factor_cpu": round(report.sim_seconds / cpu_s, 2) if cpu_s > 0 else None,
         "perception_share": round(seconds["perception"] / wall_s, 4) if wall_s > 0 else None,
+        "perception_share_cpu": round(cpu_timers.seconds.get("perception", 0.0) / cpu_s, 4) if cpu_s > 0 else None,
         "wall_s_by_section": {name: round(value, 3) for name, value in seconds.items()},
         "share_by_section": {name: round(value / wall_s, 4) for name, value in seconds.items()},
         "floor_ratio": round(wall_s / physics_s, 3) if physics_s > 0 else math.inf,
@@ -295,6 +301,7 @@ def _example_summary(trial: dict) -> dict:
         "real_time_factor",
         "real_time_factor_cpu",
         "perception_share",
+        "perception_share_cpu",
     )
     return {key: trial[key] for key in ("status", "all_within", *keys)}
 
