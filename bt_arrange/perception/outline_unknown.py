@@ -54,7 +54,7 @@ from bt_arrange.perception.outline_unknown_edges import (
     line_of_points,
     local_sampler,
 )
-from bt_arrange.perception.segmentation import Blob, clean_mask, find_blobs
+from bt_arrange.perception.segmentation import Blob, clean_mask, find_blobs, to_hsv
 from bt_arrange.perception.values import PreparedView
 from bt_arrange.robot import CameraFrame
 
@@ -499,6 +499,7 @@ def measure_unknown_outlines(
     *,
     max_vertices: int = 16,
     min_edge_m: float = 0.003,
+    painted: bool = False,
 ) -> tuple[list[MeasuredOutline], list[str]]:
     """Every whole face of ``colour`` measured as a convex polygon on ``z = plane_z_m``, and one line per problem.
 
@@ -506,10 +507,17 @@ def measure_unknown_outlines(
     the smallest blob looked at (a quarter of its face). ``frame`` is a camera frame or the detector's
     prepared view of one. Sides shorter than ``min_edge_m`` are left out (their neighbours meet
     instead); a face of more than ``max_vertices`` sides is reported, not measured. Outlines come back
-    largest blob first.
+    largest blob first. ``painted``: the faces carry a picture (``colour`` a range of many hues), so no
+    one chroma is a face's colour at its edges: each side is measured against the face's colour read
+    per column just inside it (:func:`measure_unknown_outlines_in_mask` on the colour's mask).
     """
     view = _view(detector, frame)
     colour_range = detector.colours[colour] if isinstance(colour, str) else colour
+    if painted:
+        mask = colour_range.mask(to_hsv(view.rgb))
+        return measure_unknown_outlines_in_mask(
+            detector, view, mask, plane_z_m, max_vertices=max_vertices, min_edge_m=min_edge_m, name=colour_range.name
+        )
     candidates, _ = detector.candidates(view, colour_range, None)
     regions = []
     for blob, on_plane, _ in candidates:
