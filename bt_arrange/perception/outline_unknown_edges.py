@@ -72,6 +72,36 @@ def fit_line(points: FloatArray, floor_m: float) -> tuple[Line, FloatArray]:
     return line, ((points - point) @ normal)[keep]
 
 
+def clear_along_bands(points: FloatArray, corners: FloatArray, side: int, reach_px: float) -> NDArray[np.bool_]:
+    """Which edge points of side ``side`` read no other side: none crosses their band within ``reach_px``.
+
+    A point's edge is read along its band, the pixel column across the side (a row for a steep
+    side), from ``reach_px`` inside the edge to ``reach_px`` beyond it. Another side's edge in that
+    stretch would mix into its sum; beside the band, however near, it does not. Near an obtuse
+    corner a side's own columns run clear of its neighbour while their distance to it is small.
+    """
+    count = len(corners)
+    p, q = corners[side], corners[(side + 1) % count]
+    axis = 0 if abs(q[0] - p[0]) >= abs(q[1] - p[1]) else 1  # the coordinate along the side
+    along, across = points[:, axis], points[:, 1 - axis]
+    clear = np.ones(len(points), dtype=bool)
+    for other in range(count):
+        if other == side:
+            continue
+        a, b = corners[other], corners[(other + 1) % count]
+        low, high = sorted((a[axis], b[axis]))
+        # The other side's stretch over each band, widened by half a pixel either way (the band's width).
+        t_low = np.clip((along - 0.5 - a[axis]) / (b[axis] - a[axis] or 1e-9), 0.0, 1.0)
+        t_high = np.clip((along + 0.5 - a[axis]) / (b[axis] - a[axis] or 1e-9), 0.0, 1.0)
+        first = a[1 - axis] + t_low * (b[1 - axis] - a[1 - axis])
+        last = a[1 - axis] + t_high * (b[1 - axis] - a[1 - axis])
+        over = (along + 0.5 >= low) & (along - 0.5 <= high)
+        near = np.minimum(first, last) - reach_px <= across
+        near &= across <= np.maximum(first, last) + reach_px
+        clear &= ~(over & near)
+    return clear
+
+
 def colour_sampler(view: PreparedView, face_chroma: FloatArray) -> SideSampler:
     """The box's edge measure against one face chroma, keeping points whose band ends clear of the colour."""
 
