@@ -115,6 +115,8 @@ def face_of(detector: FaceSearch, view: PreparedView, colour: ColourRange, blob:
 def face_share(face: Face, pixels_rgb: NDArray[np.uint8]) -> FloatArray:
     """How much of each pixel (N x 3 RGB) is the face's: its chroma's share of the face's; 1 or 0 by a painted range."""
     if face.picture_colour is not None:
+        if len(pixels_rgb) == 0:
+            return np.empty(0)
         hsv = to_hsv(np.ascontiguousarray(pixels_rgb, dtype=np.uint8).reshape(-1, 1, 3))
         return (face.picture_colour.mask(hsv).reshape(-1) > 0).astype(float)
     return np.asarray(chroma(pixels_rgb) @ face.face_chroma / float(face.face_chroma @ face.face_chroma))
