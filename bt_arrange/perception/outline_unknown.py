@@ -14,11 +14,12 @@ frame alone:
    half a pixel, where the mask's rounded corners do not reach.
 3. **Sub-pixel sides**: along each side the covered fractions of the pixels across the edge, unmixed
    in the chroma plane and summed (``corners._side_edge_points``, the box's edge measure), away from
-   the corners and from any other side; a band whose far end holds the colour (a neighbour under a
-   few pixels away) is left out. The points are undistorted and taken onto the plane of the top faces
-   (each pixel's ray meets ``z = plane_z_m``), a line is fitted per side there (total least squares,
-   outliers trimmed), and consecutive lines meet at the vertices. Two passes, the second re-centred on
-   the first's lines and reading the outside colour just beyond the measured edge spread.
+   the corners and where no other side crosses the band (``clear_along_bands``); a band whose far
+   end holds the colour (a neighbour under a few pixels away) is left out. The points are undistorted
+   and taken onto the plane of the top faces (each pixel's ray meets ``z = plane_z_m``), a line is
+   fitted per side there (total least squares, outliers trimmed), and consecutive lines meet at the
+   vertices. Two passes, the second re-centred on the first's lines and reading the outside colour
+   just beyond the measured edge spread.
 
 Every step is vectorised over a side's pixels; the loops run over sides and blobs. The image knows
 the vertices, never which piece is which: matching them to a fresco is the caller's.
