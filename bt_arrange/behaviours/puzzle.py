@@ -127,7 +127,9 @@ class SurveyPieces(PuzzleNode):
 
         camera = context.robot.camera
         plane_z_m = context.detector.config.table_z_m + self.spec.height_m
-        outlines, problems = measure_unknown_outlines(context.detector, camera.capture(), self.spec.colour, plane_z_m)
+        outlines, problems = measure_unknown_outlines(
+            context.detector, camera.capture(), self.spec.colour, plane_z_m, painted=self.spec.picture is not None
+        )
         if problems:
             return f"{self.spec.name}: {problems[0]}"
         if len(outlines) != self.spec.pieces:

@@ -133,7 +133,7 @@ def painted_range() -> Any:
     """The camera's colour of a painted puzzle's pieces: every hue, saturated (``picture.MIN_SATURATION``)."""
     from bt_arrange.perception.colours import ColourRange
 
-    return ColourRange(PAINTED, ((0.0, 360.0),), (0.3, 1.0), (0.2, 1.0), (1.0, 1.0, 1.0))
+    return ColourRange(PAINTED, ((0.0, 360.0),), (0.3, 1.0), (0.2, 1.0))  # no paint: the picture is printed
 
 
 def painted_colours(reader: Any, puzzles: list[PuzzleSpec], targets: list[Any], colours: Any) -> Any:

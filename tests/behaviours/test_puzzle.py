@@ -52,10 +52,12 @@ def solve_in_fake_camera(clock, seed: int):
     "seed",
     [
         0,
-        # Known misses (docs/puzzle.md): a short side the survey cannot fit in the fake camera's frame,
-        # and a break the solve's search does not complete. Not strict: either may pass once fixed.
-        pytest.param(1, marks=pytest.mark.xfail(reason="known miss of the survey or the solve")),
-        pytest.param(2, marks=pytest.mark.xfail(reason="known miss of the survey or the solve")),
+        # Known misses (docs/puzzle.md), not strict: either may pass once fixed. Seed 1: surveyed within
+        # 0.08 mm and solved within 0.02 mm, but the measured piece 6 fails the grasp judgement its true
+        # outline passes (solved_targets). Seed 2: two sides of 11 and 12 mm (11 and 12 px in the fake
+        # camera's frame, 8 px of contour after the 7 px opening) are taken for the opening's chamfers.
+        pytest.param(1, marks=pytest.mark.xfail(reason="known miss: the grasp judgement of a measured piece")),
+        pytest.param(2, marks=pytest.mark.xfail(reason="known miss of the survey: two short sides lost")),
     ],
 )
 def test_survey_and_solve_from_the_camera_alone_find_every_piece_s_home(clock, seed: int) -> None:
