@@ -137,7 +137,7 @@ class SurveyPieces(PuzzleNode):
                 f"{self.spec.name}: the camera sees {len(outlines)} pieces of {self.spec.colour}, "
                 f"the puzzle has {self.spec.pieces}"
             )
-        found = [(m, tuple(float(v) for v in centroid_m(m.outline_m))) for m in outlines]
+        found = [(m, (float(c[0]), float(c[1]))) for m in outlines for c in [centroid_m(m.outline_m)]]
         # Numbered by where they lie, so that a run's names are the same from the same scene.
         found.sort(key=lambda item: (round(item[1][0], 3), round(item[1][1], 3)))
         self.pieces = tuple(

@@ -98,7 +98,9 @@ def _parse_spec(text: str) -> PuzzleSpec:
         raise ValueError("its size and gap must be positive and its pose finite")
     if not MIN_PUZZLE_PIECES <= count <= MAX_PUZZLE_PIECES:
         raise ValueError(f"a puzzle has {MIN_PUZZLE_PIECES} to {MAX_PUZZLE_PIECES} pieces")
-    return PuzzleSpec(name, (edges[0], edges[1], edges[2]), count, float(gap), colour, *where, picture=picture)
+    return PuzzleSpec(
+        name, (edges[0], edges[1], edges[2]), count, float(gap), colour, where[0], where[1], where[2], picture=picture
+    )
 
 
 def puzzle_port_type() -> Any:
