@@ -45,7 +45,7 @@ def cell() -> list[str]:
     data = _json("benchmarks/cell.py", "--trials", "50", "--seed", "0", "--json")
     placed = data["placed_error_mm"]
     return [
-        f"pick and place, steered by ground truth: {placed['mean']:.2f} ± {placed['std']:.2f} mm, max "
+        f"pick and place, steered by ground truth: {placed['mean']:.3f} ± {placed['std']:.3f} mm, max "
         f"{placed['max']:.2f} mm, {data['grasp_failures']} grasp failures in {data['trials']}  [{source}]"
     ]
 
@@ -308,8 +308,15 @@ FIGURES: dict[str, Callable[[], list[str]]] = {
     "real_cell": real_cell,
     "records": records,
 }
-#: The figures that run whole experiment campaigns (minutes each): left out by ``--quick``.
-CAMPAIGNS = ("table1", "real_cell", "records")
+#: The figures that run whole experiment campaigns (minutes each): left out by ``--quick``, which prints
+#: the command each runs instead.
+CAMPAIGNS = {
+    "table1": "bt-arrange experiment --trials 100 --workers 2",
+    "real_cell": "bt-arrange calibrate --cell real --views 28 --out camera.toml, then bt-arrange experiment --cell "
+    "real --rows system,translation,orientation --trials 30 --workers 2 --calibration camera.toml "
+    "[--strategy diagonal --threshold-mm 0.5]",
+    "records": f"python benchmarks/campaign_wall.py --against {BEFORE_WINDOWS} --trials 100 --json",
+}
 
 
 def _names(text: str, parser: argparse.ArgumentParser, option: str) -> list[str]:
@@ -342,6 +349,10 @@ def main(argv: list[str] | None = None) -> int:
             continue
         for line in FIGURES[name]():
             print(line, flush=True)
+    if args.quick and not args.only:
+        for name, command in CAMPAIGNS.items():
+            if name not in skipped:
+                print(f"{name}: a campaign, left out by --quick (python scripts/figures.py --only {name})  [{command}]")
     return 0
 
 

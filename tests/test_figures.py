@@ -184,3 +184,12 @@ def test_the_memory_benchmark_reads_growth_from_run_two() -> None:
     assert memory.checkpoints(60) == [2, 10, 60]
     assert memory.growth_pct({2: 100.0, 10: 101.0, 60: 104.0}) == 4.0
     assert memory.growth_pct({1: 100.0}) is None
+
+
+def test_quick_names_each_campaign_it_leaves_out_and_the_command_it_runs(figures, capsys, monkeypatch) -> None:
+    monkeypatch.setattr(figures, "_run", lambda *argv: pytest.fail(f"{argv} was run"))
+    others = [name for name in figures.FIGURES if name not in figures.CAMPAIGNS]
+    assert figures.main(["--quick", "--skip", ",".join(others)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split(":")[0] for line in lines] == ["table1", "real_cell", "records"]
+    assert "left out by --quick" in lines[2] and f"campaign_wall.py --against {figures.BEFORE_WINDOWS}" in lines[2]
