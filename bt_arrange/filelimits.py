@@ -17,7 +17,8 @@ times what the shipped files need, docs/xml.md and docs/plans.md) and documented
 
 The last three are set by what judging a type costs as the plan loads (``benchmarks/outline_limits.py``):
 its outline's checks, the search for where the pads can close (``bt_arrange.shapes.antipodal``) and
-the yaw check (``bt_arrange.shapes.yaw_feature``) each take O(n log n) for n points, a part fixed a
+the yaw check (``bt_arrange.shapes.yaw_feature``) each take O(n log n) for n points (the grasp
+search's n^2 / 2 pairs of edges aside, taken at once in numpy: 5 ms for 256 points), a part fixed a
 type (every closing axis, every coarse turn) and a part a point: about 0.12 s of CPU for a round
 64-point type, 0.24 s for a 256-point one, so that the hardest plan tried within them (12 round
 64-point types) loads in 1.6 s.
