@@ -15,9 +15,12 @@ import numpy as np
 import pytest
 
 from bt_arrange import cli
-from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_OUTLINE_POINTS
+from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_OUTLINE_POINTS, MAX_PLAN_OUTLINE_POINTS
 from bt_arrange.shapes import polygon
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 from bt_arrange.shapes.polygon import first_crossing, outline_problem, segments_cross
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _every_pair(points: np.ndarray) -> bool:
@@ -132,6 +135,55 @@ def test_a_plan_with_an_outline_over_the_limit_is_one_line_and_exit_2(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "[objects.blob]" in err, err
     assert f"the outline has {MAX_OUTLINE_POINTS + 1} points, over the limit of {MAX_OUTLINE_POINTS}" in err
+
+
+def _round_part_mm(count: int, seed: int = 0) -> list[list[float]]:
+    """A round part of ``count`` points the type check accepts: two flats joined by rippled arcs (millimetres)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("outline_limits", ROOT / "benchmarks" / "outline_limits.py")
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return (bench.round_part(count, seed) * 1000).round(4).tolist()
+
+
+def test_a_part_of_as_many_points_as_the_limit_loads(tmp_path: Path) -> None:
+    from bt_arrange import plans
+
+    assert MAX_OUTLINE_POINTS == 256
+    path = _plan(tmp_path, {"round": _round_part_mm(MAX_OUTLINE_POINTS)})
+    plan = plans.load(path)
+    shape = plan.object_types["round"].shape
+    assert len(shape.outline) == MAX_OUTLINE_POINTS and shape.grasps(ROBOTIQ_2F85)
+
+
+def test_one_point_over_the_limit_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _plan(tmp_path, {"round": _round_part_mm(MAX_OUTLINE_POINTS + 1)})
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "[objects.round]" in err, err
+    assert f"the outline has {MAX_OUTLINE_POINTS + 1} points, over the limit of {MAX_OUTLINE_POINTS}" in err
+
+
+def test_outlines_over_the_plan_s_limit_in_all_are_refused_before_any_is_judged(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from bt_arrange import plans
+
+    def no_work(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a type was judged before the outline points in all were counted")
+
+    monkeypatch.setattr(plans.Prism, "from_outline", no_work)
+    parts = MAX_PLAN_OUTLINE_POINTS // MAX_OUTLINE_POINTS + 1
+    path = _plan(tmp_path, {f"round{k}": _round_part_mm(MAX_OUTLINE_POINTS, k) for k in range(parts)})
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert (
+        f"[objects]: {parts * MAX_OUTLINE_POINTS:,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS}"
+        in err
+    )
 
 
 def test_a_plan_with_more_types_than_the_limit_is_refused_before_any_is_judged(
