@@ -230,3 +230,63 @@ def test_the_rough_judgement_of_every_place_finds_the_grasps_the_exact_loop_find
             _exact_loop_alone(patched)
             exact = antipodal._search(outline, 0.02, ROBOTIQ_2F85)
         assert rough == exact, points
+
+
+def _xml_of_picks(types: dict[str, list[list[float]]]) -> str:
+    """An XML tree of one Pick a type, each type's outline written in its object_type port."""
+    picks = "".join(
+        f'<Pick name="pick {name}" obj="{name}" object_type="{name}=outline_mm '
+        + " ".join(f"{x:g}:{y:g}" for x, y in outline)
+        + ' height_mm 20"/>\n'
+        for name, outline in types.items()
+    )
+    return (
+        '<root BTCPP_format="4" main_tree_to_execute="M"><BehaviorTree ID="M">\n'
+        f'<Sequence name="s">\n{picks}</Sequence></BehaviorTree></root>\n'
+    )
+
+
+@pytest.mark.parametrize("over", ["types", "points"])
+def test_an_xml_tree_over_a_plan_s_type_limits_is_refused_before_any_type_is_judged(
+    over: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from bt_arrange import ports
+
+    def no_work(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a type was judged before the types in all were counted")
+
+    if over == "types":
+        triangle = [[0, 0], [60, 0], [15, 45]]
+        types = {f"t{k}": [[x + k * 0.01, y] for x, y in triangle] for k in range(MAX_OBJECT_TYPES + 1)}
+        expected = f"{MAX_OBJECT_TYPES + 1} object types, over the limit of {MAX_OBJECT_TYPES}"
+    else:
+        parts = MAX_PLAN_OUTLINE_POINTS // MAX_OUTLINE_POINTS + 1
+        types = {f"round{k}": _round_part_mm(MAX_OUTLINE_POINTS, k) for k in range(parts)}
+        expected = f"{parts * MAX_OUTLINE_POINTS:,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS}"
+    path = tmp_path / "tree.xml"
+    path.write_text(_xml_of_picks(types))
+    monkeypatch.setattr(ports.Prism, "from_outline", no_work)
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and expected in err and str(path) in err, err
+
+
+def test_an_xml_tree_s_types_repeated_in_many_ports_count_once(tmp_path: Path) -> None:
+    from bt_arrange import xmltree
+
+    outline = _round_part_mm(MAX_OUTLINE_POINTS)
+    text = _xml_of_picks({"round": outline})
+    many = text.replace("</Sequence>", "".join(text.split("\n")[2] + "\n" for _ in range(MAX_OBJECT_TYPES)) + "</Sequence>")
+    assert many.count("outline_mm") == MAX_OBJECT_TYPES + 1
+    root = xmltree.from_xml(many)
+    assert len(list(root.children)) == MAX_OBJECT_TYPES + 1
+
+
+def test_a_bad_outline_in_an_xml_port_is_quoted_short(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    crossing = [[0, 0], [60, 0], [0, 60], [60, 60]] + [[60 + k, 60 + 10 * k] for k in range(1, 40)]
+    path = tmp_path / "tree.xml"
+    path.write_text(_xml_of_picks({"bowtie": crossing}))
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "object_type='bowtie=outline_mm 0:0 60:0" in err and "...'" in err, err
+    assert len(err) < 500, err
