@@ -276,7 +276,9 @@ def test_an_xml_tree_s_types_repeated_in_many_ports_count_once(tmp_path: Path) -
 
     outline = _round_part_mm(MAX_OUTLINE_POINTS)
     text = _xml_of_picks({"round": outline})
-    many = text.replace("</Sequence>", "".join(text.split("\n")[2] + "\n" for _ in range(MAX_OBJECT_TYPES)) + "</Sequence>")
+    many = text.replace(
+        "</Sequence>", "".join(text.split("\n")[2] + "\n" for _ in range(MAX_OBJECT_TYPES)) + "</Sequence>"
+    )
     assert many.count("outline_mm") == MAX_OBJECT_TYPES + 1
     root = xmltree.from_xml(many)
     assert len(list(root.children)) == MAX_OBJECT_TYPES + 1

@@ -173,7 +173,8 @@ class _Reader:
         if len(seen) > MAX_OBJECT_TYPES:
             self.fail(
                 max(seen.values(), key=lambda e: e.line),
-                f"{len(seen)} object types, over the limit of {MAX_OBJECT_TYPES} (bt_arrange.filelimits.MAX_OBJECT_TYPES)",
+                f"{len(seen)} object types, over the limit of {MAX_OBJECT_TYPES} "
+                "(bt_arrange.filelimits.MAX_OBJECT_TYPES)",
             )
         points = sum(text.count(":") for text in seen)
         if points > MAX_PLAN_OUTLINE_POINTS:
