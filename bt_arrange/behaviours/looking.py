@@ -13,8 +13,8 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT, Z_PORT
 from bt_arrange.behaviours.context import Context
-from bt_arrange.behaviours.moves import PARKED_TOLERANCE_RAD, JointMovePlan, grasp_width_m
-from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
+from bt_arrange.behaviours.moves import JointMovePlan
+from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import Detection, DetectionStatus, PartDetector, WorldRegion
@@ -30,6 +30,8 @@ AT_TARGET_FRACTION = 0.5
 #: Chooses one of several blobs (world x, y) of a colour; None: none will do (with the reason).
 Chooser = Callable[[tuple[tuple[float, float], ...]], "tuple[tuple[float, float] | None, str]"]
 
+#: The arm counts as parked (out of the camera's view) within this joint distance of home.
+PARKED_TOLERANCE_RAD = 0.01
 #: Room around a part located in the binned search view (accurate to 2 mm) for the window that
 #: measures it: the sub-pixel edge fit reads 5 px (2.4 mm) beyond each edge. Measured: windows
 #: from 4 mm up give the full frame's detection exactly (clean images, 24 random poses).
@@ -41,49 +43,15 @@ LOCATED_MARGIN_M = 0.006
 EXPECTED_MARGIN_M = 0.008
 
 
-#: Fingers standing within this of the width of the part's grasp (m) may hold it: wedged between the
-#: pads, seed 0's fragment held them 0.5 mm under it after opening fully; a release opens them 6 mm
-#: over it among neighbours (``Pads.release_gap_m`` each side), 16 mm in the free.
-HOLDING_MARGIN_M = 0.003
+def park_stage(name: str = stage.PARK) -> MoveStage:
+    """A joint motion home at the free-space limits (it may take over a motion handed on at speed)."""
+    return MoveStage(name, JointMovePlan(lambda context: context.home_q, free=True))
 
 
-def keeps_wrist_parked(context: Context, object_type: ObjectType) -> bool:
-    """True when a look for this part parks the arm with its last wrist joint where it is.
-
-    The turn of the last joint (about the TCP's vertical axis) at home changes nothing the camera
-    sees (measured: the image is identical at any turn of it), and an irregular part's grasps turn
-    it by up to a full turn, which going home undid on every look: the irregular parts' longest
-    joint moves (issue 36). Cuboids (a quarter turn at most) park fully home, as Table 1 was recorded.
-    So does an arm whose fingers stand about the part's width apart (``HOLDING_MARGIN_M``): a part
-    wedged between the pads fell out of them in that turn (seed 0's fragment in the irregular
-    example), to be seen and picked again; kept in the pads, it was carried out of the camera's view.
-    """
-    if object_type.shape.rectangular:
-        return False
-    width_m = context.robot.gripper.width()
-    return abs(width_m - grasp_width_m(context.settings, object_type)) > HOLDING_MARGIN_M
-
-
-def parked_q(context: Context, keep_wrist: bool = False) -> FloatArray:
-    """The joint vector out of the camera's view: home, with the last wrist joint where it is if ``keep_wrist``."""
-    q = np.array(context.home_q, dtype=float)
-    if keep_wrist:
-        q[-1] = context.robot.arm.joint_positions()[-1]
-    return q
-
-
-def park_stage(name: str = stage.PARK, keep_wrist: bool = False) -> MoveStage:
-    """A joint motion home at the free-space limits (it may take over a motion handed on at speed).
-
-    ``keep_wrist``: the last wrist joint stays where it is (``keeps_wrist_parked``).
-    """
-    return MoveStage(name, JointMovePlan(lambda context: parked_q(context, keep_wrist), free=True))
-
-
-def is_parked(context: Context, keep_wrist: bool = False) -> bool:
-    """True when the arm rests at its home pose, out of the camera's view (any last wrist joint if ``keep_wrist``)."""
-    off = np.abs(context.robot.arm.joint_positions() - context.home_q)
-    return float(np.max(off[:-1] if keep_wrist else off)) < PARKED_TOLERANCE_RAD
+def is_parked(context: Context) -> bool:
+    """True when the arm rests at its home pose, out of the camera's view."""
+    q = context.robot.arm.joint_positions()
+    return float(np.max(np.abs(q - context.home_q))) < PARKED_TOLERANCE_RAD
 
 
 def offset_in_target_frame_mm(target: PlanarPose, pose: Pose) -> tuple[float, float]:
@@ -218,8 +186,8 @@ class MoveHome(StagedBehaviour):
         return ()
 
     def stages(self, context: Context) -> list[Stage]:
-        """One joint motion, or none when parked (the last wrist joint may stand anywhere: ``keeps_wrist_parked``)."""
-        return [] if is_parked(context, keep_wrist=True) else [park_stage(stage.MOVE_HOME)]
+        """One joint motion, or none when parked."""
+        return [] if is_parked(context) else [park_stage(stage.MOVE_HOME)]
 
     def success_message(self) -> str:
         """Feedback once home."""
@@ -280,8 +248,7 @@ class Detect(StagedBehaviour):
         """Park if needed, then look."""
         context.detector.colours[self.colour]  # raises PerceptionError for an unknown colour
         looking = InstantStage(stage.look_for(self.colour), self._look)
-        keep_wrist = keeps_wrist_parked(context, self.object_type)
-        return [looking] if is_parked(context, keep_wrist) else [park_stage(keep_wrist=keep_wrist), looking]
+        return [looking] if is_parked(context) else [park_stage(), looking]
 
     def expected_xy_m(self) -> tuple[float, float] | None:
         """Where the part should be, to look there first; None: search the whole view."""

@@ -8,7 +8,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import numpy as np
 from py_trees.common import Status
 
 from bt_arrange.behaviours.base import GripperStage
@@ -118,24 +117,9 @@ def axis_yaw_offset_rad(axis: str) -> float:
     return math.pi / 2 if axis == "y" else 0.0
 
 
-#: The arm counts as parked (out of the camera's view) within this joint distance of home.
-PARKED_TOLERANCE_RAD = 0.01
-
-
 def wrist_yaw_rad(context: Context) -> float:
-    """The yaw of the wrist's last joint now (rad): a new grasp turns it the least.
-
-    An arm parked with its last wrist joint turned (``looking.keeps_wrist_parked``) answers home's
-    yaw: the grasps, releases and pushes chosen from there are those a full park chose, so a part is
-    held by the same pads on the same sides as before (which pad meets which side moves an irregular
-    part differently), only the wrist's route to them is shorter.
-    """
-    q = np.array(context.robot.arm.joint_positions(), dtype=float)
-    home_q = context.home_q
-    off = np.abs(q - home_q)
-    if float(np.max(off[:-1])) < PARKED_TOLERANCE_RAD <= float(off[-1]):
-        q[-1] = home_q[-1]
-    return context.planner.kinematics.wrist_yaw_rad(q)
+    """The yaw of the wrist's last joint now (rad): a new grasp turns it the least."""
+    return context.planner.kinematics.wrist_yaw_rad(context.robot.arm.joint_positions())
 
 
 def holding(context: Context, object_type: ObjectType | None = None) -> bool:
