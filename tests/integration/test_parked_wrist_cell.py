@@ -1,4 +1,4 @@
-"""At home, the last wrist joint's turn changes nothing the top camera sees (why an irregular part's look keeps it)."""
+"""At home, the last wrist joint's turn changes nothing the top camera sees (what a look that kept it would rest on)."""
 
 import numpy as np
 
