@@ -239,6 +239,69 @@ def _side_edge_points(
     return (points if by_columns else points[:, ::-1]), spread[good]
 
 
+#: A pixel across a painted edge this far (its share of the face-to-outside contrast) off their mix is neither.
+MAX_OFF_MIX = 0.25
+
+
+def _local_side_points(
+    rgb: NDArray[np.uint8],
+    p: FloatArray,
+    q: FloatArray,
+    face_centre: FloatArray,
+    half_width_px: int,
+    margin_px: float,
+    near_outside_px: float | None,
+) -> tuple[FloatArray, FloatArray]:
+    """``_side_edge_points`` with the face's chroma read per column, a pixel inside the mixed pixels."""
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    if not by_columns:
+        rgb = rgb.transpose(1, 0, 2)
+        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
+    height, width = rgb.shape[:2]
+    length_px = float(np.hypot(*direction))
+    slope = direction[1] / direction[0]
+    margin_u = margin_px * abs(direction[0]) / length_px
+    u_low, u_high = sorted((p[0], q[0]))
+    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
+    v_line = p[1] + (u - p[0]) * slope
+    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
+    v_start = np.round(v_line).astype(int) - half_width_px
+    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
+    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
+    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
+    if len(u) < 3:
+        return np.empty((0, 2)), np.empty(0)
+    x = chroma(rgb[rows, u[:, None]])
+    if not face_above:
+        x = x[:, ::-1]
+    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
+    near_px = 2.0 if near_outside_px is None else near_outside_px
+    index = np.arange(x.shape[1])
+    columns = np.arange(len(x))
+    first_out = np.clip(np.ceil(line_position + near_px - 0.5).astype(int), 2, x.shape[1] - 1)
+    first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 1, first_out - 1)
+    outside = x[columns, first_out]
+    face = x[columns, first_mixed - 1]
+    contrast = face - outside
+    contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
+    covered_all = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
+    covered = np.where(window, covered_all, 0.0)
+    edge = first_mixed + covered.sum(axis=1)
+    spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
+    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
+    strong = contrast_sq > 0.09 * np.maximum(np.einsum("ij,ij->i", face, face), np.einsum("ij,ij->i", outside, outside))
+    # A pixel across the edge that is no mix of this face colour and the outside's (the picture
+    # changes within a pixel or two of the edge, a stray texel) cannot place it: its column is left out.
+    normal = np.column_stack([-contrast[:, 1], contrast[:, 0]])
+    off_mix = np.abs(np.einsum("ijk,ik->ij", x - outside[:, None, :], normal)) / contrast_sq[:, None]
+    mixed = np.all(~window | ((off_mix <= MAX_OFF_MIX) & (np.abs(covered_all - 0.5) <= 0.5 + MAX_OFF_MIX)), axis=1)
+    good = strong & mixed & (contrast_sq > 4.0**2) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
+    points = np.column_stack([u[good].astype(float), v_edge[good]])
+    return (points if by_columns else points[:, ::-1]), spread[good]
+
+
 def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
     """Least-squares line through edge points with error in v (columns) or u (rows), trimmed."""
     if len(points) < 5:
