@@ -134,8 +134,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     run_threshold = args.threshold_mm is not None
     threshold_mm = args.threshold_mm if run_threshold else THRESHOLD_MM
-    yaw_deg = args.yaw_threshold_deg if args.yaw_threshold_deg is not None else (
-        args.threshold_mm if run_threshold else YAW_THRESHOLD_DEG
+    yaw_deg = (
+        args.yaw_threshold_deg
+        if args.yaw_threshold_deg is not None
+        else (args.threshold_mm if run_threshold else YAW_THRESHOLD_DEG)
     )
     runs = []
     for seed in args.seeds:

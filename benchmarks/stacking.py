@@ -177,6 +177,44 @@ def standing(run: Any, target: Any) -> tuple[float, float]:
     return (float(pose.position_m[2]) - expected_m) * 1000, math.degrees(math.acos(min(1.0, abs(float(up[2])))))
 
 
+#: The oblique picture (``--picture``): its size (px), and where it looks from, around the plan's centre.
+PICTURE_SIZE_PX = (640, 480)
+PICTURE_DISTANCE_M, PICTURE_PITCH_DEG = 0.45, -35.0
+#: From where each plan is seen (deg about the vertical): the pyramid across its rows, the others at a corner.
+PICTURE_YAW_DEG = {"tower": 35.0, "pyramid": 125.0, "pallet": 35.0}
+
+
+def picture(run: Any, targets: list[Any], path: Path, yaw_deg: float = 35.0) -> None:
+    """An oblique view of the built arrangement (pybullet's renderer, a picture for the docs only).
+
+    The top camera sees only the top faces; this view, from the side and above the plan's centre,
+    shows the layers. Nothing steers by it.
+    """
+    import cv2
+    import pybullet
+
+    client = run.cell.client
+    centre = [float(np.mean([t.x_m for t in targets])), float(np.mean([t.y_m for t in targets]))]
+    height_m = max(t.z_m + t.object_type.shape.height_m for t in targets)
+    view = client.computeViewMatrixFromYawPitchRoll(
+        cameraTargetPosition=[*centre, height_m / 2],
+        distance=PICTURE_DISTANCE_M,
+        yaw=yaw_deg,
+        pitch=PICTURE_PITCH_DEG,
+        roll=0.0,
+        upAxisIndex=2,
+    )
+    width, height = PICTURE_SIZE_PX
+    projection = client.computeProjectionMatrixFOV(fov=40.0, aspect=width / height, nearVal=0.05, farVal=3.0)
+    _, _, rgba, _, _ = client.getCameraImage(
+        width, height, viewMatrix=view, projectionMatrix=projection, renderer=pybullet.ER_TINY_RENDERER,
+        lightDirection=[0.4, -0.6, 1.0], shadow=1, flags=pybullet.ER_NO_SEGMENTATION_MASK,
+    )
+    rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+
+
 def run_once(
     plan: str,
     seed: int,
@@ -185,6 +223,7 @@ def run_once(
     backend: str,
     record: Path | None,
     displace_mm: float = 0.0,
+    picture_dir: Path | None = None,
 ) -> dict:
     """One plan, one seed; its figures."""
     path = examples.path_of(plan)
@@ -209,6 +248,9 @@ def run_once(
             run.transition_hooks.append(Displace(run, list(root.targets), displace_mm, inject_seed + seed))
         report = run.run()
         heights = {t.obj: standing(run, t) for t in root.targets}
+        if picture_dir is not None:
+            name = f"{plan}_s{seed}{'_' + inject if inject else ''}.png"
+            picture(run, list(root.targets), picture_dir / name, PICTURE_YAW_DEG.get(plan, 35.0))
     objects = report.to_dict()["objects"]
     fallen = [n for n, (dz, tilt) in heights.items() if abs(dz) > FALLEN_MM or tilt > TIPPED_DEG]
     moved = list(watch.placing_mm.values()) + list(watch.correcting_mm.values())
@@ -229,6 +271,8 @@ def run_once(
         "final_offset_truth_mm": {o["name"]: o["final_offset_truth_mm"] for o in objects},
         "final_yaw_error_truth_deg": {o["name"]: o["final_yaw_error_truth_deg"] for o in objects},
         "placed_offset_mm": {o["name"]: o["placed_offset_mm"] for o in objects},
+        "placed_offset_truth_mm": {o["name"]: o["placed_offset_truth_mm"] for o in objects},
+        "final_offset_mm": {o["name"]: o["final_offset_mm"] for o in objects},
         "pushes": {o["name"]: o["pushes"] for o in objects},
         "height_error_truth_mm": {n: round(dz, 3) for n, (dz, _) in heights.items()},
         "moved_below_placing_truth_mm": {n: round(v, 4) for n, v in watch.placing_mm.items()},
@@ -279,16 +323,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--displace-mm", type=float, default=0.0, help="shift each raised part this far once placed")
     parser.add_argument("--backend", choices=("pybullet", "mujoco"), default="pybullet")
     parser.add_argument("--record", type=Path, help="save each run's images under this folder")
+    parser.add_argument("--picture", type=Path, help="save an oblique view of each built arrangement here (pybullet)")
     parser.add_argument("--out", type=Path, help="append each run as a JSON line")
     parser.add_argument("--table", type=Path, nargs="+", help="print the runs of these JSON-line files as a table")
     args = parser.parse_args(argv)
+    if args.picture is not None and args.backend != "pybullet":
+        parser.error("--picture renders with pybullet: use it with --backend pybullet")
     if args.table:
         print(table([json.loads(line) for path in args.table for line in path.read_text().splitlines() if line]))
         return 0
     runs = []
     for plan in args.plans:
         for seed in args.seeds:
-            result = run_once(plan, seed, args.inject, args.inject_seed, args.backend, args.record, args.displace_mm)
+            result = run_once(
+                plan, seed, args.inject, args.inject_seed, args.backend, args.record, args.displace_mm, args.picture
+            )
             runs.append(result)
             line = json.dumps(result)
             print(line, flush=True)

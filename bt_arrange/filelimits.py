@@ -11,12 +11,17 @@ times what the shipped files need, docs/xml.md and docs/plans.md) and documented
 | ``MAX_TREE_DEPTH``: nesting of a tree, SubTrees expanded (and of an XML file's elements) | 100 | 10 |
 | ``MAX_TARGETS``: targets (and starts) of a plan file | 200 | 9 |
 | ``MAX_COLOURS``: colours of a plan file | 64 | 2 |
-| ``MAX_OUTLINE_POINTS``: points of one outline (``outline_mm``) | 32 | 6 (``irregular_parts.toml``'s fragment) |
+| ``MAX_OUTLINE_POINTS``: points of one outline (``outline_mm``) | 256 | 6 (``irregular_parts.toml``'s fragment) |
+| ``MAX_PLAN_OUTLINE_POINTS``: points of all a plan file's outlines | 768 | 24 (``irregular_parts.toml``) |
 | ``MAX_OBJECT_TYPES``: types of a plan file (``[objects.NAME]``) | 12 | 5 (``irregular_parts.toml``) |
 
-The last two are set by what judging a type costs: its outline's checks are O(n log n), but the
-search for where the pads can close (``bt_arrange.shapes.antipodal``) tries every closing axis at
-every half millimetre, about 0.15 s of CPU for a 32-point outline (``benchmarks/outline_limits.py``).
+The last three are set by what judging a type costs as the plan loads (``benchmarks/outline_limits.py``):
+its outline's checks, the search for where the pads can close (``bt_arrange.shapes.antipodal``) and
+the yaw check (``bt_arrange.shapes.yaw_feature``) each take O(n log n) for n points (the grasp
+search's n^2 / 2 pairs of edges aside, taken at once in numpy: 5 ms for 256 points), a part fixed a
+type (every closing axis, every coarse turn) and a part a point: about 0.12 s of CPU for a round
+64-point type, 0.24 s for a 256-point one, so that the hardest plan tried within them (12 round
+64-point types) loads in 1.6 s.
 
 ``read_limited(path, what)`` reads a file's text within ``MAX_FILE_BYTES``; ``check_tree_size(root,
 where)`` walks a built tree without recursion and refuses one beyond the node or depth limit.
@@ -34,9 +39,10 @@ MAX_TREE_NODES = 10_000
 MAX_TREE_DEPTH = 100
 MAX_TARGETS = 200
 MAX_COLOURS = 64
-#: Points of one outline (a prism's top face): every outline check after this one is O(n log n); the
-#: grasp search on it is not, and sets the figure.
-MAX_OUTLINE_POINTS = 32
+#: Points of one outline (a prism's top face): every outline check after this one is O(n log n).
+MAX_OUTLINE_POINTS = 256
+#: Points of all the outlines of a plan file's types together: three of ``MAX_OUTLINE_POINTS``, or twelve of 64.
+MAX_PLAN_OUTLINE_POINTS = 768
 #: Types of a plan file (``[objects.NAME]``, the cube aside): each is judged (its grasps searched) as it loads.
 MAX_OBJECT_TYPES = 12
 

@@ -54,7 +54,13 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from bt_arrange.errors import BtArrangeError, PlanError
-from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_TARGETS, read_limited
+from bt_arrange.filelimits import (
+    MAX_OBJECT_TYPES,
+    MAX_OUTLINE_POINTS,
+    MAX_PLAN_OUTLINE_POINTS,
+    MAX_TARGETS,
+    read_limited,
+)
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
 from bt_arrange.plan_colours import COLOUR_KEYS as COLOUR_KEYS  # the plan format's names, kept here
@@ -312,6 +318,14 @@ class _Reader:
             raise self.fail(
                 "[objects]",
                 f"{len(table):,} types, over the limit of {MAX_OBJECT_TYPES} (bt_arrange.filelimits.MAX_OBJECT_TYPES)",
+            )
+        outlines = [entry.get("outline_mm") for entry in table.values() if isinstance(entry, dict)]
+        counts = [len(outline) for outline in outlines if isinstance(outline, list)]
+        if sum(counts) > MAX_PLAN_OUTLINE_POINTS and max(counts) <= MAX_OUTLINE_POINTS:
+            raise self.fail(
+                "[objects]",
+                f"{sum(counts):,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS} "
+                "(bt_arrange.filelimits.MAX_PLAN_OUTLINE_POINTS)",
             )
         for name, entry in table.items():
             where = f"[objects.{name}]"

@@ -72,6 +72,8 @@ def test_the_fresco_figures_sum_the_runs_plain_and_injected(figures, monkeypatch
                 "max_final_offset_truth_mm": 0.5 + seed / 10,
                 "max_yaw_error_truth_deg": 0.3,
                 "min_gap_truth_mm": 1.2 - seed / 10,
+                "threshold_mm": 1.0,
+                "yaw_threshold_deg": 1.0,
             }
             for seed in (0, 1, 2)
         ]
@@ -83,6 +85,47 @@ def test_the_fresco_figures_sum_the_runs_plain_and_injected(figures, monkeypatch
     assert "(18 by the camera)" in plain
     assert "worst 0.70 mm and 0.30 deg; smallest gap at the end 1.00 mm (no two pieces touching)" in plain
     assert "17 of 18" in injected and "--inject pick_translation" in injected
+
+
+def test_the_tight_gaps_figure_runs_the_fresco_at_its_threshold_and_counts_by_ground_truth(
+    figures, monkeypatch
+) -> None:
+    asked = []
+
+    def run(*argv: str) -> str:
+        asked.append(argv)
+        runs = [
+            {"seed": seed, "pieces": 6, "gap_mm": 0.5, "threshold_mm": 0.25, "yaw_threshold_deg": 0.25,
+             "within": 5 + (seed != 1), "within_by_camera": 5, "max_final_offset_truth_mm": 0.5 + seed / 100}
+            for seed in (0, 1, 2)
+        ]  # fmt: skip
+        return "".join(json.dumps(r) + "\n" for r in runs)
+
+    monkeypatch.setattr(figures, "_run", run)
+    (line,) = figures.tight_gaps()
+    assert asked == [("benchmarks/fresco.py", "--seeds", "0", "1", "2", *figures.TIGHT_GAPS)]
+    assert "at a 0.25 mm threshold with 0.5 mm gaps, 3 seeds: 17 of 18 within 0.25 mm and 0.25 deg" in line
+    assert "by ground truth (15 by the camera), worst 0.520 mm" in line
+
+
+def test_the_real_cell_figure_counts_within_by_ground_truth_from_the_trial_records(figures, monkeypatch) -> None:
+    def run(*argv: str) -> str:
+        if argv[0] == "experiment":
+            out = Path(argv[argv.index("--out") + 1])
+            threshold = 0.5 if "--threshold-mm" in argv else 1.0
+            truths = [0.2, 0.4, threshold + 0.01]  # the last within by the camera, not by the truth
+            records = [{"row": "system", "status": "within", "pushed_truth_mm": t} for t in truths]
+            records.append({"row": "system", "status": "error", "pushed_truth_mm": None})
+            (out / "trials.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+            (out / "summary.json").write_text(json.dumps([{
+                "row": "system", "trials": 3, "success_rate": 1.0, "placed_mean_mm": 3.0, "pushed_mean_mm": 0.5,
+                "pushed_truth_mean_mm": 0.5, "pushes_mean": 1.0}]))  # fmt: skip
+        return ""
+
+    monkeypatch.setattr(figures, "_run", run)
+    paper, ours = figures.real_cell()
+    assert "2 of 3 within 1 mm by ground truth (3 of 3 by the camera)" in paper
+    assert "2 of 3 within 0.5 mm by ground truth (3 of 3 by the camera)" in ours
 
 
 def test_the_outline_calibration_cycle_time_and_records_figures_read_their_keys(figures, monkeypatch) -> None:
@@ -128,7 +171,7 @@ def test_every_figure_has_a_name_and_unknown_names_are_refused(figures, capsys) 
     assert figures.main(["--list"]) == 0
     listed = capsys.readouterr().out.splitlines()
     assert [line.split()[0] for line in listed] == list(figures.FIGURES)
-    for name in ("irregular", "fresco", "outlines", "calibration", "cycle_time", "records"):
+    for name in ("irregular", "fresco", "tight_gaps", "outlines", "calibration", "cycle_time", "records"):
         assert name in figures.FIGURES
     with pytest.raises(SystemExit):
         figures.main(["--skip", "nonsense"])
@@ -141,3 +184,12 @@ def test_the_memory_benchmark_reads_growth_from_run_two() -> None:
     assert memory.checkpoints(60) == [2, 10, 60]
     assert memory.growth_pct({2: 100.0, 10: 101.0, 60: 104.0}) == 4.0
     assert memory.growth_pct({1: 100.0}) is None
+
+
+def test_quick_names_each_campaign_it_leaves_out_and_the_command_it_runs(figures, capsys, monkeypatch) -> None:
+    monkeypatch.setattr(figures, "_run", lambda *argv: pytest.fail(f"{argv} was run"))
+    others = [name for name in figures.FIGURES if name not in figures.CAMPAIGNS]
+    assert figures.main(["--quick", "--skip", ",".join(others)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split(":")[0] for line in lines] == ["table1", "real_cell", "records"]
+    assert "left out by --quick" in lines[2] and f"campaign_wall.py --against {figures.BEFORE_WINDOWS}" in lines[2]

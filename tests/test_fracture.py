@@ -105,3 +105,19 @@ def test_every_piece_shows_its_yaw_and_a_near_rectangle_would_not() -> None:
         [[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.03, 0.05], [0.005, 0.04]], 0.02
     )
     assert yaw_cue_m(fragment) > MIN_YAW_CUE_M
+
+
+def test_a_measured_piece_whose_two_sides_are_a_hair_from_parallel_is_framed_by_its_grasp() -> None:
+    """Closing axes 0.013 deg apart: turned to the first, the second comes first; the frame settles on it."""
+    from bt_arrange.shapes import fracture as fracture_module
+
+    # The fake camera's measurement of seed 1's piece 6 (tests/behaviours/test_puzzle.py), centred, in metres.
+    outline = np.array(
+        [[-0.0263445, -0.0203163], [0.0214288, -0.0203062], [0.0214227, 0.0220072], [-0.0160931, 0.022008]]
+    )
+    assert fracture_module._judged([outline], 0.02, ROBOTIQ_2F85) is None, "the fracture's own judgement, unsettled"
+    framed = fracture_module.in_grasp_frame(outline, 0.02)
+    assert framed is not None
+    prism, turn = framed
+    assert prism.grasps(ROBOTIQ_2F85)[0].axis == "x"
+    assert abs(math.sin(turn)) > 0.99  # the closing axis across the sides 42 mm apart, turned a quarter

@@ -15,9 +15,12 @@ import numpy as np
 import pytest
 
 from bt_arrange import cli
-from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_OUTLINE_POINTS
+from bt_arrange.filelimits import MAX_OBJECT_TYPES, MAX_OUTLINE_POINTS, MAX_PLAN_OUTLINE_POINTS
 from bt_arrange.shapes import polygon
+from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 from bt_arrange.shapes.polygon import first_crossing, outline_problem, segments_cross
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _every_pair(points: np.ndarray) -> bool:
@@ -134,6 +137,55 @@ def test_a_plan_with_an_outline_over_the_limit_is_one_line_and_exit_2(
     assert f"the outline has {MAX_OUTLINE_POINTS + 1} points, over the limit of {MAX_OUTLINE_POINTS}" in err
 
 
+def _round_part_mm(count: int, seed: int = 0) -> list[list[float]]:
+    """A round part of ``count`` points the type check accepts: two flats joined by rippled arcs (millimetres)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("outline_limits", ROOT / "benchmarks" / "outline_limits.py")
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return (bench.round_part(count, seed) * 1000).round(4).tolist()
+
+
+def test_a_part_of_as_many_points_as_the_limit_loads(tmp_path: Path) -> None:
+    from bt_arrange import plans
+
+    assert MAX_OUTLINE_POINTS == 256
+    path = _plan(tmp_path, {"round": _round_part_mm(MAX_OUTLINE_POINTS)})
+    plan = plans.load(path)
+    shape = plan.object_types["round"].shape
+    assert len(shape.outline) == MAX_OUTLINE_POINTS and shape.grasps(ROBOTIQ_2F85)
+
+
+def test_one_point_over_the_limit_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _plan(tmp_path, {"round": _round_part_mm(MAX_OUTLINE_POINTS + 1)})
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "[objects.round]" in err, err
+    assert f"the outline has {MAX_OUTLINE_POINTS + 1} points, over the limit of {MAX_OUTLINE_POINTS}" in err
+
+
+def test_outlines_over_the_plan_s_limit_in_all_are_refused_before_any_is_judged(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from bt_arrange import plans
+
+    def no_work(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a type was judged before the outline points in all were counted")
+
+    monkeypatch.setattr(plans.Prism, "from_outline", no_work)
+    parts = MAX_PLAN_OUTLINE_POINTS // MAX_OUTLINE_POINTS + 1
+    path = _plan(tmp_path, {f"round{k}": _round_part_mm(MAX_OUTLINE_POINTS, k) for k in range(parts)})
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert (
+        f"[objects]: {parts * MAX_OUTLINE_POINTS:,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS}"
+        in err
+    )
+
+
 def test_a_plan_with_more_types_than_the_limit_is_refused_before_any_is_judged(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -178,3 +230,65 @@ def test_the_rough_judgement_of_every_place_finds_the_grasps_the_exact_loop_find
             _exact_loop_alone(patched)
             exact = antipodal._search(outline, 0.02, ROBOTIQ_2F85)
         assert rough == exact, points
+
+
+def _xml_of_picks(types: dict[str, list[list[float]]]) -> str:
+    """An XML tree of one Pick a type, each type's outline written in its object_type port."""
+    picks = "".join(
+        f'<Pick name="pick {name}" obj="{name}" object_type="{name}=outline_mm '
+        + " ".join(f"{x:g}:{y:g}" for x, y in outline)
+        + ' height_mm 20"/>\n'
+        for name, outline in types.items()
+    )
+    return (
+        '<root BTCPP_format="4" main_tree_to_execute="M"><BehaviorTree ID="M">\n'
+        f'<Sequence name="s">\n{picks}</Sequence></BehaviorTree></root>\n'
+    )
+
+
+@pytest.mark.parametrize("over", ["types", "points"])
+def test_an_xml_tree_over_a_plan_s_type_limits_is_refused_before_any_type_is_judged(
+    over: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from bt_arrange import ports
+
+    def no_work(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a type was judged before the types in all were counted")
+
+    if over == "types":
+        triangle = [[0, 0], [60, 0], [15, 45]]
+        types = {f"t{k}": [[x + k * 0.01, y] for x, y in triangle] for k in range(MAX_OBJECT_TYPES + 1)}
+        expected = f"{MAX_OBJECT_TYPES + 1} object types, over the limit of {MAX_OBJECT_TYPES}"
+    else:
+        parts = MAX_PLAN_OUTLINE_POINTS // MAX_OUTLINE_POINTS + 1
+        types = {f"round{k}": _round_part_mm(MAX_OUTLINE_POINTS, k) for k in range(parts)}
+        expected = f"{parts * MAX_OUTLINE_POINTS:,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS}"
+    path = tmp_path / "tree.xml"
+    path.write_text(_xml_of_picks(types))
+    monkeypatch.setattr(ports.Prism, "from_outline", no_work)
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and expected in err and str(path) in err, err
+
+
+def test_an_xml_tree_s_types_repeated_in_many_ports_count_once(tmp_path: Path) -> None:
+    from bt_arrange import xmltree
+
+    outline = _round_part_mm(MAX_OUTLINE_POINTS)
+    text = _xml_of_picks({"round": outline})
+    many = text.replace(
+        "</Sequence>", "".join(text.split("\n")[2] + "\n" for _ in range(MAX_OBJECT_TYPES)) + "</Sequence>"
+    )
+    assert many.count("outline_mm") == MAX_OBJECT_TYPES + 1
+    root = xmltree.from_xml(many)
+    assert len(list(root.children)) == MAX_OBJECT_TYPES + 1
+
+
+def test_a_bad_outline_in_an_xml_port_is_quoted_short(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    crossing = [[0, 0], [60, 0], [0, 60], [60, 60]] + [[60 + k, 60 + 10 * k] for k in range(1, 40)]
+    path = tmp_path / "tree.xml"
+    path.write_text(_xml_of_picks({"bowtie": crossing}))
+    assert cli.main(["show", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "object_type='bowtie=outline_mm 0:0 60:0" in err and "...'" in err, err
+    assert len(err) < 500, err

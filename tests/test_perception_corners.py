@@ -153,3 +153,36 @@ def test_the_corner_fit_median_and_cross_product_are_numpys_exactly() -> None:
     for _ in range(200):
         a, b = rng.normal(size=3) * 100, rng.normal(size=3)
         assert np.array_equal(_cross(a, b), np.cross(a, b))
+
+
+def test_edge_lines_count_a_grey_side_strip_before_a_coloured_face_as_outside() -> None:
+    # A raised part's face (blue), its side seen as a grey strip 2 px wide, and a red face of the
+    # layer below beyond it: the strip is no mix of blue and red, so it counts as outside and
+    # the edge stays at the face's own pixels (unmixed from red, the edge was a pixel too far).
+    rgb = np.zeros((200, 300, 3), dtype=np.uint8)
+    rgb[:] = SIM_TABLE_RGB
+    rgb[20:48, 30:270] = (198, 19, 19)
+    rgb[48:50, 50:251] = (150, 150, 146)
+    rgb[50:151, 50:251] = (24, 61, 210)
+    truth = np.array([[49.5, 49.5], [250.5, 49.5], [250.5, 150.5], [49.5, 150.5]])
+    refined = refine_edge_lines(rgb, truth + np.array([[0.3, -0.3], [-0.3, -0.3], [-0.3, 0.3], [0.3, 0.3]]))
+    assert refined is not None
+    assert float(np.abs(refined - truth).max()) < 0.1, refined
+
+
+def test_edge_lines_keep_each_pixel_s_coverage_within_itself_beside_a_twin_across_a_narrow_gap() -> None:
+    # A green face, a 1 mm gap (2 px: the red face below, anti-aliased at both ends) and its green
+    # twin beyond: an outside colour read on the mix before the twin gave the gap's pixels negative
+    # coverages and pulled the edge inwards (0.15 mm on the pyramid's green 2 in MuJoCo).
+    green, red = np.array((25, 160, 49), dtype=float), np.array((197, 20, 20), dtype=float)
+    rgb = np.zeros((200, 300, 3), dtype=np.uint8)
+    rgb[:] = SIM_TABLE_RGB
+    rgb[30:171, 150:156] = red
+    rgb[50:151, 50:150] = green
+    rgb[50:151, 150] = np.round(0.25 * green + 0.75 * red)
+    rgb[50:151, 152] = np.round(0.5 * green + 0.5 * red)
+    rgb[50:151, 153:260] = green
+    truth = np.array([[49.5, 49.5], [149.75, 49.5], [149.75, 150.5], [49.5, 150.5]])
+    refined = refine_edge_lines(rgb, truth + np.array([[0.3, -0.3], [-0.3, -0.3], [-0.3, 0.3], [0.3, 0.3]]))
+    assert refined is not None
+    assert float(np.abs(refined - truth).max()) < 0.1, refined

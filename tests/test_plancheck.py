@@ -102,9 +102,7 @@ def test_a_fine_threshold_lowers_the_shortest_push_to_fit(threshold_mm: float, m
     assert root.settings.min_threshold_mm <= max(threshold_mm, ManipulationSettings().finest_threshold_mm) + 1e-9
 
 
-@pytest.mark.parametrize(
-    ("threshold_mm", "gap_mm"), [(3.0, 2.0), (1.0, 2.0), (0.6, 1.2), (0.25, 0.5), (0.1, 0.5)]
-)
+@pytest.mark.parametrize(("threshold_mm", "gap_mm"), [(3.0, 2.0), (1.0, 2.0), (0.6, 1.2), (0.25, 0.5), (0.1, 0.5)])
 def test_the_least_gap_between_targets_is_twice_the_threshold(threshold_mm: float, gap_mm: float) -> None:  # issue 38
     root = arrangement([RED], threshold_mm=threshold_mm)
     assert root.settings.min_target_gap_m * 1000 == pytest.approx(gap_mm)

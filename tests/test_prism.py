@@ -10,6 +10,7 @@ import pytest
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism, footprint_m, outline_problem, yaw_error_rad
+from bt_arrange.shapes.polygon import signed_area_m2
 
 #: The issue's L, in metres: 60 x 50 mm, legs 20 mm wide.
 ELL = [[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]]
@@ -212,6 +213,18 @@ def test_the_fragment_has_no_two_edges_flat_on_both_pads_so_no_grasp_choice_avoi
     for k in range(len(fragment.grasps(ROBOTIQ_2F85))):
         upper, lower, _ = contacts_mm(fragment, k)
         assert sorted((is_corner(upper), is_corner(lower))) == [False, True], k
+
+
+def test_the_fragment_is_two_convex_pieces_and_no_corner_a_pad_presses_is_split_between_them() -> None:
+    """The first ear clipping made three, with slivers of 44 and 53 deg at the corners the pads press."""
+    fragment = Prism.from_outline(FRAGMENT, 0.02)
+    pieces = fragment.convex_pieces()
+    assert len(pieces) == 2
+    assert sum(abs(signed_area_m2(piece)) for piece in pieces) == pytest.approx(abs(signed_area_m2(fragment.outline_m)))
+    outline = fragment.outline_m
+    for corner in (outline[1], outline[5]):  # (45, 4) under one pad, (5, 40) under the other
+        holding = [piece for piece in pieces if np.min(np.linalg.norm(piece - corner, axis=1)) < 1e-9]
+        assert len(holding) == 1
 
 
 def test_a_trapezoid_is_held_across_its_two_parallel_edges_on_a_line_through_its_centroid() -> None:

@@ -82,3 +82,16 @@ def test_the_picture_chooses_between_the_whole_s_two_turns(turned: bool) -> None
         surveyed.append(SurveyedPiece(name, outline, (0.0, 0.0), edges))
         placements[name] = Placement(name, 0.0, (0.0, 0.0), (0.0, 0.0))
     assert picture_turn(spec, surveyed, placements) == pytest.approx(turn)
+
+
+def test_a_painted_face_s_share_of_pixels_is_read_by_the_painted_range() -> None:
+    """Beyond a painted face's edge: a saturated pixel is a face's, the table's grey is not; no pixels, no shares."""
+    from bt_arrange.perception.outline_face import Face, face_share
+    from bt_arrange.puzzle.spec import painted_range
+
+    colour = painted_range()
+    assert colour.many_hues
+    face = Face(np.zeros((3, 2), np.int32), 1.0, np.zeros((3, 2)), 1.0, np.zeros(2), np.ones(2), False, colour)
+    shares = face_share(face, np.array([[200, 30, 30], [30, 60, 200], [140, 140, 136]], dtype=np.uint8))
+    assert shares.tolist() == [1.0, 1.0, 0.0]
+    assert face_share(face, np.empty((0, 3), dtype=np.uint8)).shape == (0,)  # cvtColor refuses an empty image

@@ -196,3 +196,20 @@ def examples_path(name: str) -> Path:
     path = examples.path_of(name)
     assert path is not None
     return path
+
+
+def test_a_raised_part_among_neighbours_is_picked_off_its_support_as_the_layout_releases_it() -> None:
+    from bt_arrange.behaviours import Inspect, Pick, Place
+
+    root = plans.load(examples_path("pyramid")).create_root()
+    green = next(c for c in root.children if c.name == "then the next (green 2)")
+    placed = next(n for n in nodes(green, Place) if n.name == "place green 2")
+    assert placed.release is not None  # its neighbour 2 mm away: the pads stand across the free axis
+    picked_off = next(n for n in nodes(green, Pick) if n.name == "pick green 2 off its support")
+    placed_again = next(n for n in nodes(green, Place) if n.name == "place green 2 on its support again")
+    # Not the default grasp, whose pad could come down into the gap beside green 1 and knock the layer off.
+    assert picked_off.grasp == placed.release
+    assert placed_again.release == placed.release
+    # Two identical green cubes: the inspection after placing it again tells it from its twin.
+    again = next(n for n in nodes(green, Inspect) if n.name == "inspect green 2 after placing it on its support again")
+    assert len(again.kind_targets) == 2

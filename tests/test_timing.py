@@ -49,3 +49,20 @@ def test_wrap_method_times_one_object_and_keeps_its_result() -> None:
     timers.wrap_method(camera, "capture", "render")
     assert camera.capture(3) == 6 and other.capture(4) == 8
     assert timers.calls == {"render": 1}
+
+
+def test_timers_count_the_clock_they_are_given() -> None:
+    ticks = iter([0.0, 5.0, 5.5, 9.0])
+    timers = SectionTimers(clock=lambda: next(ticks))
+
+    def inner() -> None:
+        return None
+
+    timed_inner = timers.wrap("inner", inner)
+
+    def outer() -> None:
+        timed_inner()
+
+    timers.wrap("outer", outer)()
+    # outer from 0 to 5 and from 5.5 to 9 (8.5 s), inner from 5 to 5.5 (0.5 s), exclusive.
+    assert timers.seconds == {"outer": 8.5, "inner": 0.5}

@@ -127,7 +127,9 @@ class SurveyPieces(PuzzleNode):
 
         camera = context.robot.camera
         plane_z_m = context.detector.config.table_z_m + self.spec.height_m
-        outlines, problems = measure_unknown_outlines(context.detector, camera.capture(), self.spec.colour, plane_z_m)
+        outlines, problems = measure_unknown_outlines(
+            context.detector, camera.capture(), self.spec.colour, plane_z_m, painted=self.spec.picture is not None
+        )
         if problems:
             return f"{self.spec.name}: {problems[0]}"
         if len(outlines) != self.spec.pieces:
@@ -135,7 +137,7 @@ class SurveyPieces(PuzzleNode):
                 f"{self.spec.name}: the camera sees {len(outlines)} pieces of {self.spec.colour}, "
                 f"the puzzle has {self.spec.pieces}"
             )
-        found = [(m, tuple(float(v) for v in centroid_m(m.outline_m))) for m in outlines]
+        found = [(m, (float(c[0]), float(c[1]))) for m in outlines for c in [centroid_m(m.outline_m)]]
         # Numbered by where they lie, so that a run's names are the same from the same scene.
         found.sort(key=lambda item: (round(item[1][0], 3), round(item[1][1], 3)))
         self.pieces = tuple(

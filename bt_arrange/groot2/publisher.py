@@ -10,6 +10,11 @@ answers requests on its own thread. The tree's thread only writes status bytes i
   with the changes the ``TransitionLog`` visitor sees, so the publisher never walks the tree;
 - ``refresh(root)``: a walk over every node, for a tree ticked without a session.
 
+A tree that grows while it runs (a puzzle's ``ArrangeSolved`` builds its pieces' subtrees once the
+solve is known) is numbered again when either sees a node it does not know: the XML then holds
+the new nodes, the statuses shown so far are kept, and every reply's header carries a new tree
+UUID, which tells a client that the tree it holds is not the one served (fetch it again).
+
 Statuses are shown as BehaviorTree.CPP's publisher shows its own tree's: when a control node or a
 decorator finishes, its children are reset (``IDLE``, remembering what they were: 10 + status),
 a decorator resets its child as soon as the child finishes, and the root is reset when it
@@ -128,40 +133,17 @@ class Groot2Publisher:
 
         self._zmq = zmq
         self._packb = msgpack.packb
+        self._xmltree = xmltree
+        self.nodes: list[py_trees.behaviour.Behaviour] = []
+        self._status = bytearray()
         self.port = check_port(port)
         self.bind = bind
         self.root = root
         self.tree_id = tree_id or root.name
-        self.nodes = preorder(root)
-        if len(self.nodes) > MAX_NODES:
-            raise GrootError(f"the tree has {len(self.nodes)} nodes; Groot2 numbers at most {MAX_NODES}")
-        #: Each node's UID, as in the XML served.
-        self.uids: dict[py_trees.behaviour.Behaviour, int] = {node: uid for uid, node in enumerate(self.nodes, 1)}
-        #: The tree as BehaviorTree.CPP XML with ``_uid`` attributes (an unregistered node under its class name).
-        self.xml = xmltree.to_xml(root, tree_id=self.tree_id, uids=self.uids, generic=True)
-        self._xml_bytes = self.xml.encode("utf-8")
-        self._index = {str(node.id): index for index, node in enumerate(self.nodes)}
-        position = {node: index for index, node in enumerate(self.nodes)}
-        # Pre-order: the descendants of node i are i+1 .. end[i]-1.
-        self._end = [0] * len(self.nodes)
-        for node in root.iterate():  # children before their parent
-            index = position[node]
-            self._end[index] = self._end[position[node.children[-1]]] if node.children else index + 1
-        #: Who BehaviorTree.CPP resets when a node finishes: below it (a control node or decorator: from i+1),
-        #: the node too (under a decorator, or the root: from i), or nobody (a leaf elsewhere: None).
-        self._reset_from: list[int | None] = [None] * len(self.nodes)
-        for index, node in enumerate(self.nodes):
-            parent = node.parent
-            if index == 0 or isinstance(parent, py_trees.decorators.Decorator):
-                self._reset_from[index] = index
-            elif node.children:
-                self._reset_from[index] = index + 1
-        self._status = bytearray()
-        for uid in range(1, len(self.nodes) + 1):
-            self._status += uid.to_bytes(2, "little") + bytes((protocol.IDLE,))
-        self._last = [protocol.IDLE] * len(self.nodes)
         self._lock = threading.Lock()
-        self.tree_uuid = protocol.random_uuid()
+        self.tree_uuid = b""
+        self._last: list[int] = []
+        self._number(preorder(root))
         self._recording = False
         self._record_start_s = 0.0
         self._transitions: collections.deque[bytes] = collections.deque(maxlen=RECORDED_TRANSITIONS)
@@ -215,17 +197,67 @@ class Groot2Publisher:
             raise GrootError(f"cannot serve Groot2 on {endpoint} ({role} socket): {reason}") from None
         return sock
 
+    def _number(self, nodes: list[py_trees.behaviour.Behaviour]) -> None:
+        """Number ``nodes`` (pre-order) and serve them under a new tree UUID, keeping the statuses already shown."""
+        if len(nodes) > MAX_NODES:
+            raise GrootError(f"the tree has {len(nodes)} nodes; Groot2 numbers at most {MAX_NODES}")
+        uids = {node: uid for uid, node in enumerate(nodes, 1)}
+        xml = self._xmltree.to_xml(self.root, tree_id=self.tree_id, uids=uids, generic=True)
+        position = {node: index for index, node in enumerate(nodes)}
+        # Pre-order: the descendants of node i are i+1 .. end[i]-1.
+        end = [0] * len(nodes)
+        for node in self.root.iterate():  # children before their parent
+            index = position[node]
+            end[index] = end[position[node.children[-1]]] if node.children else index + 1
+        # Who BehaviorTree.CPP resets when a node finishes: below it (a control node or decorator: from i+1),
+        # the node too (under a decorator, or the root: from i), or nobody (a leaf elsewhere: None).
+        reset_from: list[int | None] = [None] * len(nodes)
+        for index, node in enumerate(nodes):
+            if index == 0 or isinstance(node.parent, py_trees.decorators.Decorator):
+                reset_from[index] = index
+            elif node.children:
+                reset_from[index] = index + 1
+        with self._lock:
+            shown = {node: (self._status[3 * i + 2], self._last[i]) for i, node in enumerate(self.nodes)}
+            status, last = bytearray(), []
+            for uid, node in enumerate(nodes, 1):
+                code, before = shown.get(node, (protocol.IDLE, protocol.IDLE))
+                status += uid.to_bytes(2, "little") + bytes((code,))
+                last.append(before)
+            self.nodes = nodes
+            #: Each node's UID, as in the XML served.
+            self.uids: dict[py_trees.behaviour.Behaviour, int] = uids
+            #: The tree as BehaviorTree.CPP XML with ``_uid`` attributes (an unregistered node under its class name).
+            self.xml = xml
+            self._xml_bytes = xml.encode("utf-8")
+            self._index = {str(node.id): index for index, node in enumerate(nodes)}
+            self._end, self._reset_from = end, reset_from
+            self._status, self._last = status, last
+            # A new UUID in every reply's header: how a client learns that the tree it holds is not the one served.
+            self.tree_uuid = protocol.random_uuid()
+
+    def _renumber_if_grown(self) -> bool:
+        """Serve the tree again if nodes were added or removed since it was numbered (a node building its children)."""
+        nodes = preorder(self.root)
+        if nodes == self.nodes or len(nodes) > MAX_NODES:
+            return False
+        self._number(nodes)
+        return True
+
     # -- the tree's side -----------------------------------------------------------------------
 
     def on_transition(self, transition: Any) -> None:
         """Note one status change (a ``bt_arrange.runner.Transition``): the session's transition hook."""
         index = self._index.get(transition.node_id)
+        if index is None and self._renumber_if_grown():
+            index = self._index.get(transition.node_id)
         if index is not None:
             self._set(index, protocol.CODES[transition.new])
 
     def refresh(self, root: py_trees.behaviour.Behaviour | None = None) -> None:
         """Read every node's status (for a tree ticked without a session's transition hooks), after a tick."""
         codes = protocol.CODES
+        self._renumber_if_grown()
         position = {node: index for index, node in enumerate(self.nodes)}
         for node in self.root.iterate():  # children before their parent, as a tick reports them
             index = position[node]
@@ -316,10 +348,12 @@ class Groot2Publisher:
         protocol_id, request_type, request_id = protocol.unpack_header(frames[0])
         if protocol_id != protocol.PROTOCOL_ID:
             return protocol.error_reply(protocol.WRONG_PROTOCOL)
-        head = protocol.reply_header(request_type, request_id, self.tree_uuid)
+        with self._lock:  # the UUID and the XML of one numbering (the tree's thread renumbers a grown tree)
+            tree_uuid, xml_bytes = self.tree_uuid, self._xml_bytes
+        head = protocol.reply_header(request_type, request_id, tree_uuid)
         if request_type == protocol.FULLTREE:
             self.tree_fetched.set()
-            return [head, self._xml_bytes]
+            return [head, xml_bytes]
         if request_type == protocol.STATUS:
             return [head, self.status_buffer()]
         if request_type == protocol.BLACKBOARD:

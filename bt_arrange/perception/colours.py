@@ -139,6 +139,11 @@ class ColourRange:
                 )
         return bounds
 
+    @property
+    def many_hues(self) -> bool:
+        """True for a range over more than half the hue circle: a picture's colours, no one face chroma."""
+        return sum(high - low for low, high in self.hue_ranges_deg) > 180.0
+
     def mask(self, hsv: NDArray[np.uint8]) -> Mask:
         """Binary mask (0 or 255) of the pixels of an 8-bit HSV image that have this colour."""
         bounds = self._cv_bounds()

@@ -11,7 +11,9 @@ four fitted lines:
   ``c * face + (1 - c) * outside`` where ``c`` is the fraction of the pixel the face covers.
   The mix is linear in RGB; solving it for ``c`` in the chroma plane (RGB minus its grey part)
   makes any grey neighbour (the table, the white part sides, the robot) count as "outside"
-  whatever its brightness, and a coloured neighbour is unmixed with its own colour.
+  whatever its brightness, and a coloured neighbour is unmixed with its own colour (each pixel
+  from that colour or from grey, whichever mix lies nearer it: a grey side strip between the
+  face and a coloured face beyond is outside too; ``_covered``).
 * Summed over a column of pixels that crosses an edge, the covered fractions give the edge's
   height at the column's centre exactly, whatever the slope (the area under a straight line
   over a unit-wide column is its value at the centre). Sides closer to vertical use rows.
@@ -123,11 +125,39 @@ SHARP_EDGE_SPREAD = 0.25
 INITIAL_OUTSIDE_PX = 2.0
 
 
-def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
-    """Fraction of each pixel (columns, band) covered by the face, unmixed from ``outside``."""
+#: A pixel's unmixed coverage this far below none or above all (a fraction of the pixel) is no
+#: mix of the face and the outside read (camera noise moves it a few hundredths): set to none or all.
+GROSS_COVERAGE = 0.25
+#: An outside colour counts as coloured (a neighbour's face, not the table or a part's side) when its
+#: chroma is at least this fraction of the face's (the simulator's table: 0.03 of a face's).
+COLOURED_OUTSIDE = 0.3
+
+
+def _unmixed(x: FloatArray, face: FloatArray, outside: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Each pixel's (columns, band) face fraction unmixed from ``outside`` (columns, 2), and its distance off that mix."""
     contrast = face[None, :] - outside
     contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
-    return np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    c = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    mixed = outside[:, None, :] + c[..., None] * contrast[:, None, :]
+    return c, np.linalg.norm(x - mixed, axis=-1)
+
+
+def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray:
+    """Fraction of each pixel (columns, band) covered by the face, unmixed from ``outside`` or from grey.
+
+    Each pixel is taken as the mix that explains it better: the face with the column's outside
+    colour, or the face with grey (a part's side, the table; chroma zero). A raised part's side
+    seen as a grey strip between its face and a coloured face below (a pallet's upper bar over
+    the red layer) is no mix of blue and red: unmixed from red, each of its pixels counted half
+    the face, and the edge came out a pixel too far (0.23 mm on the pallet's bars).
+
+    Only beside a coloured outside (chroma at least ``COLOURED_OUTSIDE`` of the face's): beside
+    the table, itself a grey, the choice would only follow the camera noise.
+    """
+    c_outside, off_outside = _unmixed(x, face, outside)
+    c_grey, off_grey = _unmixed(x, face, np.zeros_like(outside))
+    coloured = np.linalg.norm(outside, axis=-1) >= COLOURED_OUTSIDE * float(np.linalg.norm(face))
+    return np.where(coloured[:, None] & (off_grey < off_outside), c_grey, c_outside)
 
 
 def _side_edge_points(
@@ -189,7 +219,14 @@ def _side_edge_points(
     first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 0, first_out - 1)
     outside = x[np.arange(len(x)), first_out]
     window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
-    covered = np.where(window, _covered(x, face, outside), 0.0)
+    # A pixel covers between none and all of itself: an outside read on a mix beyond (a twin's
+    # face across a 1 mm gap, anti-aliased) would otherwise give the pixels before it coverages
+    # of -1 or less and pull the edge inwards (0.15 mm on the pyramid's green 2 in MuJoCo). Only
+    # such gross ones are set to none or all: clipping the camera noise's small excursions too
+    # would bias every noisy edge outwards.
+    c = _covered(x, face, outside)
+    c = np.where(c < -GROSS_COVERAGE, 0.0, np.where(c > 1.0 + GROSS_COVERAGE, 1.0, c))
+    covered = np.where(window, c, 0.0)
     edge = first_mixed + covered.sum(axis=1)
     spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
     v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
@@ -198,6 +235,69 @@ def _side_edge_points(
     # A column whose neighbour has nearly the face's colour cannot place the edge, and an edge
     # found outside the band's middle means the band missed the transition.
     good = (contrast_sq > 0.09 * float(face @ face)) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
+    points = np.column_stack([u[good].astype(float), v_edge[good]])
+    return (points if by_columns else points[:, ::-1]), spread[good]
+
+
+#: A pixel across a painted edge this far (its share of the face-to-outside contrast) off their mix is neither.
+MAX_OFF_MIX = 0.25
+
+
+def _local_side_points(
+    rgb: NDArray[np.uint8],
+    p: FloatArray,
+    q: FloatArray,
+    face_centre: FloatArray,
+    half_width_px: int,
+    margin_px: float,
+    near_outside_px: float | None,
+) -> tuple[FloatArray, FloatArray]:
+    """``_side_edge_points`` with the face's chroma read per column, a pixel inside the mixed pixels."""
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    if not by_columns:
+        rgb = rgb.transpose(1, 0, 2)
+        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
+    height, width = rgb.shape[:2]
+    length_px = float(np.hypot(*direction))
+    slope = direction[1] / direction[0]
+    margin_u = margin_px * abs(direction[0]) / length_px
+    u_low, u_high = sorted((p[0], q[0]))
+    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
+    v_line = p[1] + (u - p[0]) * slope
+    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
+    v_start = np.round(v_line).astype(int) - half_width_px
+    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
+    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
+    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
+    if len(u) < 3:
+        return np.empty((0, 2)), np.empty(0)
+    x = chroma(rgb[rows, u[:, None]])
+    if not face_above:
+        x = x[:, ::-1]
+    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
+    near_px = 2.0 if near_outside_px is None else near_outside_px
+    index = np.arange(x.shape[1])
+    columns = np.arange(len(x))
+    first_out = np.clip(np.ceil(line_position + near_px - 0.5).astype(int), 2, x.shape[1] - 1)
+    first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 1, first_out - 1)
+    outside = x[columns, first_out]
+    face = x[columns, first_mixed - 1]
+    contrast = face - outside
+    contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
+    covered_all = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
+    window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
+    covered = np.where(window, covered_all, 0.0)
+    edge = first_mixed + covered.sum(axis=1)
+    spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
+    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
+    strong = contrast_sq > 0.09 * np.maximum(np.einsum("ij,ij->i", face, face), np.einsum("ij,ij->i", outside, outside))
+    # A pixel across the edge that is no mix of this face colour and the outside's (the picture
+    # changes within a pixel or two of the edge, a stray texel) cannot place it: its column is left out.
+    normal = np.column_stack([-contrast[:, 1], contrast[:, 0]])
+    off_mix = np.abs(np.einsum("ijk,ik->ij", x - outside[:, None, :], normal)) / contrast_sq[:, None]
+    mixed = np.all(~window | ((off_mix <= MAX_OFF_MIX) & (np.abs(covered_all - 0.5) <= 0.5 + MAX_OFF_MIX)), axis=1)
+    good = strong & mixed & (contrast_sq > 4.0**2) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
     points = np.column_stack([u[good].astype(float), v_edge[good]])
     return (points if by_columns else points[:, ::-1]), spread[good]
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.perception.colours import ColourRange
-from bt_arrange.perception.corners import _median, _side_edge_points, chroma
+from bt_arrange.perception.corners import _local_side_points, _median, _side_edge_points, chroma
 from bt_arrange.perception.outline_fit import (
     MIN_EDGE_POINTS,
     EdgeSegments,
@@ -28,7 +28,7 @@ from bt_arrange.perception.outline_fit import (
     pixels_on_plane,
     segment_distances,
 )
-from bt_arrange.perception.segmentation import Blob, colour_mask
+from bt_arrange.perception.segmentation import Blob, colour_mask, to_hsv
 from bt_arrange.perception.values import DetectorConfig, PreparedView, WorldRegion
 
 
@@ -46,7 +46,12 @@ class FaceSearch(Protocol):
 
 @dataclass(frozen=True)
 class Face:
-    """One blob's face at full resolution: contour (image px), its area, on the plane, the face's chroma."""
+    """One blob's face at full resolution: contour (image px), its area, on the plane, the face's chroma.
+
+    ``picture_colour``: a painted face's colour (a range of many hues, ``ColourRange.many_hues``). Its
+    edges are measured against its colour read per column just inside them, and the range tells
+    what lies beyond one (``face_share``); None: the face is of one chroma.
+    """
 
     contour_px: NDArray[np.int32]
     area_px: float
@@ -55,6 +60,7 @@ class Face:
     centroid_m: FloatArray
     face_chroma: FloatArray
     touches_border: bool
+    picture_colour: ColourRange | None = None
 
 
 def face_of(detector: FaceSearch, view: PreparedView, colour: ColourRange, blob: Blob, plane_z_m: float) -> Face | None:
@@ -103,7 +109,17 @@ def face_of(detector: FaceSearch, view: PreparedView, colour: ColourRange, blob:
         return None
     take = np.linspace(0, len(u) - 1, min(len(u), 400)).astype(int)
     face = _median(chroma(view.rgb[v[take] + y0, u[take] + x0]), axis=0)
-    return Face(contour, area_px, on_plane, area_m2, centroid, face, touches)
+    return Face(contour, area_px, on_plane, area_m2, centroid, face, touches, colour if colour.many_hues else None)
+
+
+def face_share(face: Face, pixels_rgb: NDArray[np.uint8]) -> FloatArray:
+    """How much of each pixel (N x 3 RGB) is the face's: its chroma's share of the face's; 1 or 0 by a painted range."""
+    if face.picture_colour is not None:
+        if len(pixels_rgb) == 0:
+            return np.empty(0)
+        hsv = to_hsv(np.ascontiguousarray(pixels_rgb, dtype=np.uint8).reshape(-1, 1, 3))
+        return (face.picture_colour.mask(hsv).reshape(-1) > 0).astype(float)
+    return np.asarray(chroma(pixels_rgb) @ face.face_chroma / float(face.face_chroma @ face.face_chroma))
 
 
 def project(view: PreparedView, points_world: FloatArray) -> FloatArray:
@@ -153,9 +169,12 @@ def edge_points(
     all_points, all_edges, spreads = [], [], []
     for k in range(count):
         p, q = corners_px[k], corners_px[(k + 1) % count]
-        points, spread = _side_edge_points(
-            view.rgb, p, q, inside_px[k], face.face_chroma, half_width_px, margin_px, near_outside_px
-        )
+        if face.picture_colour is None:
+            points, spread = _side_edge_points(
+                view.rgb, p, q, inside_px[k], face.face_chroma, half_width_px, margin_px, near_outside_px
+            )
+        else:  # painted: no one chroma is the face's at its edges
+            points, spread = _local_side_points(view.rgb, p, q, inside_px[k], half_width_px, margin_px, near_outside_px)
         if len(points) == 0:
             continue
         # Keep the points whose band cannot reach another edge of the face.
@@ -165,7 +184,8 @@ def edge_points(
         points, spread = points[clear], spread[clear]
         # And those whose band ends outside the face's colour: a neighbour of the colour a pixel or two
         # across the edge (a sub-millimetre gap) puts its own face in the band, and the fit off it.
-        free = _outside_is_clear(view.rgb, points, p, q, inside_px[k], face.face_chroma, half_width_px + 1.0)
+        beyond = _outward_pixels(view.rgb, points, p, q, inside_px[k], half_width_px + 1.0)
+        free = face_share(face, beyond) <= OUTSIDE_MAX_COVERAGE
         points, spread = points[free], spread[free]
         if len(points) < MIN_EDGE_POINTS:
             continue
@@ -193,6 +213,15 @@ def _outside_is_clear(
     reach_px: float,
 ) -> NDArray[np.bool_]:
     """Which edge points (image px) have no face of the colour ``reach_px`` beyond them, outward."""
+    beyond = _outward_pixels(rgb, points_px, p, q, inside_px, reach_px)
+    coverage = chroma(beyond) @ face_chroma / float(face_chroma @ face_chroma)
+    return np.asarray(coverage <= OUTSIDE_MAX_COVERAGE)
+
+
+def _outward_pixels(
+    rgb: NDArray[np.uint8], points_px: FloatArray, p: FloatArray, q: FloatArray, inside_px: FloatArray, reach_px: float
+) -> NDArray[np.uint8]:
+    """The pixels (N x 3 RGB) ``reach_px`` beyond edge points of the side ``p`` to ``q``, away from ``inside_px``."""
     along = (q - p) / max(float(np.hypot(*(q - p))), 1e-9)
     normal = np.array([along[1], -along[0]])
     if float(normal @ (inside_px - (p + q) / 2)) > 0:
@@ -200,8 +229,7 @@ def _outside_is_clear(
     probes = np.round(points_px + reach_px * normal).astype(int)
     height, width = rgb.shape[:2]
     u, v = np.clip(probes[:, 0], 0, width - 1), np.clip(probes[:, 1], 0, height - 1)
-    coverage = chroma(rgb[v, u]) @ face_chroma / float(face_chroma @ face_chroma)
-    return np.asarray(coverage <= OUTSIDE_MAX_COVERAGE)
+    return np.asarray(rgb[v, u], dtype=np.uint8)
 
 
 def spans_two_directions(model: OutlineModel, edges: NDArray[np.intp]) -> bool:

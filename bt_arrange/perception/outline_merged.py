@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from bt_arrange.geometry import FloatArray, fold_yaw
-from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median, chroma
-from bt_arrange.perception.outline_face import Face, edge_points, project, spans_two_directions
+from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median
+from bt_arrange.perception.outline_face import Face, edge_points, face_share, project, spans_two_directions
 from bt_arrange.perception.outline_fit import (
     COARSE_POINTS,
     EDGE_PASSES,
@@ -292,14 +292,12 @@ def seam_coverage(
         return 0.0
     samples, normals = samples[facing], model.normals[edge_of[facing]]
     height, width = view.rgb.shape[:2]
-    face_chroma = face.face_chroma
     least = np.full(len(samples), np.inf)
     for offset_px in (0.5, 1.0):
         world = _posed(samples + offset_px * px_m * normals, pose)
         pixels = np.round(project(view, np.column_stack([world, np.full(len(world), plane_z_m)]))).astype(int)
         u, v = np.clip(pixels[:, 0], 0, width - 1), np.clip(pixels[:, 1], 0, height - 1)
-        coverage = chroma(view.rgb[v, u]) @ face_chroma / float(face_chroma @ face_chroma)
-        least = np.minimum(least, coverage)
+        least = np.minimum(least, face_share(face, view.rgb[v, u]))
     return float(np.mean(np.clip(least, 0.0, 1.0)))
 
 

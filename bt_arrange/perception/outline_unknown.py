@@ -14,11 +14,12 @@ frame alone:
    half a pixel, where the mask's rounded corners do not reach.
 3. **Sub-pixel sides**: along each side the covered fractions of the pixels across the edge, unmixed
    in the chroma plane and summed (``corners._side_edge_points``, the box's edge measure), away from
-   the corners and from any other side; a band whose far end holds the colour (a neighbour under a
-   few pixels away) is left out. The points are undistorted and taken onto the plane of the top faces
-   (each pixel's ray meets ``z = plane_z_m``), a line is fitted per side there (total least squares,
-   outliers trimmed), and consecutive lines meet at the vertices. Two passes, the second re-centred on
-   the first's lines and reading the outside colour just beyond the measured edge spread.
+   the corners and where no other side crosses the band (``clear_along_bands``); a band whose far
+   end holds the colour (a neighbour under a few pixels away) is left out. The points are undistorted
+   and taken onto the plane of the top faces (each pixel's ray meets ``z = plane_z_m``), a line is
+   fitted per side there (total least squares, outliers trimmed), and consecutive lines meet at the
+   vertices. Two passes, the second re-centred on the first's lines and reading the outside colour
+   just beyond the measured edge spread.
 
 Every step is vectorised over a side's pixels; the loops run over sides and blobs. The image knows
 the vertices, never which piece is which: matching them to a fresco is the caller's.
@@ -41,12 +42,13 @@ from bt_arrange.geometry import FloatArray
 from bt_arrange.perception.colours import ColourRange, Mask
 from bt_arrange.perception.corners import INITIAL_OUTSIDE_PX, SHARP_EDGE_SPREAD, _median
 from bt_arrange.perception.outline_face import face_of, project
-from bt_arrange.perception.outline_fit import EdgeSegments, area_centroid, pixels_on_plane, segment_distances
+from bt_arrange.perception.outline_fit import area_centroid, pixels_on_plane
 from bt_arrange.perception.outline_unknown_edges import (
     MIN_SIDE_POINTS,
     Line,
     SideSampler,
     aliased_line,
+    clear_along_bands,
     colour_sampler,
     edge_colours,
     fit_line,
@@ -54,7 +56,7 @@ from bt_arrange.perception.outline_unknown_edges import (
     line_of_points,
     local_sampler,
 )
-from bt_arrange.perception.segmentation import Blob, clean_mask, find_blobs
+from bt_arrange.perception.segmentation import Blob, clean_mask, find_blobs, to_hsv
 from bt_arrange.perception.values import PreparedView
 from bt_arrange.robot import CameraFrame
 
@@ -73,6 +75,8 @@ REACH_MARGIN_PX = 2.0
 MAX_VERTEX_SHIFT_PX = 3.0
 #: Two consecutive sides turning less than this are one side (Douglas-Peucker split it on noise).
 MIN_TURN_DEG = 12.0
+#: A short side (a few columns between its margins) is fitted to this many sub-pixel edge points at least.
+MIN_SHORT_SIDE_POINTS = 4
 #: Two pieces closer than this are "under a millimetre apart".
 CLOSE_GAP_M = 0.001
 
@@ -255,8 +259,12 @@ def _sub_pixel(
     sampler: SideSampler,
     plane_z_m: float,
     px_per_m: float,
+    short_px: float = 0.0,
 ) -> tuple[FloatArray, float, str | None, int | None]:
-    """The vertices where the sub-pixel side lines meet (on the plane), the RMS residual (px); or why not, the side."""
+    """The vertices where the sub-pixel side lines meet (on the plane), the RMS residual (px); or why not, the side.
+
+    A side shorter than ``short_px`` is fitted to ``MIN_SHORT_SIDE_POINTS`` edge points or more.
+    """
     corners = corners_px
     count = len(corners)
     near_outside_px: float | None = None
@@ -264,20 +272,18 @@ def _sub_pixel(
     residuals: list[FloatArray] = []
     for half_width_px, margin_px in UNKNOWN_EDGE_PASSES:
         centre = corners.mean(axis=0)
-        segments = EdgeSegments.closed(corners)
         lines: list[Line] = []
         spreads, residuals = [], []
         for k in range(count):
             p, q = corners[k], corners[(k + 1) % count]
             points, spread = sampler(p, q, centre, half_width_px, margin_px, near_outside_px)
             if len(points):
-                distances, _ = segment_distances(points, segments)
-                distances[:, k] = np.inf
                 # The pixels a point's edge reads lie within its outside distance: clear of other sides.
                 reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + REACH_MARGIN_PX
-                clear = distances.min(axis=1) >= reach_px
+                clear = clear_along_bands(points, corners, k, reach_px)
                 points, spread = points[clear], spread[clear]
-            if len(points) < MIN_SIDE_POINTS:
+            needed = MIN_SHORT_SIDE_POINTS if float(np.hypot(*(q - p))) < short_px else MIN_SIDE_POINTS
+            if len(points) < needed:
                 return vertices, math.inf, f"side {k + 1} of {count} has {len(points)} edge points", k
             points = aliased_line(points, p, q)
             if view.undistort is not None:
@@ -323,7 +329,7 @@ def _measure_sides(
     weak_px = max(min_edge_px, 2.5 * kernel_px)
     while True:
         slack_px = 0.0
-        vertices, residual_px, why, side = _sub_pixel(view, corners, sampler, plane_z_m, px_per_m)
+        vertices, residual_px, why, side = _sub_pixel(view, corners, sampler, plane_z_m, px_per_m, weak_px)
         count = len(corners)
         if why is None:
             lengths = np.hypot(*(np.roll(vertices, -1, axis=0) - vertices).T)
@@ -499,6 +505,7 @@ def measure_unknown_outlines(
     *,
     max_vertices: int = 16,
     min_edge_m: float = 0.003,
+    painted: bool = False,
 ) -> tuple[list[MeasuredOutline], list[str]]:
     """Every whole face of ``colour`` measured as a convex polygon on ``z = plane_z_m``, and one line per problem.
 
@@ -506,10 +513,17 @@ def measure_unknown_outlines(
     the smallest blob looked at (a quarter of its face). ``frame`` is a camera frame or the detector's
     prepared view of one. Sides shorter than ``min_edge_m`` are left out (their neighbours meet
     instead); a face of more than ``max_vertices`` sides is reported, not measured. Outlines come back
-    largest blob first.
+    largest blob first. ``painted``: the faces carry a picture (``colour`` a range of many hues), so no
+    one chroma is a face's colour at its edges: each side is measured against the face's colour read
+    per column just inside it (:func:`measure_unknown_outlines_in_mask` on the colour's mask).
     """
     view = _view(detector, frame)
     colour_range = detector.colours[colour] if isinstance(colour, str) else colour
+    if painted:
+        mask = colour_range.mask(to_hsv(view.rgb))
+        return measure_unknown_outlines_in_mask(
+            detector, view, mask, plane_z_m, max_vertices=max_vertices, min_edge_m=min_edge_m, name=colour_range.name
+        )
     candidates, _ = detector.candidates(view, colour_range, None)
     regions = []
     for blob, on_plane, _ in candidates:

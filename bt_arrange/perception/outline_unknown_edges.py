@@ -2,7 +2,7 @@
 
 The image side of ``bt_arrange.perception.outline_unknown``: a side's sub-pixel edge points against
 one face colour (``corners._side_edge_points``, the box's measure) or against the face's colour read
-per column just inside the edge (a painted face, ``_local_side_points``), total least squares lines
+per column just inside the edge (a painted face, ``corners._local_side_points``), total least squares lines
 through points on the table plane, and the face's colour sampled along each edge.
 """
 
@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.perception.colours import Mask
-from bt_arrange.perception.corners import _median, _side_edge_points, chroma
+from bt_arrange.perception.corners import _local_side_points, _median, _side_edge_points
 from bt_arrange.perception.outline_face import _outside_is_clear
 from bt_arrange.perception.values import PreparedView
 
@@ -72,6 +72,36 @@ def fit_line(points: FloatArray, floor_m: float) -> tuple[Line, FloatArray]:
     return line, ((points - point) @ normal)[keep]
 
 
+def clear_along_bands(points: FloatArray, corners: FloatArray, side: int, reach_px: float) -> NDArray[np.bool_]:
+    """Which edge points of side ``side`` read no other side: none crosses their band within ``reach_px``.
+
+    A point's edge is read along its band, the pixel column across the side (a row for a steep
+    side), from ``reach_px`` inside the edge to ``reach_px`` beyond it. Another side's edge in that
+    stretch would mix into its sum; beside the band, however near, it does not. Near an obtuse
+    corner a side's own columns run clear of its neighbour while their distance to it is small.
+    """
+    count = len(corners)
+    p, q = corners[side], corners[(side + 1) % count]
+    axis = 0 if abs(q[0] - p[0]) >= abs(q[1] - p[1]) else 1  # the coordinate along the side
+    along, across = points[:, axis], points[:, 1 - axis]
+    clear = np.ones(len(points), dtype=bool)
+    for other in range(count):
+        if other == side:
+            continue
+        a, b = corners[other], corners[(other + 1) % count]
+        low, high = sorted((a[axis], b[axis]))
+        # The other side's stretch over each band, widened by half a pixel either way (the band's width).
+        t_low = np.clip((along - 0.5 - a[axis]) / (b[axis] - a[axis] or 1e-9), 0.0, 1.0)
+        t_high = np.clip((along + 0.5 - a[axis]) / (b[axis] - a[axis] or 1e-9), 0.0, 1.0)
+        first = a[1 - axis] + t_low * (b[1 - axis] - a[1 - axis])
+        last = a[1 - axis] + t_high * (b[1 - axis] - a[1 - axis])
+        over = (along + 0.5 >= low) & (along - 0.5 <= high)
+        near = np.minimum(first, last) - reach_px <= across
+        near &= across <= np.maximum(first, last) + reach_px
+        clear &= ~(over & near)
+    return clear
+
+
 def colour_sampler(view: PreparedView, face_chroma: FloatArray) -> SideSampler:
     """The box's edge measure against one face chroma, keeping points whose band ends clear of the colour."""
 
@@ -112,60 +142,6 @@ def local_sampler(view: PreparedView, foreground: Mask) -> SideSampler:
         return points[free], spread[free]
 
     return sample
-
-
-def _local_side_points(
-    rgb: NDArray[np.uint8],
-    p: FloatArray,
-    q: FloatArray,
-    face_centre: FloatArray,
-    half_width_px: int,
-    margin_px: float,
-    near_outside_px: float | None,
-) -> tuple[FloatArray, FloatArray]:
-    """``corners._side_edge_points`` with the face's chroma read per column, a pixel inside the mixed pixels."""
-    direction = q - p
-    by_columns = abs(direction[0]) >= abs(direction[1])
-    if not by_columns:
-        rgb = rgb.transpose(1, 0, 2)
-        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
-    height, width = rgb.shape[:2]
-    length_px = float(np.hypot(*direction))
-    slope = direction[1] / direction[0]
-    margin_u = margin_px * abs(direction[0]) / length_px
-    u_low, u_high = sorted((p[0], q[0]))
-    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
-    v_line = p[1] + (u - p[0]) * slope
-    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
-    v_start = np.round(v_line).astype(int) - half_width_px
-    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
-    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
-    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
-    if len(u) < 3:
-        return np.empty((0, 2)), np.empty(0)
-    x = chroma(rgb[rows, u[:, None]])
-    if not face_above:
-        x = x[:, ::-1]
-    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
-    near_px = 2.0 if near_outside_px is None else near_outside_px
-    index = np.arange(x.shape[1])
-    columns = np.arange(len(x))
-    first_out = np.clip(np.ceil(line_position + near_px - 0.5).astype(int), 2, x.shape[1] - 1)
-    first_mixed = np.clip(np.floor(line_position - near_px + 0.5).astype(int), 1, first_out - 1)
-    outside = x[columns, first_out]
-    face = x[columns, first_mixed - 1]
-    contrast = face - outside
-    contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
-    covered_all = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
-    window = (index[None, :] >= first_mixed[:, None]) & (index[None, :] < first_out[:, None])
-    covered = np.where(window, covered_all, 0.0)
-    edge = first_mixed + covered.sum(axis=1)
-    spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
-    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
-    strong = contrast_sq > 0.09 * np.maximum(np.einsum("ij,ij->i", face, face), np.einsum("ij,ij->i", outside, outside))
-    good = strong & (contrast_sq > 4.0**2) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
-    points = np.column_stack([u[good].astype(float), v_edge[good]])
-    return (points if by_columns else points[:, ::-1]), spread[good]
 
 
 def edge_colours(view: PreparedView, vertices_px: FloatArray) -> tuple[FloatArray, ...]:

@@ -98,7 +98,9 @@ def _parse_spec(text: str) -> PuzzleSpec:
         raise ValueError("its size and gap must be positive and its pose finite")
     if not MIN_PUZZLE_PIECES <= count <= MAX_PUZZLE_PIECES:
         raise ValueError(f"a puzzle has {MIN_PUZZLE_PIECES} to {MAX_PUZZLE_PIECES} pieces")
-    return PuzzleSpec(name, (edges[0], edges[1], edges[2]), count, float(gap), colour, *where, picture=picture)
+    return PuzzleSpec(
+        name, (edges[0], edges[1], edges[2]), count, float(gap), colour, where[0], where[1], where[2], picture=picture
+    )
 
 
 def puzzle_port_type() -> Any:
@@ -133,7 +135,7 @@ def painted_range() -> Any:
     """The camera's colour of a painted puzzle's pieces: every hue, saturated (``picture.MIN_SATURATION``)."""
     from bt_arrange.perception.colours import ColourRange
 
-    return ColourRange(PAINTED, ((0.0, 360.0),), (0.3, 1.0), (0.2, 1.0), (1.0, 1.0, 1.0))
+    return ColourRange(PAINTED, ((0.0, 360.0),), (0.3, 1.0), (0.2, 1.0))  # no paint: the picture is printed
 
 
 def painted_colours(reader: Any, puzzles: list[PuzzleSpec], targets: list[Any], colours: Any) -> Any:

@@ -56,24 +56,61 @@ def _search(points: FloatArray, height: float, gripper: Gripper) -> tuple[Grasp,
 
 
 def _closing_axes(points: FloatArray) -> list[FloatArray]:
-    """Unit closing directions, one per half-turn class: edge normals and antipodal bisectors."""
+    """Unit closing directions, one per half-turn class: edge normals and antipodal bisectors.
+
+    The candidates are every edge's normal, then the bisector of every pair of edges facing each
+    other within ``ANTIPODAL_HALF_ANGLE_RAD`` (in the order of the pairs, ``i < j``); each is kept
+    unless it lies within a degree of one kept before it. Every pair is judged at once (numpy, O(n^2)
+    in C), and a comparison that comes within ``DECIDED_BY_M`` of its bound is made again one pair
+    at a time, so the axes kept, and their figures, are the ones a loop over the pairs keeps.
+    """
     directions = np.roll(points, -1, axis=0) - points
     normals = np.column_stack([directions[:, 1], -directions[:, 0]])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    axes = list(normals)
     count = len(normals)
-    for i in range(count):
-        for j in range(i + 1, count):
-            if float(normals[i] @ normals[j]) < -math.cos(2 * ANTIPODAL_HALF_ANGLE_RAD):
-                bisector = normals[i] - normals[j]
-                axes.append(bisector / np.linalg.norm(bisector))
-    unique: list[FloatArray] = []
-    for axis in axes:
+    facing = -math.cos(2 * ANTIPODAL_HALF_ANGLE_RAD)
+    first, second = np.triu_indices(count, k=1)  # the pairs i < j in the loop's order
+    products = np.einsum("ij,ij->i", normals[first], normals[second])
+    chosen = products < facing
+    for k in np.flatnonzero(np.abs(products - facing) <= DECIDED_BY_M):
+        chosen[k] = float(normals[first[k]] @ normals[second[k]]) < facing
+    pairs = np.column_stack([first[chosen], second[chosen]])
+    bisectors = normals[pairs[:, 0]] - normals[pairs[:, 1]]
+    rough = np.vstack([normals, bisectors / np.linalg.norm(bisectors, axis=1)[:, None]])
+    rough[(rough[:, 0] < -1e-12) | ((np.abs(rough[:, 0]) <= 1e-12) & (rough[:, 1] < 0))] *= -1
+
+    def exact(k: int) -> FloatArray:
+        """Candidate ``k`` as the loop computes it: a normal, or a pair's bisector normalised on its own."""
+        if k < count:
+            axis = normals[k]
+        else:
+            bisector = normals[pairs[k - count, 0]] - normals[pairs[k - count, 1]]
+            axis = bisector / np.linalg.norm(bisector)
         if axis[0] < -1e-12 or (abs(axis[0]) <= 1e-12 and axis[1] < 0):
             axis = -axis  # the pads are symmetric under a half turn
-        if not any(float(axis @ other) > math.cos(math.radians(1.0)) for other in unique):
-            unique.append(axis)
-    return unique
+        return axis
+
+    # A candidate whose half-turn could go either way by rounding is judged exactly throughout.
+    doubtful = np.abs(np.abs(rough[:, 0]) - 1e-12) <= DECIDED_BY_M
+    for k in np.flatnonzero(doubtful):
+        rough[k] = exact(int(k))
+    same = math.cos(math.radians(1.0))
+    alive = np.ones(len(rough), dtype=bool)
+    unique: list[FloatArray] = []
+    start = 0
+    while True:
+        remaining = np.flatnonzero(alive[start:])
+        if not len(remaining):
+            return unique
+        k = start + int(remaining[0])
+        axis = exact(k)
+        unique.append(axis)
+        later = rough[k + 1 :] @ axis
+        dropped = later > same
+        for m in np.flatnonzero((np.abs(later - same) <= DECIDED_BY_M) & alive[k + 1 :]):
+            dropped[m] = float(exact(k + 1 + int(m)) @ axis) > same
+        alive[k + 1 :] &= ~dropped
+        start = k + 1
 
 
 def _grasp_along(
@@ -88,10 +125,12 @@ def _grasp_along(
     centres = np.arange(low, high + step / 2, step)
     # Every centre judged at once, roughly; only those not clearly refused are judged exactly below.
     undecided = ~_clearly_refused(points, closing, along, centres, half_pad, max_width_m)
-    order = sorted(range(len(centres)), key=lambda k: (abs(float(centres[k])), float(centres[k])))
-    # Each point's place along the pads and across them, as the exact loop computes them (a dot each).
-    projections = ([float(p @ along) for p in points], [float(p @ closing) for p in points])
-    for centre_t in (float(centres[k]) for k in order if undecided[k]):
+    order = np.lexsort((centres, np.abs(centres)))  # nearest the centroid first, the lower of two as near
+    left = order[undecided[order]]
+    if not len(left):
+        return None
+    projections = _Projected(points, closing, along, t_values)
+    for centre_t in (float(centres[k]) for k in left):
         band = half_pad
         slab = _slab(points, closing, along, centre_t, band, projections)
         if slab is None:
@@ -115,36 +154,64 @@ def _grasp_along(
     return None
 
 
+class _Projected:
+    """Each point's place along the pads (``t``) and across them as the exact loop has them: a dot each, on demand.
+
+    ``rough``: every point's ``t`` at once (a product of matrices, within a rounding of the exact
+    figures), which picks the edges a slab may hold; only those edges' points are projected exactly.
+    """
+
+    def __init__(self, points: FloatArray, closing: FloatArray, along: FloatArray, rough: FloatArray) -> None:
+        self.points, self.closing, self.along = points, closing, along
+        self.rough, self.rough_next = rough, np.roll(rough, -1)
+        self.t, self.c = np.full(len(points), np.nan), np.full(len(points), np.nan)
+
+    def exact(self, indices: np.ndarray) -> None:
+        """Project the points ``indices`` exactly, those not yet projected."""
+        for k in indices[np.isnan(self.t[indices])].tolist():
+            point = self.points[k]
+            self.t[k], self.c[k] = float(point @ self.along), float(point @ self.closing)
+
+
 def _slab(
     points: FloatArray,
     closing: FloatArray,
     along: FloatArray,
     centre_t: float,
     half_m: float,
-    projections: tuple[list[float], list[float]] | None = None,
+    projections: _Projected | None = None,
 ) -> FloatArray | None:
     """The outline's points (as ``[across, t]``) within ``|t - centre_t| <= half_m``, cut where its edges cross.
 
-    ``projections``: each point's ``t`` and ``across``, computed once for the closing axis (the same
-    figures as here); an edge wholly beyond the slab adds nothing and is passed over.
+    ``projections``: each point's ``t`` and ``across`` for the closing axis (the same figures as
+    here), kept from one slab to the next. The edges are judged together (numpy), on the exact
+    figures and in the same arithmetic as one at a time, each crossing's ``across`` a dot of its own.
     """
     count = len(points)
-    t_of, c_of = projections or ([float(p @ along) for p in points], [float(p @ closing) for p in points])
+    seen = projections or _Projected(points, closing, along, points @ along)
     # Beyond these by a picometre, a point is outside the slab whatever the rounding of the tests below.
     low_t, high_t = centre_t - half_m - 1e-12, centre_t + half_m + 1e-12
-    out: list[tuple[float, float]] = []
-    for k in range(count):
-        ta, tb = t_of[k], t_of[(k + 1) % count]
-        if (ta < low_t and tb < low_t) or (ta > high_t and tb > high_t):
-            continue  # neither its start within the slab nor a crossing of either side
-        a, b = points[k], points[(k + 1) % count]
-        if abs(ta - centre_t) <= half_m:
-            out.append((c_of[k], ta))
-        for t in (centre_t - half_m, centre_t + half_m):
-            if (ta - t) * (tb - t) < 0:
-                s = (t - ta) / (tb - ta)
-                out.append((float((a + s * (b - a)) @ closing), t))
-    return np.array(out) if out else None
+    # The edges that may start within the slab or cross a side, by the rough figures and a margin of
+    # ``DECIDED_BY_M``; the exact tests below judge each of them.
+    low_rough, high_rough = low_t - DECIDED_BY_M, high_t + DECIDED_BY_M
+    starts, ends = seen.rough, seen.rough_next
+    edges = np.flatnonzero(
+        ~(((starts < low_rough) & (ends < low_rough)) | ((starts > high_rough) & (ends > high_rough)))
+    )
+    following = (edges + 1) % count
+    seen.exact(np.concatenate([edges, following]))
+    ta, tb = seen.t[edges], seen.t[following]
+    inside = np.abs(ta - centre_t) <= half_m
+    values, places = [seen.c[edges][inside]], [ta[inside]]
+    for t in (centre_t - half_m, centre_t + half_m):
+        crossing = (ta - t) * (tb - t) < 0
+        a, b = points[edges[crossing]], points[following[crossing]]
+        s = (t - ta[crossing]) / (tb[crossing] - ta[crossing])
+        cut = a + s[:, None] * (b - a)
+        values.append(np.array([float(point @ closing) for point in cut]))
+        places.append(np.full(len(cut), t))
+    slab = np.column_stack([np.concatenate(values), np.concatenate(places)])
+    return slab if len(slab) else None
 
 
 #: How far (metres) every rough figure of ``_clearly_refused`` must lie from each bound it is compared
@@ -157,57 +224,104 @@ def _clearly_refused(
 ) -> np.ndarray:
     """For each centre along the pads, True when ``_grasp_along``'s checks refuse it by more than ``DECIDED_BY_M``.
 
-    The same checks on every centre at once (numpy, in O(centres x points)), on figures rounded
-    differently from the exact loop's (a product of matrices, not a dot per point): a centre any of
-    whose comparisons comes within ``DECIDED_BY_M`` of its bound is left to the exact loop, so the
-    grasp found is the one the loop alone finds, only without judging the centres refused plainly.
+    The same checks on every centre at once, in O((n + centres) log n): the points sorted along the
+    pads, the highest and lowest of those within a slab read from sparse tables, the edges' crossings
+    of the slabs' sides counted out edge by edge, and the pads' contacts found by binary lifting. Its
+    figures are rounded differently from the exact loop's (a product of matrices, not a dot per
+    point): a centre any of whose comparisons comes within ``DECIDED_BY_M`` of its bound is left to
+    the exact loop, so the grasp found is the one the loop alone finds.
     """
-    t = points @ along
-    c = points @ closing
+    t, c = points @ along, points @ closing
+    count, near = len(t), DECIDED_BY_M
+    order = np.argsort(t, kind="stable")
+    ts = t[order]
+    # Sparse tables of the points in order along the pads: level k, place i holds the highest across of
+    # [i, i + 2^k); the second half the highest of the negated, so that the lowest is read the same way.
+    levels = max(1, int(count).bit_length())
+    table = np.full((levels, 2 * count + 1), -np.inf)
+    table[0, : 2 * count] = np.concatenate([c[order], -c[order]])
+    for k in range(1, levels):
+        size = 1 << (k - 1)
+        table[k, : 2 * count - size] = np.maximum(table[k - 1, : 2 * count - size], table[k - 1, size : 2 * count])
     t_next, c_next = np.roll(t, -1), np.roll(c, -1)
-    near = DECIDED_BY_M
-    mid = centres[:, None]
+    edge_low, edge_high = np.minimum(t, t_next), np.maximum(t, t_next)
     unclear = np.zeros(len(centres), dtype=bool)
 
-    def slab(half_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """Each centre's slab: its points' ``c`` (NaN where none) and ``t``, vertices then crossings."""
+    def highest(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """The highest table value in each [lo, hi) (-inf where empty)."""
+        length = np.maximum(hi - lo, 1)
+        k = np.frexp(length.astype(float))[1] - 1
+        found = np.maximum(table[k, lo], table[k, hi - (1 << k)])
+        return np.where(hi > lo, found, -np.inf)
+
+    def crossings(bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The highest and lowest across where edges cross each bound (strictly); -inf and inf where none do."""
+        first = np.searchsorted(bounds, edge_low, side="right")
+        counts = np.maximum(np.searchsorted(bounds, edge_high, side="left") - first, 0)
+        top, bottom = np.full(len(bounds), -np.inf), np.full(len(bounds), np.inf)
+        total = int(counts.sum())
+        if total:
+            edges = np.repeat(np.arange(count), counts)
+            at = np.arange(total) - np.repeat(np.cumsum(counts) - counts - first, counts)
+            share = (bounds[at] - t[edges]) / (t_next[edges] - t[edges])
+            values = c[edges] + share * (c_next[edges] - c[edges])
+            np.maximum.at(top, at, values)
+            np.minimum.at(bottom, at, values)
+        return top, bottom
+
+    def slab(half_m: float) -> tuple[np.ndarray, ...]:
+        """Each centre's slab: its points' range in order, highest and lowest, and the crossings on either side."""
         nonlocal unclear
-        inside = np.abs(t - mid) <= half_m
-        unclear |= np.any(np.abs(np.abs(t - mid) - half_m) <= near, axis=1)
-        values, places = [np.where(inside, c, np.nan)], [np.broadcast_to(t, inside.shape)]
-        for bound in (mid - half_m, mid + half_m):
-            crosses = (t - bound) * (t_next - bound) < 0
-            unclear |= np.any((np.abs(t - bound) <= near) | (np.abs(t_next - bound) <= near), axis=1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                share = (bound - t) / (t_next - t)
-            values.append(np.where(crosses, c + share * (c_next - c), np.nan))
-            places.append(np.broadcast_to(bound, inside.shape))
-        return np.concatenate(values, axis=1), np.concatenate(places, axis=1)
+        low_side, high_side = centres - half_m, centres + half_m
+        for side in (low_side, high_side):  # a point on a side is inside to one rounding and outside to another
+            unclear |= np.searchsorted(ts, side - near, side="left") != np.searchsorted(ts, side + near, side="right")
+        lo = np.searchsorted(ts, low_side, side="left")
+        hi = np.searchsorted(ts, high_side, side="right")
+        (low_top, low_bottom), (high_top, high_bottom) = crossings(low_side), crossings(high_side)
+        top = np.maximum(np.maximum(highest(lo, hi), low_top), high_top)
+        bottom = np.minimum(np.minimum(-highest(lo + count, hi + count), low_bottom), high_bottom)
+        return lo, hi, top, bottom, low_top, -low_bottom, high_top, -high_bottom
+
+    def lifted(lo: np.ndarray, hi: np.ndarray, floor: np.ndarray, backwards: bool) -> np.ndarray:
+        """The first (or, ``backwards``, one past the last) place in [lo, hi) whose value reaches ``floor``."""
+        place = hi.copy() if backwards else lo.copy()
+        for k in range(levels - 1, -1, -1):
+            size = 1 << k
+            start = place - size if backwards else place  # from -count to 2 count: always a place of the table
+            fits = start >= lo if backwards else start + size <= hi
+            place = np.where(fits & (table[k, start] < floor), place - size if backwards else place + size, place)
+        return place
 
     with np.errstate(invalid="ignore"):
-        values, places = slab(half_pad)
-        empty = np.all(np.isnan(values), axis=1)
-        top, bottom = (
-            np.nanmax(np.where(empty[:, None], 0.0, values), axis=1),
-            np.nanmin(np.where(empty[:, None], 0.0, values), axis=1),
-        )
+        lo, hi, top, bottom, *sides = slab(half_pad)
+        empty = ~np.isfinite(top)
+        top, bottom = np.where(empty, 0.0, top), np.where(empty, 0.0, bottom)
         width = top - bottom
         unclear |= np.abs(width - max_width_m) <= near
-        wider, _ = slab(half_pad + BESIDE_PADS_M)
-        wider_top = np.nanmax(np.where(np.isnan(wider), -np.inf, wider), axis=1)
-        wider_bottom = np.nanmin(np.where(np.isnan(wider), np.inf, wider), axis=1)
+        _, _, wider_top, wider_bottom, *_ = slab(half_pad + BESIDE_PADS_M)
         high, low = top + MAX_RISE_M, bottom - MAX_RISE_M
         unclear |= (np.abs(wider_top - high) <= near) | (np.abs(wider_bottom - low) <= near)
         rises = (wider_top > high) | (wider_bottom < low)
-        upper = values >= (top - 5e-4)[:, None]
-        lower = values <= (bottom + 5e-4)[:, None]
-        unclear |= np.any(np.abs(values - (top - 5e-4)[:, None]) <= near, axis=1)
-        unclear |= np.any(np.abs(values - (bottom + 5e-4)[:, None]) <= near, axis=1)
-
-        def span(members: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            return np.where(members, places, np.inf).min(axis=1), np.where(members, places, -np.inf).max(axis=1)
-
-        (upper_low, upper_high), (lower_low, lower_high) = span(upper), span(lower)
+        # The pads' contacts: the slab's members within 0.5 mm of its top (and of its bottom, negated),
+        # found twice, their bound moved ``near`` either way: where the two differ, the call is close.
+        low_top, low_neg, high_top, high_neg = sides
+        # Four searches a centre, stacked: the upper and the lower contacts, each with its bound moved both ways.
+        offset = np.repeat([0, count, 0, count], len(centres))
+        floor = np.concatenate([top - 5e-4 - near, -(bottom + 5e-4) - near, top - 5e-4 + near, -(bottom + 5e-4) + near])
+        at_low, at_high = (
+            np.tile(np.concatenate([low_top, low_neg]), 2),
+            np.tile(np.concatenate([high_top, high_neg]), 2),
+        )
+        starts, ends = np.tile(lo, 4) + offset, np.tile(hi, 4) + offset
+        first = lifted(starts, ends, floor, backwards=False)
+        after = lifted(starts, ends, floor, backwards=True)
+        low_side, high_side = np.tile(centres - half_pad, 4), np.tile(centres + half_pad, 4)
+        start = np.where(first < ends, ts[(first - offset) % count], high_side)
+        end = np.where(after > starts, ts[(after - 1 - offset) % count], low_side)
+        span_low = np.where(at_low >= floor, low_side, start).reshape(4, -1)
+        span_high = np.where(at_high >= floor, high_side, end).reshape(4, -1)
+        unclear |= np.any(span_low[:2] != span_low[2:], axis=0) | np.any(span_high[:2] != span_high[2:], axis=0)
+        upper_low, lower_low, upper_high, lower_high = span_low[0], span_low[1], span_high[0], span_high[1]
     facing, facing_unclear = _facing_all(upper_low, upper_high, lower_low, lower_high, near)
     unclear |= facing_unclear
     refused = empty | (width > max_width_m) | rises | ~facing

@@ -203,7 +203,9 @@ def _too_wide_to_grasp(points: FloatArray, gripper: Gripper) -> bool:
     return least_width > bound + TOO_WIDE_MARGIN_M
 
 
-def _judged(cells: list[FloatArray], height_m: float, gripper: Gripper) -> list[tuple[Prism, float]] | None:
+def _judged(
+    cells: list[FloatArray], height_m: float, gripper: Gripper, settle_turns: int = 0
+) -> list[tuple[Prism, float]] | None:
     """Every cell as a prism whose frame's x axis is its preferred grasp's closing axis, and that frame's turn.
 
     None when a piece is no part the gripper handles: an outline problem, a short side, no grasp, a
@@ -213,6 +215,10 @@ def _judged(cells: list[FloatArray], height_m: float, gripper: Gripper) -> list[
     any: a draw one piece's short side refuses costs no grasp search, and the yaw search (the
     dearest, and never yet the one to refuse a piece whose cue holds) runs only on a draw every
     other check passed. The same checks as piece by piece, so the same draws pass.
+
+    ``settle_turns`` (a measured outline's, ``in_grasp_frame``): two sides a hair from parallel give
+    two closing axes a hair apart, and once turned to the first the other may come first; the turn
+    is then moved onto the axis that comes first, up to that many times.
     """
     firsts = []
     for cell in cells:
@@ -231,9 +237,13 @@ def _judged(cells: list[FloatArray], height_m: float, gripper: Gripper) -> list[
     framed = []
     for first in firsts:
         turn = first.grasps(gripper)[0].yaw_offset_rad
-        c, s = math.cos(turn), math.sin(turn)
-        turned = first.outline_m @ np.array([[c, -s], [s, c]])  # each point turned by -turn
-        prism = Prism.from_outline(turned.tolist(), height_m)
+        prism = _turned(first, turn, height_m)
+        for _ in range(settle_turns):
+            preferred = prism.grasps(gripper)
+            if not preferred or preferred[0].axis == "x" or abs(math.sin(preferred[0].yaw_offset_rad)) > SETTLE_SIN:
+                break
+            turn += preferred[0].yaw_offset_rad
+            prism = _turned(first, turn, height_m)
         if prism.size_problems() or not prism.grasps(gripper) or prism.grasps(gripper)[0].axis != "x":
             return None
         framed.append((prism, turn))
@@ -244,12 +254,22 @@ def _judged(cells: list[FloatArray], height_m: float, gripper: Gripper) -> list[
     return framed
 
 
+def _turned(first: Prism, turn: float, height_m: float) -> Prism:
+    c, s = math.cos(turn), math.sin(turn)
+    turned = first.outline_m @ np.array([[c, -s], [s, c]])  # each point turned by -turn
+    return Prism.from_outline(turned.tolist(), height_m)
+
+
+#: How far from the frame's x a measured outline's preferred axis may come out to be settled onto it (1 deg).
+SETTLE_SIN = math.sin(math.radians(1.0))
+
+
 def in_grasp_frame(outline: FloatArray, height_m: float, gripper: Gripper = ROBOTIQ_2F85) -> tuple[Prism, float] | None:
     """One outline as a fresco's piece (``_judged`` of it alone): the prism in its grasp's frame and that frame's turn.
 
     None when it is no part the gripper handles. A puzzle's solved piece is framed so.
     """
-    judged = _judged([np.asarray(outline, dtype=float)], height_m, gripper)
+    judged = _judged([np.asarray(outline, dtype=float)], height_m, gripper, settle_turns=3)
     return judged[0] if judged is not None else None
 
 

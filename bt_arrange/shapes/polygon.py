@@ -261,9 +261,27 @@ def convex_pieces(points: FloatArray) -> list[FloatArray]:
     """A simple counter-clockwise polygon split into convex polygons (counter-clockwise).
 
     Ear clipping gives triangles; neighbouring pieces are then merged while the union stays
-    convex (Hertel and Mehlhorn), so a convex outline is one piece and an L two.
+    convex (Hertel and Mehlhorn), so a convex outline is one piece and an L two. The clipping
+    is started at each vertex in turn and the split kept that has the fewest pieces, then the
+    widest narrowest corner: a sliver piece at an outline corner is a contact the physics
+    engines resolve sideways (a pad pressed on the corner of a 44 deg sliver of the fragment was
+    pushed shut along the sliver's inner side and held the part, docs/irregular.md).
     """
-    pieces = [list(triangle) for triangle in ear_clip(points)]
+    count = len(points)
+    best: tuple[tuple[int, float], list[list[int]]] | None = None
+    for start in range(count):
+        order = [(start + k) % count for k in range(count)]
+        pieces = _merged([[order[i] for i in triangle] for triangle in ear_clip(points[order])], points)
+        score = (len(pieces), min(_narrowest_corner_rad(points[piece]) for piece in pieces))
+        # Fewer pieces, or as many with a corner wider by more than rounding: the first clipping keeps ties.
+        if best is None or score[0] < best[0][0] or (score[0] == best[0][0] and score[1] > best[0][1] + 1e-9):
+            best = (score, pieces)
+    assert best is not None
+    return [points[piece] for piece in best[1]]
+
+
+def _merged(pieces: list[list[int]], points: FloatArray) -> list[list[int]]:
+    """Neighbouring convex pieces merged while their union stays convex (the first pair found first)."""
     merged = True
     while merged:
         merged = False
@@ -277,4 +295,10 @@ def convex_pieces(points: FloatArray) -> list[FloatArray]:
                     break
             if merged:
                 break
-    return [points[piece] for piece in pieces]
+    return pieces
+
+
+def _narrowest_corner_rad(piece: FloatArray) -> float:
+    """The smallest interior angle of a convex piece (a flat corner counts as pi)."""
+    count = len(piece)
+    return min(math.pi - abs(turn_rad(piece[k - 1], piece[k], piece[(k + 1) % count])) for k in range(count))

@@ -111,7 +111,7 @@ def arrange_one(
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
         # Layers (issue 33): a raised part must stand on its support; far off, it is placed again, not pushed.
         *layers.standing(target),
-        *layers.regrasp_while_far(target),
+        *layers.regrasp_while_far(target, release, kind_targets),
         # An irregular part turned in the pads by more than pushes correct is picked up again (a box's
         # grasp squares it, so its tree is the paper's). Among neighbours there is no room for a free pick.
         *([] if dense or target.object_type.shape.rectangular else [regrasp_while_turned(target)]),

@@ -28,6 +28,8 @@ from bt_arrange.behaviours import CheckStanding, GraspGuard, Pick, Place, keys
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.footprints import overlap
+from bt_arrange.geometry import PlanarPose
+from bt_arrange.layout import Release
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.stacking import LEVEL_TOLERANCE_M, footprint_of, layered, top_m
 from bt_arrange.trees.steps import inspect
@@ -113,8 +115,15 @@ def watched_below(target: Target, placed: Sequence[Target], settings: Manipulati
     ]
 
 
-def regrasp_while_far(target: Target) -> list[py_trees.behaviour.Behaviour]:
+def regrasp_while_far(
+    target: Target, release: Release | None = None, kind_targets: Sequence[PlanarPose] = ()
+) -> list[py_trees.behaviour.Behaviour]:
     """For a raised target: pick it up from its support and place it again while it lies far off (nothing else).
+
+    ``release`` (a part among neighbours in its layer, ``plan_steps``): the pads pick it across the
+    axis the layout gave its release, and release it so again; without it a pick off the support
+    could bring a pad down into the 2 mm gap beside a neighbour (a pyramid's layer) and knock it off.
+    ``kind_targets`` (identical parts): the inspection after placing it again tells it from its twins.
 
     After the inspect after placing (``/<obj>/offset_mm``, ``/<obj>/yaw_error_deg``)::
 
@@ -134,11 +143,12 @@ def regrasp_while_far(target: Target) -> list[py_trees.behaviour.Behaviour]:
         name=f"pick {obj} off its support and place it again",
         memory=True,
         children=[
-            Pick(f"pick {obj} off its support", obj, kind, z_m=z_m),
+            Pick(f"pick {obj} off its support", obj, kind, grasp=release, z_m=z_m),
             GraspGuard(
-                f"while holding {obj} over its support", Place(f"place {obj} on its support again", obj, kind, z_m=z_m)
+                f"while holding {obj} over its support",
+                Place(f"place {obj} on its support again", obj, kind, release=release, z_m=z_m),
             ),
-            inspect(target, f"inspect {obj} after placing it on its support again"),
+            inspect(target, f"inspect {obj} after placing it on its support again", kind_targets=kind_targets),
             *standing(target),
         ],
     )

@@ -76,7 +76,12 @@ class ArrangeSolved(py_trees.composites.Sequence):
         unknown = set(options) - set(OPTIONS)
         if unknown:
             raise BtArrangeError(f"ArrangeSolved: unknown options {', '.join(sorted(unknown))}")
-        self.options = {"threshold_mm": 1.0, "yaw_threshold_deg": 1.0, "max_pushes": 10, "max_regrasps": 3}
+        self.options: dict[str, Any] = {
+            "threshold_mm": 1.0,
+            "yaw_threshold_deg": 1.0,
+            "max_pushes": 10,
+            "max_regrasps": 3,
+        }
         self.options.update({"strategy": "paper", "keep_going": True, **options})
         self._setup_kwargs: dict[str, Any] = {}
         self.blackboard = self.attach_blackboard_client(name=name)
@@ -117,7 +122,9 @@ class ArrangeSolved(py_trees.composites.Sequence):
         root: py_trees.behaviour.Behaviour = self
         while root.parent is not None:
             root = root.parent
-        shared = {"colours": root.colours, "settings": root.settings} if isinstance(root, Arrangement) else {}
+        shared: dict[str, Any] = (
+            {"colours": root.colours, "settings": root.settings} if isinstance(root, Arrangement) else {}
+        )
         surveyed = self._surveyed()
 
         def locate(target: Any) -> py_trees.behaviour.Behaviour:

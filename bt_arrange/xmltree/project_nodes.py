@@ -19,5 +19,5 @@ for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard,
 register_node(RepeatUntilWithin, "RetryUntilThreshold")
 register_node(Arrangement)
 # A puzzle (issue 32): its survey, its solve, and the arrangement its solve decides.
-for _node in (SurveyPieces, SolvePuzzle, ArrangeSolved):
-    register_node(_node)
+for _puzzle_node in (SurveyPieces, SolvePuzzle, ArrangeSolved):
+    register_node(_puzzle_node)

@@ -17,7 +17,15 @@ from typing import Any, NoReturn
 import py_trees
 
 from bt_arrange.errors import BtArrangeError, PortValueError, XmlTreeError
-from bt_arrange.filelimits import MAX_FILE_BYTES, MAX_TREE_DEPTH, MAX_TREE_NODES, read_limited, too_large
+from bt_arrange.filelimits import (
+    MAX_FILE_BYTES,
+    MAX_OBJECT_TYPES,
+    MAX_PLAN_OUTLINE_POINTS,
+    MAX_TREE_DEPTH,
+    MAX_TREE_NODES,
+    read_limited,
+    too_large,
+)
 from bt_arrange.suggest import did_you_mean
 from bt_arrange.xmltree.registry import REGISTRY, NodeModel
 from bt_arrange.xmltree.writer import FORMAT_VERSION
@@ -74,6 +82,12 @@ def parse_elements(text: str, source: str = "<string>") -> Element:
 
 def _expat_message(error: xml.parsers.expat.ExpatError) -> str:
     return xml.parsers.expat.ErrorString(error.code) if error.code is not None else str(error)
+
+
+#: An object type's text in a port's value: ``NAME=outline_mm X:Y ...`` up to the next field (``;``).
+_TYPE_TEXT = re.compile(r"[^;=\s]+\s*=\s*outline_mm\b[^;]*")
+#: Characters of a port's value quoted in an error (an outline's value runs to kilobytes).
+_SHOWN_CHARACTERS = 120
 
 
 def load_xml(path: str | Path, tree_id: str | None = None) -> py_trees.behaviour.Behaviour:
@@ -135,7 +149,40 @@ class _Reader:
                 self.document, f"main tree {main!r} is not one of the <BehaviorTree> IDs: {', '.join(self.trees)}"
             )
         self._check_size(main)
+        self._check_object_types()
         return self._tree(self.trees[main], ())
+
+    def _check_object_types(self) -> None:
+        """Refuse a file of more object types or outline points than a plan may hold, before any type is judged.
+
+        Each type is judged (its grasps searched) as its port is read, so the plan's limits
+        (``MAX_OBJECT_TYPES``, ``MAX_PLAN_OUTLINE_POINTS``) bound an XML tree's load too. A type is
+        counted once however many ports repeat its text (``NAME=outline_mm X:Y ...``, alone or in a
+        target's fields); its points are its ``X:Y`` vertices.
+        """
+        seen: dict[str, Element] = {}
+        stack = list(self.trees.values())
+        while stack:
+            element = stack.pop()
+            stack.extend(element.children)
+            for value in element.attributes.values():
+                if "outline_mm" not in value:
+                    continue
+                for match in _TYPE_TEXT.finditer(value):
+                    seen.setdefault(" ".join(match.group(0).split()), element)
+        if len(seen) > MAX_OBJECT_TYPES:
+            self.fail(
+                max(seen.values(), key=lambda e: e.line),
+                f"{len(seen)} object types, over the limit of {MAX_OBJECT_TYPES} "
+                "(bt_arrange.filelimits.MAX_OBJECT_TYPES)",
+            )
+        points = sum(text.count(":") for text in seen)
+        if points > MAX_PLAN_OUTLINE_POINTS:
+            self.fail(
+                max(seen.values(), key=lambda e: e.line),
+                f"{points:,} outline points in all, over the limit of {MAX_PLAN_OUTLINE_POINTS} "
+                "(bt_arrange.filelimits.MAX_PLAN_OUTLINE_POINTS)",
+            )
 
     def _check_size(self, main: str) -> None:
         """Refuse a tree whose SubTrees expand beyond the node or depth limit, before any node is built.
@@ -256,8 +303,9 @@ class _Reader:
             try:
                 values[attribute] = port.type.parse(text)
             except PortValueError as error:  # every codec error is one (bt_arrange.ports.PortType.parse)
+                shown = text if len(text) <= _SHOWN_CHARACTERS else text[: _SHOWN_CHARACTERS - 3] + "..."
                 raise XmlTreeError(
-                    f"{self.source} line {element.line}: <{element.tag} name={name!r}> {attribute}={text!r} "
+                    f"{self.source} line {element.line}: <{element.tag} name={name!r}> {attribute}={shown!r} "
                     f"is not a {port.type.name}: {error.reason}"
                 ) from error
         for port in model.ports:

@@ -13,6 +13,7 @@ ports (a user's Python tree can be watched even where it cannot be saved as XML)
 
 from __future__ import annotations
 
+import dataclasses
 import reprlib
 from collections.abc import Mapping
 from xml.sax.saxutils import escape, quoteattr
@@ -89,6 +90,16 @@ def _write_node(
         if not options.generic:
             raise
         model = generic_model(type(node))
+    if node.children and model.children == "none":
+        if not options.generic:
+            # A leaf that builds its children as it runs (ArrangeSolved): a file holds the leaf, never what it built.
+            node_children: list[py_trees.behaviour.Behaviour] = []
+        else:
+            # The Groot2 view shows what it built, so the model is a control node's (a leaf has no children).
+            model = dataclasses.replace(model, category="Control")
+            node_children = list(node.children)
+    else:
+        node_children = list(node.children)
     used[model.tag] = model
     attributes = [f"name={quoteattr(node.name)}"]
     if node in options.uids:
@@ -99,11 +110,11 @@ def _write_node(
         attributes.append(f"{port.name}={quoteattr(text)}")
     indent = "  " * depth
     opening = f"{indent}<{model.tag} {' '.join(attributes)}"
-    if not node.children:
+    if not node_children:
         lines.append(opening + "/>")
         return
     lines.append(opening + ">")
-    for child in node.children:
+    for child in node_children:
         _write_node(child, lines, depth + 1, used, options)
     lines.append(f"{indent}</{model.tag}>")
 

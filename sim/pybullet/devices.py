@@ -109,6 +109,9 @@ class SimGripper(CellGripper):
     Each finger joint is the distance of its pad from the centre, so the opening is their sum.
     """
 
+    #: Polls further apart than this (s) are not compared for ringing (the control period is 8 ms).
+    RING_POLL_S = 0.05
+
     def __init__(self, cell: WorkCell) -> None:
         self._cell = cell
         self._client = cell.client
@@ -165,7 +168,8 @@ class SimGripper(CellGripper):
         On a part without friction anchors (a prism, ``PhysicsConfig.prism_contact``) the pads can
         ring in place, the fingers swinging a few micrometres together at the control rate (a
         trapezoid under the close: +2.7 to -2.1 mm/s, 8 um peak to peak, every 8 ms): there a
-        finger also has to have travelled 1 mm/s's worth since the last poll to count as moving.
+        finger also has to have travelled 1 mm/s's worth since the last poll (if within ``RING_POLL_S``)
+        to count as moving.
         """
         states = self._client.getJointStates(self._body, self._fingers)
         now_s, positions = self._cell.sim_time_s, [s[0] for s in states]
@@ -173,7 +177,10 @@ class SimGripper(CellGripper):
             self._polls = (self._polls[-1], (now_s, positions))
         last_s, last = self._polls[0]
         fast = [abs(s[1]) > 1e-3 for s in states]
-        if not any(fast) or not last or not self._on_unanchored_part():
+        # A poll from before this command (a stage ago: the first polls of a command are not made)
+        # says nothing of ringing: measured against one, fingers opening at 75 mm/s had travelled
+        # less than 1 mm/s's worth of the seconds since and counted as still (a release "stalled").
+        if not any(fast) or not last or now_s - last_s > self.RING_POLL_S or not self._on_unanchored_part():
             return any(fast)
         travelled = [abs(q - q0) > 1e-3 * (now_s - last_s) for q, q0 in zip(positions, last, strict=True)]
         return any(f and t for f, t in zip(fast, travelled, strict=True))

@@ -15,7 +15,7 @@ from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism, preferred_grasp
 from bt_arrange_sim.parts import WOOD_DENSITY_KG_M3, mass_of
 from bt_arrange_sim.pybullet.cell import WorkCell
-from bt_arrange_sim.pybullet.scripted import ScriptedPickPlace
+from bt_arrange_sim.pybullet.scripted import OBJ, ScriptedPickPlace
 
 ELL = ObjectType(
     "ell", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)
@@ -54,6 +54,31 @@ def test_an_ell_is_picked_at_its_grasp_and_placed_turned_by_contact_alone() -> N
         x, y, yaw = cell.part_planar_truth("ell")
         assert math.hypot(x - target[0], y - target[1]) < 0.002, "placed within 2 mm (no push yet)"
         assert abs(math.degrees(fold_yaw(yaw - target[2], 2 * math.pi))) < 1.0
+
+
+FRAGMENT = ObjectType(
+    "fragment",
+    shape=Prism.from_outline([[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.03, 0.05], [0.005, 0.04]], 0.02),
+)
+
+
+@pytest.mark.parametrize("turn_rad", [-0.005, 0.005, 0.015])
+def test_the_fragment_released_at_its_target_lets_the_pads_open_to_the_release_width(turn_rad) -> None:
+    """Split into three pieces, two slivers met the pads at its corners: they held the opening pads at 52 mm.
+
+    Lying where ``irregular_parts`` seed 0 lays it, picked with its yaw a little off (as a camera's may be),
+    set down at that run's target: at -5 and 15 mrad the release wedged; at 5 mrad the fingers, opening
+    at 75 mm/s, were judged still against a finger poll seconds old and sent all the way open.
+    """
+    with WorkCell() as cell:
+        x0, y0, yaw0 = 0.654936536063375, -0.10807565050110662, 0.4494351814662769
+        cell.add_object(FRAGMENT, "red", x0, y0, yaw0, name=OBJ)
+        cell.step(50)
+        script = ScriptedPickPlace(cell, object_type=FRAGMENT)
+        assert script.pick(x0, y0, yaw0 + turn_rad).grasped
+        script.place(0.5, -0.14, math.radians(-120.0))  # raises when the release stays wedged
+        opening_m = cell.gripper.width()
+        assert 0.06 < opening_m < script.context.settings.open_width_m - 0.01, "opened to the release width, no stall"
 
 
 TRIANGLE = ObjectType("triangle", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.015, 0.045]], 0.02))
