@@ -207,8 +207,14 @@ def picture(run: Any, targets: list[Any], path: Path, yaw_deg: float = 35.0) -> 
     width, height = PICTURE_SIZE_PX
     projection = client.computeProjectionMatrixFOV(fov=40.0, aspect=width / height, nearVal=0.05, farVal=3.0)
     _, _, rgba, _, _ = client.getCameraImage(
-        width, height, viewMatrix=view, projectionMatrix=projection, renderer=pybullet.ER_TINY_RENDERER,
-        lightDirection=[0.4, -0.6, 1.0], shadow=1, flags=pybullet.ER_NO_SEGMENTATION_MASK,
+        width,
+        height,
+        viewMatrix=view,
+        projectionMatrix=projection,
+        renderer=pybullet.ER_TINY_RENDERER,
+        lightDirection=[0.4, -0.6, 1.0],
+        shadow=1,
+        flags=pybullet.ER_NO_SEGMENTATION_MASK,
     )
     rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
     path.parent.mkdir(parents=True, exist_ok=True)

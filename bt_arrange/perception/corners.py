@@ -134,7 +134,7 @@ COLOURED_OUTSIDE = 0.3
 
 
 def _unmixed(x: FloatArray, face: FloatArray, outside: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Each pixel's (columns, band) face fraction unmixed from ``outside`` (columns, 2), and its distance off that mix."""
+    """Each pixel's (columns, band) face fraction unmixed from ``outside`` (columns, 2), and its distance off it."""
     contrast = face[None, :] - outside
     contrast_sq = np.maximum(np.einsum("ij,ij->i", contrast, contrast), 1e-12)
     c = np.einsum("ijk,ik->ij", x - outside[:, None, :], contrast) / contrast_sq[:, None]
