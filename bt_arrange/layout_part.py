@@ -73,9 +73,9 @@ class Part:
     def _square_pushes(self) -> dict[str, SquarePush]:
         return self.shape.named_pushes(self.gripper) if self.by_outline else {}
 
-    @property
+    @functools.cached_property
     def footprint(self) -> Footprint:
-        """The part at its target."""
+        """The part at its target (kept: the layout search asks for it at every step it tries)."""
         if self.by_outline:
             pieces = tuple(tuple((float(x), float(y)) for x, y in piece) for piece in self.shape.convex_pieces())
             return Outline(self.x_m, self.y_m, self.yaw_rad, pieces)
