@@ -428,15 +428,14 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
         return _steps(sequence, pads)
 
     memo: dict[tuple[str, frozenset[str]], tuple[Release | None, list[str]]] = {}
-    worst: list[tuple[int, Part, list[str]]] = []
 
     def release_of(part: Part, placed_names: frozenset[str]) -> tuple[Release | None, list[str]]:
         key = (part.name, placed_names)
         if key not in memo:
-            if len(memo) >= MAX_RELEASE_CHECKS:
-                raise PlanError(_gave_up(worst, part, pads), parts=_parts_of(*_hardest(worst, part)))
             memo[key] = choose_release(part, [(n, by_name[n].footprint) for n in placed_names], pads)
         return memo[key]
+
+    worst: list[tuple[int, Part, list[str]]] = []
 
     def search(done: list[Part], left: list[Part]) -> list[Part] | None:
         if not left:
@@ -460,29 +459,6 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
         depth, part, in_way = max(worst, key=lambda w: w[0])
         raise PlanError(_no_room(part, in_way, pads, after=False), parts=_parts_of(part, in_way))
     return _steps(found, pads)
-
-
-#: Releases the order search may judge (each a part among a set of placed ones, a few ms each) before it
-#: gives up: the search backtracks over orders, which grow as n!, and a plan must be judged in seconds.
-#: Every shipped plan needs at most 108; a 12-piece fresco that no order builds needed 4,451 (8.8 s).
-MAX_RELEASE_CHECKS = 600
-
-
-def _hardest(worst: Sequence[tuple[int, Part, list[str]]], part: Part) -> tuple[Part, list[str]]:
-    if not worst:
-        return part, []
-    _, hardest, in_way = max(worst, key=lambda w: w[0])
-    return hardest, in_way
-
-
-def _gave_up(worst: Sequence[tuple[int, Part, list[str]]], part: Part, pads: Pads) -> str:
-    hardest, in_way = _hardest(worst, part)
-    # The reason without its "no order ... builds this plan" head: the search stopped, it did not prove that.
-    reason = _no_room(hardest, in_way, pads, after=False).split(": ", 1)[1] if worst else f"at {part.name}"
-    return (
-        f"no placing order found within {MAX_RELEASE_CHECKS} release checks of the layout search "
-        f"(bt_arrange.layout.MAX_RELEASE_CHECKS); the furthest it got: {reason}"
-    )
 
 
 def _parts_of(part: Part, in_way: Sequence[str]) -> tuple[tuple[str, str], ...]:
