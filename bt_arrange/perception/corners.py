@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -160,6 +161,73 @@ def _covered(x: FloatArray, face: FloatArray, outside: FloatArray) -> FloatArray
     return np.where(coloured[:, None] & (off_grey < off_outside), c_grey, c_outside)
 
 
+@dataclass(frozen=True)
+class _EdgeBand:
+    """The pixels across one side, a column each (rows for a side nearer vertical: a transposed view).
+
+    ``x`` is their chroma (columns, band, 2), index 0 at the face's end of the band, growing
+    outwards; ``line_position`` is where the side's line crosses each column, counted the same way.
+    """
+
+    x: FloatArray
+    u: NDArray[np.int_]
+    v_line: FloatArray
+    v_start: NDArray[np.int_]
+    half_width_px: int
+    face_above: bool
+    by_columns: bool
+
+    @property
+    def line_position(self) -> FloatArray:
+        """The side's line in each column, in pixels from the face's end of the band."""
+        if self.face_above:
+            return self.v_line - self.v_start + 0.5
+        return self.v_start + 2 * self.half_width_px + 0.5 - self.v_line
+
+    def v_edge(self, edge: FloatArray) -> FloatArray:
+        """An edge ``edge`` pixels from the face's end of each column, as image v (u in the transposed view)."""
+        if self.face_above:
+            return self.v_start - 0.5 + edge
+        return self.v_start + 2 * self.half_width_px + 0.5 - edge
+
+    def points(self, v_edge: FloatArray, good: NDArray[np.bool_]) -> FloatArray:
+        """The ``good`` columns' edge points as image (u, v)."""
+        points = np.column_stack([self.u[good].astype(float), v_edge[good]])
+        return points if self.by_columns else points[:, ::-1]
+
+
+def _edge_band(
+    rgb: NDArray[np.uint8], p: FloatArray, q: FloatArray, face_centre: FloatArray, half_width_px: int, margin_px: float
+) -> _EdgeBand | None:
+    """The band of pixels across the side from ``p`` to ``q``, or None when under 3 columns lie in the image."""
+    direction = q - p
+    by_columns = abs(direction[0]) >= abs(direction[1])
+    if not by_columns:
+        rgb = rgb.transpose(1, 0, 2)
+        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
+    height, width = rgb.shape[:2]
+    length_px = float(np.hypot(*direction))
+    slope = direction[1] / direction[0]
+    # Skip the ends of the side, where the band of pixels would also cross the adjacent sides.
+    margin_u = margin_px * abs(direction[0]) / length_px
+    u_low, u_high = sorted((p[0], q[0]))
+    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
+    if len(u) < 3:
+        return None
+    v_line = p[1] + (u - p[0]) * slope
+    face_above = bool((face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0)
+    v_start = np.round(v_line).astype(int) - half_width_px
+    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
+    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
+    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
+    if len(u) < 3:
+        return None
+    x = chroma(rgb[rows, u[:, None]])  # (columns, band, 2)
+    if not face_above:
+        x = x[:, ::-1]
+    return _EdgeBand(x, u, v_line, v_start, half_width_px, face_above, by_columns)
+
+
 def _side_edge_points(
     rgb: NDArray[np.uint8],
     p: FloatArray,
@@ -180,31 +248,10 @@ def _side_edge_points(
     Works on columns for a side closer to horizontal and on rows otherwise, by swapping the
     roles of u and v (a transposed view of the image).
     """
-    direction = q - p
-    by_columns = abs(direction[0]) >= abs(direction[1])
-    if not by_columns:
-        rgb = rgb.transpose(1, 0, 2)
-        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
-    height, width = rgb.shape[:2]
-    length_px = float(np.hypot(*direction))
-    slope = direction[1] / direction[0]
-    # Skip the ends of the side, where the band of pixels would also cross the adjacent sides.
-    margin_u = margin_px * abs(direction[0]) / length_px
-    u_low, u_high = sorted((p[0], q[0]))
-    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
-    if len(u) < 3:
+    band = _edge_band(rgb, p, q, face_centre, half_width_px, margin_px)
+    if band is None:
         return np.empty((0, 2)), np.empty(0)
-    v_line = p[1] + (u - p[0]) * slope
-    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
-    v_start = np.round(v_line).astype(int) - half_width_px
-    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
-    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
-    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
-    if len(u) < 3:
-        return np.empty((0, 2)), np.empty(0)
-    x = chroma(rgb[rows, u[:, None]])  # (columns, band, 2)
-    if not face_above:
-        x = x[:, ::-1]  # index 0 at the face's end of the band, growing outwards
+    x, line_position = band.x, band.line_position
     # Pixel k of the band covers [k, k + 1] measured outwards from the face's end, so with the
     # face's covered fraction c_k the edge lies at sum(c_k) from that end. The outside colour
     # comes from the first pixel beyond the edge's spread, measured from the current line, and
@@ -212,7 +259,6 @@ def _side_edge_points(
     # and the table (they differ a little in chroma) then counts as outside, and a neighbour's
     # face across a gap of a few pixels (2 mm is 4 px) never enters the sum. Pixels as far
     # inside are pure face and count as exactly 1, which keeps their noise out of the edge.
-    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
     near_px = INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px
     index = np.arange(x.shape[1])
     first_out = np.clip(np.ceil(line_position + near_px - 0.5).astype(int), 1, x.shape[1] - 1)
@@ -229,14 +275,13 @@ def _side_edge_points(
     covered = np.where(window, c, 0.0)
     edge = first_mixed + covered.sum(axis=1)
     spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
-    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
+    v_edge = band.v_edge(edge)
     contrast = face[None, :] - outside
     contrast_sq = np.einsum("ij,ij->i", contrast, contrast)
     # A column whose neighbour has nearly the face's colour cannot place the edge, and an edge
     # found outside the band's middle means the band missed the transition.
-    good = (contrast_sq > 0.09 * float(face @ face)) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
-    points = np.column_stack([u[good].astype(float), v_edge[good]])
-    return (points if by_columns else points[:, ::-1]), spread[good]
+    good = (contrast_sq > 0.09 * float(face @ face)) & (np.abs(v_edge - band.v_line) < half_width_px - 1.0)
+    return band.points(v_edge, good), spread[good]
 
 
 #: A pixel across a painted edge this far (its share of the face-to-outside contrast) off their mix is neither.
@@ -253,29 +298,10 @@ def _local_side_points(
     near_outside_px: float | None,
 ) -> tuple[FloatArray, FloatArray]:
     """``_side_edge_points`` with the face's chroma read per column, a pixel inside the mixed pixels."""
-    direction = q - p
-    by_columns = abs(direction[0]) >= abs(direction[1])
-    if not by_columns:
-        rgb = rgb.transpose(1, 0, 2)
-        p, q, face_centre, direction = p[::-1], q[::-1], face_centre[::-1], direction[::-1]
-    height, width = rgb.shape[:2]
-    length_px = float(np.hypot(*direction))
-    slope = direction[1] / direction[0]
-    margin_u = margin_px * abs(direction[0]) / length_px
-    u_low, u_high = sorted((p[0], q[0]))
-    u = np.arange(np.ceil(u_low + margin_u), np.floor(u_high - margin_u) + 1).astype(int)
-    v_line = p[1] + (u - p[0]) * slope
-    face_above = (face_centre[1] - (p[1] + (face_centre[0] - p[0]) * slope)) < 0
-    v_start = np.round(v_line).astype(int) - half_width_px
-    rows = v_start[:, None] + np.arange(2 * half_width_px + 1)[None, :]
-    keep = (u >= 0) & (u < width) & (rows[:, 0] >= 0) & (rows[:, -1] < height)
-    u, v_line, v_start, rows = u[keep], v_line[keep], v_start[keep], rows[keep]
-    if len(u) < 3:
+    band = _edge_band(rgb, p, q, face_centre, half_width_px, margin_px)
+    if band is None:
         return np.empty((0, 2)), np.empty(0)
-    x = chroma(rgb[rows, u[:, None]])
-    if not face_above:
-        x = x[:, ::-1]
-    line_position = v_line - v_start + 0.5 if face_above else v_start + 2 * half_width_px + 0.5 - v_line
+    x, line_position = band.x, band.line_position
     near_px = 2.0 if near_outside_px is None else near_outside_px
     index = np.arange(x.shape[1])
     columns = np.arange(len(x))
@@ -290,16 +316,15 @@ def _local_side_points(
     covered = np.where(window, covered_all, 0.0)
     edge = first_mixed + covered.sum(axis=1)
     spread = np.where(window, np.clip(np.minimum(covered, 1.0 - covered), 0.0, None), 0.0).sum(axis=1)
-    v_edge = v_start - 0.5 + edge if face_above else v_start + 2 * half_width_px + 0.5 - edge
+    v_edge = band.v_edge(edge)
     strong = contrast_sq > 0.09 * np.maximum(np.einsum("ij,ij->i", face, face), np.einsum("ij,ij->i", outside, outside))
     # A pixel across the edge that is no mix of this face colour and the outside's (the picture
     # changes within a pixel or two of the edge, a stray texel) cannot place it: its column is left out.
     normal = np.column_stack([-contrast[:, 1], contrast[:, 0]])
     off_mix = np.abs(np.einsum("ijk,ik->ij", x - outside[:, None, :], normal)) / contrast_sq[:, None]
     mixed = np.all(~window | ((off_mix <= MAX_OFF_MIX) & (np.abs(covered_all - 0.5) <= 0.5 + MAX_OFF_MIX)), axis=1)
-    good = strong & mixed & (contrast_sq > 4.0**2) & (np.abs(v_edge - v_line) < half_width_px - 1.0)
-    points = np.column_stack([u[good].astype(float), v_edge[good]])
-    return (points if by_columns else points[:, ::-1]), spread[good]
+    good = strong & mixed & (contrast_sq > 4.0**2) & (np.abs(v_edge - band.v_line) < half_width_px - 1.0)
+    return band.points(v_edge, good), spread[good]
 
 
 def _fit_side(points: FloatArray, by_columns: bool) -> FloatArray | None:
