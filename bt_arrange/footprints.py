@@ -9,6 +9,7 @@ parts with them. No pybullet, no shapely.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -121,6 +122,32 @@ def _radius(polygon: Sequence[tuple[float, float]]) -> tuple[float, float, float
     return cx, cy, max(math.hypot(x - cx, y - cy) for x, y in polygon)
 
 
+#: What ``overlap``'s test of two whole footprints keeps beyond the pieces' own tests (metres): far
+#: above the rounding between a piece's circle worked on the table and in the part's frame.
+REACH_SLACK_M = 1e-9
+
+
+def _reach(shape: Footprint) -> tuple[float, float, float]:
+    """A circle on the table holding every circle ``overlap`` draws around one of the footprint's pieces."""
+    if isinstance(shape, Rect):
+        return shape.x_m, shape.y_m, math.hypot(shape.half_x_m, shape.half_y_m)
+    return shape.x_m, shape.y_m, _pieces_reach(shape.pieces)
+
+
+@functools.lru_cache(maxsize=4096)
+def _pieces_reach(pieces: tuple[tuple[tuple[float, float], ...], ...]) -> float:
+    """How far from the frame's origin the farthest piece's circle (its corners' mean, to its farthest corner) reaches.
+
+    The same in every pose (a turn and a shift keep distances), so kept per outline: the layout's
+    search asks it of the same pieces at thousands of poses.
+    """
+    reach = 0.0
+    for piece in pieces:
+        cx, cy, radius = _radius(piece)
+        reach = max(reach, math.hypot(cx, cy) + radius)
+    return reach
+
+
 def _project(rect: Rect, axis: tuple[float, float]) -> tuple[float, float]:
     values = [x * axis[0] + y * axis[1] for x, y in rect.corners()]
     return min(values), max(values)
@@ -134,6 +161,9 @@ def overlap(a: Footprint, b: Footprint, clearance_m: float = 0.0) -> bool:
     piece by piece, each convex piece on its own edge normals.
     """
     if not (isinstance(a, Rect) and isinstance(b, Rect)):
+        (ax0, ay0, a_reach), (bx0, by0, b_reach) = _reach(a), _reach(b)
+        if math.hypot(ax0 - bx0, ay0 - by0) > a_reach + b_reach + clearance_m + REACH_SLACK_M:
+            return False  # every pair of pieces' circles below lies apart too: the loop would say so
         for first in _polygons(a):
             ax, ay, ar = _radius(first)
             for second in _polygons(b):
