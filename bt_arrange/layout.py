@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Iterable, Sequence
 from contextvars import ContextVar
 from dataclasses import dataclass, field
@@ -151,31 +153,32 @@ def _square_push_pads(part: Part, at: Footprint, towards: str, distance_m: float
     return Rect(centre.x_m, centre.y_m, at.yaw_rad + heading_rad, (far - near) / 2, half_across)
 
 
-#: While ``plan_layout`` searches, every overlap it has judged: the search asks the same volume
+#: While ``plan_layout`` searches, every overlap it has judged, by volume and then by the placed
+#: footprint (its id, the footprint kept beside the verdict): the search asks the same volume
 #: against the same target under thousands of placed sets (a 12-piece fresco: a million tests, of
 #: fifty thousand kinds). None outside a search, so nothing outlives it.
-_JUDGED_OVERLAPS: ContextVar[dict[tuple[Footprint, Footprint, float], bool] | None] = ContextVar(
+_JUDGED_OVERLAPS: ContextVar[dict[tuple[Footprint, float], dict[int, tuple[Footprint, bool]]] | None] = ContextVar(
     "judged_overlaps", default=None
 )
 
 
-def _overlaps(volume: Footprint, footprint: Footprint, clearance_m: float) -> bool:
-    judged = _JUDGED_OVERLAPS.get()
-    if judged is None:
-        return overlap(volume, footprint, clearance_m)
-    key = (volume, footprint, clearance_m)
-    found = judged.get(key)
-    if found is None:
-        found = judged[key] = overlap(volume, footprint, clearance_m)
-    return found
-
-
 def blockers(volumes: Iterable[Footprint], placed: Sequence[tuple[str, Footprint]], clearance_m: float) -> list[str]:
     """Names of the placed parts that any of ``volumes`` meets."""
+    judged = _JUDGED_OVERLAPS.get()
     names = []
     for volume in volumes:
+        verdicts = judged.setdefault((volume, clearance_m), {}) if judged is not None else None
         for name, footprint in placed:
-            if name not in names and _overlaps(volume, footprint, clearance_m):
+            if name in names:
+                continue
+            if verdicts is None:
+                meets = overlap(volume, footprint, clearance_m)
+            else:
+                kept = verdicts.get(id(footprint))
+                if kept is None or kept[0] is not footprint:
+                    kept = verdicts[id(footprint)] = (footprint, overlap(volume, footprint, clearance_m))
+                meets = kept[1]
+            if meets:
                 names.append(name)
     return names
 
@@ -430,11 +433,35 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
     every part not yet placed can still be released (parts only ever add obstacles, so a part that
     cannot be released now never can later).
     """
+    parts, pads = list(parts), pads or Pads()
+    key = (
+        tuple((p.name, p.x_m, p.y_m, p.yaw_rad, id(p.shape), p.gripper) for p in parts),
+        pads,
+        None if order is None else tuple(order),
+    )
+    with _LAYOUTS_LOCK:
+        kept = _LAYOUTS.get(key)
+        if kept is not None:
+            _LAYOUTS.move_to_end(key)
+            return list(kept[1])
     judging = _JUDGED_OVERLAPS.set({})
     try:
-        return _plan_layout(list(parts), pads or Pads(), order)
+        steps = _plan_layout(parts, pads, order)
     finally:
         _JUDGED_OVERLAPS.reset(judging)
+    with _LAYOUTS_LOCK:
+        _LAYOUTS[key] = (parts, steps)  # the parts keep their shapes, whose ids the key holds
+        while len(_LAYOUTS) > KEPT_LAYOUTS:
+            _LAYOUTS.popitem(last=False)
+    return list(steps)
+
+
+#: Layouts kept, the latest first out last: a run asks for the same one four times (the plan
+#: file's check and tree as it loads, the run's tree, the session's plan check), and a 12-piece
+#: fresco's search takes a second.
+KEPT_LAYOUTS = 8
+_LAYOUTS: OrderedDict[tuple[object, ...], tuple[list[Part], list[Step]]] = OrderedDict()
+_LAYOUTS_LOCK = threading.Lock()
 
 
 def _plan_layout(parts: list[Part], pads: Pads, order: Sequence[str] | None) -> list[Step]:
