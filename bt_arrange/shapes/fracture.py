@@ -252,6 +252,15 @@ def _too_wide_to_grasp(points: FloatArray, gripper: Gripper) -> bool:
     return least_width > bound + TOO_WIDE_MARGIN_M
 
 
+def _least_width_m(prism: Prism) -> float:
+    """The outline's least width across one of its edges (its width along that edge's normal)."""
+    points = prism.outline_m
+    edges = np.concatenate((points[1:], points[:1])) - points
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]]) / np.hypot(edges[:, 0], edges[:, 1])[:, None]
+    spans = points @ normals.T
+    return float(np.min(spans.max(axis=0) - spans.min(axis=0)))
+
+
 def _judged(
     cells: list[FloatArray], height_m: float, gripper: Gripper, settle_turns: int = 0
 ) -> list[tuple[Prism, float]] | None:
@@ -269,20 +278,28 @@ def _judged(
     two closing axes a hair apart, and once turned to the first the other may come first; the turn
     is then moved onto the axis that comes first, up to that many times.
     """
+    if any(len(cell) < 3 for cell in cells):
+        return None
+    # Too wide every way, judged on the cells as cut (the bound is the same wherever the outline
+    # stands): a large slab's draws fall on it before any piece is built and checked.
+    if any(_too_wide_to_grasp(cell, gripper) for cell in cells):
+        return None
     firsts = []
     for cell in cells:
-        if len(cell) < 3 or outline_problem(cell.tolist()) is not None:
+        try:
+            first = Prism.from_outline(cell.tolist(), height_m)  # a PlanError for an outline problem
+        except PlanError:
+            if outline_problem(cell.tolist()) is None:
+                raise  # not the outline's: the height's, no draw would mend it
             return None
-        first = Prism.from_outline(cell.tolist(), height_m)
         if first.size_problems():
             return None
         firsts.append(first)
-    if any(_too_wide_to_grasp(first.outline_m, gripper) for first in firsts):
-        return None
     # The half turn alone, before any grasp search: a long slab's pieces fall on it, at a fortieth of the cost.
     if any(float(_misfit_m(first, HALF_TURN)[0]) < MIN_YAW_CUE_M - CUE_SCREEN_MARGIN_M for first in firsts):
         return None
-    if not all(first.grasps(gripper) for first in firsts):
+    # The widest piece first: the one a draw of large pieces fails on, before the others' searches.
+    if not all(first.grasps(gripper) for first in sorted(firsts, key=_least_width_m, reverse=True)):
         return None
     if any(yaw_cue_m(first) < MIN_YAW_CUE_M for first in firsts):
         return None

@@ -350,11 +350,11 @@ class Prism:
             found.append(f"{self.height * 1000:g} mm tall, taller than {MAX_HEIGHT_M * 1000:.0f} mm")
         points = self.outline_m
         count = len(points)
-        for k in range(count):
+        steps = np.concatenate((points[1:], points[:1])) - points
+        lengths = np.hypot(steps[:, 0], steps[:, 1]).tolist()  # edge k runs from corner k to k + 1
+        for k in np.flatnonzero(np.array(lengths) < MIN_PERCEIVED_EDGE_M).tolist():
             before, here, after = points[k - 1], points[k], points[(k + 1) % count]
-            length = float(np.hypot(*(after - here)))
-            if length >= MIN_PERCEIVED_EDGE_M:
-                continue
+            length = lengths[k]
             turn_in = turn_rad(before, here, after)
             turn_out = turn_rad(here, after, points[(k + 2) % count])
             if min(abs(turn_in), abs(turn_out)) >= CORNER_TURN_RAD:  # a side between two corners
