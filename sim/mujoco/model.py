@@ -29,7 +29,9 @@ higher ``priority``). The pybullet cell's table, links and parts are 0.5 and its
 every contact's coefficient here is the product Bullet uses: geoms carry ``0.5 x`` their Bullet
 coefficient (parts at priority 1, so a part's own ``lateral_friction`` decides its contacts with
 the table and the links), and each finger geom meets each part through an explicit ``<pair>``
-of ``pad x part`` (the dynamic contacts between finger and part bodies are excluded).
+of ``pad x part`` (the dynamic contacts between finger and part bodies are excluded). Two parts
+meet through explicit pairs too, with their own ``solref`` (``MujocoPhysics.part_solref_time_constant_s``:
+a part landing on another) and otherwise what MuJoCo's dynamic contact between them has.
 """
 
 from __future__ import annotations
