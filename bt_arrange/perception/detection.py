@@ -54,6 +54,10 @@ from bt_arrange.perception.segmentation import (
 from bt_arrange.perception.values import Detection, DetectionStatus, DetectorConfig, PreparedView, WorldRegion
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 
+#: A box's outcomes that a twin touching it may cause (merged blob, a side not measurable): the
+#: outline registration is tried there (``PartDetector._on_free_edges``).
+_TWIN_STATUSES = (DetectionStatus.PARTIAL, DetectionStatus.AMBIGUOUS)
+
 
 def _format_xy(points: Iterable[tuple[float, float]]) -> str:
     return ", ".join(f"({x:.3f}, {y:.3f})" for x, y in points)
@@ -275,7 +279,10 @@ class PartDetector:
             )
         blob, _, expected_px = candidates[0]
         try:
-            return self._measure(view, colour, blob, expected_px, xy)
+            detection = self._measure(view, colour, blob, expected_px, xy)
+            if detection.found or roi is None or detection.status not in _TWIN_STATUSES:
+                return detection
+            return self._on_free_edges(view, colour, roi) or detection
         except (cv2.error, ValueError, np.linalg.LinAlgError) as error:
             # Degenerate geometry (say, corners that coincide) must not end a run: report it.
             return Detection(
@@ -285,6 +292,20 @@ class PartDetector:
                 expected_area_px=expected_px,
                 candidates_xy_m=xy,
             )
+
+    def _on_free_edges(self, view: PreparedView, colour: ColourRange, roi: WorldRegion) -> Detection | None:
+        """A box's face beside a twin, found by the outline registration where its corners could not be.
+
+        A box face closer than a pixel or two to another of its colour (a raised cube bumped towards
+        its twin in a pyramid's layer) is one blob with it, or its edge facing the twin cannot be
+        measured: its corners are not the face's. Where the part is expected (the region's centre),
+        its outline is registered on its free edges instead (``outline_merged``, as for a prism);
+        None when that finds it neither.
+        """
+        from bt_arrange.perception.outline import detect_outline
+
+        outlined = detect_outline(self, view, colour, roi)
+        return outlined if outlined.found else None
 
     def _measure(
         self,

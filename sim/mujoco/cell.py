@@ -262,7 +262,10 @@ class MujocoCell(CellBase):
 
     def _apply_pad_friction(self, only: str | None = None) -> None:
         model = self.model
+        fingers = set(self._finger_body.values())
         for pair in range(model.npair):
+            if int(model.geom_bodyid[model.pair_geom1[pair]]) not in fingers:
+                continue  # two parts' pair (``model._part_pairs``): no pad in it
             geom = model.pair_geom2[pair]
             name = self.model.body(model.geom_bodyid[geom]).name
             if name in self._parts and (only is None or name == only):

@@ -29,7 +29,9 @@ higher ``priority``). The pybullet cell's table, links and parts are 0.5 and its
 every contact's coefficient here is the product Bullet uses: geoms carry ``0.5 x`` their Bullet
 coefficient (parts at priority 1, so a part's own ``lateral_friction`` decides its contacts with
 the table and the links), and each finger geom meets each part through an explicit ``<pair>``
-of ``pad x part`` (the dynamic contacts between finger and part bodies are excluded).
+of ``pad x part`` (the dynamic contacts between finger and part bodies are excluded). Two parts
+meet through explicit pairs too, with their own ``solref`` (``MujocoPhysics.part_solref_time_constant_s``:
+a part landing on another) and otherwise what MuJoCo's dynamic contact between them has.
 """
 
 from __future__ import annotations
@@ -56,6 +58,8 @@ VISUAL_GROUP, HIDDEN_GROUP = 1, 3
 BULLET_BASE_FRICTION = DEFAULT_PART_FRICTION
 FINGER_BODIES = ("left_finger", "right_finger")
 TABLE_THICKNESS_M = 0.04
+#: A contact between two parts has ``solref``'s time constant this many time steps (``MujocoPhysics``).
+PART_CONTACT_TIME_STEPS = 4.0
 
 
 @dataclass(frozen=True)
@@ -79,6 +83,12 @@ class MujocoPhysics:
     solver_iterations: int = 100
     #: None: twice the time step.
     solref_time_constant_s: float | None = None
+    #: ``solref``'s time constant of a contact between two parts (a part landing on another, parts
+    #: side by side). None: four time steps. At two a contact arrests an approach within one step:
+    #: a face landing tilted by a few hundredths of a degree touches first at one vertex, which takes
+    #: the fall's whole impulse alone and spins both parts, and the lower one slides 0.1 mm on its
+    #: support (``docs/mujoco.md``). The pads and the table keep the stiffer contact.
+    part_solref_time_constant_s: float | None = None
     solref_damping_ratio: float = 1.0
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
     friction_scale: float = 1.0
@@ -99,6 +109,11 @@ class MujocoPhysics:
         """``solref``'s time constant for a time step (scaled by ``solref_scale``)."""
         base = self.solref_time_constant_s if self.solref_time_constant_s is not None else 2.0 * time_step_s
         return base * self.solref_scale
+
+    def part_time_constant_s(self, time_step_s: float) -> float:
+        """``solref``'s time constant of a part-on-part contact for a time step (scaled by ``solref_scale``)."""
+        base = self.part_solref_time_constant_s
+        return (base if base is not None else PART_CONTACT_TIME_STEPS * time_step_s) * self.solref_scale
 
 
 @dataclass(frozen=True)
@@ -136,8 +151,8 @@ def build_spec(config: CellConfig, physics: MujocoPhysics, parts: Sequence[PartS
     name_finger_geoms(spec)
     _table(spec, config, physics)
     pad = config.physics.pad_contact.lateral_friction
-    for part in parts:
-        _part(spec, part, physics, config.physics.time_step_s, pad)
+    geoms = {part.name: _part(spec, part, physics, config.physics.time_step_s, pad) for part in parts}
+    _part_pairs(spec, parts, geoms, physics, config.physics.time_step_s)
     _camera_and_light(spec, config)
     return spec
 
@@ -279,7 +294,7 @@ def pad_friction(part_friction: float, pad_lateral_friction: float, physics: Muj
     return physics.friction_scale * pad_lateral_friction * part_friction
 
 
-def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_lateral: float) -> None:  # noqa: ANN001
+def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_lateral: float) -> list:  # noqa: ANN001
     import mujoco
 
     shape = part.object_type.shape
@@ -355,6 +370,32 @@ def _part(spec, part: PartSpec, physics: MujocoPhysics, time_step_s: float, pad_
                 solref=_solref(physics, time_step_s),
                 solimp=list(physics.solimp),
             )
+    return collision_geoms
+
+
+def _part_pairs(spec, parts: Sequence[PartSpec], geoms: dict, physics: MujocoPhysics, time_step_s: float) -> None:  # noqa: ANN001
+    """Two parts meet through explicit pairs whose ``solref`` is the part-on-part contact's.
+
+    Everything else is what MuJoCo's dynamic contact between two part geoms of equal priority has:
+    the larger friction of the two, condim 3, the parts' ``solimp``; the dynamic contacts between
+    the two bodies are excluded.
+    """
+    solref = [physics.part_time_constant_s(time_step_s), physics.solref_damping_ratio]
+    for k, first in enumerate(parts):
+        for second in parts[k + 1 :]:
+            spec.add_exclude(bodyname1=first.name, bodyname2=second.name)
+            friction = physics.friction_scale * BULLET_BASE_FRICTION * max(first.friction, second.friction)
+            for geom1 in geoms[first.name]:
+                for geom2 in geoms[second.name]:
+                    spec.add_pair(
+                        name=f"{geom1.name}_{geom2.name}",
+                        geomname1=geom1.name,
+                        geomname2=geom2.name,
+                        condim=3,
+                        friction=[friction] * 2 + [0.0, 0.0, 0.0],
+                        solref=solref,
+                        solimp=list(physics.solimp),
+                    )
 
 
 def name_finger_geoms(spec) -> None:  # noqa: ANN001

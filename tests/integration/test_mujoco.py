@@ -193,3 +193,74 @@ def test_a_run_in_a_fresh_process_prints_only_its_report_headless() -> None:
     assert result.returncode == 0, result.stderr
     assert result.stderr == ""  # no GL warning, no teardown message: OSMesa chosen before mujoco loads
     assert json.loads(result.stdout)["objects"][0]["status"] == "within"
+
+
+#: A landing from a run (the tower, seed 0, bumped 2 mm: ``blue`` placed again on ``green`` after its
+#: regrasp, 4 ms after the pads let it go): qpos (x, y, z, w, qx, qy, qz) and qvel of each cube.
+#: Blue falls 0.8 mm tilted by 0.018 deg; one vertex of its face touches first.
+TOWER_LANDING = {
+    "red": (
+        [0.4999983827259703, -9.918623775820808e-07, 0.024991256594797173, 6.894758517042263e-06,
+         -6.219242298676074e-07, -1.9891036259592457e-07, -0.9999999999760182],
+        [0.0] * 6,
+    ),
+    "green": (
+        [0.5001761724448427, 5.587209892606255e-05, 0.0749868839682935, 0.6087565227691897, 1.3706492838941746e-06,
+         4.537068189114742e-07, 0.7933571049558201],
+        [0.0] * 6,
+    ),
+    "blue": (
+        [0.5002050146271679, 0.0001311537177286891, 0.1257803260802762, 0.5000042329709785, 0.000139881230026081,
+         7.260573660527554e-05, 0.8660229455232417],
+        [-0.00016556445750273116, -1.9954634525734113e-05, -0.019770534423822744, 0.0005633221676872613,
+         -0.0004953143875813269, -0.00011700822454432718],
+    ),
+}  # fmt: skip
+
+
+def _land(physics) -> float:
+    """Replay ``TOWER_LANDING`` for 0.6 s, the arm turned away: how far (mm) the lower cubes' centres moved."""
+    import mujoco
+
+    from bt_arrange_sim.config import CellConfig
+    from bt_arrange_sim.mujoco.model import PartSpec, build_spec
+
+    parts = [PartSpec(name, CUBE, (0.5, 0.5, 0.5), Pose.from_planar(0.3, 0.1 * k, 0.0, 0.025)) for k, name in
+             enumerate(TOWER_LANDING)]  # fmt: skip
+    model = build_spec(CellConfig(), physics, parts).compile()
+    data = mujoco.MjData(model)
+    data.qpos[0] = 3.0  # the shoulder turned away from the tower
+    for name, (qpos, qvel) in TOWER_LANDING.items():
+        joint = model.joint(f"{name}_free")
+        data.qpos[joint.qposadr[0] : joint.qposadr[0] + 7] = qpos
+        data.qvel[joint.dofadr[0] : joint.dofadr[0] + 6] = qvel
+    mujoco.mj_forward(model, data)
+    before = {name: data.body(name).xpos.copy() for name in ("red", "green")}
+    for _ in range(300):
+        mujoco.mj_step(model, data)
+    return max(1000 * float(np.linalg.norm(data.body(name).xpos - p)) for name, p in before.items())
+
+
+def test_a_cube_landing_tilted_on_another_moves_the_ones_below_less_than_a_tenth_of_a_millimetre() -> None:
+    from bt_arrange_sim.mujoco.model import MujocoPhysics
+
+    # Two parts meet at four time steps' time constant: the landing spreads over the whole face.
+    assert _land(MujocoPhysics()) < 0.05
+    # At two (the pads' and the table's), the first vertex to touch takes the whole fall: green slides.
+    assert _land(MujocoPhysics(part_solref_time_constant_s=0.004)) > 0.1
+
+
+def test_the_pads_friction_changes_only_the_pads_pairs_not_the_pairs_between_parts() -> None:
+    with MujocoCell() as cell:
+        cell.add_parts([ObjectStart("red", 0.4, -0.1, 0.0), ObjectStart("green", 0.4, 0.1, 0.0)])
+        model = cell.model
+        fingers = set(cell._finger_body.values())
+        between = [p for p in range(model.npair) if int(model.geom_bodyid[model.pair_geom1[p]]) not in fingers]
+        assert len(between) == 1  # one box each
+        pad = [p for p in range(model.npair) if p not in between]
+        cell.set_pad_friction("red", 0.9)
+        assert model.pair_friction[between[0], 0] == pytest.approx(0.25)
+        red = cell.parts["red"]
+        assert {
+            round(float(model.pair_friction[p, 0]), 6) for p in pad if model.geom_bodyid[model.pair_geom2[p]] == red
+        } == {0.45}
