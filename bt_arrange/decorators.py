@@ -44,7 +44,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
     there (degrees) is under ``yaw_threshold_deg`` too: the loop also corrects yaw.
 
     The offset counts as under the threshold only with the camera's own error added: the margin
-    the session writes at ``bt_arrange.uncertainty.CAMERA_MARGIN_KEY`` (mm; none there, no margin).
+    the session writes at ``bt_arrange.uncertainty.CAMERA_MARGIN_KEY`` (mm; none there, no margin),
+    ``margins`` times (2 for a part a neighbour's recheck will read again).
     """
 
     #: The node's description in the XML ``TreeNodesModel``.
@@ -62,6 +63,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "succeed once the yaw error is under this too [deg] (0: off)"),
             Port("stall_after", INT, 0, "fail once this many corrections in a row closed nothing (0: off)"),
             Port("accumulate", BOOL, False, "count on from what the corrections key holds (a second loop)"),
+            Port("margins", INT, 1, "the camera's error counted this many times (2: a later recheck reads it again)"),
         )
 
     def __init__(
@@ -77,8 +79,10 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         yaw_threshold_deg: float | None = None,
         stall_after: int = 0,
         accumulate: bool = False,
+        margins: int = 1,
     ) -> None:
         positive_number("threshold", threshold_mm, "mm", style="unit", finite=False)
+        whole_number("margins", margins, style="unit")
         if stall_after:
             whole_number("stall_after", stall_after, style="unit")
         if yaw_threshold_deg is not None:
@@ -102,6 +106,10 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         #: With ``accumulate`` the count at ``corrections_key`` goes on from what it held (a second loop of one object).
         self.accumulate = accumulate
         self._counted_before = 0
+        #: The camera's error is added this many times: twice for a part a later neighbour's recheck
+        #: reads again (a reading beside a neighbour differs by up to that error once more), so that
+        #: a part accepted here is still within when looked at again, not left a hair outside.
+        self.margins = int(margins)
         self.stalled_key = keys.key(self.obj, keys.PUSHES_STALLED) if stall_after and self.obj else None
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(offset_key, access=Access.READ)
@@ -217,7 +225,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         if not self.blackboard.exists(CAMERA_MARGIN_KEY):
             return 0.0
         value = self.blackboard.get(CAMERA_MARGIN_KEY)
-        return 0.0 if value is None else float(value)
+        return 0.0 if value is None else self.margins * float(value)
 
     def _yaw_error(self) -> float | None:
         if self.yaw_key is None or not self.blackboard.exists(self.yaw_key):

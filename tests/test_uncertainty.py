@@ -55,6 +55,30 @@ def test_the_failure_names_the_margin() -> None:
     assert "0.95 mm + camera 0.10 mm >= 1.00 mm after 1 correction(s)" in decorator.feedback_message
 
 
+def test_a_part_a_neighbour_will_look_at_again_counts_the_margin_twice() -> None:
+    """0.75 mm at a 0.8 mm threshold with a 0.04 mm camera: within once, not with a second reading's error."""
+    py_trees.blackboard.Blackboard.set(CAMERA_MARGIN_KEY, 0.04)
+    write_offset(0.75)
+    once = RepeatUntilWithin("correct red", push_then_inspect([0.3])[0], OFFSET, 0.8, max_attempts=5)
+    assert run(once) == Status.SUCCESS and once.attempts == 0
+    write_offset(0.75)
+    twice = RepeatUntilWithin("correct red", push_then_inspect([0.3])[0], OFFSET, 0.8, max_attempts=5, margins=2)
+    assert run(twice) == Status.SUCCESS and twice.attempts == 1
+    assert "0.30 mm + camera 0.08 mm < 0.80 mm" in twice.feedback_message
+
+
+def test_the_parts_later_steps_look_at_again_get_two_margins_in_the_tree() -> None:
+    from trees.dense_row import create_root
+
+    loops = {
+        node.obj: node.margins
+        for node in create_root().iterate()
+        if isinstance(node, RepeatUntilWithin) and node.name.startswith("correct") and " after " not in node.name
+    }
+    # A row of four 2 mm apart: each but the last is the next one's neighbour, looked at again.
+    assert loops == {"red": 2, "green": 2, "blue": 2, "yellow": 1}
+
+
 class Calibration:
     def __init__(self, reprojection_error_px: float, height_m: float, fx_px: float) -> None:
         self.reprojection_error_px = reprojection_error_px

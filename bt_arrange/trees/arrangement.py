@@ -82,6 +82,7 @@ def arrange_one(
     kind_targets: Sequence[PlanarPose] = (),
     kind_of_neighbour: Mapping[str, Sequence[PlanarPose]] | None = None,
     settings: ManipulationSettings | None = None,
+    rechecked: bool = False,
 ) -> py_trees.behaviour.Behaviour:
     """Algorithm 1 for one object: locate (detect), pick, place, inspect, push until within the thresholds.
 
@@ -90,7 +91,10 @@ def arrange_one(
     each with the directions it may be pushed and its restaging once this one is down: each is
     looked at again afterwards (``Recheck``) and corrected when it moved beyond the threshold.
     ``kind_targets`` (identical parts) are the targets of its kind; ``kind_of_neighbour`` gives
-    a neighbour's. ``settings`` are the run's (the pads' figures among neighbours).
+    a neighbour's. ``settings`` are the run's (the pads' figures among neighbours). ``rechecked``:
+    a later part's step looks at this one again (it is that part's neighbour): its own correction
+    counts the camera's error twice (``RepeatUntilWithin.margins``), so that the second reading,
+    beside the new neighbour, still finds it within.
     """
     settings = settings or ManipulationSettings()
     pads = Pads.from_settings(settings)
@@ -126,6 +130,7 @@ def arrange_one(
             restage=restage,
             push_opening_m=_opening(step, dense, pads),
             settings=settings,
+            margins=2 if rechecked else 1,
         ),
     ]
     for neighbour, sides, again in neighbours:
@@ -368,6 +373,12 @@ def arrangement(
 
     if correct == "each":
         children = []
+        # The parts a later step looks at again: its neighbours, and in layers the parts below it.
+        rechecked = {name for st in steps for name in st.neighbours} | {
+            part.obj
+            for index, st in enumerate(steps)
+            for part in layers.watched_below(by_obj[st.part.name], ordered[:index], settings)
+        }
         for index, step in enumerate(steps):
             target = by_obj[step.part.name]
             # Layers (issue 33): the pads meet only the parts of a part's own layer on the table.
@@ -398,6 +409,7 @@ def arrangement(
                 kind_targets=siblings.get(target.obj, ()),
                 kind_of_neighbour=siblings,
                 settings=settings,
+                rechecked=target.obj in rechecked,
             )
             children.append(carry_on(subtree, target.obj))
     else:

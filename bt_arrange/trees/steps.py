@@ -238,6 +238,7 @@ def correction(
     count: bool = True,
     label: str = "",
     settings: ManipulationSettings | None = None,
+    margins: int = 1,
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
@@ -248,7 +249,8 @@ def correction(
     ``strategy`` is the push's (``Push``): ``"paper"``, the paper's alternating push, ``"learned"``
     or ``"diagonal"``.
     ``yaw_threshold_deg=None`` corrects the position only. ``settings`` are the run's (the
-    threshold's floor).
+    threshold's floor). ``margins``: how many times the camera's error is added to the offset
+    (``RepeatUntilWithin.margins``: 2 for a part a later neighbour's recheck reads again).
     """
     check_threshold(threshold_mm, settings)
     check_strategy(strategy)
@@ -291,6 +293,7 @@ def correction(
         yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
         yaw_threshold_deg=yaw_threshold_deg,
         stall_after=STALL_AFTER_PUSHES if free else 0,
+        margins=margins,
     )
     if not free:
         return loop
@@ -315,6 +318,7 @@ def correction(
         yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
         yaw_threshold_deg=yaw_threshold_deg,
         accumulate=True,
+        margins=margins,
     )
     place_again = py_trees.composites.Sequence(
         name=f"place {obj} again when its pushes stall{label}",
