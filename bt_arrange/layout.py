@@ -29,7 +29,7 @@ import dataclasses
 import math
 import threading
 from collections import OrderedDict
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -162,6 +162,55 @@ _JUDGED_OVERLAPS: ContextVar[dict[tuple[Footprint, float], dict[int, tuple[Footp
 )
 
 
+@dataclass
+class _Targets:
+    """While ``plan_layout`` searches: every part's target footprint, and which of them each volume tried meets.
+
+    A volume the search tries (the pads of a staged release, a push's sweep) is the same under
+    every placed set; only which parts are placed changes. So it is judged once against every
+    target, under a key naming it (part, distance, direction, what), and a placed set then asks
+    only whether it holds one of those names: the same verdict as testing the placed footprints.
+    """
+
+    footprints: dict[str, Footprint]
+    met: dict[tuple[object, ...], frozenset[str]] = field(default_factory=dict)
+
+    def placed_names(self, placed: Sequence[tuple[str, Footprint]]) -> frozenset[str] | None:
+        """The names of ``placed`` when each is its target's footprint (else None: judge them one by one)."""
+        if all(self.footprints.get(name) is footprint for name, footprint in placed):
+            return frozenset(name for name, _ in placed)
+        return None
+
+    def meeting(
+        self, key: tuple[object, ...], volumes: Callable[[], Sequence[Footprint]], clearance_m: float
+    ) -> frozenset[str]:
+        """The targets any of the volumes ``key`` names meets (with ``clearance_m``), judged the first time asked."""
+        found = self.met.get(key)
+        if found is None:
+            built = volumes()
+            found = self.met[key] = frozenset(
+                name for name, footprint in self.footprints.items() if blockers(built, [(name, footprint)], clearance_m)
+            )
+        return found
+
+
+_TARGETS: ContextVar[_Targets | None] = ContextVar("layout_targets", default=None)
+
+
+def _blocked(
+    key: tuple[object, ...],
+    volumes: Callable[[], Sequence[Footprint]],
+    placed: Sequence[tuple[str, Footprint]],
+    clearance_m: float,
+) -> bool:
+    """True when a placed part meets one of the volumes (``bool(blockers(volumes(), placed, clearance_m))``)."""
+    targets = _TARGETS.get()
+    names = targets.placed_names(placed) if targets is not None else None
+    if targets is None or names is None:
+        return bool(blockers(volumes(), placed, clearance_m))
+    return not targets.meeting(key, volumes, clearance_m).isdisjoint(names)
+
+
 def blockers(volumes: Iterable[Footprint], placed: Sequence[tuple[str, Footprint]], clearance_m: float) -> list[str]:
     """Names of the placed parts that any of ``volumes`` meets."""
     judged = _JUDGED_OVERLAPS.get()
@@ -190,7 +239,12 @@ def free_push_directions(part: Part, placed: Sequence[tuple[str, Footprint]], pa
     return tuple(
         towards
         for towards in part.push_directions
-        if not blockers([push_pads(part, at, towards, 0.0, pads)], others, pads.pad_clearance_m)
+        if not _blocked(
+            (part.name, "push", towards),
+            lambda towards=towards: [push_pads(part, at, towards, 0.0, pads)],
+            others,
+            pads.pad_clearance_m,
+        )
     )
 
 
@@ -305,19 +359,44 @@ def _staged_prism_release(
     One push along the edge's normal, squarely, so that the way home neither turns it nor needs
     a second side.
     """
+    targets = _TARGETS.get()
+    names = targets.placed_names(placed) if targets is not None else None
+
+    def blocked(key: tuple[object, ...], volumes: Callable[[], Sequence[Footprint]], clearance_m: float) -> bool:
+        if targets is None or names is None:
+            return bool(blockers(volumes(), placed, clearance_m))
+        return not targets.meeting((part.name, "staged", *key), volumes, clearance_m).isdisjoint(names)
+
     for distance in pads.staging_steps_m:
         for towards in free:
             ux, uy = part.push_vector(towards)
             offset = (-ux * distance, -uy * distance)
-            staged = part.footprint.moved(*offset)
-            axis, _ = _release_at(part, staged, placed, pads, axes)
-            if axis is None:
+
+            def staged(offset: tuple[float, float] = offset) -> Footprint:
+                return part.footprint.moved(*offset)
+
+            def sweep(towards: str = towards, distance: float = distance) -> list[Footprint]:
+                return [
+                    push_pads(part, staged(), towards, distance, pads),
+                    push_pads(part, part.footprint, towards, 0.0, pads),
+                ]
+
+            # What ``_release_at`` judges, each volume under its own key (``_Targets``).
+            if blocked((distance, towards, "part"), lambda: [staged()], pads.place_clearance_m):
                 continue
-            sweep = [
-                push_pads(part, staged, towards, distance, pads),
-                push_pads(part, part.footprint, towards, 0.0, pads),
-            ]
-            if blockers(sweep, placed, pads.pad_clearance_m):
+            axis = next(
+                (
+                    a
+                    for a in axes
+                    if not blocked(
+                        (distance, towards, "pads", a),
+                        lambda a=a: release_pads(part, staged(), a, pads),
+                        pads.pad_clearance_m,
+                    )
+                ),
+                None,
+            )
+            if axis is None or blocked((distance, towards, "sweep"), sweep, pads.pad_clearance_m):
                 continue
             return _release(part, axis, pads, offset)
     return None
@@ -445,9 +524,11 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
             _LAYOUTS.move_to_end(key)
             return list(kept[1])
     judging = _JUDGED_OVERLAPS.set({})
+    targets = _TARGETS.set(_Targets({p.name: p.footprint for p in parts}))
     try:
         steps = _plan_layout(parts, pads, order)
     finally:
+        _TARGETS.reset(targets)
         _JUDGED_OVERLAPS.reset(judging)
     with _LAYOUTS_LOCK:
         _LAYOUTS[key] = (parts, steps)  # the parts keep their shapes, whose ids the key holds
