@@ -40,6 +40,18 @@ DIAGONAL_ACROSS_RATIO = 0.6
 
 #: Among neighbours an offset at most this long (mm) between two free pushes is closed by both.
 CONE_MAX_OFFSET_MM = 2.0
+#: Among neighbours a square push longer than this (mm; a staged part's way home) stops
+#: ``APPROACH_RESERVE_MM`` short of the target: its pads can still move it across the push then.
+#: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
+#: it about the pads), on a side only a blocked push reaches (issue 38 item 4).
+LONG_PUSH_MM = 3.0
+#: How far short of the target a long push among neighbours stops (mm): enough along the push for
+#: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
+APPROACH_RESERVE_MM = 1.0
+#: A push that also moves the part across comes straight up to this far (mm) before the edge's
+#: place, then turns to its slanted line: the pads move across the push only near the edge, so they
+#: keep to the side of the part they were checked on.
+SLANT_RUN_IN_MM = 1.0
 #: A squaring push of an irregular part presses its edge this far past where it belongs: a push
 #: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
 #: such pushes left a fresco piece 1.27 deg off).
@@ -262,15 +274,24 @@ class Push(StagedBehaviour):
         yaw: float,
         push_stage: str,
         gentle: bool = False,
+        via: FloatArray | None = None,
     ) -> list[Stage]:
-        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
+        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's).
+
+        ``via``: the pads go there first, straight and at the push's speed, and push from there (a
+        push that also moves the part across).
+        """
         approach_m, push_m = heights
+        run_in: list[Stage] = []
+        if via is not None:
+            run_in = [MoveStage(stage.APPROACH_EDGE, line_to(via[0], via[1], push_m, yaw, pushing=True, gentle=gentle))]
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             # Only the push itself touches the part: the moves before and after it run at the free-space limits.
             MoveStage(stage.MOVE_BEHIND_PART, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
+            *run_in,
             MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
@@ -289,7 +310,8 @@ class Push(StagedBehaviour):
         neighbour beside the part): an axis push is made instead.
         """
         s = context.settings
-        choice = self.choose_square_push(
+        self.across_m = 0.0
+        choice = self.plan_square_push(
             offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned()
         )
         if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
@@ -306,10 +328,11 @@ class Push(StagedBehaviour):
             self.pushed = ("x", 0.0)
             self.squaring = False
             return []
-        name, distance_mm = choice
+        name, distance_mm = choice.name, choice.distance_mm
         distance_m = distance_mm / 1000
         self.pushed = (name, distance_m)
         self.squaring = distance_m < s.min_push_m
+        self.across_m = choice.across_mm / 1000
         heading = target.yaw_rad + self.square_pushes[name].heading_rad
         direction = np.array([math.cos(heading), math.sin(heading)])
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
@@ -323,14 +346,81 @@ class Push(StagedBehaviour):
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
+        via = None
+        if self.across_m:
+            # Straight up to the edge, then slanted: the pads carry the part across by friction while
+            # they press it along, and come into contact where a straight push would.
+            across = np.array([-direction[1], direction[0]]) * self.across_m
+            run_in_m = min(SLANT_RUN_IN_MM / 1000, s.push_clearance_m / 2)
+            lead = across * (run_in_m / distance_m)
+            begin = begin - lead
+            via = centre - direction * (reach_m + run_in_m) - lead
+            end = end + across
         back = end - direction * s.push_clearance_m
         return self._motion(
-            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name), gentle=self.z_m > 0.0
+            opening_m,
+            begin,
+            end,
+            back,
+            (approach_m, push_m),
+            yaw,
+            stage.push(distance_m, name),
+            gentle=self.z_m > 0.0,
+            via=via,
         )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
         heading = self.square_pushes[name].heading_rad
         return float(offset_xy_mm[0] * math.cos(heading) + offset_xy_mm[1] * math.sin(heading))
+
+    @staticmethod
+    def plan_square_push(
+        offset_xy_mm: tuple[float, float],
+        pushes: dict[str, SquarePush],
+        towards: tuple[str, ...],
+        min_push_mm: float,
+        turned: bool,
+    ) -> SquareMove | Blocked | None:
+        """``choose_square_push``, and among neighbours a long push stopped short or a push that also moves across.
+
+        With a neighbour beside the part (a push not in ``towards``):
+
+        - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
+          ``APPROACH_RESERVE_MM`` short of the target;
+        - an offset no two free pushes take between them (``_free_cone_shares``) is closed by the
+          free push with the largest projection, whose pads also move across it by what lies
+          beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the push's length: the part follows them
+          by friction. Pushed by its projection alone, the part would be left beside its place on a
+          side only a blocked push reaches.
+
+        Every push free: ``choose_square_push``'s choice, as it is.
+        """
+        choice = Push.choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
+        plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
+        free = [name for name in pushes if name in towards]
+        if len(free) == len(pushes) or not free:
+            return plain
+        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
+            return SquareMove(plain.name, plain.distance_mm - APPROACH_RESERVE_MM)
+        offset = np.asarray(offset_xy_mm, dtype=float)
+        if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM or _free_cone_shares(offset, pushes, free) is not None:
+            return plain
+        if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
+            return plain
+        slanted: list[tuple[float, float, SquareMove]] = []
+        for name in free:
+            heading = pushes[name].heading_rad
+            along = float(offset @ np.array([math.cos(heading), math.sin(heading)]))
+            if along < min_push_mm:
+                continue
+            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
+            limit = DIAGONAL_ACROSS_RATIO * along
+            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
+            # What is left beside the place, then the longest push.
+            slanted.append((abs(beside - across), -along, SquareMove(name, along, across)))
+        if not slanted:
+            return plain
+        return min(slanted, key=lambda item: item[:2])[2]
 
     @staticmethod
     def choose_square_push(
@@ -509,7 +599,9 @@ class Push(StagedBehaviour):
             edge = self.square_pushes[axis].edge + 1
             if self.squaring:
                 return f"squared the part on its edge {edge} with a push of {fixed(distance_m * 1000, sign=True)} mm"
-            return f"pushed {fixed(distance_m * 1000, sign=True)} mm squarely onto its edge {edge} ({axis[1:]} deg)"
+            across = f", {fixed(self.across_m * 1000, sign=True)} mm across" if self.across_m else ""
+            onto = f"squarely onto its edge {edge} ({axis[1:]} deg)"
+            return f"pushed {fixed(distance_m * 1000, sign=True)} mm {onto}{across}"
         if self.squaring:
             return f"squared the part with a push of {fixed(distance_m * 1000, sign=True)} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
@@ -521,6 +613,19 @@ class Push(StagedBehaviour):
                 f"{fixed(self.across_m * 1000, sign=True)} mm along {other}"
             )
         return f"pushed {fixed(distance_m * 1000, sign=True)} mm along {axis}"
+
+
+@dataclass(frozen=True)
+class SquareMove:
+    """A square push: which (``Prism.named_pushes``' name), how far along its heading, how far across (mm).
+
+    ``across_mm`` is positive to the left of the heading (the heading turned by +90 deg): the pads
+    move that far sideways while they press the edge, and the part follows them by friction.
+    """
+
+    name: str
+    distance_mm: float
+    across_mm: float = 0.0
 
 
 @dataclass(frozen=True)
