@@ -114,3 +114,50 @@ def test_far_from_its_target_a_part_among_neighbours_is_pushed_by_the_projection
     scale = 2 * CONE_MAX_OFFSET_MM / math.hypot(0.5, 2.0)
     name, distance = Push.choose_square_push((-0.5 * scale, -2.0 * scale), pushes, free, 0.2, False)
     assert name == names[-135] and distance == pytest.approx(2.5 * scale / math.sqrt(2))
+
+
+def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
+    # Issue 38 item 4: a staged part pushed all the way home landed 0.2 to 0.35 mm beside its place, on
+    # a side only a blocked push reaches. It stops APPROACH_RESERVE_MM short, for a push that also moves it across.
+    from bt_arrange.behaviours.push import APPROACH_RESERVE_MM, LONG_PUSH_MM, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False) == SquareMove(
+        names[0], pytest.approx(20.0 - APPROACH_RESERVE_MM)
+    )
+    assert Push.plan_square_push((LONG_PUSH_MM - 0.1, 0.0), pushes, free, 0.2, False) == SquareMove(
+        names[0], pytest.approx(LONG_PUSH_MM - 0.1)
+    )
+    # A part with no neighbour: the whole way, as before.
+    assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False) == SquareMove(
+        names[0], pytest.approx(20.0)
+    )
+
+
+def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
+    # Free: +x and +y. (1, -0.3) mm needs -y, which only the blocked hypotenuse push gives; pushed 1 mm
+    # along +x the part is left 0.3 mm off towards +y: "no free push closes it". The pads move 0.3 mm
+    # towards -y (right of the heading) while they press 1 mm along +x.
+    from bt_arrange.behaviours.push import DIAGONAL_ACROSS_RATIO, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    assert Push.choose_square_push((1.0, -0.3), pushes, free, 0.2, False) == (names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.2, False) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-0.3)
+    )
+    # Across by at most DIAGONAL_ACROSS_RATIO of the push (friction): the rest is left to the next push.
+    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.2, False) == SquareMove(
+        names[0], pytest.approx(0.5), pytest.approx(-0.5 * DIAGONAL_ACROSS_RATIO)
+    )
+    # Between two free pushes: their shares, as before, nothing across.
+    assert Push.plan_square_push((1.0, 0.3), pushes, free, 0.2, False) == SquareMove(names[0], pytest.approx(1.0))
+    # Every push free: choose_square_push's, nothing across.
+    assert Push.plan_square_push((1.0, -0.3), pushes, tuple(pushes), 0.2, False) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
+    # Nothing along a free push to carry it: blocked, as before.
+    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.2, False), Blocked)
