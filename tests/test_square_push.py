@@ -153,11 +153,32 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
     assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.2, False) == SquareMove(
         names[0], pytest.approx(0.5), pytest.approx(-0.5 * DIAGONAL_ACROSS_RATIO)
     )
-    # Between two free pushes: their shares, as before, nothing across.
-    assert Push.plan_square_push((1.0, 0.3), pushes, free, 0.2, False) == SquareMove(names[0], pytest.approx(1.0))
+    # Between two free pushes too: one push straight there, the squarest, rather than two.
+    assert Push.plan_square_push((1.0, 0.3), pushes, free, 0.2, False) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(0.3)
+    )
+    # No one push closes it, two free ones take it between them: their shares, as before.
+    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.2, False) == SquareMove(
+        *Push.choose_square_push((0.5, 0.5), pushes, free, 0.2, False)
+    )
     # Every push free: choose_square_push's, nothing across.
     assert Push.plan_square_push((1.0, -0.3), pushes, tuple(pushes), 0.2, False) == SquareMove(
         names[0], pytest.approx(1.0)
     )
     # Nothing along a free push to carry it: blocked, as before.
     assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.2, False), Blocked)
+
+
+def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_nearly_opposite_pushes() -> None:
+    # Issue 38 item 4 (seed 1's fracture, 0.5 mm gaps): free pushes at -178.7, 56.1 and -1.3 deg. 1 mm
+    # from home, their shares sent the piece 1.6 mm along -178.7 deg, past its place into a neighbour.
+    from bt_arrange.behaviours.push import SquareMove
+    from bt_arrange.shapes.base import SquarePush
+
+    pushes = {f"@{d}": SquarePush(math.radians(d), 0.02, 0.05, i) for i, d in enumerate((-178.7, 56.1, -1.3, -81.1))}
+    free = ("@-178.7", "@56.1", "@-1.3")
+    name, distance = Push.choose_square_push((-1.0, -0.05), pushes, free, 0.1, False)
+    assert (name, distance) == ("@-178.7", pytest.approx(1.60, abs=0.01))
+    assert Push.plan_square_push((-1.0, -0.05), pushes, free, 0.1, False) == SquareMove(
+        "@-178.7", pytest.approx(1.0, abs=0.01)
+    )

@@ -387,11 +387,14 @@ class Push(StagedBehaviour):
 
         - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
           ``APPROACH_RESERVE_MM`` short of the target;
-        - an offset no two free pushes take between them (``_free_cone_shares``) is closed by the
-          free push with the largest projection, whose pads also move across it by what lies
-          beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the push's length: the part follows them
-          by friction. Pushed by its projection alone, the part would be left beside its place on a
-          side only a blocked push reaches.
+        - near the target (``CONE_MAX_OFFSET_MM``) an offset is closed by one free push whose pads
+          also move across it by what lies beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the
+          push's length (the part follows them by friction), the squarest such push: the part goes
+          straight to its place. Pushed by its projection alone, it would be left beside its place,
+          on a side only a blocked push may reach; by two pushes (``_free_cone_shares``), past its
+          place on the way (a piece 1 mm from home was pushed 2.2 mm, past it into a neighbour
+          0.5 mm away). Only when no one push closes it: two free pushes that take it between
+          them, else the push that leaves the least beside the place.
 
         Every push free: ``choose_square_push``'s choice, as it is.
         """
@@ -403,7 +406,7 @@ class Push(StagedBehaviour):
         if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
             return SquareMove(plain.name, plain.distance_mm - APPROACH_RESERVE_MM)
         offset = np.asarray(offset_xy_mm, dtype=float)
-        if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM or _free_cone_shares(offset, pushes, free) is not None:
+        if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM:
             return plain
         if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
             return plain
@@ -416,9 +419,13 @@ class Push(StagedBehaviour):
             beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
             limit = DIAGONAL_ACROSS_RATIO * along
             across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
-            # What is left beside the place, then the longest push.
-            slanted.append((abs(beside - across), -along, SquareMove(name, along, across)))
-        if not slanted:
+            left = abs(beside - across) if abs(beside) >= min_push_mm else 0.0
+            slanted.append((left, abs(across) / along, SquareMove(name, along, across)))
+        exact = [item for item in slanted if item[0] == 0.0]
+        if exact:
+            # One push straight to the target, the squarest one: the part never passes its place.
+            return min(exact, key=lambda item: item[1])[2]
+        if _free_cone_shares(offset, pushes, free) is not None or not slanted:
             return plain
         return min(slanted, key=lambda item: item[:2])[2]
 
