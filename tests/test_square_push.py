@@ -124,8 +124,9 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
     pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     free = (names[0], names[90])
+    # Its pads bring it onto the target's line as they go (0.3 mm across, to the left of +x).
     assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False) == SquareMove(
-        names[0], pytest.approx(20.0 - APPROACH_RESERVE_MM)
+        names[0], pytest.approx(20.0 - APPROACH_RESERVE_MM), pytest.approx(0.3)
     )
     assert Push.plan_square_push((LONG_PUSH_MM - 0.1, 0.0), pushes, free, 0.2, False) == SquareMove(
         names[0], pytest.approx(LONG_PUSH_MM - 0.1)

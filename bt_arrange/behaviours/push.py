@@ -386,7 +386,8 @@ class Push(StagedBehaviour):
         With a neighbour beside the part (a push not in ``towards``):
 
         - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
-          ``APPROACH_RESERVE_MM`` short of the target;
+          ``APPROACH_RESERVE_MM`` short of the target, its pads moving the part across onto the
+          target's line as they go (below);
         - near the target (``CONE_MAX_OFFSET_MM``) an offset is closed by one free push whose pads
           also move across it by what lies beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the
           push's length (the part follows them by friction), the squarest such push: the part goes
@@ -403,9 +404,16 @@ class Push(StagedBehaviour):
         free = [name for name in pushes if name in towards]
         if len(free) == len(pushes) or not free:
             return plain
-        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
-            return SquareMove(plain.name, plain.distance_mm - APPROACH_RESERVE_MM)
         offset = np.asarray(offset_xy_mm, dtype=float)
+        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
+            # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
+            # beside it stayed so): they end on the line the layout checked them along.
+            heading = pushes[plain.name].heading_rad
+            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
+            distance = plain.distance_mm - APPROACH_RESERVE_MM
+            limit = DIAGONAL_ACROSS_RATIO * distance
+            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
+            return SquareMove(plain.name, distance, across)
         if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM:
             return plain
         if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
