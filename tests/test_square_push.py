@@ -138,36 +138,40 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
 
 
 def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
-    # Free: +x and +y. (1, -0.3) mm needs -y, which only the blocked hypotenuse push gives; pushed 1 mm
-    # along +x the part is left 0.3 mm off towards +y: "no free push closes it". The pads move 0.3 mm
+    # Free: +x and +y. (1, -0.1) mm needs -y, which only the blocked hypotenuse push gives; pushed 1 mm
+    # along +x the part is left 0.1 mm off towards +y: "no free push closes it". The pads move 0.1 mm
     # towards -y (right of the heading) while they press 1 mm along +x.
-    from bt_arrange.behaviours.push import DIAGONAL_ACROSS_RATIO, SquareMove
+    from bt_arrange.behaviours.push import DIAGONAL_ACROSS_RATIO, SLANT_STEP_RESERVE_MM, SquareMove
 
     pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     free = (names[0], names[90])
-    assert Push.choose_square_push((1.0, -0.3), pushes, free, 0.2, False) == (names[0], pytest.approx(1.0))
-    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.2, False) == SquareMove(
-        names[0], pytest.approx(1.0), pytest.approx(-0.3)
+    assert Push.choose_square_push((1.0, -0.1), pushes, free, 0.05, False) == (names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -0.1), pushes, free, 0.05, False) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-0.1)
+    )
+    # Far across (0.3 mm): onto the target's line first, SLANT_STEP_RESERVE_MM short, the rest by the next push.
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False) == SquareMove(
+        names[0], pytest.approx(1.0 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.3)
     )
     # Across by at most DIAGONAL_ACROSS_RATIO of the push (friction): the rest is left to the next push.
-    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.2, False) == SquareMove(
+    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.05, False) == SquareMove(
         names[0], pytest.approx(0.5), pytest.approx(-0.5 * DIAGONAL_ACROSS_RATIO)
     )
     # Between two free pushes too: one push straight there, the squarest, rather than two.
-    assert Push.plan_square_push((1.0, 0.3), pushes, free, 0.2, False) == SquareMove(
-        names[0], pytest.approx(1.0), pytest.approx(0.3)
+    assert Push.plan_square_push((1.0, 0.1), pushes, free, 0.05, False) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(0.1)
     )
     # No one push closes it, two free ones take it between them: their shares, as before.
-    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.2, False) == SquareMove(
-        *Push.choose_square_push((0.5, 0.5), pushes, free, 0.2, False)
+    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.05, False) == SquareMove(
+        *Push.choose_square_push((0.5, 0.5), pushes, free, 0.05, False)
     )
     # Every push free: choose_square_push's, nothing across.
-    assert Push.plan_square_push((1.0, -0.3), pushes, tuple(pushes), 0.2, False) == SquareMove(
+    assert Push.plan_square_push((1.0, -0.1), pushes, tuple(pushes), 0.05, False) == SquareMove(
         names[0], pytest.approx(1.0)
     )
     # Nothing along a free push to carry it: blocked, as before.
-    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.2, False), Blocked)
+    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.05, False), Blocked)
 
 
 def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_nearly_opposite_pushes() -> None:

@@ -48,6 +48,10 @@ LONG_PUSH_MM = 3.0
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
 APPROACH_RESERVE_MM = 1.0
+#: Near the target, a push that must also move the part this far across or more (mm) ...
+SLANT_STEP_ACROSS_MM = 0.15
+#: ... stops this far short of the place (mm), when it can: the last push along closes what it left across.
+SLANT_STEP_RESERVE_MM = 0.4
 #: A push that also moves the part across comes straight up to this far (mm) before the edge's
 #: place, then turns to its slanted line: the pads move across the push only near the edge, so they
 #: keep to the side of the part they were checked on.
@@ -432,7 +436,13 @@ class Push(StagedBehaviour):
         exact = [item for item in slanted if item[0] == 0.0]
         if exact:
             # One push straight to the target, the squarest one: the part never passes its place.
-            return min(exact, key=lambda item: item[1])[2]
+            move = min(exact, key=lambda item: item[1])[2]
+            shorter = move.distance_mm - SLANT_STEP_RESERVE_MM
+            if abs(move.across_mm) >= SLANT_STEP_ACROSS_MM and abs(move.across_mm) <= DIAGONAL_ACROSS_RATIO * shorter:
+                # Far across: onto the target's line first, short of the place, so that what that leaves
+                # across is closed by the last push along.
+                return SquareMove(move.name, shorter, move.across_mm)
+            return move
         if _free_cone_shares(offset, pushes, free) is not None or not slanted:
             return plain
         return min(slanted, key=lambda item: item[:2])[2]
