@@ -125,16 +125,22 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     free = (names[0], names[90])
     # Its pads bring it onto the target's line as they go (0.3 mm across, to the left of +x).
-    assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False) == SquareMove(
+    assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(20.0 - APPROACH_RESERVE_MM), pytest.approx(0.3)
     )
-    assert Push.plan_square_push((LONG_PUSH_MM - 0.1, 0.0), pushes, free, 0.2, False) == SquareMove(
+    assert Push.plan_square_push((LONG_PUSH_MM - 0.1, 0.0), pushes, free, 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(LONG_PUSH_MM - 0.1)
     )
     # A part with no neighbour: the whole way, as before.
-    assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False) == SquareMove(
+    assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(20.0)
     )
+    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: the whole way, onto the line.
+    # Left 1 mm short at 0.8 mm, the part would count as within there, short of its place.
+    for threshold_mm in (0.8, None):
+        assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, threshold_mm) == SquareMove(
+            names[0], pytest.approx(20.0), pytest.approx(0.3)
+        )
 
 
 def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
@@ -150,9 +156,13 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
     assert Push.plan_square_push((1.0, -0.1), pushes, free, 0.05, False) == SquareMove(
         names[0], pytest.approx(1.0), pytest.approx(-0.1)
     )
-    # Far across (0.3 mm): onto the target's line first, SLANT_STEP_RESERVE_MM short, the rest by the next push.
-    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False) == SquareMove(
+    # Far across (0.3 mm): onto the target's line first, SLANT_STEP_RESERVE_MM short, the rest by the next
+    # push; at a threshold that reserve leaves well outside (0.25 mm), not at a coarser one.
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.25) == SquareMove(
         names[0], pytest.approx(1.0 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.3)
+    )
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.5) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-0.3)
     )
     # Across by at most DIAGONAL_ACROSS_RATIO of the push (friction): the rest is left to the next push.
     assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.05, False) == SquareMove(

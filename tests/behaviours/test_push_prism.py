@@ -98,7 +98,7 @@ def test_among_neighbours_a_push_that_also_moves_across_meets_the_edge_straight_
     # Issue 38 item 4: free pushes +x and +y only, the part 0.3 mm off towards +y (a -y push is blocked):
     # pushed along +x, 0.4 mm short of its place (SLANT_STEP_RESERVE_MM), its pads 0.3 mm towards -y.
     names = {round(math.degrees(p.heading_rad)): n for n, p in TRIANGLE.shape.named_pushes(ROBOTIQ_2F85).items()}
-    push = setup(context, TRIANGLE, (1.0, -0.3), towards=(names[0], names[90]))
+    push = setup(context, TRIANGLE, (1.0, -0.3), towards=(names[0], names[90]), threshold_mm=0.25)
     run = tick_until_done(push, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == f"pushed +0.60 mm squarely onto its edge 3 ({names[0][1:]} deg), -0.30 mm across"
