@@ -434,12 +434,12 @@ class Push(StagedBehaviour):
         def may_stop_short(reserve_mm: float) -> bool:
             return threshold_mm is not None and reserve_mm >= STOP_SHORT_FACTOR * threshold_mm
 
-        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM and may_stop_short(APPROACH_RESERVE_MM):
+        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
             # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
             # beside it stayed so): they end on the line the layout checked them along.
             heading = pushes[plain.name].heading_rad
             beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
-            distance = plain.distance_mm - APPROACH_RESERVE_MM
+            distance = plain.distance_mm - (APPROACH_RESERVE_MM if may_stop_short(APPROACH_RESERVE_MM) else 0.0)
             limit = DIAGONAL_ACROSS_RATIO * distance
             across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
             return SquareMove(plain.name, distance, across)
