@@ -135,12 +135,18 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
     assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(20.0)
     )
-    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: the whole way, onto the line.
+    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: choose_square_push's.
     # Left 1 mm short at 0.8 mm, the part would count as within there, short of its place.
     for threshold_mm in (0.8, None):
         assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, threshold_mm) == SquareMove(
-            names[0], pytest.approx(20.0), pytest.approx(0.3)
+            names[0], pytest.approx(20.0)
         )
+    # At most LONG_PUSH_MAX_ACROSS_MM across on the way.
+    from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM
+
+    assert Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(12.0 - APPROACH_RESERVE_MM), pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+    )
 
 
 def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
@@ -153,7 +159,7 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
     names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
     free = (names[0], names[90])
     assert Push.choose_square_push((1.0, -0.1), pushes, free, 0.05, False) == (names[0], pytest.approx(1.0))
-    assert Push.plan_square_push((1.0, -0.1), pushes, free, 0.05, False) == SquareMove(
+    assert Push.plan_square_push((1.0, -0.1), pushes, free, 0.05, False, 0.25) == SquareMove(
         names[0], pytest.approx(1.0), pytest.approx(-0.1)
     )
     # Far across (0.3 mm): onto the target's line first, SLANT_STEP_RESERVE_MM short, the rest by the next
@@ -164,16 +170,20 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
     assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.5) == SquareMove(
         names[0], pytest.approx(1.0), pytest.approx(-0.3)
     )
+    # At a coarse threshold: choose_square_push's, nothing across (0.3 mm beside the place is within 0.8 mm).
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
     # Across by at most DIAGONAL_ACROSS_RATIO of the push (friction): the rest is left to the next push.
-    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.05, False) == SquareMove(
+    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.05, False, 0.25) == SquareMove(
         names[0], pytest.approx(0.5), pytest.approx(-0.5 * DIAGONAL_ACROSS_RATIO)
     )
     # Between two free pushes too: one push straight there, the squarest, rather than two.
-    assert Push.plan_square_push((1.0, 0.1), pushes, free, 0.05, False) == SquareMove(
+    assert Push.plan_square_push((1.0, 0.1), pushes, free, 0.05, False, 0.25) == SquareMove(
         names[0], pytest.approx(1.0), pytest.approx(0.1)
     )
     # No one push closes it, two free ones take it between them: their shares, as before.
-    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.05, False) == SquareMove(
+    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.05, False, 0.25) == SquareMove(
         *Push.choose_square_push((0.5, 0.5), pushes, free, 0.05, False)
     )
     # Every push free: choose_square_push's, nothing across.
@@ -181,7 +191,7 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
         names[0], pytest.approx(1.0)
     )
     # Nothing along a free push to carry it: blocked, as before.
-    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.05, False), Blocked)
+    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.05, False, 0.25), Blocked)
 
 
 def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_nearly_opposite_pushes() -> None:
@@ -194,6 +204,6 @@ def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_n
     free = ("@-178.7", "@56.1", "@-1.3")
     name, distance = Push.choose_square_push((-1.0, -0.05), pushes, free, 0.1, False)
     assert (name, distance) == ("@-178.7", pytest.approx(1.60, abs=0.01))
-    assert Push.plan_square_push((-1.0, -0.05), pushes, free, 0.1, False) == SquareMove(
+    assert Push.plan_square_push((-1.0, -0.05), pushes, free, 0.1, False, 0.25) == SquareMove(
         "@-178.7", pytest.approx(1.0, abs=0.01)
     )

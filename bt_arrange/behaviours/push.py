@@ -45,6 +45,8 @@ CONE_MAX_OFFSET_MM = 2.0
 #: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
 #: it about the pads), on a side only a blocked push reaches (issue 38 item 4).
 LONG_PUSH_MM = 3.0
+#: The most a long push among neighbours moves the part across on its way (mm).
+LONG_PUSH_MAX_ACROSS_MM = 1.0
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
 APPROACH_RESERVE_MM = 1.0
@@ -427,20 +429,23 @@ class Push(StagedBehaviour):
         choice = Push.choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
         plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
         free = [name for name in pushes if name in towards]
-        if len(free) == len(pushes) or not free:
-            return plain
-        offset = np.asarray(offset_xy_mm, dtype=float)
 
         def may_stop_short(reserve_mm: float) -> bool:
             return threshold_mm is not None and reserve_mm >= STOP_SHORT_FACTOR * threshold_mm
 
+        # Only at a fine threshold (the long push's reserve 1.5 thresholds or more): at a coarse one
+        # what these correct is within, and the example fresco (0.8 mm) went as before, not better.
+        if len(free) == len(pushes) or not free or not may_stop_short(APPROACH_RESERVE_MM):
+            return plain
+        offset = np.asarray(offset_xy_mm, dtype=float)
         if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
             # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
-            # beside it stayed so): they end on the line the layout checked them along.
+            # beside it stayed so): they end on the line the layout checked them along. At most
+            # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring.
             heading = pushes[plain.name].heading_rad
             beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
-            distance = plain.distance_mm - (APPROACH_RESERVE_MM if may_stop_short(APPROACH_RESERVE_MM) else 0.0)
-            limit = DIAGONAL_ACROSS_RATIO * distance
+            distance = plain.distance_mm - APPROACH_RESERVE_MM
+            limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
             across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
             return SquareMove(plain.name, distance, across)
         if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM:
