@@ -207,3 +207,17 @@ def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_n
     assert Push.plan_square_push((-1.0, -0.05), pushes, free, 0.1, False, 0.25) == SquareMove(
         "@-178.7", pytest.approx(1.0, abs=0.01)
     )
+
+
+def test_among_neighbours_a_part_left_between_2_and_3_mm_from_its_place_goes_there_in_one_slanted_push() -> None:
+    # Issue 38 item 4 (seed 8's fracture, 1 mm gaps): a piece turned 2 deg at its set-down ended its long
+    # push 2.2 mm short and 0.75 mm beside its line; pushed by its projection it met a neighbour.
+    from bt_arrange.behaviours.push import CONE_MAX_OFFSET_MM, LONG_PUSH_MM, SLANT_STEP_RESERVE_MM, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    offset = (2.1, -0.75)
+    assert CONE_MAX_OFFSET_MM < math.hypot(*offset) < LONG_PUSH_MM
+    assert Push.plan_square_push(offset, pushes, (names[0],), 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(2.1 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.75)
+    )

@@ -411,7 +411,7 @@ class Push(StagedBehaviour):
         - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
           ``APPROACH_RESERVE_MM`` short of the target, its pads moving the part across onto the
           target's line as they go (below);
-        - near the target (``CONE_MAX_OFFSET_MM``) an offset is closed by one free push whose pads
+        - near the target (``LONG_PUSH_MM``) an offset is closed by one free push whose pads
           also move across it by what lies beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the
           push's length (the part follows them by friction), the squarest such push: the part goes
           straight to its place. Pushed by its projection alone, it would be left beside its place,
@@ -448,7 +448,9 @@ class Push(StagedBehaviour):
             limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
             across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
             return SquareMove(plain.name, distance, across)
-        if float(np.hypot(*offset)) > CONE_MAX_OFFSET_MM:
+        if float(np.hypot(*offset)) > LONG_PUSH_MM:
+            # Between CONE_MAX_OFFSET_MM and here too: a piece turned 2 deg at its set-down ended its long
+            # push 2.2 mm short, 0.75 mm beside its line, and its push by the projection met a neighbour.
             return plain
         if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
             return plain
