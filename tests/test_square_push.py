@@ -221,3 +221,22 @@ def test_among_neighbours_a_part_left_between_2_and_3_mm_from_its_place_goes_the
     assert Push.plan_square_push(offset, pushes, (names[0],), 0.05, False, 0.25) == SquareMove(
         names[0], pytest.approx(2.1 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.75)
     )
+
+
+def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nobody_else() -> None:
+    # Push stops short only when it knows the correction's threshold (issue 38 item 4): an irregular
+    # part among neighbours gets it; a box (Table 1's pushes) and a free part do not.
+    from bt_arrange.objects import CUBE, ObjectType
+    from bt_arrange.trees.steps import correction
+    from bt_arrange.trees.targets import Target
+
+    triangle = ObjectType("triangle", shape=TRIANGLE)
+    names = tuple(TRIANGLE.named_pushes(ROBOTIQ_2F85))
+
+    def thresholds(target: Target, towards: tuple[str, ...] | None) -> set[float | None]:
+        tree = correction(target, 0.25, towards=towards)
+        return {node.threshold_mm for node in tree.iterate() if isinstance(node, Push)}
+
+    assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), names[:2]) == {0.25}
+    assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), None) == {None}
+    assert thresholds(Target("red", 0.5, 0.0, object_type=CUBE), ("+x", "-y")) == {None}
