@@ -114,3 +114,129 @@ def test_far_from_its_target_a_part_among_neighbours_is_pushed_by_the_projection
     scale = 2 * CONE_MAX_OFFSET_MM / math.hypot(0.5, 2.0)
     name, distance = Push.choose_square_push((-0.5 * scale, -2.0 * scale), pushes, free, 0.2, False)
     assert name == names[-135] and distance == pytest.approx(2.5 * scale / math.sqrt(2))
+
+
+def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
+    # Issue 38 item 4: a staged part pushed all the way home landed 0.2 to 0.35 mm beside its place, on
+    # a side only a blocked push reaches. It stops APPROACH_RESERVE_MM short, for a push that also moves it across.
+    from bt_arrange.behaviours.push import APPROACH_RESERVE_MM, LONG_PUSH_MM, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    # Its pads bring it onto the target's line as they go (0.3 mm across, to the left of +x).
+    assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(20.0 - APPROACH_RESERVE_MM), pytest.approx(0.3)
+    )
+    assert Push.plan_square_push((LONG_PUSH_MM - 0.1, 0.0), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(LONG_PUSH_MM - 0.1)
+    )
+    # A part with no neighbour: the whole way, as before.
+    assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(20.0)
+    )
+    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: choose_square_push's.
+    # Left 1 mm short at 0.8 mm, the part would count as within there, short of its place.
+    for threshold_mm in (0.8, None):
+        assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, threshold_mm) == SquareMove(
+            names[0], pytest.approx(20.0)
+        )
+    # At most LONG_PUSH_MAX_ACROSS_MM across on the way.
+    from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM
+
+    assert Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(12.0 - APPROACH_RESERVE_MM), pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+    )
+
+
+def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
+    # Free: +x and +y. (1, -0.1) mm needs -y, which only the blocked hypotenuse push gives; pushed 1 mm
+    # along +x the part is left 0.1 mm off towards +y: "no free push closes it". The pads move 0.1 mm
+    # towards -y (right of the heading) while they press 1 mm along +x.
+    from bt_arrange.behaviours.push import DIAGONAL_ACROSS_RATIO, SLANT_STEP_RESERVE_MM, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    assert Push.choose_square_push((1.0, -0.1), pushes, free, 0.05, False) == (names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -0.1), pushes, free, 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-0.1)
+    )
+    # Far across (0.3 mm): onto the target's line first, SLANT_STEP_RESERVE_MM short, the rest by the next
+    # push; at a threshold that reserve leaves well outside (0.25 mm), not at a coarser one.
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(1.0 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.3)
+    )
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.5) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-0.3)
+    )
+    # At a coarse threshold: choose_square_push's, nothing across (0.3 mm beside the place is within 0.8 mm).
+    assert Push.plan_square_push((1.0, -0.3), pushes, free, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
+    # Across by at most DIAGONAL_ACROSS_RATIO of the push (friction): the rest is left to the next push.
+    assert Push.plan_square_push((0.5, -0.5), pushes, free, 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(0.5), pytest.approx(-0.5 * DIAGONAL_ACROSS_RATIO)
+    )
+    # Between two free pushes too: one push straight there, the squarest, rather than two.
+    assert Push.plan_square_push((1.0, 0.1), pushes, free, 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(0.1)
+    )
+    # No one push closes it, two free ones take it between them: their shares, as before.
+    assert Push.plan_square_push((0.5, 0.5), pushes, free, 0.05, False, 0.25) == SquareMove(
+        *Push.choose_square_push((0.5, 0.5), pushes, free, 0.05, False)
+    )
+    # Every push free: choose_square_push's, nothing across.
+    assert Push.plan_square_push((1.0, -0.1), pushes, tuple(pushes), 0.05, False) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
+    # Nothing along a free push to carry it: blocked, as before.
+    assert isinstance(Push.plan_square_push((-1.0, -1.0), pushes, free, 0.05, False, 0.25), Blocked)
+
+
+def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_nearly_opposite_pushes() -> None:
+    # Issue 38 item 4 (seed 1's fracture, 0.5 mm gaps): free pushes at -178.7, 56.1 and -1.3 deg. 1 mm
+    # from home, their shares sent the piece 1.6 mm along -178.7 deg, past its place into a neighbour.
+    from bt_arrange.behaviours.push import SquareMove
+    from bt_arrange.shapes.base import SquarePush
+
+    pushes = {f"@{d}": SquarePush(math.radians(d), 0.02, 0.05, i) for i, d in enumerate((-178.7, 56.1, -1.3, -81.1))}
+    free = ("@-178.7", "@56.1", "@-1.3")
+    name, distance = Push.choose_square_push((-1.0, -0.05), pushes, free, 0.1, False)
+    assert (name, distance) == ("@-178.7", pytest.approx(1.60, abs=0.01))
+    assert Push.plan_square_push((-1.0, -0.05), pushes, free, 0.1, False, 0.25) == SquareMove(
+        "@-178.7", pytest.approx(1.0, abs=0.01)
+    )
+
+
+def test_among_neighbours_a_part_left_between_2_and_3_mm_from_its_place_goes_there_in_one_slanted_push() -> None:
+    # Issue 38 item 4 (seed 8's fracture, 1 mm gaps): a piece turned 2 deg at its set-down ended its long
+    # push 2.2 mm short and 0.75 mm beside its line; pushed by its projection it met a neighbour.
+    from bt_arrange.behaviours.push import CONE_MAX_OFFSET_MM, LONG_PUSH_MM, SLANT_STEP_RESERVE_MM, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    offset = (2.1, -0.75)
+    assert CONE_MAX_OFFSET_MM < math.hypot(*offset) < LONG_PUSH_MM
+    assert Push.plan_square_push(offset, pushes, (names[0],), 0.05, False, 0.25) == SquareMove(
+        names[0], pytest.approx(2.1 - SLANT_STEP_RESERVE_MM), pytest.approx(-0.75)
+    )
+
+
+def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nobody_else() -> None:
+    # Push stops short only when it knows the correction's threshold (issue 38 item 4): an irregular
+    # part among neighbours gets it; a box (Table 1's pushes) and a free part do not.
+    from bt_arrange.objects import CUBE, ObjectType
+    from bt_arrange.trees.steps import correction
+    from bt_arrange.trees.targets import Target
+
+    triangle = ObjectType("triangle", shape=TRIANGLE)
+    names = tuple(TRIANGLE.named_pushes(ROBOTIQ_2F85))
+
+    def thresholds(target: Target, towards: tuple[str, ...] | None) -> set[float | None]:
+        tree = correction(target, 0.25, towards=towards)
+        return {node.threshold_mm for node in tree.iterate() if isinstance(node, Push)}
+
+    assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), names[:2]) == {0.25}
+    assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), None) == {None}
+    assert thresholds(Target("red", 0.5, 0.0, object_type=CUBE), ("+x", "-y")) == {None}

@@ -40,6 +40,28 @@ DIAGONAL_ACROSS_RATIO = 0.6
 
 #: Among neighbours an offset at most this long (mm) between two free pushes is closed by both.
 CONE_MAX_OFFSET_MM = 2.0
+#: Among neighbours a square push longer than this (mm; a staged part's way home) stops
+#: ``APPROACH_RESERVE_MM`` short of the target: its pads can still move it across the push then.
+#: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
+#: it about the pads), on a side only a blocked push reaches (issue 38 item 4).
+LONG_PUSH_MM = 3.0
+#: The most a long push among neighbours moves the part across on its way (mm).
+LONG_PUSH_MAX_ACROSS_MM = 1.0
+#: How far short of the target a long push among neighbours stops (mm): enough along the push for
+#: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
+APPROACH_RESERVE_MM = 1.0
+#: A push stops short of the place only by this many thresholds or more: the correction must go on
+#: (at the example fresco's 0.8 mm, pieces left 0.4 mm short were within, and the next piece's
+#: set-down met one of them).
+STOP_SHORT_FACTOR = 1.5
+#: Near the target, a push that must also move the part this far across or more (mm) ...
+SLANT_STEP_ACROSS_MM = 0.15
+#: ... stops this far short of the place (mm), when it can: the last push along closes what it left across.
+SLANT_STEP_RESERVE_MM = 0.4
+#: A push that also moves the part across comes straight up to this far (mm) before the edge's
+#: place, then turns to its slanted line: the pads move across the push only near the edge, so they
+#: keep to the side of the part they were checked on.
+SLANT_RUN_IN_MM = 1.0
 #: A squaring push of an irregular part presses its edge this far past where it belongs: a push
 #: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
 #: such pushes left a fresco piece 1.27 deg off).
@@ -109,6 +131,14 @@ class Push(StagedBehaviour):
             ),
             Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
             Z_PORT,
+            Port(
+                "threshold_mm",
+                OFF_DOUBLE,
+                None,
+                "the correction's threshold [mm]: among neighbours a push stops short of the place only where "
+                "that leaves the part well outside it (0: never)",
+                optional=True,
+            ),
         )
 
     def __init__(
@@ -122,8 +152,12 @@ class Push(StagedBehaviour):
         towards: tuple[str, ...] | None = None,
         opening_m: float | None = None,
         z_m: float = 0.0,
+        threshold_mm: float | None = None,
     ) -> None:
         super().__init__(name)
+        #: The correction's threshold (mm; None: unknown): a square push among neighbours stops short
+        #: of the place (``plan_square_push``) only by what leaves the part ``STOP_SHORT_FACTOR`` of it away.
+        self.threshold_mm = threshold_mm
         #: Layers (issue 33): the height of the part's bottom face (0: the table); the pads push at its own height.
         self.z_m = float(z_m)
         if strategy not in PUSH_STRATEGIES:
@@ -262,15 +296,24 @@ class Push(StagedBehaviour):
         yaw: float,
         push_stage: str,
         gentle: bool = False,
+        via: FloatArray | None = None,
     ) -> list[Stage]:
-        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's)."""
+        """The push's stages: open, go behind the part, lower, push, back off, lift (every push's).
+
+        ``via``: the pads go there first, straight and at the push's speed, and push from there (a
+        push that also moves the part across).
+        """
         approach_m, push_m = heights
+        run_in: list[Stage] = []
+        if via is not None:
+            run_in = [MoveStage(stage.APPROACH_EDGE, line_to(via[0], via[1], push_m, yaw, pushing=True, gentle=gentle))]
         return [
             GripperStage(stage.SET_PUSH_OPENING, lambda c: c.robot.gripper.open(opening_m), wait=False),
             # Only the push itself touches the part: the moves before and after it run at the free-space limits.
             MoveStage(stage.MOVE_BEHIND_PART, to_pose(begin[0], begin[1], approach_m, yaw, free=True)),
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
+            *run_in,
             MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
@@ -289,8 +332,9 @@ class Push(StagedBehaviour):
         neighbour beside the part): an axis push is made instead.
         """
         s = context.settings
-        choice = self.choose_square_push(
-            offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned()
+        self.across_m = 0.0
+        choice = self.plan_square_push(
+            offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned(), self.threshold_mm
         )
         if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
             if set(self.towards) >= set(self.square_pushes):
@@ -306,10 +350,11 @@ class Push(StagedBehaviour):
             self.pushed = ("x", 0.0)
             self.squaring = False
             return []
-        name, distance_mm = choice
+        name, distance_mm = choice.name, choice.distance_mm
         distance_m = distance_mm / 1000
         self.pushed = (name, distance_m)
         self.squaring = distance_m < s.min_push_m
+        self.across_m = choice.across_mm / 1000
         heading = target.yaw_rad + self.square_pushes[name].heading_rad
         direction = np.array([math.cos(heading), math.sin(heading)])
         yaw = nearest_symmetric_yaw(heading + math.pi / 2, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
@@ -323,14 +368,119 @@ class Push(StagedBehaviour):
         centre = np.array([pose.x_m, pose.y_m])
         begin = centre - direction * (reach_m + s.push_clearance_m)
         end = centre - direction * reach_m + direction * distance_m
+        via = None
+        if self.across_m:
+            # Straight up to the edge, then slanted: the pads carry the part across by friction while
+            # they press it along, and come into contact where a straight push would.
+            across = np.array([-direction[1], direction[0]]) * self.across_m
+            run_in_m = min(SLANT_RUN_IN_MM / 1000, s.push_clearance_m / 2)
+            lead = across * (run_in_m / distance_m)
+            begin = begin - lead
+            via = centre - direction * (reach_m + run_in_m) - lead
+            end = end + across
         back = end - direction * s.push_clearance_m
         return self._motion(
-            opening_m, begin, end, back, (approach_m, push_m), yaw, stage.push(distance_m, name), gentle=self.z_m > 0.0
+            opening_m,
+            begin,
+            end,
+            back,
+            (approach_m, push_m),
+            yaw,
+            stage.push(distance_m, name),
+            gentle=self.z_m > 0.0,
+            via=via,
         )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:
         heading = self.square_pushes[name].heading_rad
         return float(offset_xy_mm[0] * math.cos(heading) + offset_xy_mm[1] * math.sin(heading))
+
+    @staticmethod
+    def plan_square_push(
+        offset_xy_mm: tuple[float, float],
+        pushes: dict[str, SquarePush],
+        towards: tuple[str, ...],
+        min_push_mm: float,
+        turned: bool,
+        threshold_mm: float | None = None,
+    ) -> SquareMove | Blocked | None:
+        """``choose_square_push``, and among neighbours a long push stopped short or a push that also moves across.
+
+        With a neighbour beside the part (a push not in ``towards``):
+
+        - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
+          ``APPROACH_RESERVE_MM`` short of the target, its pads moving the part across onto the
+          target's line as they go (below);
+        - near the target (``LONG_PUSH_MM``) an offset is closed by one free push whose pads
+          also move across it by what lies beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the
+          push's length (the part follows them by friction), the squarest such push: the part goes
+          straight to its place. Pushed by its projection alone, it would be left beside its place,
+          on a side only a blocked push may reach; by two pushes (``_free_cone_shares``), past its
+          place on the way (a piece 1 mm from home was pushed 2.2 mm, past it into a neighbour
+          0.5 mm away). Only when no one push closes it: two free pushes that take it between
+          them, else the push that leaves the least beside the place.
+
+        A push stops short only by what leaves the part ``STOP_SHORT_FACTOR`` times ``threshold_mm``
+        or more from its place, so that the correction goes on (None: never): at a coarse threshold
+        it would end there, short, and what it corrects (0.2 to 0.35 mm beside the place) is within.
+
+        Every push free: ``choose_square_push``'s choice, as it is.
+        """
+        choice = Push.choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
+        plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
+        free = [name for name in pushes if name in towards]
+
+        def may_stop_short(reserve_mm: float) -> bool:
+            return threshold_mm is not None and reserve_mm >= STOP_SHORT_FACTOR * threshold_mm
+
+        # Only at a fine threshold (the long push's reserve 1.5 thresholds or more): at a coarse one
+        # what these correct is within, and the example fresco (0.8 mm) went as before, not better.
+        if len(free) == len(pushes) or not free or not may_stop_short(APPROACH_RESERVE_MM):
+            return plain
+        offset = np.asarray(offset_xy_mm, dtype=float)
+        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
+            # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
+            # beside it stayed so): they end on the line the layout checked them along. At most
+            # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring.
+            heading = pushes[plain.name].heading_rad
+            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
+            distance = plain.distance_mm - APPROACH_RESERVE_MM
+            limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
+            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
+            return SquareMove(plain.name, distance, across)
+        if float(np.hypot(*offset)) > LONG_PUSH_MM:
+            # Between CONE_MAX_OFFSET_MM and here too: a piece turned 2 deg at its set-down ended its long
+            # push 2.2 mm short, 0.75 mm beside its line, and its push by the projection met a neighbour.
+            return plain
+        if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
+            return plain
+        slanted: list[tuple[float, float, SquareMove]] = []
+        for name in free:
+            heading = pushes[name].heading_rad
+            along = float(offset @ np.array([math.cos(heading), math.sin(heading)]))
+            if along < min_push_mm:
+                continue
+            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
+            limit = DIAGONAL_ACROSS_RATIO * along
+            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
+            left = abs(beside - across) if abs(beside) >= min_push_mm else 0.0
+            slanted.append((left, abs(across) / along, SquareMove(name, along, across)))
+        exact = [item for item in slanted if item[0] == 0.0]
+        if exact:
+            # One push straight to the target, the squarest one: the part never passes its place.
+            move = min(exact, key=lambda item: item[1])[2]
+            shorter = move.distance_mm - SLANT_STEP_RESERVE_MM
+            if (
+                may_stop_short(SLANT_STEP_RESERVE_MM)
+                and SLANT_STEP_ACROSS_MM <= abs(move.across_mm) <= DIAGONAL_ACROSS_RATIO * shorter
+            ):
+                # Far across: onto the target's line first, short of the place, so that what that leaves
+                # across is closed by the last push along.
+                return SquareMove(move.name, shorter, move.across_mm)
+            return move
+        if _free_cone_shares(offset, pushes, free) is not None or not slanted:
+            return plain
+        return min(slanted, key=lambda item: item[:2])[2]
 
     @staticmethod
     def choose_square_push(
@@ -509,7 +659,9 @@ class Push(StagedBehaviour):
             edge = self.square_pushes[axis].edge + 1
             if self.squaring:
                 return f"squared the part on its edge {edge} with a push of {fixed(distance_m * 1000, sign=True)} mm"
-            return f"pushed {fixed(distance_m * 1000, sign=True)} mm squarely onto its edge {edge} ({axis[1:]} deg)"
+            across = f", {fixed(self.across_m * 1000, sign=True)} mm across" if self.across_m else ""
+            onto = f"squarely onto its edge {edge} ({axis[1:]} deg)"
+            return f"pushed {fixed(distance_m * 1000, sign=True)} mm {onto}{across}"
         if self.squaring:
             return f"squared the part with a push of {fixed(distance_m * 1000, sign=True)} mm along {axis}"
         if abs(distance_m) < (self.context.settings.min_push_m if self.context else 0.0):
@@ -521,6 +673,19 @@ class Push(StagedBehaviour):
                 f"{fixed(self.across_m * 1000, sign=True)} mm along {other}"
             )
         return f"pushed {fixed(distance_m * 1000, sign=True)} mm along {axis}"
+
+
+@dataclass(frozen=True)
+class SquareMove:
+    """A square push: which (``Prism.named_pushes``' name), how far along its heading, how far across (mm).
+
+    ``across_mm`` is positive to the left of the heading (the heading turned by +90 deg): the pads
+    move that far sideways while they press the edge, and the part follows them by friction.
+    """
+
+    name: str
+    distance_mm: float
+    across_mm: float = 0.0
 
 
 @dataclass(frozen=True)

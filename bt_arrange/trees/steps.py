@@ -266,6 +266,9 @@ def correction(
         towards=towards,
         opening_m=push_opening_m,
         z_m=target.z_m,
+        # Among neighbours a part pushed squarely onto its edges may be stopped short of its place,
+        # as far as the threshold allows (``Push.plan_square_push``); a box is pushed as Table 1's.
+        threshold_mm=None if towards is None or target.object_type.shape.rectangular else threshold_mm,
     )
     if restage:
         push = py_trees.composites.Selector(

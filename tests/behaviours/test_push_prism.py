@@ -92,3 +92,25 @@ def test_an_ell_whose_square_pushes_leave_the_offset_out_is_pushed_along_an_axis
     run = tick_until_done(push, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "pushed -1.50 mm along x"
+
+
+def test_among_neighbours_a_push_that_also_moves_across_meets_the_edge_straight_then_slants(context: Context) -> None:
+    # Issue 38 item 4: free pushes +x and +y only, the part 0.3 mm off towards +y (a -y push is blocked):
+    # pushed along +x, 0.4 mm short of its place (SLANT_STEP_RESERVE_MM), its pads 0.3 mm towards -y.
+    names = {round(math.degrees(p.heading_rad)): n for n, p in TRIANGLE.shape.named_pushes(ROBOTIQ_2F85).items()}
+    push = setup(context, TRIANGLE, (1.0, -0.3), towards=(names[0], names[90]), threshold_mm=0.25)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == f"pushed +0.60 mm squarely onto its edge 3 ({names[0][1:]} deg), -0.30 mm across"
+    path = tcp_path(context)
+    contact_x = -0.020 - SETTINGS.gripper.pad_width_m / 2  # the pads on the leg x = -20 mm
+    deepest = int(np.argmax(path[:, 0]))
+    assert path[deepest, 0] == pytest.approx(contact_x + 0.0006, abs=1e-6)
+    assert path[deepest, 1] == pytest.approx(-0.0003, abs=1e-6), "0.3 mm across by the end of the push"
+    # Straight (lowered 0.5 mm to the other side: 0.3 mm per 0.6 mm, over the 1 mm run-in) up to 1 mm
+    # before the edge, then slanted: the pads meet the edge where a straight push would, and move
+    # across only while they press it.
+    pushing = path[: deepest + 1]
+    assert pushing[0, 1] == pytest.approx(0.0005, abs=1e-6)
+    assert np.all(np.abs(pushing[pushing[:, 0] < contact_x - 0.001 - 1e-6, 1] - 0.0005) < 1e-6)
+    assert float(np.interp(contact_x, pushing[:, 0], pushing[:, 1])) == pytest.approx(0.0, abs=2e-5)
