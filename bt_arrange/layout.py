@@ -27,15 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import threading
-from collections import OrderedDict
-from collections.abc import Callable, Iterable, Sequence
-from contextvars import ContextVar
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bt_arrange.errors import PlanError
 from bt_arrange.footprints import Footprint, Outline, Rect, gap_m, overlap, radius_of
+from bt_arrange.layout_judged import KeptLayouts, blocked, blockers, current_targets, judging
 from bt_arrange.layout_part import DIRECTIONS, Part
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 
@@ -153,99 +151,19 @@ def _square_push_pads(part: Part, at: Footprint, towards: str, distance_m: float
     return Rect(centre.x_m, centre.y_m, at.yaw_rad + heading_rad, (far - near) / 2, half_across)
 
 
-#: While ``plan_layout`` searches, every overlap it has judged, by volume and then by the placed
-#: footprint (its id, the footprint kept beside the verdict): the search asks the same volume
-#: against the same target under thousands of placed sets (a 12-piece fresco: a million tests, of
-#: fifty thousand kinds). None outside a search, so nothing outlives it.
-_JUDGED_OVERLAPS: ContextVar[dict[tuple[Footprint, float], dict[int, tuple[Footprint, bool]]] | None] = ContextVar(
-    "judged_overlaps", default=None
-)
-
-
-@dataclass
-class _Targets:
-    """While ``plan_layout`` searches: every part's target footprint, and which of them each volume tried meets.
-
-    A volume the search tries (the pads of a staged release, a push's sweep) is the same under
-    every placed set; only which parts are placed changes. So it is judged once against every
-    target, under a key naming it (part, distance, direction, what), and a placed set then asks
-    only whether it holds one of those names: the same verdict as testing the placed footprints.
-    """
-
-    footprints: dict[str, Footprint]
-    met: dict[tuple[object, ...], frozenset[str]] = field(default_factory=dict)
-
-    def placed_names(self, placed: Sequence[tuple[str, Footprint]]) -> frozenset[str] | None:
-        """The names of ``placed`` when each is its target's footprint (else None: judge them one by one)."""
-        if all(self.footprints.get(name) is footprint for name, footprint in placed):
-            return frozenset(name for name, _ in placed)
-        return None
-
-    def meeting(
-        self, key: tuple[object, ...], volumes: Callable[[], Sequence[Footprint]], clearance_m: float
-    ) -> frozenset[str]:
-        """The targets any of the volumes ``key`` names meets (with ``clearance_m``), judged the first time asked."""
-        found = self.met.get(key)
-        if found is None:
-            built = volumes()
-            found = self.met[key] = frozenset(
-                name for name, footprint in self.footprints.items() if blockers(built, [(name, footprint)], clearance_m)
-            )
-        return found
-
-
-_TARGETS: ContextVar[_Targets | None] = ContextVar("layout_targets", default=None)
-
-
-def _blocked(
-    key: tuple[object, ...],
-    volumes: Callable[[], Sequence[Footprint]],
-    placed: Sequence[tuple[str, Footprint]],
-    clearance_m: float,
-) -> bool:
-    """True when a placed part meets one of the volumes (``bool(blockers(volumes(), placed, clearance_m))``)."""
-    targets = _TARGETS.get()
-    names = targets.placed_names(placed) if targets is not None else None
-    if targets is None or names is None:
-        return bool(blockers(volumes(), placed, clearance_m))
-    return not targets.meeting(key, volumes, clearance_m).isdisjoint(names)
-
-
-def blockers(volumes: Iterable[Footprint], placed: Sequence[tuple[str, Footprint]], clearance_m: float) -> list[str]:
-    """Names of the placed parts that any of ``volumes`` meets."""
-    judged = _JUDGED_OVERLAPS.get()
-    names = []
-    for volume in volumes:
-        verdicts = judged.setdefault((volume, clearance_m), {}) if judged is not None else None
-        for name, footprint in placed:
-            if name in names:
-                continue
-            if verdicts is None:
-                meets = overlap(volume, footprint, clearance_m)
-            else:
-                kept = verdicts.get(id(footprint))
-                if kept is None or kept[0] is not footprint:
-                    kept = verdicts[id(footprint)] = (footprint, overlap(volume, footprint, clearance_m))
-                meets = kept[1]
-            if meets:
-                names.append(name)
-    return names
-
-
 def free_push_directions(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> tuple[str, ...]:
     """The directions ``part`` (at its target) can be pushed towards with nothing of ``placed`` in the pads' way."""
     at = part.footprint
     others = [(n, r) for n, r in placed if n != part.name]
-    return tuple(
-        towards
-        for towards in part.push_directions
-        if not _blocked(
-            (part.name, "push", towards),
-            lambda towards=towards: [push_pads(part, at, towards, 0.0, pads)],
-            others,
-            pads.pad_clearance_m,
-        )
-    )
+    free = []
+    for towards in part.push_directions:
+
+        def volumes(towards: str = towards) -> list[Footprint]:
+            return [push_pads(part, at, towards, 0.0, pads)]
+
+        if not blocked((part.name, "push", towards), volumes, others, pads.pad_clearance_m):
+            free.append(towards)
+    return tuple(free)
 
 
 @dataclass(frozen=True)
@@ -359,10 +277,10 @@ def _staged_prism_release(
     One push along the edge's normal, squarely, so that the way home neither turns it nor needs
     a second side.
     """
-    targets = _TARGETS.get()
+    targets = current_targets()
     names = targets.placed_names(placed) if targets is not None else None
 
-    def blocked(key: tuple[object, ...], volumes: Callable[[], Sequence[Footprint]], clearance_m: float) -> bool:
+    def blocked_here(key: tuple[object, ...], volumes: Callable[[], Sequence[Footprint]], clearance_m: float) -> bool:
         if targets is None or names is None:
             return bool(blockers(volumes(), placed, clearance_m))
         return not targets.meeting((part.name, "staged", *key), volumes, clearance_m).isdisjoint(names)
@@ -382,21 +300,18 @@ def _staged_prism_release(
                 ]
 
             # What ``_release_at`` judges, each volume under its own key (``_Targets``).
-            if blocked((distance, towards, "part"), lambda: [staged()], pads.place_clearance_m):
+            if blocked_here((distance, towards, "part"), lambda: [staged()], pads.place_clearance_m):
                 continue
-            axis = next(
-                (
-                    a
-                    for a in axes
-                    if not blocked(
-                        (distance, towards, "pads", a),
-                        lambda a=a: release_pads(part, staged(), a, pads),
-                        pads.pad_clearance_m,
-                    )
-                ),
-                None,
-            )
-            if axis is None or blocked((distance, towards, "sweep"), sweep, pads.pad_clearance_m):
+            axis = None
+            for a in axes:
+
+                def pads_at(a: str = a) -> list[Rect]:
+                    return release_pads(part, staged(), a, pads)
+
+                if not blocked_here((distance, towards, "pads", a), pads_at, pads.pad_clearance_m):
+                    axis = a
+                    break
+            if axis is None or blocked_here((distance, towards, "sweep"), sweep, pads.pad_clearance_m):
                 continue
             return _release(part, axis, pads, offset)
     return None
@@ -518,22 +433,12 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
         pads,
         None if order is None else tuple(order),
     )
-    with _LAYOUTS_LOCK:
-        kept = _LAYOUTS.get(key)
-        if kept is not None:
-            _LAYOUTS.move_to_end(key)
-            return list(kept[1])
-    judging = _JUDGED_OVERLAPS.set({})
-    targets = _TARGETS.set(_Targets({p.name: p.footprint for p in parts}))
-    try:
+    kept = _LAYOUTS.get(key)
+    if kept is not None:
+        return list(kept[1])  # type: ignore[index]
+    with judging({p.name: p.footprint for p in parts}):
         steps = _plan_layout(parts, pads, order)
-    finally:
-        _TARGETS.reset(targets)
-        _JUDGED_OVERLAPS.reset(judging)
-    with _LAYOUTS_LOCK:
-        _LAYOUTS[key] = (parts, steps)  # the parts keep their shapes, whose ids the key holds
-        while len(_LAYOUTS) > KEPT_LAYOUTS:
-            _LAYOUTS.popitem(last=False)
+    _LAYOUTS.put(key, (parts, steps))  # the parts keep their shapes, whose ids the key holds
     return list(steps)
 
 
@@ -541,8 +446,7 @@ def plan_layout(parts: Sequence[Part], pads: Pads | None = None, order: Sequence
 #: file's check and tree as it loads, the run's tree, the session's plan check), and a 12-piece
 #: fresco's search takes a second.
 KEPT_LAYOUTS = 8
-_LAYOUTS: OrderedDict[tuple[object, ...], tuple[list[Part], list[Step]]] = OrderedDict()
-_LAYOUTS_LOCK = threading.Lock()
+_LAYOUTS = KeptLayouts(KEPT_LAYOUTS)
 
 
 def _plan_layout(parts: list[Part], pads: Pads, order: Sequence[str] | None) -> list[Step]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bt_arrange import layout
+from bt_arrange import layout, layout_judged
 from bt_arrange.errors import PlanError
 from bt_arrange.layout import Pads, plan_layout
 from bt_arrange.objects import ObjectType
@@ -120,8 +120,8 @@ def test_a_layout_asked_again_is_not_searched_again_and_a_moved_part_is(monkeypa
 def test_a_fresco_no_order_builds_is_refused_judging_each_overlap_once(monkeypatch: pytest.MonkeyPatch) -> None:
     """160 x 120 mm in 12 pieces, seed 1: tile 11 never has room, found after thousands of placed sets."""
     judged = []
-    overlap = layout.overlap
-    monkeypatch.setattr(layout, "overlap", lambda *a: judged.append(1) or overlap(*a))
+    overlap = layout_judged.overlap
+    monkeypatch.setattr(layout_judged, "overlap", lambda *a: judged.append(1) or overlap(*a))
     layout._LAYOUTS.clear()
     parts = _fresco_parts(12, 1)
     with pytest.raises(PlanError, match="tile 11 has no room for the pads"):

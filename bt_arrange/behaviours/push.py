@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,6 +18,22 @@ from bt_arrange.behaviours.moves import (
     to_pose,
     wrist_yaw_rad,
 )
+from bt_arrange.behaviours.square_pushes import (  # noqa: F401 - re-exported: Push's figures and verdicts
+    APPROACH_RESERVE_MM,
+    CONE_MAX_OFFSET_MM,
+    DIAGONAL_ACROSS_RATIO,
+    LONG_PUSH_MAX_ACROSS_MM,
+    LONG_PUSH_MM,
+    SLANT_RUN_IN_MM,
+    SLANT_STEP_ACROSS_MM,
+    SLANT_STEP_RESERVE_MM,
+    SQUARING_PRESS_MM,
+    STOP_SHORT_FACTOR,
+    Blocked,
+    SquareMove,
+    choose_square_push,
+    plan_square_push,
+)
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
 from bt_arrange.layout import DIRECTIONS
@@ -31,41 +46,6 @@ from bt_arrange.shapes import ROBOTIQ_2F85, SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
 PUSH_STRATEGIES = ("paper", "learned", "diagonal")
-
-#: Strategy "diagonal": the most a push may move the part across its axis, per millimetre along it.
-#: The pads drag the part sideways by friction (pads 1.2 on the part: slipping only beyond about
-#: 50 deg, atan 1.2); 0.6 (31 deg) keeps well inside that and the line contact squares the part.
-DIAGONAL_ACROSS_RATIO = 0.6
-
-
-#: Among neighbours an offset at most this long (mm) between two free pushes is closed by both.
-CONE_MAX_OFFSET_MM = 2.0
-#: Among neighbours a square push longer than this (mm; a staged part's way home) stops
-#: ``APPROACH_RESERVE_MM`` short of the target: its pads can still move it across the push then.
-#: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
-#: it about the pads), on a side only a blocked push reaches (issue 38 item 4).
-LONG_PUSH_MM = 3.0
-#: The most a long push among neighbours moves the part across on its way (mm).
-LONG_PUSH_MAX_ACROSS_MM = 1.0
-#: How far short of the target a long push among neighbours stops (mm): enough along the push for
-#: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
-APPROACH_RESERVE_MM = 1.0
-#: A push stops short of the place only by this many thresholds or more: the correction must go on
-#: (at the example fresco's 0.8 mm, pieces left 0.4 mm short were within, and the next piece's
-#: set-down met one of them).
-STOP_SHORT_FACTOR = 1.5
-#: Near the target, a push that must also move the part this far across or more (mm) ...
-SLANT_STEP_ACROSS_MM = 0.15
-#: ... stops this far short of the place (mm), when it can: the last push along closes what it left across.
-SLANT_STEP_RESERVE_MM = 0.4
-#: A push that also moves the part across comes straight up to this far (mm) before the edge's
-#: place, then turns to its slanted line: the pads move across the push only near the edge, so they
-#: keep to the side of the part they were checked on.
-SLANT_RUN_IN_MM = 1.0
-#: A squaring push of an irregular part presses its edge this far past where it belongs: a push
-#: that only reaches the edge's place leaves a part turned 1 deg barely touched (measured: ten
-#: such pushes left a fresco piece 1.27 deg off).
-SQUARING_PRESS_MM = 0.3
 
 
 class Push(StagedBehaviour):
@@ -395,139 +375,10 @@ class Push(StagedBehaviour):
         heading = self.square_pushes[name].heading_rad
         return float(offset_xy_mm[0] * math.cos(heading) + offset_xy_mm[1] * math.sin(heading))
 
-    @staticmethod
-    def plan_square_push(
-        offset_xy_mm: tuple[float, float],
-        pushes: dict[str, SquarePush],
-        towards: tuple[str, ...],
-        min_push_mm: float,
-        turned: bool,
-        threshold_mm: float | None = None,
-    ) -> SquareMove | Blocked | None:
-        """``choose_square_push``, and among neighbours a long push stopped short or a push that also moves across.
-
-        With a neighbour beside the part (a push not in ``towards``):
-
-        - a push longer than ``LONG_PUSH_MM`` (a staged part on its way home) stops
-          ``APPROACH_RESERVE_MM`` short of the target, its pads moving the part across onto the
-          target's line as they go (below);
-        - near the target (``LONG_PUSH_MM``) an offset is closed by one free push whose pads
-          also move across it by what lies beside it, at most ``DIAGONAL_ACROSS_RATIO`` of the
-          push's length (the part follows them by friction), the squarest such push: the part goes
-          straight to its place. Pushed by its projection alone, it would be left beside its place,
-          on a side only a blocked push may reach; by two pushes (``_free_cone_shares``), past its
-          place on the way (a piece 1 mm from home was pushed 2.2 mm, past it into a neighbour
-          0.5 mm away). Only when no one push closes it: two free pushes that take it between
-          them, else the push that leaves the least beside the place.
-
-        A push stops short only by what leaves the part ``STOP_SHORT_FACTOR`` times ``threshold_mm``
-        or more from its place, so that the correction goes on (None: never): at a coarse threshold
-        it would end there, short, and what it corrects (0.2 to 0.35 mm beside the place) is within.
-
-        Every push free: ``choose_square_push``'s choice, as it is.
-        """
-        choice = Push.choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
-        plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
-        free = [name for name in pushes if name in towards]
-
-        def may_stop_short(reserve_mm: float) -> bool:
-            return threshold_mm is not None and reserve_mm >= STOP_SHORT_FACTOR * threshold_mm
-
-        # Only at a fine threshold (the long push's reserve 1.5 thresholds or more): at a coarse one
-        # what these correct is within, and the example fresco (0.8 mm) went as before, not better.
-        if len(free) == len(pushes) or not free or not may_stop_short(APPROACH_RESERVE_MM):
-            return plain
-        offset = np.asarray(offset_xy_mm, dtype=float)
-        if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
-            # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
-            # beside it stayed so): they end on the line the layout checked them along. At most
-            # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring.
-            heading = pushes[plain.name].heading_rad
-            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
-            distance = plain.distance_mm - APPROACH_RESERVE_MM
-            limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
-            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
-            return SquareMove(plain.name, distance, across)
-        if float(np.hypot(*offset)) > LONG_PUSH_MM:
-            # Between CONE_MAX_OFFSET_MM and here too: a piece turned 2 deg at its set-down ended its long
-            # push 2.2 mm short, 0.75 mm beside its line, and its push by the projection met a neighbour.
-            return plain
-        if isinstance(plain, SquareMove) and plain.distance_mm < min_push_mm:  # a squaring press
-            return plain
-        slanted: list[tuple[float, float, SquareMove]] = []
-        for name in free:
-            heading = pushes[name].heading_rad
-            along = float(offset @ np.array([math.cos(heading), math.sin(heading)]))
-            if along < min_push_mm:
-                continue
-            beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
-            limit = DIAGONAL_ACROSS_RATIO * along
-            across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
-            left = abs(beside - across) if abs(beside) >= min_push_mm else 0.0
-            slanted.append((left, abs(across) / along, SquareMove(name, along, across)))
-        exact = [item for item in slanted if item[0] == 0.0]
-        if exact:
-            # One push straight to the target, the squarest one: the part never passes its place.
-            move = min(exact, key=lambda item: item[1])[2]
-            shorter = move.distance_mm - SLANT_STEP_RESERVE_MM
-            if (
-                may_stop_short(SLANT_STEP_RESERVE_MM)
-                and SLANT_STEP_ACROSS_MM <= abs(move.across_mm) <= DIAGONAL_ACROSS_RATIO * shorter
-            ):
-                # Far across: onto the target's line first, short of the place, so that what that leaves
-                # across is closed by the last push along.
-                return SquareMove(move.name, shorter, move.across_mm)
-            return move
-        if _free_cone_shares(offset, pushes, free) is not None or not slanted:
-            return plain
-        return min(slanted, key=lambda item: item[:2])[2]
-
-    @staticmethod
-    def choose_square_push(
-        offset_xy_mm: tuple[float, float],
-        pushes: dict[str, SquarePush],
-        towards: tuple[str, ...],
-        min_push_mm: float,
-        turned: bool,
-    ) -> tuple[str, float] | Blocked | None:
-        """Which square push to make and how far (mm), what blocks the one needed, or None: nothing to push.
-
-        The offset (target minus pose, target frame) is projected on each push's heading: the
-        push that closes most of it, among the free ones (``towards``), is made by that
-        projection; what it leaves lies across it, for the next push. When the best push is
-        below ``min_push_mm`` a part ``turned`` past the yaw threshold is still pushed on the
-        free edge the pads stand widest on, ``SQUARING_PRESS_MM`` past where that edge belongs: the square contact
-        turns it back. When only blocked pushes close the offset: ``Blocked`` with the best of them.
-        """
-        offset = np.asarray(offset_xy_mm, dtype=float)
-        along = {
-            name: float(offset @ np.array([math.cos(p.heading_rad), math.sin(p.heading_rad)]))
-            for name, p in pushes.items()
-        }
-        free = [name for name in pushes if name in towards]
-        best = max(pushes, key=lambda name: along[name])
-        if len(free) < len(pushes) and float(np.hypot(*offset)) <= CONE_MAX_OFFSET_MM:
-            # Among neighbours a push by the whole projection can carry the part past the line of a
-            # second free push, into a place only a blocked push would close. Two free pushes whose
-            # headings take the offset between them close it exactly, each by its own share; near
-            # the target only, where the pads' way is the one the layout checked (a staged part far
-            # from it goes home by the push its staging chose).
-            shares = _free_cone_shares(offset, pushes, free)
-            if shares is not None:
-                chosen, distance_mm = max(shares, key=lambda share: share[1])
-                if distance_mm >= min_push_mm:
-                    return chosen, distance_mm
-        usable = [name for name in free if along[name] >= min_push_mm]
-        if usable:
-            chosen = max(usable, key=lambda name: along[name])
-            return chosen, along[chosen]
-        if along[best] >= min_push_mm:
-            return Blocked(best, along[best])
-        if turned and free:
-            widest = max(free, key=lambda name: (pushes[name].opening_m, pushes[name].edge_m))
-            # Pressed a little past where the edge belongs, so that the pads meet all of it there.
-            return widest, max(0.0, along[widest]) + SQUARING_PRESS_MM
-        return None
+    #: ``bt_arrange.behaviours.square_pushes.plan_square_push``: the square push among neighbours.
+    plan_square_push = staticmethod(plan_square_push)
+    #: ``bt_arrange.behaviours.square_pushes.choose_square_push``: the square push that closes most.
+    choose_square_push = staticmethod(choose_square_push)
 
     def face_geometry(self, s: ManipulationSettings, heading_rad: float, object_yaw_rad: float) -> tuple[float, float]:
         """(opening, reach) for the face pushed along ``heading_rad``.
@@ -673,63 +524,3 @@ class Push(StagedBehaviour):
                 f"{fixed(self.across_m * 1000, sign=True)} mm along {other}"
             )
         return f"pushed {fixed(distance_m * 1000, sign=True)} mm along {axis}"
-
-
-@dataclass(frozen=True)
-class SquareMove:
-    """A square push: which (``Prism.named_pushes``' name), how far along its heading, how far across (mm).
-
-    ``across_mm`` is positive to the left of the heading (the heading turned by +90 deg): the pads
-    move that far sideways while they press the edge, and the part follows them by friction.
-    """
-
-    name: str
-    distance_mm: float
-    across_mm: float = 0.0
-
-
-@dataclass(frozen=True)
-class Blocked:
-    """A correction Push cannot make: the part must move ``towards`` (target frame) by ``offset_mm``."""
-
-    towards: str
-    offset_mm: float
-
-    def reason(self, obj: str) -> str:
-        """The feedback: which side, and what happens next."""
-        if self.towards.startswith("@"):
-            return (
-                f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "
-                "frame), where a neighbour leaves the pads no room, and no free push closes it"
-            )
-        side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
-        return (
-            f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
-            "where a neighbour leaves the pads no room: pick it up and release it again "
-            "on the side it can be pushed from"
-        )
-
-
-def _free_cone_shares(
-    offset_mm: np.ndarray, pushes: dict[str, SquarePush], free: list[str]
-) -> list[tuple[str, float]] | None:
-    """The two free pushes (and how far each, mm) whose headings take the offset between them, or None.
-
-    ``offset = a u + b v`` with ``a, b >= 0`` for the headings ``u``, ``v`` of two free pushes less than
-    half a turn apart; of all such pairs, the one that travels least (``a + b``).
-    """
-    best: tuple[float, list[tuple[str, float]]] | None = None
-    for i, first in enumerate(free):
-        u = np.array([math.cos(pushes[first].heading_rad), math.sin(pushes[first].heading_rad)])
-        for second in free[i + 1 :]:
-            v = np.array([math.cos(pushes[second].heading_rad), math.sin(pushes[second].heading_rad)])
-            determinant = float(u[0] * v[1] - u[1] * v[0])
-            if abs(determinant) < 1e-6:  # parallel or opposite: no cone
-                continue
-            a = float(offset_mm[0] * v[1] - offset_mm[1] * v[0]) / determinant
-            b = float(u[0] * offset_mm[1] - u[1] * offset_mm[0]) / determinant
-            if a < 0.0 or b < 0.0:
-                continue
-            if best is None or a + b < best[0]:
-                best = (a + b, [(first, a), (second, b)])
-    return None if best is None else best[1]
