@@ -79,6 +79,20 @@ def test_the_parts_later_steps_look_at_again_get_two_margins_in_the_tree() -> No
     assert loops == {"red": 2, "green": 2, "blue": 2, "yellow": 1}
 
 
+def test_a_neighbour_never_placed_is_not_looked_at_again() -> None:
+    """A part whose transfer failed lies where it started: a later step's recheck passes it by."""
+    from bt_arrange.behaviours import keys
+    from trees.dense_row import create_root
+
+    guard = next(n for n in create_root().iterate() if n.name == "look again at red after green if it was placed")
+    check = guard.children[0].decorated
+    assert check.variable_name == keys.key("red", keys.PLACED_OFFSET_MM)
+    py_trees.blackboard.Blackboard.unset(keys.key("red", keys.PLACED_OFFSET_MM))
+    guard.tick_once()
+    assert guard.status == Status.SUCCESS
+    assert guard.children[1].status == Status.INVALID  # the recheck and its correction never ran
+
+
 class Calibration:
     def __init__(self, reprojection_error_px: float, height_m: float, fx_px: float) -> None:
         self.reprojection_error_px = reprojection_error_px

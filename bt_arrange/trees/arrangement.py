@@ -136,34 +136,50 @@ def arrange_one(
     for neighbour, sides, again in neighbours:
         label = f" after {obj}"
         neighbour_kind = (kind_of_neighbour or {}).get(neighbour.obj, ())
+        look_again = py_trees.composites.Sequence(
+            name=f"look again at {neighbour.obj}{label}",
+            memory=True,
+            children=[
+                Recheck(
+                    f"look at {neighbour.obj}{label}",
+                    neighbour.obj,
+                    neighbour.colour,
+                    after=obj,
+                    object_type=neighbour.object_type,
+                    kind_targets=neighbour_kind,
+                    z_m=neighbour.z_m,
+                ),
+                correction(
+                    neighbour,
+                    threshold_mm,
+                    max_pushes,
+                    strategy,
+                    yaw_threshold_deg=yaw_threshold_deg,
+                    kind_targets=neighbour_kind,
+                    towards=sides,
+                    restage=again,
+                    push_opening_m=pads.neighbour_push_opening_m(parts_of([neighbour], settings)[0], "x"),
+                    count=False,
+                    label=label,
+                    settings=settings,
+                ),
+            ],
+        )
+        # A neighbour whose transfer failed (the tree going on past it) lies where it started: nothing
+        # to look at again, and a push from there towards its target would be the wrong one.
         children.append(
-            py_trees.composites.Sequence(
-                name=f"look again at {neighbour.obj}{label}",
+            py_trees.composites.Selector(
+                name=f"look again at {neighbour.obj}{label} if it was placed",
                 memory=True,
                 children=[
-                    Recheck(
-                        f"look at {neighbour.obj}{label}",
-                        neighbour.obj,
-                        neighbour.colour,
-                        after=obj,
-                        object_type=neighbour.object_type,
-                        kind_targets=neighbour_kind,
-                        z_m=neighbour.z_m,
+                    py_trees.decorators.Inverter(
+                        name=f"{neighbour.obj} was never placed{label}",
+                        child=py_trees.behaviours.CheckBlackboardVariableExists(
+                            name=f"{neighbour.obj} was placed{label}",
+                            variable_name=keys.key(neighbour.obj, keys.PLACED_OFFSET_MM),
+                        ),
                     ),
-                    correction(
-                        neighbour,
-                        threshold_mm,
-                        max_pushes,
-                        strategy,
-                        yaw_threshold_deg=yaw_threshold_deg,
-                        kind_targets=neighbour_kind,
-                        towards=sides,
-                        restage=again,
-                        push_opening_m=pads.neighbour_push_opening_m(parts_of([neighbour], settings)[0], "x"),
-                        count=False,
-                        label=label,
-                        settings=settings,
-                    ),
+                    look_again,
                 ],
             )
         )
