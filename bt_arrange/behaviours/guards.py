@@ -6,10 +6,7 @@ import py_trees
 from py_trees.common import Status
 
 from bt_arrange.behaviours.context import Context
-from bt_arrange.behaviours.moves import (
-    holding,
-    min_held_width_m,
-)
+from bt_arrange.behaviours.moves import min_held_width_m
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.ports import Port
@@ -19,8 +16,15 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     """Runs its child (e.g. Place) only while the part stays between the fingers.
 
     Checked before every tick: when the fingers close past the part's width (it slipped out),
-    the child is interrupted at once and the guard fails, so a retry above can detect and pick
-    the part again instead of placing air.
+    the child is interrupted at once, the pads open (what is left between them is let go here, not
+    carried to the next pick) and the guard fails, so a retry above can detect and pick the part
+    again instead of placing air.
+
+    "Past the part's width" is judged against the grip the guard finds at its first tick, not the
+    part's width alone: pads sink into a part (a prism's corner into a compliant pad, up to 3 mm
+    in the real-cell model), so a part held firmly can stand under the nominal width less the
+    tolerance; the fingers closing ``grasp_width_tolerance_m`` past that grip (or past the nominal
+    width less it, whichever is lower) is what a part leaving looks like.
     """
 
     #: The node's description in the XML ``TreeNodesModel``.
@@ -38,6 +42,8 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         #: The held part's type: the child's (a Place knows it), else the cube.
         self.object_type: ObjectType = getattr(child, "object_type", None) or CUBE
         self.context: Context | None = None
+        #: The fingers' width at this run's first tick (m): the grip the pick left; None between runs.
+        self.grip_width_m: float | None = None
 
     def setup(self, **kwargs: object) -> None:
         """Receive the context; without one the guard could never fire, so that is an error."""
@@ -47,17 +53,38 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         self.context = context
         super().setup(**kwargs)
 
+    def held_width_m(self) -> float:
+        """Fingers closed narrower than this (m) hold nothing: the grip found at the first tick, or the nominal's.
+
+        A grip at least the nominal least width (``min_held_width_m``) lowers the bound to that grip
+        less ``grasp_width_tolerance_m``, never raises it; a narrower first grip leaves the nominal bound.
+        """
+        assert self.context is not None
+        low_m = min_held_width_m(self.context.settings, self.object_type)
+        if self.grip_width_m is None or self.grip_width_m < low_m:
+            return low_m
+        return min(low_m, self.grip_width_m - self.context.settings.grasp_width_tolerance_m)
+
     def _holding(self) -> bool:
         if self.context is None:
             return True
-        if holding(self.context, self.object_type):
+        gripper = self.context.robot.gripper
+        width_m = gripper.width()
+        if self.grip_width_m is None:
+            self.grip_width_m = width_m
+        low_m = self.held_width_m()
+        if width_m > low_m:
             return True
-        low_m = min_held_width_m(self.context.settings, self.object_type)
         self.feedback_message = (
-            f"the part left the gripper: fingers at {self.context.robot.gripper.width() * 1000:.1f} mm, "
-            f"under the {low_m * 1000:.1f} mm of a held part"
+            f"the part left the gripper: fingers at {width_m * 1000:.1f} mm, under the {low_m * 1000:.1f} mm of a held part"
         )
+        gripper.open(gripper.max_width_m)
         return False
+
+    def terminate(self, new_status: Status) -> None:
+        """Forget the grip: the next run judges its own."""
+        self.grip_width_m = None
+        super().terminate(new_status)
 
     def update(self) -> Status:
         """Reflect the child, with its feedback."""
