@@ -25,7 +25,7 @@ from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, Col
 from bt_arrange_sim.cell_base import CellBase
 from bt_arrange_sim.config import HOME_Q, CellConfig
 from bt_arrange_sim.noise import CameraNoise, CameraNoiseConfig
-from bt_arrange_sim.parts import TABLE_RGB
+from bt_arrange_sim.parts import TABLE_RGB, mass_of
 from bt_arrange_sim.perturbed_robot import hand_eye_base_pose, write_perturbed_urdf
 from bt_arrange_sim.pybullet.devices import SimArm, SimCamera, SimClock, SimGripper
 from bt_arrange_sim.pybullet.objects import apply_contact, create_object
@@ -107,6 +107,9 @@ class WorkCell(CellBase):
         with _silenced(1):
             self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         self.client.setGravity(0.0, 0.0, -physics.gravity_m_s2)
+        #: The contact solve's iterations now: ``physics.solver_iterations``, more while the pads grip a light part.
+        self.solver_iterations = physics.solver_iterations
+        self._light_parts = False
         self.client.setPhysicsEngineParameter(
             fixedTimeStep=physics.time_step_s, numSolverIterations=physics.solver_iterations
         )
@@ -260,6 +263,7 @@ class WorkCell(CellBase):
             picture_uv=picture_uv,
         )
         self.object_types[name] = object_type
+        self._solve_for(built)
         if self.config.physics.parts_sleep:
             self.client.changeDynamics(
                 self.parts[name],
@@ -268,6 +272,23 @@ class WorkCell(CellBase):
                 sleepThreshold=self.config.physics.sleep_threshold,
             )
         return name
+
+    def _solve_for(self, object_type: ObjectType) -> None:
+        """Note a part lighter than ``PhysicsConfig.light_part_mass_kg``: the pads' grip on it needs more iterations."""
+        if mass_of(object_type) < self.config.physics.light_part_mass_kg:
+            self._light_parts = True
+
+    def solve_grip(self, closed: bool) -> None:
+        """The contact solve's iterations while the fingers close on a part (``closed``) and after they open.
+
+        Closed, with a light part in the cell: ``light_part_solver_iterations``, so that the squeeze
+        converges; else ``solver_iterations``, as the pushes (made with open pads) were measured.
+        """
+        physics = self.config.physics
+        wanted = physics.light_part_solver_iterations if closed and self._light_parts else physics.solver_iterations
+        if wanted != self.solver_iterations:
+            self.solver_iterations = wanted
+            self.client.setPhysicsEngineParameter(numSolverIterations=wanted)
 
     def _wake(self, name: str) -> None:
         """A part whose pose or contacts were changed from outside moves again under physics."""
