@@ -130,7 +130,6 @@ class SimGripper(CellGripper):
         # hull too, whose normal no longer faced the pad, and held the fingers shut at 40 N (a kite wedged
         # at 40.2 mm of 85). A prism is let go without them; a box's release is as it was.
         self._anchor_pads(physics.pad_contact.friction_anchor and not self._on_unanchored_part())
-        self._cell.solve_grip(False)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
@@ -146,7 +145,6 @@ class SimGripper(CellGripper):
         import pybullet
 
         self._anchor_pads(self._cell.config.physics.pad_contact.friction_anchor)
-        self._cell.solve_grip(True)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body, finger, pybullet.VELOCITY_CONTROL, targetVelocity=-speed_m_s / 2, force=force_n
