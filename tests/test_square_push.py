@@ -240,3 +240,23 @@ def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nob
     assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), names[:2]) == {0.25}
     assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), None) == {None}
     assert thresholds(Target("red", 0.5, 0.0, object_type=CUBE), ("+x", "-y")) == {None}
+
+
+def test_at_a_coarse_threshold_a_push_that_would_leave_the_part_blocked_beside_its_place_moves_across() -> None:
+    # Free: +x and +y. (1, -1) mm at 0.8 mm: pushed 1 mm along +x it is left 1 mm off towards -y, which
+    # only the blocked hypotenuse push closes. Moving across while it presses (0.6 of 1 mm) leaves 0.4.
+    from bt_arrange.behaviours.push import DIAGONAL_ACROSS_RATIO, SquareMove
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    assert Push.choose_square_push((1.0, -1.0), pushes, free, 0.05, False) == (names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(1.0), pytest.approx(-DIAGONAL_ACROSS_RATIO)
+    )
+    # Left half the threshold beside its place or less, or with every push free: the push by the projection.
+    assert Push.plan_square_push((1.0, -0.35), pushes, free, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(1.0))
+    every = tuple(pushes)
+    assert Push.plan_square_push((1.0, -1.0), pushes, every, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(1.0))
+    # Far from the target (a staged part on its way home) the long push is made as chosen.
+    assert Push.plan_square_push((10.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(10.0))
