@@ -65,8 +65,9 @@ class PhysicsConfig:
     #: along the closing axis and set down 0.48 mm off on average, 1.0 mm at most, in isolation. At
     #: 150, 0.09 and 0.17 mm (``benchmarks/setdown.py``; docs/irregular.md, issue 38 item 1). With
     #: such a part in the cell, it solves with ``light_part_solver_iterations`` from each close of the
-    #: fingers until the next opening has let go (within 2 mm of its width): pushes, made with open
-    #: pads, as before (at 150 a fragment's pushes stopped converging); a cell of cubes as before.
+    #: fingers (a grasp) until they are narrowed for a push: the release, the retreat and the look
+    #: under the solve that held the part (switched back at the release, a released part moved up to
+    #: 2.5 mm), pushes as before (at 150 a fragment's pushes stopped converging); cubes as before.
     light_part_mass_kg: float = 0.1
     light_part_solver_iterations: int = 150
     control_period_s: float = 0.008

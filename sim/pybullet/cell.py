@@ -110,8 +110,6 @@ class WorkCell(CellBase):
         #: The contact solve's iterations now: ``physics.solver_iterations``, more while the pads grip a light part.
         self.solver_iterations = physics.solver_iterations
         self._light_parts = False
-        #: The opening (m) at which a release has let go: the solve returns to ``solver_iterations``.
-        self._loosen_at_width_m: float | None = None
         self.client.setPhysicsEngineParameter(
             fixedTimeStep=physics.time_step_s, numSolverIterations=physics.solver_iterations
         )
@@ -197,8 +195,6 @@ class WorkCell(CellBase):
             if self._recentre_at_width_m is not None and self.gripper.width() >= self._recentre_at_width_m:
                 self._set_grasp_offset(0.0)
                 self._recentre_at_width_m = None
-            if self._loosen_at_width_m is not None and self.gripper.width() >= self._loosen_at_width_m:
-                self._solve_grip(False)
         self._steps += control_periods * self._substeps
 
     def _apply_friction_field(self) -> None:
@@ -283,14 +279,13 @@ class WorkCell(CellBase):
             self._light_parts = True
 
     def _solve_grip(self, gripping: bool) -> None:
-        """The contact solve's iterations from a grasp's close (``gripping``) and once its release has opened.
+        """The contact solve's iterations from a grasp's close (``gripping``) until the pads are narrowed for a push.
 
         Gripping, with a light part in the cell: ``light_part_solver_iterations``, so that the
         squeeze converges; else ``solver_iterations``, at which the pushes (open pads) were measured.
         """
         physics = self.config.physics
         wanted = physics.light_part_solver_iterations if gripping and self._light_parts else physics.solver_iterations
-        self._loosen_at_width_m = None
         if wanted != self.solver_iterations:
             self.solver_iterations = wanted
             self.client.setPhysicsEngineParameter(numSolverIterations=wanted)
@@ -391,7 +386,7 @@ class WorkCell(CellBase):
         The gear constraint keeps the two fingers that far apart from symmetric until the next grasp
         (``relativePositionTarget`` is the left joint's value minus the right's: twice the offset).
         No offset in the ideal cell. In either, a light part is gripped under more of the contact
-        solve (``PhysicsConfig.light_part_solver_iterations``) until the release has opened.
+        solve (``PhysicsConfig.light_part_solver_iterations``) until the pads are set for a push.
         """
         self._solve_grip(True)
         if self._grasp_offset_rng is None:
@@ -410,9 +405,11 @@ class WorkCell(CellBase):
         """
         if self.grasp_offset_m != 0.0:
             self._recentre_at_width_m = opening_m - 0.002 - 2 * abs(self.grasp_offset_m)
-        if self.solver_iterations != self.config.physics.solver_iterations:
-            # Not at once: the part is let go under the solve that held it.
-            self._loosen_at_width_m = opening_m - 0.002
+        if opening_m < self.gripper.width() - 0.001:
+            # Open pads narrowed for a push: the pushes were measured at the cell's own solve (at 150
+            # a fragment's stopped converging). A release, which widens them, keeps the grip's: the
+            # part is let go, and the arm leaves and looks, under the solve that held it.
+            self._solve_grip(False)
 
     def _set_grasp_offset(self, offset_m: float) -> None:
         self.grasp_offset_m = offset_m
