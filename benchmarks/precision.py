@@ -15,10 +15,11 @@ sums every part up against the issue's targets: within 0.3 mm and 0.3 deg by tru
 ``--cell real`` runs them in the real-cell model (``CellConfig.real``, its per-run errors seeded by
 each seed, as ``bt-arrange run --cell real --seed N``) with a calibrated camera (issue 38, item 5):
 ``--calibration FILE``, or, without it, one made first as a user would (``bt-arrange calibrate
---cell real --views 20``, its summary printed). ``--plan-thresholds`` keeps each plan's own thresholds;
-``--as-shipped`` runs the plans as shipped: their own thresholds (the examples': 1 mm and 1 deg, 0.8 mm and 0.8 deg) and the fresco's own fracture
-(seed 3), only the scene varying with the seed (``bt-arrange run fresco --seed N``). The summary
-counts the parts within their run's thresholds by truth (``within_threshold_truth``).
+--cell real --views 20``, its summary printed). ``--plan-thresholds`` keeps each plan's own
+thresholds; ``--as-shipped`` runs the plans as shipped: their own thresholds (the examples': 1 mm
+and 1 deg, 0.8 mm and 0.8 deg) and the fresco's own fracture (seed 3), only the scene varying with
+the seed (``bt-arrange run fresco --seed N``). The summary counts the parts within their run's
+thresholds by truth (``within_threshold_truth``).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ MAX_MM, MAX_DEG, MEAN_MM = 0.3, 0.3, 0.15
 def plan_text(
     name: str, seed: int, threshold_mm: float | None, yaw_threshold_deg: float | None, fracture: bool = True
 ) -> str:
-    """The plan with its thresholds replaced (None: its own); a fresco's scene, and its fracture unless not ``fracture``, from ``seed``."""
+    """The plan, its thresholds replaced (None: its own); a fresco's scene (and fracture, if ``fracture``) from ``seed``."""
     text = PLANS[name].read_text()
     if threshold_mm is not None:
         text = re.sub(r"(?m)^threshold_mm = [\d.]+", f"threshold_mm = {threshold_mm:g}", text)
@@ -179,7 +180,9 @@ def main() -> None:
     print(json.dumps({"summary": summary(runs)}))
 
 
-def measure(args: argparse.Namespace, threshold_mm: float | None, yaw_deg: float | None, calibration: Path | None) -> list[dict]:
+def measure(
+    args: argparse.Namespace, threshold_mm: float | None, yaw_deg: float | None, calibration: Path | None
+) -> list[dict]:
     """Every plan at every seed, each printed as it ends."""
     runs = []
     for name in args.plans:

@@ -255,8 +255,14 @@ def test_at_a_coarse_threshold_a_push_that_would_leave_the_part_blocked_beside_i
         names[0], pytest.approx(1.0), pytest.approx(-DIAGONAL_ACROSS_RATIO)
     )
     # Left half the threshold beside its place or less, or with every push free: the push by the projection.
-    assert Push.plan_square_push((1.0, -0.35), pushes, free, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -0.35), pushes, free, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
     every = tuple(pushes)
-    assert Push.plan_square_push((1.0, -1.0), pushes, every, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(1.0))
+    assert Push.plan_square_push((1.0, -1.0), pushes, every, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(1.0)
+    )
     # Far from the target (a staged part on its way home) the long push is made as chosen.
-    assert Push.plan_square_push((10.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(names[0], pytest.approx(10.0))
+    assert Push.plan_square_push((10.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(
+        names[0], pytest.approx(10.0)
+    )

@@ -76,7 +76,8 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         if width_m > low_m:
             return True
         self.feedback_message = (
-            f"the part left the gripper: fingers at {width_m * 1000:.1f} mm, under the {low_m * 1000:.1f} mm of a held part"
+            f"the part left the gripper: fingers at {width_m * 1000:.1f} mm, "
+            f"under the {low_m * 1000:.1f} mm of a held part"
         )
         gripper.open(gripper.max_width_m)
         return False

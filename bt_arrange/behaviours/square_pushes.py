@@ -103,7 +103,9 @@ def plan_square_push(
             and threshold_mm is not None
             and float(np.hypot(*offset)) <= LONG_PUSH_MM
             and beside > threshold_mm / 2
-            and isinstance(choose_square_push((float(left[0]), float(left[1])), pushes, towards, min_push_mm, False), Blocked)
+            and isinstance(
+                choose_square_push((float(left[0]), float(left[1])), pushes, towards, min_push_mm, False), Blocked
+            )
         ):
             better = [item for item in _slanted(offset, pushes, free, min_push_mm) if item[0] < beside - min_push_mm]
             if better:
@@ -155,8 +157,10 @@ def _left_by(offset: np.ndarray, pushes: dict[str, SquarePush], move: SquareMove
 def _slanted(
     offset: np.ndarray, pushes: dict[str, SquarePush], free: list[str], min_push_mm: float
 ) -> list[tuple[float, float, SquareMove]]:
-    """Each free push by the offset's projection, its pads moving across by what lies beside it (at most
-    ``DIAGONAL_ACROSS_RATIO`` of the push): (what it leaves beside the place (mm), across per along, the move).
+    """Each free push by the offset's projection, its pads moving across by what lies beside it.
+
+    At most ``DIAGONAL_ACROSS_RATIO`` of the push across; each as (what it leaves beside the place
+    (mm), across per along, the move).
     """
     slanted: list[tuple[float, float, SquareMove]] = []
     for name in free:
