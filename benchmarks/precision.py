@@ -48,7 +48,7 @@ MAX_MM, MAX_DEG, MEAN_MM = 0.3, 0.3, 0.15
 def plan_text(
     name: str, seed: int, threshold_mm: float | None, yaw_threshold_deg: float | None, fracture: bool = True
 ) -> str:
-    """The plan, its thresholds replaced (None: its own); a fresco's scene (and fracture, if ``fracture``) from ``seed``."""
+    """The plan, thresholds replaced (None: its own); a fresco's scene (and fracture if ``fracture``) from ``seed``."""
     text = PLANS[name].read_text()
     if threshold_mm is not None:
         text = re.sub(r"(?m)^threshold_mm = [\d.]+", f"threshold_mm = {threshold_mm:g}", text)
