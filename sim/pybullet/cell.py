@@ -263,7 +263,7 @@ class WorkCell(CellBase):
             picture_uv=picture_uv,
         )
         self.object_types[name] = object_type
-        self._solve_for(built)
+        self._note_light_part(built)
         if self.config.physics.parts_sleep:
             self.client.changeDynamics(
                 self.parts[name],
@@ -273,7 +273,7 @@ class WorkCell(CellBase):
             )
         return name
 
-    def _solve_for(self, object_type: ObjectType) -> None:
+    def _note_light_part(self, object_type: ObjectType) -> None:
         """Note a part lighter than ``PhysicsConfig.light_part_mass_kg``: the pads' grip on it needs more iterations."""
         if mass_of(object_type) < self.config.physics.light_part_mass_kg:
             self._light_parts = True
