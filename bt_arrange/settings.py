@@ -37,6 +37,11 @@ class ManipulationSettings:
     approach_height_m: float = 0.10
     #: A taller part raises the moves above the table: the TCP stays at least this far above its top.
     approach_clearance_m: float = 0.05
+    #: Issue 36: a tree built for a plan of parts all lower than a cube moves above the table at
+    #: ``approach_clearance_m`` over the plan's tallest part instead (0.07 m for 20 mm parts: the pads'
+    #: bottoms as far above them as above a cube at 0.10 m; shorter descents, lifts and lowerings).
+    #: False keeps ``approach_height_m`` as the floor: for a table holding taller things than the plan's parts.
+    approach_over_plan: bool = True
     #: The held part is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
     #: Layers (issue 33): a part released on others is let go at least this far above its support. A
@@ -226,6 +231,18 @@ class ManipulationSettings:
     def finest_threshold_mm(self) -> float:
         """The smallest threshold a tree takes (mm): ``min_threshold_mm`` at ``finest_push_m``."""
         return math.sqrt(2.0) * self.finest_push_m * 1000
+
+    def for_tallest_part(self, height_m: float) -> ManipulationSettings:
+        """These settings for a plan whose tallest part's top is ``height_m`` above the table.
+
+        With ``approach_over_plan``, the approach comes down to ``approach_clearance_m`` over that top
+        when it is lower than ``approach_height_m``; a taller plan keeps these settings (the shapes'
+        own heights raise it, ``tcp_heights_m``).
+        """
+        approach_m = height_m + self.approach_clearance_m
+        if not self.approach_over_plan or approach_m >= self.approach_height_m:
+            return self
+        return replace(self, approach_height_m=approach_m)
 
     def for_threshold(self, threshold_mm: float) -> ManipulationSettings:
         """These settings for a run to ``threshold_mm``: the shortest push and the least gap between targets.

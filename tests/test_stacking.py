@@ -213,3 +213,38 @@ def test_a_raised_part_among_neighbours_is_picked_off_its_support_as_the_layout_
     # Two identical green cubes: the inspection after placing it again tells it from its twin.
     again = next(n for n in nodes(green, Inspect) if n.name == "inspect green 2 after placing it on its support again")
     assert len(again.kind_targets) == 2
+
+
+# -- issue 36: flat parts come down to the approach clearance over the tallest --------------------
+
+
+@pytest.mark.parametrize(
+    ("example", "approach_m"),
+    [("irregular_parts", 0.07), ("near_symmetric", 0.07), ("four_cubes", 0.10), ("fresco", 0.10)],
+)
+def test_a_plan_of_flat_parts_placed_free_moves_above_the_table_at_the_clearance_over_its_tallest(
+    example: str, approach_m: float
+) -> None:
+    """Flat parts placed free come down to 5 cm over the tallest; cubes, and pieces among neighbours, do not."""
+    root = plans.load(examples_path(example)).create_root()
+    assert root.settings.approach_height_m == pytest.approx(approach_m)
+
+
+def test_the_approach_over_the_plan_can_be_turned_off_and_never_rises_above_the_setting() -> None:
+    settings = ManipulationSettings()
+    assert settings.for_tallest_part(0.02).approach_height_m == pytest.approx(0.07)
+    assert settings.for_tallest_part(0.08) is settings, "a taller part raises it through the shape's own height"
+    kept = ManipulationSettings(approach_over_plan=False)
+    assert kept.for_tallest_part(0.02) is kept
+
+
+@pytest.mark.parametrize(("example", "approach_m"), [("irregular_parts", 0.07), ("tower", 0.25)])
+def test_a_plan_exported_to_xml_moves_above_the_table_at_the_plans_own_height(
+    example: str, approach_m: float, tmp_path: Path
+) -> None:
+    from bt_arrange import treefile, xmltree
+
+    exported = tmp_path / f"{example}.xml"
+    exported.write_text(xmltree.to_xml(treefile.build_root(treefile.load(examples_path(example))), tree_id=example))
+    root = treefile.build_root(treefile.load(exported))
+    assert root.settings.approach_height_m == pytest.approx(approach_m)

@@ -16,6 +16,7 @@
 | ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
 | ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
 | ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
+| ``/<obj>/grasp_half_turn`` | ``bool``, the gripper holds it half a turn round (issue 36) | Pick | Place |
 | ``/<obj>/top_height_error_mm`` | ``float``, raised top face (depth) minus planned height | CheckStanding | reports |
 | ``/<obj>/tilt_deg`` | ``float``, the tilt of a raised part's top face from depth | CheckStanding | reports |
 """
@@ -43,6 +44,9 @@ MOVED_MM = "moved_mm"
 MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
 LAST_PUSH = "last_push"
+#: Issue 36: Pick takes a part without half-turn symmetry with the gripper turned half a turn when
+#: that turns the last wrist joint less over the pick, the carry and the look after it.
+GRASP_HALF_TURN = "grasp_half_turn"
 #: Layers (issue 33): written by ``CheckStanding``.
 TOP_HEIGHT_ERROR_MM = "top_height_error_mm"
 TILT_DEG = "tilt_deg"

@@ -8,12 +8,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import numpy as np
 from py_trees.common import Status
 
 from bt_arrange.behaviours.base import GripperStage
 from bt_arrange.behaviours.context import Context
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.motion import LinearMotion, Motion, gripper_down_pose, nearest_symmetric_yaw
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, LinearMotion, Motion, gripper_down_pose, nearest_symmetric_yaw
+from bt_arrange.motion.bounds import joint_move_bound_s
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Grasp, preferred_grasp
@@ -32,12 +34,21 @@ class JointMovePlan:
     moving_start = True
 
     def __init__(
-        self, target: Callable[[Context], Pose | FloatArray], free: bool = False, carrying: bool = False
+        self,
+        target: Callable[[Context], Pose | FloatArray],
+        free: bool = False,
+        carrying: bool = False,
+        via_home: bool = False,
     ) -> None:
-        """Move to ``target(context)`` (read when the move starts)."""
+        """Move to ``target(context)`` (read when the move starts).
+
+        ``via_home``: the move is followed by one home (a look): its last wrist joint takes whichever
+        way round, a whole turn either side, that makes the two moves the shortest (``toward_home_q``).
+        """
         self._target = target
         self._free = free
         self._carrying = carrying
+        self._via_home = via_home
 
     def __call__(
         self,
@@ -50,6 +61,8 @@ class JointMovePlan:
         s = context.settings
         limits = s.free_joint_limits if self._free else s.carry_joint_limits if self._carrying else None
         target = self._target(context)
+        if isinstance(target, Pose) and self._via_home:
+            target = toward_home_q(context, q, context.planner.kinematics.inverse(target, q))
         if isinstance(target, Pose):
             return context.planner.move_to_pose(
                 q,
@@ -64,11 +77,43 @@ class JointMovePlan:
 
 
 def to_pose(
-    x_m: float, y_m: float, z_m: float, yaw_rad: float, free: bool = False, carrying: bool = False
+    x_m: float,
+    y_m: float,
+    z_m: float,
+    yaw_rad: float,
+    free: bool = False,
+    carrying: bool = False,
+    via_home: bool = False,
 ) -> JointMovePlan:
     """A stage planner: a joint-space move to a gripper-down pose (fast, path free; ``JointMovePlan``)."""
     pose = gripper_down_pose(x_m, y_m, z_m, yaw_rad)
-    return JointMovePlan(lambda context: pose, free=free, carrying=carrying)
+    return JointMovePlan(lambda context: pose, free=free, carrying=carrying, via_home=via_home)
+
+
+def toward_home_q(context: Context, start_q: FloatArray, target_q: FloatArray) -> FloatArray:
+    """``target_q``, or it with the last wrist joint a whole turn either way: the one soonest reached and left home.
+
+    The TCP's pose is the same for all three. Costed by the moves' lower bounds at the free-space
+    limits (``bt_arrange.motion.bounds``), from ``start_q`` and then to ``context.home_q``; a turn
+    outside the joint's limits is not taken, and ``target_q`` wins a tie.
+    """
+    limits = context.settings.free_joint_limits
+    wrist = len(target_q) - 1
+    best, best_s = target_q, math.inf
+    for turns in (0, -1, 1):
+        q = np.array(target_q, dtype=float)
+        q[wrist] += 2.0 * math.pi * turns
+        if not limits.lower_rad[wrist] <= q[wrist] <= limits.upper_rad[wrist]:
+            continue
+        seconds = joint_move_bound_s(start_q, q, limits) + joint_move_bound_s(q, context.home_q, limits)
+        if seconds < best_s - 1e-9:
+            best, best_s = q, seconds
+    return best
+
+
+def half_turn_free(object_type: ObjectType) -> bool:
+    """True when the part looks the same turned half a turn (a cuboid): the gripper's own half turn is then free."""
+    return object_type.shape.symmetry_rad <= GRIPPER_SYMMETRY_RAD + 1e-9
 
 
 def line_nearly_done(remaining_m: float | None = None) -> Callable[[Context, Motion], bool]:
@@ -133,20 +178,29 @@ def grasp_of(settings: ManipulationSettings, object_type: ObjectType) -> Grasp:
 
 
 def free_grasp_pose(
-    settings: ManipulationSettings, object_type: ObjectType, x_m: float, y_m: float, yaw_rad: float, wrist_rad: float
+    settings: ManipulationSettings,
+    object_type: ObjectType,
+    x_m: float,
+    y_m: float,
+    yaw_rad: float,
+    wrist_rad: float,
+    half_turn: bool = False,
 ) -> tuple[float, float, float]:
     """The TCP's (x, y, gripper yaw) for the part's grasp with the part at ``(x, y, yaw)``, turning the wrist least.
 
     The grasp's yaw is taken modulo the shape's symmetry. A grasp centred on the part (a cuboid's)
     stands the TCP at the part's origin; an off-centre one (an irregular part's) at its centre,
-    turned with the part. The gripper's own half turn is not taken: the part's turn in the pads
-    is then the same at the pick and at the place, which each compute it from this alone.
+    turned with the part. ``half_turn``: the gripper turned half a turn on the same grasp (the pads
+    swap sides; the same for a cuboid). Pick chooses it (``/<obj>/grasp_half_turn``) and Place
+    reads it, so the part's turn in the pads is the same at the pick and at the place.
     """
     grasp = grasp_of(settings, object_type)
-    yaw = nearest_symmetric_yaw(yaw_rad + grasp.yaw_offset_rad, wrist_rad, object_type.shape.symmetry_rad)
+    turn_rad = math.pi if half_turn else 0.0
+    yaw = nearest_symmetric_yaw(yaw_rad + grasp.yaw_offset_rad + turn_rad, wrist_rad, object_type.shape.symmetry_rad)
     if grasp.centre_m == (0.0, 0.0):
         return x_m, y_m, yaw
-    part_yaw = yaw - grasp.yaw_offset_rad  # the turn of the part, within its symmetry, this grasp is taken at
+    # The turn of the part, within its symmetry, this grasp is taken at.
+    part_yaw = yaw - grasp.yaw_offset_rad - turn_rad
     c, s = math.cos(part_yaw), math.sin(part_yaw)
     cx, cy = grasp.centre_m
     return x_m + c * cx - s * cy, y_m + s * cx + c * cy, yaw

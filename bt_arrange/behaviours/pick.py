@@ -18,6 +18,7 @@ from bt_arrange.behaviours.moves import (
     close_stage,
     free_grasp_pose,
     grasp_width_m,
+    half_turn_free,
     heights_m,
     line_nearly_done,
     line_to,
@@ -26,18 +27,25 @@ from bt_arrange.behaviours.moves import (
     open_stage,
     slow_close_from_m,
     to_pose,
+    toward_home_q,
     wrist_yaw_rad,
 )
-from bt_arrange.geometry import FloatArray, PlanarPose, Pose
+from bt_arrange.errors import BtArrangeError
+from bt_arrange.geometry import FloatArray, PlanarPose, Pose, fold_yaw
 from bt_arrange.layout import Release
-from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, nearest_symmetric_yaw
+from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
+from bt_arrange.motion.bounds import joint_move_bound_s
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.ports import RELEASE, Port
+from bt_arrange.ports import BOOL, RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
 
 #: Pick's success feedback holds this when it squared a part it had pinched across its corners.
 SQUARED_FEEDBACK = "squared from a"
+#: A part without half-turn symmetry is taken with the gripper half a turn round when that makes the
+#: joint moves to it, to its target and home for the look after at least this much shorter (s, by
+#: their lower bounds): the last wrist joint otherwise turns up to a whole turn there and back.
+HALF_TURN_GAIN_S = 0.05
 
 
 class Pick(StagedBehaviour):
@@ -85,7 +93,15 @@ class Pick(StagedBehaviour):
             "axis of the target's frame (empty: the free grasp)",
             optional=True,
         )
-        return (OBJ, OBJECT_TYPE_PORT, grasp, Z_PORT)
+        nearest_grasp = Port(
+            "nearest_grasp",
+            BOOL,
+            False,
+            "the wrist's nearest grasp always (false: a part without half-turn symmetry may be taken with the "
+            "gripper half a turn round when the wrist then turns less to it, to its target and home)",
+            optional=True,
+        )
+        return (OBJ, OBJECT_TYPE_PORT, grasp, Z_PORT, nearest_grasp)
 
     def __init__(
         self,
@@ -94,9 +110,12 @@ class Pick(StagedBehaviour):
         object_type: ObjectType | None = None,
         grasp: Release | None = None,
         z_m: float = 0.0,
+        nearest_grasp: bool = False,
     ) -> None:
         super().__init__(name)
         self.obj = obj
+        #: Issue 36: True keeps a free grasp to the wrist's nearest, never the half turn (``_half_turn_shorter``).
+        self.nearest_grasp = bool(nearest_grasp)
         #: Layers (issue 33): the height of the part's bottom face where it is picked (0: the table).
         self.z_m = float(z_m)
         #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
@@ -105,6 +124,9 @@ class Pick(StagedBehaviour):
         self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
         if grasp is not None:
             self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
+        else:
+            self.reads(keys.key(obj, keys.TARGET))  # optional: where the part goes, to choose the half turn
+        self.writes(keys.key(obj, keys.GRASP_HALF_TURN))
         self.grip_width_m: float | None = None
         self.bad_grasp: str | None = None
         #: The first close's width when the pads pinched a turned part and Pick squared it (m), else None.
@@ -122,18 +144,19 @@ class Pick(StagedBehaviour):
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
         if self.grasp is None:
-            x, y, yaw = free_grasp_pose(s, kind, x, y, pose.yaw_rad, wrist_yaw_rad(context))
+            half_turn = self._half_turn_shorter(context, pose, approach_m)
+            x, y, yaw = free_grasp_pose(s, kind, x, y, pose.yaw_rad, wrist_yaw_rad(context), half_turn)
         else:
             target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
             # The turn of the part's measured yaw (modulo its symmetry) whose closing axis is the chosen one.
             offset_rad = axis_yaw_offset_rad(self.grasp.axis)
             across = target.yaw_rad + offset_rad
-            yaw = nearest_symmetric_yaw(
-                nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.shape.symmetry_rad),
-                wrist_yaw_rad(context),
-                GRIPPER_SYMMETRY_RAD,
-            )
+            grasp_yaw = nearest_symmetric_yaw(pose.yaw_rad + offset_rad, across, kind.shape.symmetry_rad)
+            yaw = nearest_symmetric_yaw(grasp_yaw, wrist_yaw_rad(context), GRIPPER_SYMMETRY_RAD)
+            # The wrist's nearest half turn may hold a part without half-turn symmetry the other way round.
+            half_turn = not half_turn_free(kind) and abs(fold_yaw(yaw - grasp_yaw, 2.0 * math.pi)) > math.pi / 2
             opening_m = self.grasp.opening_m
+        self.write(keys.key(self.obj, keys.GRASP_HALF_TURN), half_turn)
         self.squared_from_width_m = None
         self._sweep_m = np.zeros(2)
         self.wrist_turn_rad = 0.0
@@ -170,6 +193,41 @@ class Pick(StagedBehaviour):
             MoveStage(stage.LIFT_PART, lift_plan, hand_on=line_nearly_done(s.hand_on_remaining_m)),
             InstantStage(stage.CONFIRM_GRASP, lambda c: self.bad_grasp),
         ]
+
+    def _half_turn_shorter(self, context: Context, pose: Pose, approach_m: float) -> bool:
+        """Take a part without half-turn symmetry with the gripper half a turn round, when that is shorter.
+
+        Costed, each way round, by the lower bounds of the joint moves above the part, above its
+        target (``/<obj>/target``, when the tree has written it) and home for the look after
+        (``toward_home_q``); the half turn must save ``HALF_TURN_GAIN_S``. A cuboid, or a pick with
+        no target yet, keeps the wrist's nearest grasp.
+        """
+        target_key = keys.key(self.obj, keys.TARGET)
+        kind = self.object_type
+        if self.nearest_grasp or half_turn_free(kind) or not self.blackboard.exists(target_key):
+            return False
+        target: PlanarPose = self.blackboard.get(target_key)
+        s = context.settings
+        kinematics = context.planner.kinematics
+        limits = s.free_joint_limits
+        start_q = context.robot.arm.joint_positions()
+        wrist_rad = wrist_yaw_rad(context)
+        seconds: dict[bool, float] = {}
+        for half_turn in (False, True):
+            x, y, yaw = free_grasp_pose(s, kind, pose.x_m, pose.y_m, pose.yaw_rad, wrist_rad, half_turn)
+            tx, ty, target_yaw = free_grasp_pose(s, kind, target.x_m, target.y_m, target.yaw_rad, yaw, half_turn)
+            try:
+                above_q = kinematics.inverse(gripper_down_pose(x, y, approach_m, yaw), start_q)
+                place_q = kinematics.inverse(gripper_down_pose(tx, ty, approach_m, target_yaw), above_q)
+            except BtArrangeError:
+                continue  # that way round is out of reach: the other (or the stage's own error) decides
+            place_q = toward_home_q(context, above_q, place_q)
+            seconds[half_turn] = (
+                joint_move_bound_s(start_q, above_q, limits)
+                + joint_move_bound_s(above_q, place_q, limits)
+                + joint_move_bound_s(place_q, context.home_q, limits)
+            )
+        return True in seconds and seconds[True] < seconds.get(False, math.inf) - HALF_TURN_GAIN_S
 
     def _reclose_stages(self, s: ManipulationSettings, opening_m: float) -> list[Stage]:
         """After a fast close that left the part a little turned in the pads: open just clear of it, close slowly.

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from bt_arrange.behaviours import keys
@@ -12,6 +14,7 @@ from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
     free_grasp_pose,
+    half_turn_free,
     heights_m,
     line_nearly_done,
     line_to,
@@ -81,6 +84,7 @@ class Place(StagedBehaviour):
         self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
         if where == "pick":
             self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
+        self.reads(keys.key(obj, keys.GRASP_HALF_TURN))  # optional: False (the wrist's nearest grasp) without it
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -90,18 +94,22 @@ class Place(StagedBehaviour):
         grasp_m, approach_m, _ = heights_m(s, kind, self.z_m)
         x, y = target.x_m, target.y_m
         opening_m = release_opening_m(s, kind)
+        half_turn_key = keys.key(self.obj, keys.GRASP_HALF_TURN)
+        half_turn = bool(self.blackboard.get(half_turn_key)) if self.blackboard.exists(half_turn_key) else False
         if self.where == "pick":
             picked: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
-            x, y, yaw = free_grasp_pose(s, kind, picked.x_m, picked.y_m, picked.yaw_rad, wrist_yaw_rad(context))
+            x, y, yaw = free_grasp_pose(
+                s, kind, picked.x_m, picked.y_m, picked.yaw_rad, wrist_yaw_rad(context), half_turn
+            )
         elif self.release is None:
             # The grasp squared the part to the pads, so the target yaw modulo the shape's symmetry
             # will do (any quarter turn for a square top, a half turn otherwise); an off-centre grasp
             # brings the TCP to where that grasp's centre lies with the part at its target.
-            x, y, yaw = free_grasp_pose(s, kind, x, y, target.yaw_rad, wrist_yaw_rad(context))
+            x, y, yaw = free_grasp_pose(s, kind, x, y, target.yaw_rad, wrist_yaw_rad(context), half_turn)
         else:
             offset = rotation_z(target.yaw_rad) @ np.array([*self.release.offset_m, 0.0])
             x, y = x + float(offset[0]), y + float(offset[1])
-            across = target.yaw_rad + axis_yaw_offset_rad(self.release.axis)
+            across = target.yaw_rad + axis_yaw_offset_rad(self.release.axis) + (math.pi if half_turn else 0.0)
             # The gripper's half turn is free only when the part looks the same turned so (a cuboid):
             # an irregular part held turned by it would land turned by it.
             symmetry_rad = max(GRIPPER_SYMMETRY_RAD, kind.shape.symmetry_rad)
@@ -110,7 +118,13 @@ class Place(StagedBehaviour):
         return [
             # At the UR5's joint speeds, whether the grasp holds the part through its centre of mass
             # or off it (an irregular part's): measured, the inertia did not turn a part in the pads.
-            MoveStage(stage.CARRY_ABOVE_TARGET, to_pose(x, y, approach_m, yaw, carrying=True)),
+            # A look follows: a part without half-turn symmetry placed free is carried turning the
+            # wrist the way round that, with the park after, turns it least (a cuboid's turn is a
+            # quarter at most). Among neighbours, and set down to be looked at, as the layout planned.
+            MoveStage(
+                stage.CARRY_ABOVE_TARGET,
+                to_pose(x, y, approach_m, yaw, carrying=True, via_home=self._free_transfer(kind)),
+            ),
             MoveStage(stage.LOWER_PART, line_to(x, y, grasp_m + release_clearance_m(s, self.z_m), yaw)),
             self._release_stage(opening_m, free=self.release is None, raised=self.z_m > 0.0),
             MoveStage(
@@ -119,6 +133,10 @@ class Place(StagedBehaviour):
                 hand_on=line_nearly_done(s.hand_on_remaining_m),
             ),
         ]
+
+    def _free_transfer(self, kind: ObjectType) -> bool:
+        """A part without half-turn symmetry placed at its target, not among neighbours (issue 36)."""
+        return not half_turn_free(kind) and self.release is None and self.where == "target"
 
     @staticmethod
     def _release_stage(opening_m: float, free: bool, raised: bool = False) -> GripperStage:
