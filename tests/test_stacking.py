@@ -248,3 +248,21 @@ def test_a_plan_exported_to_xml_moves_above_the_table_at_the_plans_own_height(
     exported.write_text(xmltree.to_xml(treefile.build_root(treefile.load(examples_path(example))), tree_id=example))
     root = treefile.build_root(treefile.load(exported))
     assert root.settings.approach_height_m == pytest.approx(approach_m)
+
+
+@pytest.mark.parametrize(("example", "nearest"), [("irregular_parts", False), ("fresco", True)])
+def test_parts_neighbours_are_placed_beside_keep_the_wrists_nearest_grasp_and_turn(example: str, nearest: bool) -> None:
+    """Issue 36: the half turn and the short way round are for parts placed free; among neighbours as planned."""
+    from bt_arrange.behaviours import Pick, Place
+
+    root = plans.load(examples_path(example)).create_root()
+    # The transfers (a part picked up again after a miss takes the free choice either way).
+    picks = [n for n in root.iterate() if isinstance(n, Pick) and n.grasp is None and "again" not in n.name]
+    places = [
+        n
+        for n in root.iterate()
+        if isinstance(n, Place) and n.release is None and n.where == "target" and "again" not in n.name
+    ]
+    assert picks and {p.nearest_grasp for p in picks} == {nearest}
+    if places:
+        assert {p.nearest_turn for p in places} == {nearest}

@@ -29,7 +29,7 @@ from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.ports import RELEASE, STRING, Port
+from bt_arrange.ports import BOOL, RELEASE, STRING, Port
 
 
 class Place(StagedBehaviour):
@@ -60,7 +60,15 @@ class Place(StagedBehaviour):
             optional=True,
         )
         where = Port("where", STRING, "target", "target, or pick: set down where it was picked", optional=True)
-        return (OBJ, OBJECT_TYPE_PORT, release, where, Z_PORT)
+        nearest_turn = Port(
+            "nearest_turn",
+            BOOL,
+            False,
+            "the wrist's nearest way round for the carry always (false: a part without half-turn symmetry "
+            "placed free is carried the way round that, with the park after it, turns the wrist least)",
+            optional=True,
+        )
+        return (OBJ, OBJECT_TYPE_PORT, release, where, Z_PORT, nearest_turn)
 
     def __init__(
         self,
@@ -70,8 +78,11 @@ class Place(StagedBehaviour):
         release: Release | None = None,
         where: str = "target",
         z_m: float = 0.0,
+        nearest_turn: bool = False,
     ) -> None:
         super().__init__(name)
+        #: Issue 36: True keeps the carry to the wrist's nearest way round (``toward_home_q`` otherwise).
+        self.nearest_turn = bool(nearest_turn)
         #: Layers (issue 33): the height of the support it is released on (0: the table); the lowering
         #: ends with the part's bottom ``release_clearance_m`` above it, the pads clear of the layer below.
         self.z_m = float(z_m)
@@ -136,7 +147,7 @@ class Place(StagedBehaviour):
 
     def _free_transfer(self, kind: ObjectType) -> bool:
         """A part without half-turn symmetry placed at its target, not among neighbours (issue 36)."""
-        return not half_turn_free(kind) and self.release is None and self.where == "target"
+        return not (self.nearest_turn or half_turn_free(kind)) and self.release is None and self.where == "target"
 
     @staticmethod
     def _release_stage(opening_m: float, free: bool, raised: bool = False) -> GripperStage:

@@ -112,7 +112,9 @@ def arrange_one(
     restage = step.restage if dense and step is not None else None
     children: list[py_trees.behaviour.Behaviour] = [
         set_target(target),
-        transfer(target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release),
+        transfer(
+            target, max_regrasps, locate=locate, kind_targets=kind_targets, release=release, nearest=dense or rechecked
+        ),
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=kind_targets),
         # Layers (issue 33): a raised part must stand on its support; far off, it is placed again, not pushed.
         *layers.standing(target),
