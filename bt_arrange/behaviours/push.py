@@ -32,6 +32,7 @@ from bt_arrange.behaviours.square_pushes import (  # noqa: F401 - re-exported: P
     Blocked,
     SquareMove,
     choose_square_push,
+    cone_push,
     plan_square_push,
 )
 from bt_arrange.errors import BtArrangeError
@@ -308,8 +309,9 @@ class Push(StagedBehaviour):
     ) -> list[Stage] | None:
         """An irregular part's push: squarely onto one edge, the one whose push best closes the offset.
 
-        None when no square push closes an offset of a push or more and every one is free (no
-        neighbour beside the part): an axis push is made instead.
+        None when no square push closes an offset of a push or more and the part is free (no
+        opening among neighbours given): an axis push is made instead. Among neighbours with every
+        square push free, the larger of two that take the offset between them (``cone_push``).
         """
         s = context.settings
         self.across_m = 0.0
@@ -317,10 +319,18 @@ class Push(StagedBehaviour):
             offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000, self._turned(), self.threshold_mm
         )
         if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
-            if set(self.towards) >= set(self.square_pushes):
+            every_push_free = set(self.towards) >= set(self.square_pushes)
+            if every_push_free and self.opening_m is None:
                 return None
-            best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
-            choice = Blocked(best, math.hypot(*offset_xy_mm))
+            # Among neighbours (an opening given) the axis push is never made: its pads were not checked
+            # against them (a fresco piece 0.59 mm off across its pushes was pushed along y with the pads
+            # closed, and a neighbour moved 14 mm). Two square pushes take the offset between them.
+            cone = cone_push(offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000)
+            if every_push_free and cone is not None:
+                choice = SquareMove(*cone)
+            else:
+                best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
+                choice = Blocked(best, math.hypot(*offset_xy_mm), across_every_push=every_push_free)
         if isinstance(choice, Blocked):
             self.pushed = None
             self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)

@@ -222,6 +222,22 @@ def choose_square_push(
     return None
 
 
+def cone_push(
+    offset_xy_mm: tuple[float, float], pushes: dict[str, SquarePush], towards: tuple[str, ...], min_push_mm: float
+) -> tuple[str, float] | None:
+    """The larger share of the two free pushes whose headings take the offset between them (mm), or None.
+
+    For a part among neighbours whose offset no one square push closes (it lies across all of
+    them): the next push after this one closes the rest. None when no two free pushes take it
+    between them, or the larger share is below ``min_push_mm``.
+    """
+    shares = _free_cone_shares(np.asarray(offset_xy_mm, dtype=float), pushes, [n for n in pushes if n in towards])
+    if shares is None:
+        return None
+    chosen, distance_mm = max(shares, key=lambda share: share[1])
+    return (chosen, distance_mm) if distance_mm >= min_push_mm else None
+
+
 @dataclass(frozen=True)
 class SquareMove:
     """A square push: which (``Prism.named_pushes``' name), how far along its heading, how far across (mm).
@@ -241,9 +257,16 @@ class Blocked:
 
     towards: str
     offset_mm: float
+    #: Nothing blocks it: the offset lies across every square push, and no two take it between them.
+    across_every_push: bool = False
 
     def reason(self, obj: str) -> str:
         """The feedback: which side, and what happens next."""
+        if self.across_every_push:
+            return (
+                f"{obj} needs a push of {abs(self.offset_mm):.2f} mm across every square push it has, and no "
+                "two take it between them: among neighbours no other push is made"
+            )
         if self.towards.startswith("@"):
             return (
                 f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "

@@ -126,10 +126,13 @@ class SimGripper(CellGripper):
         import pybullet
 
         physics = self._cell.config.physics
+        held = self._unanchored_contacts()
         # The pads' friction anchors pin a held prism; opening, they pinned a stale contact point of its
         # hull too, whose normal no longer faced the pad, and held the fingers shut at 40 N (a kite wedged
         # at 40.2 mm of 85). A prism is let go without them; a box's release is as it was.
-        self._anchor_pads(physics.pad_contact.friction_anchor and not self._on_unanchored_part())
+        self._anchor_pads(physics.pad_contact.friction_anchor and not held)
+        if physics.fresh_prism_release_contacts:
+            self._refresh_contacts(held)
         for finger in self._fingers:
             self._client.setJointMotorControl2(
                 self._body,
@@ -187,15 +190,38 @@ class SimGripper(CellGripper):
 
     def _on_unanchored_part(self) -> bool:
         """Whether a pad touches a part whose contacts have no friction anchors."""
+        return bool(self._unanchored_contacts())
+
+    def _unanchored_contacts(self) -> list[tuple[int, int]]:
+        """(part body, finger link) of each pad touching a part whose contacts have no friction anchors (a prism)."""
         cell = self._cell
         if cell.config.physics.prism_contact.friction_anchor:
-            return False
+            return []
         unanchored = [cell.parts[n] for n, t in cell.object_types.items() if not t.shape.rectangular]
-        return any(
-            self._client.getContactPoints(self._body, body, linkIndexA=finger)
+        return [
+            (body, finger)
             for body in unanchored
             for finger in self._fingers
-        )
+            if self._client.getContactPoints(self._body, body, linkIndexA=finger)
+        ]
+
+    def _refresh_contacts(self, pairs: list[tuple[int, int]]) -> None:
+        """Make Bullet forget the contact points it keeps between these pads and parts; the next step finds them anew.
+
+        Bullet keeps a pair's contact points from step to step, each with the normal it had when
+        found, until the bodies drift 20 mm apart there (its breaking threshold). A prism's hull
+        squeezed by a pad can keep a point whose normal faces the wrong way; opening, that pad
+        pulled the part with it (a triangle dragged 8 mm and lifted on the retreat, a fragment
+        turned 1.5 deg). The pair's collision is switched off for one collision pass, which drops
+        its points, and on again: nothing moves, and the next step's contacts are the geometry's.
+        """
+        client = self._client
+        for body, finger in pairs:
+            client.setCollisionFilterPair(self._body, body, finger, -1, 0)
+        if pairs:
+            client.performCollisionDetection()
+        for body, finger in pairs:
+            client.setCollisionFilterPair(self._body, body, finger, -1, 1)
 
     def reset(self, width_m: float) -> None:
         """Put the fingers at rest at an opening (set-up only)."""

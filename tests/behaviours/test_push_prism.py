@@ -114,3 +114,27 @@ def test_among_neighbours_a_push_that_also_moves_across_meets_the_edge_straight_
     assert pushing[0, 1] == pytest.approx(0.0005, abs=1e-6)
     assert np.all(np.abs(pushing[pushing[:, 0] < contact_x - 0.001 - 1e-6, 1] - 0.0005) < 1e-6)
     assert float(np.interp(contact_x, pushing[:, 0], pushing[:, 1])) == pytest.approx(0.0, abs=2e-5)
+
+
+def test_among_neighbours_an_offset_across_every_square_push_is_never_pushed_along_an_axis(context: Context) -> None:
+    # The fallback above is for a free part: among neighbours (an opening given) its pads were never
+    # checked against them; with the pads closed, a fresco piece's axis push moved a neighbour 14 mm.
+    every = tuple(ELL.shape.named_pushes(ROBOTIQ_2F85))
+    push = setup(context, ELL, (-1.5, -1.5), towards=every, opening_m=0.03)
+    run = tick_until_done(push, context)
+    assert run.status == Status.FAILURE
+    assert run.feedback == (
+        "p needs a push of 2.12 mm across every square push it has, and no two take it between them: "
+        "among neighbours no other push is made"
+    )
+    assert fake_arm(context).commands == []
+
+
+def test_among_neighbours_an_offset_between_two_square_pushes_is_pushed_by_the_larger_share(context: Context) -> None:
+    names = {round(math.degrees(p.heading_rad)): n for n, p in TRIANGLE.shape.named_pushes(ROBOTIQ_2F85).items()}
+    # 0.21 mm off, no push closing 0.2 mm of it (the legs' 0.15 mm, the hypotenuse's 0): between the
+    # pushes at 0 and -135 deg, 0.30 mm and 0.21 mm.
+    push = setup(context, TRIANGLE, (0.15, -0.15), towards=tuple(names.values()), opening_m=0.03)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == f"pushed +0.30 mm squarely onto its edge 3 ({names[0][1:]} deg)"
