@@ -19,7 +19,13 @@ from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import Prism
 from bt_arrange.trees import Target, arrange_one
-from bt_arrange.trees.steps import MAX_TURNED_REGRASPS, REGRASP_YAW_DEG, regrasp_while_turned
+from bt_arrange.trees.steps import (
+    MAX_TURNED_REGRASPS,
+    REGRASP_ANY_YAW_DEG,
+    REGRASP_YAW_DEG,
+    regrasp_while_turned,
+    turned_limit_deg,
+)
 
 FRAGMENT_OUTLINE_M = [[0, 0], [0.045, 0.004], [0.060, 0.030], [0.035, 0.028], [0.030, 0.050], [0.005, 0.040]]
 FRAGMENT = ObjectType("fragment", shape=Prism.from_outline(FRAGMENT_OUTLINE_M, 0.02))
@@ -103,6 +109,29 @@ def test_an_irregular_part_s_tree_regrasps_between_the_inspect_after_placing_and
         f"regrasp orange while turned {REGRASP_YAW_DEG:g} deg or more"
     )
     assert names[-1].startswith("correct orange")
+
+
+@pytest.mark.parametrize(
+    ("yaw_threshold_deg", "rechecked", "limit_deg"),
+    [
+        (1.0, False, REGRASP_YAW_DEG),  # the example's 1 deg: turned 1.5 deg or more is placed again
+        (0.25, False, REGRASP_YAW_DEG),
+        (3.0, False, 3.0),  # never placed again while within the plan's own yaw threshold
+        (None, False, REGRASP_ANY_YAW_DEG),  # position only
+        (1.0, True, REGRASP_ANY_YAW_DEG),  # a later neighbour's recheck reads it again: as before
+    ],
+)
+def test_how_far_turned_a_free_part_is_placed_again(
+    yaw_threshold_deg: float | None, rechecked: bool, limit_deg: float
+) -> None:
+    assert turned_limit_deg(yaw_threshold_deg, rechecked) == limit_deg
+
+
+def test_a_plan_s_yaw_threshold_sets_the_regrasp_of_its_tree() -> None:
+    names = [child.name for child in arrange_one(ORANGE, yaw_threshold_deg=3.0).children]
+    assert "regrasp orange while turned 3 deg or more" in names
+    names = [child.name for child in arrange_one(ORANGE, yaw_threshold_deg=None).children]
+    assert f"regrasp orange while turned {REGRASP_ANY_YAW_DEG:g} deg or more" in names
 
 
 def test_a_cuboid_s_tree_has_no_regrasp() -> None:

@@ -56,6 +56,7 @@ from bt_arrange.trees.steps import (
     regrasp_while_turned,
     set_target,
     transfer,
+    turned_limit_deg,
 )
 from bt_arrange.trees.targets import (
     CORRECT_MODES,
@@ -121,7 +122,11 @@ def arrange_one(
         *layers.regrasp_while_far(target, release, kind_targets),
         # An irregular part turned in the pads by more than pushes correct is picked up again (a box's
         # grasp squares it, so its tree is the paper's). Among neighbours there is no room for a free pick.
-        *([] if dense or target.object_type.shape.rectangular else [regrasp_while_turned(target)]),
+        *(
+            []
+            if dense or target.object_type.shape.rectangular
+            else [regrasp_while_turned(target, yaw_limit_deg=turned_limit_deg(yaw_threshold_deg, rechecked))]
+        ),
         correction(
             target,
             threshold_mm,
