@@ -14,7 +14,10 @@ captures), ``physics`` (inside the world's stepping), ``perception`` (the detect
 benchmark only (``bt_arrange.timing``): an ordinary run is not instrumented.
 
 World time is attributed per tick to what the running behaviour was doing: following a motion,
-letting the arm settle after one, waiting for the fingers, or braking.
+letting the arm settle after one, waiting for the fingers, or braking. The table (without
+``--json``; ``stage_rows`` with it) lists each stage, or chain of motions handed on without
+stopping, with its world time and bound, each tick counted once: a stage ending two kinds of chain
+(a look's move out of the view after a retreat and after a push) counts in each only its own ticks.
 
 Beside it, a lower bound for the same waypoints (``BoundRecorder``, ``bt_arrange.motion.bounds``):
 every motion the run planned, as the time-optimal jerk-limited trajectory between the same joint
@@ -142,20 +145,51 @@ class BoundRecorder:
         self._seen: set[int] = set()
         self.finger_travel_m: dict[str, float] = defaultdict(float)
         self._width_m: float | None = None
+        #: World time (s) of the ticks spent on each motion (following it or settling after it), by the
+        #: motion's id; the other ticks by stage label. A stage that follows several motions (a look's
+        #: move out of the view after a retreat or after a push) is so counted once, in each chain.
+        self.world_by_motion: dict[int, float] = defaultdict(float)
+        self.world_elsewhere: dict[str, float] = defaultdict(float)
 
-    def on_tick(self, category: str, stage: str, node: py_trees.behaviour.Behaviour | None, context: Context) -> None:
-        """Record a newly planned motion, or the fingers' travel in a gripper stage."""
+    def on_tick(
+        self,
+        category: str,
+        stage: str,
+        node: py_trees.behaviour.Behaviour | None,
+        context: Context,
+        period_s: float = 0.0,
+    ) -> None:
+        """Record a newly planned motion, or the fingers' travel in a gripper stage, and the tick's world time."""
         width = context.robot.gripper.width()
         if category == "gripper" and self._width_m is not None:
             self.finger_travel_m[stage] += abs(width - self._width_m)
         self._width_m = width
-        if not isinstance(node, StagedBehaviour):
-            return
-        inner = _inner_stage(node)
+        inner = _inner_stage(node) if isinstance(node, StagedBehaviour) else None
         motion = getattr(inner, "motion", None)
-        if isinstance(inner, MoveStage) and motion is not None and id(motion) not in self._seen:
+        if not isinstance(inner, MoveStage) or motion is None:
+            self.world_elsewhere[stage] += period_s
+            return
+        self.world_by_motion[id(motion)] += period_s
+        if id(motion) not in self._seen:
             self._seen.add(id(motion))
             self.motions.append((stage, motion, np.asarray(getattr(inner, "start_q", motion.target_positions_rad))))
+
+    def rows(self) -> list[tuple[str, float, float]]:
+        """(stage or chain of handed-on stages, world time, bound) of the run, each tick counted once, longest first."""
+        bounds = self.bounds_by_stage()
+        world: dict[str, float] = defaultdict(float)
+        chain: list[tuple[str, object, np.ndarray]] = []
+        for entry in self.motions:
+            chain.append(entry)
+            if getattr(entry[1], "handed_on", False):
+                continue
+            label = " + ".join(dict.fromkeys(stage for stage, _, _ in chain))
+            world[label] += sum(self.world_by_motion[id(motion)] for _, motion, _ in chain)
+            chain = []
+        for stage, seconds in self.world_elsewhere.items():
+            world[stage] += seconds
+        labels = set(world) | set(bounds)
+        return sorted(((label, world.get(label, 0.0), bounds.get(label, 0.0)) for label in labels), key=lambda r: -r[1])
 
     def bounds_by_stage(self) -> dict[str, float]:
         """Seconds of lower bound per stage label; a chain of handed-on motions under its stages joined by " + "."""
@@ -226,7 +260,7 @@ def run_trial(tree_file: Path, seed: int) -> dict:
             category, stage = _stage_of(tree_root, context)
             world_by_category[category] += period_s
             world_by_stage[stage] += period_s
-            recorder.on_tick(category, stage, _running_node(tree_root), context)
+            recorder.on_tick(category, stage, _running_node(tree_root), context, period_s)
             bookkeeping_cpu_s[0] += time.process_time() - started_cpu
 
         def time_ticks(runner: Runner) -> None:
@@ -276,20 +310,13 @@ def run_trial(tree_file: Path, seed: int) -> dict:
         "world_s_by_activity": {k: round(v, 3) for k, v in sorted(world_by_category.items())},
         "world_s_by_stage": {k: round(v, 3) for k, v in sorted(world_by_stage.items(), key=lambda kv: -kv[1])},
         "bound_s_by_stage": {k: round(v, 3) for k, v in sorted(bound_by_stage.items(), key=lambda kv: -kv[1])},
+        "stage_rows": [[label, round(world, 3), round(bound, 3)] for label, world, bound in recorder.rows()],
     }
 
 
 def _stage_rows(trial: dict) -> list[tuple[str, float, float]]:
-    """(stage or chain of stages, world time, bound) for the table, longest first."""
-    world, bounds = trial["world_s_by_stage"], trial["bound_s_by_stage"]
-    rows = []
-    in_chains: set[str] = set()
-    for label, bound_s in bounds.items():
-        stages = label.split(" + ")
-        in_chains.update(stages)
-        rows.append((label, sum(world.get(stage, 0.0) for stage in stages), bound_s))
-    rows += [(stage, world_s, 0.0) for stage, world_s in world.items() if stage not in in_chains]
-    return sorted(rows, key=lambda row: -row[1])
+    """(stage or chain of stages, world time, bound) for the table, longest first: each tick counted once."""
+    return [(label, world_s, bound_s) for label, world_s, bound_s in trial["stage_rows"]]
 
 
 def _example_summary(trial: dict) -> dict:
