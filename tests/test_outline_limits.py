@@ -20,8 +20,6 @@ from bt_arrange.shapes import polygon
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85
 from bt_arrange.shapes.polygon import first_crossing, outline_problem, segments_cross
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _every_pair(points: np.ndarray) -> bool:
     """The check as it was (n^2 / 2 tests): True when two edges that are not neighbours meet."""
@@ -139,12 +137,9 @@ def test_a_plan_with_an_outline_over_the_limit_is_one_line_and_exit_2(
 
 def _round_part_mm(count: int, seed: int = 0) -> list[list[float]]:
     """A round part of ``count`` points the type check accepts: two flats joined by rippled arcs (millimetres)."""
-    import importlib.util
+    from benchmark_modules import load_benchmark
 
-    spec = importlib.util.spec_from_file_location("outline_limits", ROOT / "benchmarks" / "outline_limits.py")
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = load_benchmark("outline_limits.py")
     return (bench.round_part(count, seed) * 1000).round(4).tolist()
 
 
