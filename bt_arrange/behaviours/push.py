@@ -325,8 +325,9 @@ class Push(StagedBehaviour):
             # Among neighbours (an opening given) the axis push is never made: its pads were not checked
             # against them (a fresco piece 0.59 mm off across its pushes was pushed along y with the pads
             # closed, and a neighbour moved 14 mm). Two square pushes take the offset between them.
-            cone = cone_push(offset_xy_mm, self.square_pushes, self.towards, s.min_push_m * 1000)
-            if every_push_free and cone is not None:
+            min_push_mm = s.min_push_m * 1000
+            cone = cone_push(offset_xy_mm, self.square_pushes, self.towards, min_push_mm) if every_push_free else None
+            if cone is not None:
                 choice = SquareMove(*cone)
             else:
                 best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
