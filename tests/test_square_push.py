@@ -266,3 +266,17 @@ def test_at_a_coarse_threshold_a_push_that_would_leave_the_part_blocked_beside_i
     assert Push.plan_square_push((10.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(
         names[0], pytest.approx(10.0)
     )
+
+
+def test_two_nearly_opposite_pushes_never_take_an_offset_between_them() -> None:
+    # A slab whose right edge leans 1.1 deg: its left and right pushes are 178.9 deg apart, and a
+    # 1.19 mm offset across them lies "between" them only for 59.5 mm of travel each way (seed 25 of
+    # the tight gaps pushed a piece so, into two neighbours).
+    slab = Prism.from_outline([[0, 0], [0.05, 0], [0.05 + 0.05 * math.tan(math.radians(1.1)), 0.05], [0, 0.05]], 0.02)
+    pushes = slab.named_pushes(ROBOTIQ_2F85)
+    by_heading = {round(math.degrees(p.heading_rad), 1): n for n, p in pushes.items()}
+    sides = tuple(n for h, n in by_heading.items() if abs(h) < 5 or abs(abs(h) - 180) < 5)
+    assert len(sides) == 2 and len(pushes) > 2, by_heading
+    choice = Push.choose_square_push((0.0, 1.19), pushes, sides, 0.2, False)
+    assert isinstance(choice, Blocked), choice
+    assert choice.towards not in sides, "the push it needs is the blocked one along +y"

@@ -22,6 +22,12 @@ DIAGONAL_ACROSS_RATIO = 0.6
 
 #: Among neighbours an offset at most this long (mm) between two free pushes is closed by both.
 CONE_MAX_OFFSET_MM = 2.0
+#: ... when the two pushes travel no more than this many times the offset together (headings up to
+#: 151 deg apart with the offset halfway between them; a triangle's +x and hypotenuse pushes, 135 deg
+#: apart, travel 2.1 times theirs). Two pushes nearly opposite take any offset between them by
+#: travelling far: a fresco piece 1.19 mm off, between pushes 178.9 deg apart, was pushed 59.5 mm
+#: into two neighbours (tight gaps, seed 25), 100 times its offset.
+CONE_MAX_TRAVEL_RATIO = 4.0
 #: Among neighbours a square push longer than this (mm; a staged part's way home) stops
 #: ``APPROACH_RESERVE_MM`` short of the target: its pads can still move it across the push then.
 #: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
@@ -286,7 +292,8 @@ def _free_cone_shares(
     """The two free pushes (and how far each, mm) whose headings take the offset between them, or None.
 
     ``offset = a u + b v`` with ``a, b >= 0`` for the headings ``u``, ``v`` of two free pushes less than
-    half a turn apart; of all such pairs, the one that travels least (``a + b``).
+    half a turn apart; of all such pairs, the one that travels least (``a + b``), and none that
+    travels more than ``CONE_MAX_TRAVEL_RATIO`` times the offset.
     """
     best: tuple[float, list[tuple[str, float]]] | None = None
     for i, first in enumerate(free):
@@ -298,7 +305,7 @@ def _free_cone_shares(
                 continue
             a = float(offset_mm[0] * v[1] - offset_mm[1] * v[0]) / determinant
             b = float(u[0] * offset_mm[1] - u[1] * offset_mm[0]) / determinant
-            if a < 0.0 or b < 0.0:
+            if a < 0.0 or b < 0.0 or a + b > CONE_MAX_TRAVEL_RATIO * float(np.hypot(*offset_mm)):
                 continue
             if best is None or a + b < best[0]:
                 best = (a + b, [(first, a), (second, b)])
