@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from bt_arrange import treefile
-from bt_arrange.layout import Rect, gap_m
+from bt_arrange.plan.layout import Rect, gap_m
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 

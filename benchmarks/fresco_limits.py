@@ -28,7 +28,7 @@ from pathlib import Path
 
 from bt_arrange import plans
 from bt_arrange.errors import PlanError
-from bt_arrange.plancheck import check_plan
+from bt_arrange.plan.check import check_plan
 
 LENGTHS_MM = (40, 80, 120, 160, 200, 300, 400, 600)
 WIDTHS_MM = (40, 60, 80, 120, 160, 250, 400)

@@ -25,7 +25,7 @@ import numpy as np
 from bt_arrange.geometry import fold_yaw
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import PartDetector
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange_sim.config import CameraConfig, CellConfig
 from bt_arrange_sim.noise import CameraNoiseConfig
 from bt_arrange_sim.parts import PAINT_RGB

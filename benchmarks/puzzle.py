@@ -27,7 +27,7 @@ from pathlib import Path
 import py_trees
 
 from bt_arrange import treefile
-from bt_arrange.layout import Outline, gap_m
+from bt_arrange.plan.layout import Outline, gap_m
 from bt_arrange.shapes import Prism
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 

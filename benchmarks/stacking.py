@@ -142,9 +142,9 @@ class Displace:
         two inside each other); the draw is repeated until the shifted footprint stays
         ``BUMP_CLEARANCE_MM`` from every other target of its height.
         """
-        from bt_arrange.footprints import overlap
+        from bt_arrange.plan.footprints import overlap
+        from bt_arrange.plan.stacking import footprint_of
         from bt_arrange.settings import ManipulationSettings
-        from bt_arrange.stacking import footprint_of
         from bt_arrange.trees.layers import same_layer
 
         settings = ManipulationSettings()

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from numbers import Integral, Real
-from typing import Literal
+from typing import Any, Literal
 
 from bt_arrange.errors import BtArrangeError, PlanError
 
@@ -107,3 +107,12 @@ def whole_number(
 def at_mm(x_m: float, y_m: float) -> str:
     """A point on the table as a plan file writes it: ``x 450 mm, y 50 mm``."""
     return f"x {x_m * 1000:.0f} mm, y {y_m * 1000:.0f} mm"
+
+
+def toml_shown(value: Any) -> str:
+    """A plan file's value as the user wrote it, roughly: strings quoted, booleans lower-case."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value)

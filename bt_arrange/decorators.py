@@ -12,15 +12,15 @@ loop), with the offset checked before each run, not like ``Retry`` (which runs a
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 
 import py_trees
 from py_trees.common import Access, Status
 
 from bt_arrange.behaviours import keys
-from bt_arrange.checks import positive_number, whole_number
+from bt_arrange.checks import whole_number
 from bt_arrange.numbers import fixed
+from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.ports import BOOL, INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY
 
@@ -81,23 +81,20 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         accumulate: bool = False,
         margins: int = 1,
     ) -> None:
-        positive_number("threshold", threshold_mm, "mm", style="unit", finite=False)
+        #: The thresholds and the one "within" rule the loop asks (the report asks the plan's too).
+        self.tolerance = Tolerance(threshold_mm, yaw_threshold_deg)
         whole_number("margins", margins, style="unit")
         if stall_after:
             whole_number("stall_after", stall_after, style="unit")
-        if yaw_threshold_deg is not None:
-            positive_number("yaw threshold", yaw_threshold_deg, "deg", style="unit", finite=False)
         whole_number("max_attempts", max_attempts, style="unit")
         super().__init__(name=name, child=child)
         self.offset_key = offset_key
-        self.threshold_mm = float(threshold_mm)
         self.max_attempts = max_attempts
         self.corrections_key = corrections_key
         #: The object corrected: ``obj``, else the one whose offset it watches (``/<obj>/offset_mm``).
         self.obj = obj if obj is not None else keys.object_of_key(offset_key)
         self.attempts = 0
         self.yaw_key = yaw_key if yaw_threshold_deg is not None else None
-        self.yaw_threshold_deg = None if yaw_threshold_deg is None else float(yaw_threshold_deg)
         #: Corrections in a row that closed less than ``STALL_FRACTION`` of the best offset and yaw error so far
         #: end the loop with FAILURE ("stopped converging"), for a fallback above it; 0: never.
         self.stall_after = int(stall_after)
@@ -122,6 +119,16 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
         if self.stalled_key is not None:
             self.blackboard.register_key(self.stalled_key, access=Access.WRITE)
+
+    @property
+    def threshold_mm(self) -> float:
+        """The offset's threshold [mm] (``inf``: yaw only)."""
+        return self.tolerance.threshold_mm
+
+    @property
+    def yaw_threshold_deg(self) -> float | None:
+        """The yaw error's threshold [deg], or None: position only."""
+        return self.tolerance.yaw_threshold_deg
 
     def initialise(self) -> None:
         """Start counting corrections from zero."""
@@ -173,14 +180,14 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             self.feedback_message = f"no offset at {self.offset_key}: inspect the object before correcting it"
             return Status.FAILURE
         yaw = self._yaw_error()
-        yaw_within = yaw is None or self.yaw_threshold_deg is None or abs(yaw) < self.yaw_threshold_deg
+        yaw_within = self.tolerance.yaw_within(yaw)
         yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
         margin = self._margin_mm()
         margin_text = f" + camera {margin:.2f} mm" if margin > 0 else ""
-        if offset + margin < self.threshold_mm and yaw_within:
+        if self.tolerance.within(offset, yaw, margin):
             under = (
                 f"offset {offset:.2f} mm"  # no offset threshold: the yaw alone decides (a regrasp)
-                if math.isinf(self.threshold_mm)
+                if self.tolerance.yaw_only
                 else f"offset {offset:.2f} mm{margin_text} < {self.threshold_mm:.2f} mm"
             )
             self.feedback_message = f"{under}{yaw_text} after {self.attempts} correction(s)"
@@ -194,9 +201,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             )
             return Status.FAILURE
         if self.attempts >= self.max_attempts:
-            what = f"offset still {offset:.2f} mm" + (
-                f"{margin_text} >= {self.threshold_mm:.2f} mm" if offset + margin >= self.threshold_mm else ""
-            )
+            outside = not self.tolerance.offset_within(offset, margin)
+            what = f"offset still {offset:.2f} mm" + (f"{margin_text} >= {self.threshold_mm:.2f} mm" if outside else "")
             if not yaw_within:
                 what += f"{yaw_text} (>= {self.yaw_threshold_deg:.2f} deg)"
             self.feedback_message = f"{what} after {self.attempts} correction(s)"
@@ -213,8 +219,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             return False
         keep = 1.0 - STALL_FRACTION
         # Only what is still outside its threshold counts: a yaw already within shrinking by a hundredth is no progress.
-        offset_outside = offset + self._margin_mm() >= self.threshold_mm
-        yaw_outside = self.yaw_threshold_deg is not None and now[1] >= self.yaw_threshold_deg
+        offset_outside = not self.tolerance.offset_within(offset, self._margin_mm())
+        yaw_outside = yaw is not None and not self.tolerance.yaw_within(yaw)
         improved = (offset_outside and now[0] < self._best[0] * keep) or (yaw_outside and now[1] < self._best[1] * keep)
         self._best = (min(self._best[0], now[0]), min(self._best[1], now[1]))
         self._stalls = 0 if improved else self._stalls + 1

@@ -13,6 +13,9 @@ run time Python asks ``__getattr__`` only for names the module lacks, so the new
 
 A renamed keyword argument: ``@renamed_keywords(cubes="parts")`` on the function.
 
+A moved module keeps its old path as a two-line file: ``moved_module(__name__, "new.path")``, which
+warns once and puts the new module in the old one's place (every name, private ones too).
+
 Each old name warns once per process (``DeprecationWarning``): a loop over an old name would
 otherwise repeat the same line thousands of times, and the first one says all there is to say.
 """
@@ -25,7 +28,7 @@ import warnings
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
-__all__ = ["renamed_attributes", "renamed_keywords", "warn_once"]
+__all__ = ["moved_module", "renamed_attributes", "renamed_keywords", "warn_once"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -88,3 +91,11 @@ def renamed_keywords(**renames: str) -> Callable[[F], F]:
         return wrapper  # type: ignore[return-value]
 
     return decorate
+
+
+def moved_module(old: str, new: str) -> None:
+    """Serve module ``new`` under its old path ``old`` (call it from the old module's file), warning once."""
+    import importlib
+
+    warn_once(old, new, stacklevel=4)
+    sys.modules[old] = importlib.import_module(new)

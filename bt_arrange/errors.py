@@ -43,7 +43,7 @@ class PlanError(BtArrangeError, ValueError):
 
     ``parts`` names what the error is about, as ``(role, name)`` pairs: ``("target", "red")``,
     ``("start", "red")``, ``("colour", "teal")``; a plan file turns them into its entries
-    (``[[targets]] 3``, ``[colours.teal]``, ``bt_arrange.plancheck.in_plan``).
+    (``[[targets]] 3``, ``[colours.teal]``, ``bt_arrange.plan.check.in_plan``).
     """
 
     def __init__(

@@ -4,17 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from bt_arrange.checks import toml_shown as _shown
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.filelimits import MAX_COLOURS
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
 
 COLOUR_KEYS = ("rgb", "hue_deg", "saturation", "value")
-
-
-def _shown(value: Any) -> str:
-    from bt_arrange.plans import _shown as shown
-
-    return shown(value)
 
 
 def read_colour_table(self: Any, table: Any) -> ColourTable:

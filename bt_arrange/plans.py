@@ -53,6 +53,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
+from bt_arrange.checks import toml_shown as _shown
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.filelimits import (
     MAX_OBJECT_TYPES,
@@ -63,6 +64,7 @@ from bt_arrange.filelimits import (
 )
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
+from bt_arrange.plan.targets import Target
 from bt_arrange.plan_colours import COLOUR_KEYS as COLOUR_KEYS  # the plan format's names, kept here
 from bt_arrange.plan_colours import read_colour_table
 from bt_arrange.puzzle.spec import painted_colours, read_puzzles
@@ -73,7 +75,7 @@ from bt_arrange.suggest import did_you_mean
 
 if TYPE_CHECKING:
     from bt_arrange.backends import Backend
-    from bt_arrange.plancheck import PlanSource
+    from bt_arrange.plan.check import PlanSource
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -159,7 +161,7 @@ class Plan:
     @property
     def source(self) -> PlanSource:
         """The file and, for each target, start and colour of the plan, its entry (``[[targets]] 3``)."""
-        from bt_arrange.plancheck import PlanSource
+        from bt_arrange.plan.check import PlanSource
 
         entries: dict[tuple[str, str], str] = {}
         for index, target in enumerate(self.targets, start=1):
@@ -383,8 +385,6 @@ class _Reader:
 
         The gap along its fractures must keep two pieces each within ``threshold_mm`` apart (twice it).
         """
-        from bt_arrange.trees import Target
-
         if not isinstance(table, dict):
             raise self.fail("[fresco]", f"must be a table of frescoes, got {_shown(table)}")
         taken = {t.obj for t in targets}
@@ -518,7 +518,6 @@ class _Reader:
         return z_mm / 1000
 
     def targets(self, entries: Any, types: dict[str, ObjectType], colours: ColourTable) -> list[Any]:
-        from bt_arrange.trees import Target
 
         if not isinstance(entries, list) or not entries:
             raise self.fail("[[targets]]", "must be a list of targets with at least one entry")
@@ -571,12 +570,3 @@ class _Reader:
                 name = waiting.pop(0) if waiting else None
             starts.append(ObjectStart(colour, x_m, y_m, yaw_rad, name, kind))
         return seed, starts
-
-
-def _shown(value: Any) -> str:
-    """A TOML value as the user wrote it, roughly."""
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(value)

@@ -30,9 +30,9 @@ import numpy as np
 
 from bt_arrange.errors import BtArrangeError, PlanError, PortValueError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import DIRECTIONS, Release
 from bt_arrange.objects import DEFAULT_TYPE, ObjectType, PartOnTable
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE, ColourRange, ColourTable
+from bt_arrange.plan.layout import DIRECTIONS, Release
 from bt_arrange.shapes import Prism
 from bt_arrange.shapes.prism import push_heading_rad
 

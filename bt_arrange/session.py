@@ -54,7 +54,9 @@ from bt_arrange.foxglove import streams as foxglove_streams
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
-from bt_arrange.plancheck import CameraView, check_plan, check_scene
+from bt_arrange.plan.check import CameraView, check_plan, check_scene
+from bt_arrange.plan.compiled import ArrangementPlan
+from bt_arrange.plan.targets import Target
 from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
@@ -63,7 +65,7 @@ from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
-from bt_arrange.trees import Arrangement, Target
+from bt_arrange.trees import plan_of
 from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY, camera_margin_mm
 
@@ -167,6 +169,11 @@ class Session:
     ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick.
     ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
     campaign's trial, ``experiment --record``): written whole at the end, or a fault.
+
+    ``plan`` is what the tree carries out (``bt_arrange.plan.compiled.ArrangementPlan``: targets,
+    tolerance, settings, colours, puzzles): the plan check, the report and "within" come from it. By
+    default the tree's own (``trees.plan_of(root)``, a rendered arrangement's); a tree without a plan
+    is run and its scene checked, and reports no parts.
     """
 
     def __init__(
@@ -183,14 +190,17 @@ class Session:
         settings: ManipulationSettings | None = None,
         calibration: CameraCalibration | None = None,
         mcap_path: Path | None = None,
+        plan: ArrangementPlan | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
         positive_number("time limit", time_limit_s, "s", style="unit")
-        # One settings value for the plan check and the context: the tree's own (an arrangement
-        # keeps what it was checked and built with), unless the caller hands one in.
+        #: The plan the tree carries out, or None (a tree composed without one: no parts to report).
+        self.plan: ArrangementPlan | None = plan if plan is not None else plan_of(root)
+        # One settings value for the plan check and the context: the plan's own (what it was checked
+        # and built with), unless the caller hands one in.
         if settings is None:
-            settings = root.settings if isinstance(root, Arrangement) else ManipulationSettings()
+            settings = self.plan.settings if self.plan is not None else ManipulationSettings()
         #: The handling settings of the run.
         self.settings = settings
         # Everything a user can get wrong is checked here, before the world is built.
@@ -203,13 +213,14 @@ class Session:
                 check_image_size(calibration, view.intrinsics.width_px, view.intrinsics.height_px)
             view = calibration.view()
         #: The colour table of the plan: the world paints with it and the camera's detector reads it.
-        self.colours: ColourTable = root.colours if isinstance(root, Arrangement) else DEFAULT_COLOUR_TABLE
-        if isinstance(root, Arrangement):
+        self.colours: ColourTable = self.plan.colours if self.plan is not None else DEFAULT_COLOUR_TABLE
+        if self.plan is not None:
+            checked = self.plan
             try:
-                if root.targets or not root.puzzles:
+                if checked.targets or not checked.puzzles:
                     check_plan(
-                        root.targets,
-                        threshold_mm=root.threshold_mm,
+                        list(checked.targets),
+                        threshold_mm=checked.tolerance.threshold_mm,
                         starts=scene,
                         view=view,
                         colours=self.colours,
@@ -217,13 +228,13 @@ class Session:
                     )
                 else:  # a puzzle's targets come from its solve: its scene and its whole's place are checked
                     check_scene(scene, view=view, colours=self.colours, settings=settings)
-                check_puzzles_in_view(root.puzzles, view)
-                check_colours_apart(root.targets, self.colours)
+                check_puzzles_in_view(list(checked.puzzles), view)
+                check_colours_apart(list(checked.targets), self.colours)
             except PlanError as error:
                 # A plan file's errors name its file and entries ([[targets]] 3, [colours.teal]).
-                if root.source is None:
+                if checked.source is None:
                     raise
-                raise root.source.locate(error) from error
+                raise checked.source.locate(error) from error
         else:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
         check_keys(root)
@@ -239,7 +250,7 @@ class Session:
         #: Ground truth of the world (evaluation only), or None: the report is then camera only.
         self.truth: GroundTruth | None = self.world.truth
         #: A puzzle's truth (evaluation only): each named piece's part of the world and true home.
-        self.puzzle_truth = PuzzleTruth(root.puzzles if isinstance(root, Arrangement) else [], self.truth)
+        self.puzzle_truth = PuzzleTruth(list(self.plan.puzzles) if self.plan is not None else [], self.truth)
         #: World time when the tree starts: the report and the live view count from here.
         self.start_s = self.world.clock.now()
         robot = self.world.robot
@@ -265,6 +276,8 @@ class Session:
         self.faults = files.Faults()
         #: The camera's own error (mm) a measured offset must leave under the threshold, and whence.
         self.camera_margin_mm, self.camera_margin_source = camera_margin_mm(calibration, self.world)
+        #: The subtree that places every part before any is corrected (the paper's Fig. 5), or None.
+        self._place_all = getattr(root, "place_all", None)
         #: A live Foxglove server (``bt_arrange.foxglove.streams.LiveServer``, ``--foxglove``) to stream to, or None.
         self.foxglove_live: Any = None
 
@@ -307,8 +320,8 @@ class Session:
         report = SessionReport(
             objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
             tree_status=result.status.value,
-            threshold_mm=self.root.threshold_mm if isinstance(self.root, Arrangement) else None,
-            yaw_threshold_deg=self.root.yaw_threshold_deg if isinstance(self.root, Arrangement) else None,
+            threshold_mm=self.plan.tolerance.threshold_mm if self.plan is not None else None,
+            yaw_threshold_deg=self.plan.tolerance.yaw_threshold_deg if self.plan is not None else None,
             sim_seconds=result.sim_seconds,
             wall_seconds=result.wall_seconds,
             timed_out=result.timed_out,
@@ -385,10 +398,9 @@ class Session:
 
         The one of its name, or, for identical parts, the one of its kind nearest the target.
         """
-        assert isinstance(self.root, Arrangement)
         if target.obj in self.puzzle_truth.parts:
             return self.puzzle_truth.parts[target.obj]
-        siblings = [t for t in self.root.targets if t.colour == target.colour and t.object_type == target.object_type]
+        siblings = [t for t in self._targets() if t.colour == target.colour and t.object_type == target.object_type]
         if len(siblings) <= 1 or self.truth is None:
             return target.obj
         truth = self.truth
@@ -409,6 +421,8 @@ class Session:
         node = self.node(transition)
         if isinstance(node, Pick) and transition.old != Status.RUNNING.value and transition.new != Status.INVALID.value:
             self.placements.pick_started(node.obj)  # a Pick starts: after a placing, a regrasp
+        if isinstance(node, ArrangeSolved) and node.arranged and self.plan is not None:
+            self.plan = self.plan.joined(node.arranged)  # a puzzle's pieces join the plan once it built them
         if transition.new != Status.SUCCESS.value:
             return
         if isinstance(node, SurveyPieces):
@@ -417,14 +431,14 @@ class Session:
             self._track_truth(node)
         # The Inspects after placing, by their own flag rather than their names; a regrasp's next look.
         stem = None
-        if isinstance(node, Inspect) and isinstance(self.root, Arrangement):
+        if isinstance(node, Inspect) and self.plan is not None:
             obj = node.obj
             stem = self.placements.inspected(obj, node.after_placing, lambda first: self._placement(obj, first))
         if self.record_dir is None:
             return
         if stem is not None:
             self._save_image(stem)
-        elif isinstance(self.root, Arrangement) and node is not None and node is self.root.place_all:
+        elif node is not None and node is self._place_all:
             self._save_image("after_placing")
 
     def _placement(self, obj: str, first: bool) -> Placement:
@@ -432,8 +446,7 @@ class Session:
         board = py_trees.blackboard.Client(name="report")
         placed = (keys.PLACED_OFFSET_MM, keys.PLACED_YAW_ERROR_DEG)
         offset, yaw = placed if first else (keys.OFFSET_MM, keys.YAW_ERROR_DEG)
-        assert isinstance(self.root, Arrangement)
-        target = next((t for t in self.root.targets if t.obj == obj), None)
+        target = next((t for t in self._targets() if t.obj == obj), None)
         truth = self._truth_offset_mm(target) if target is not None else None
         return Placement(_get(board, keys.key(obj, offset)), _get(board, keys.key(obj, yaw)), truth)
 
@@ -444,8 +457,7 @@ class Session:
         """
         if self.truth is None:
             return
-        targets = self.root.targets if isinstance(self.root, Arrangement) else []
-        target = next((t for t in targets if t.obj == node.obj), None)
+        target = next((t for t in self._targets() if t.obj == node.obj), None)
         x, y, _ = self.truth.planar_pose(self.part_of(target) if target is not None else node.obj)
         before = self._looked_truth_xy.get(node.obj)
         if isinstance(node, Recheck) and before is not None:
@@ -476,11 +488,11 @@ class Session:
     # -- the report ----------------------------------------------------------------------------
 
     def _outcomes(self, transitions: list[Transition], stopped: str = "") -> list[ObjectOutcome]:
-        if not isinstance(self.root, Arrangement):
+        if self.plan is None:
             return []
         report = py_trees.blackboard.Client(name="report")
         outcomes = []
-        for target in self.root.targets:
+        for target in self._targets():
             first = self.placements.first.get(target.obj)
             again = self.placements.again.get(target.obj, Placement(None, None, None))
             # The first placing's figures, kept by the log (a regrasp's look after placing writes the keys again).
@@ -516,10 +528,13 @@ class Session:
             )
         return outcomes + self._unsolved_pieces(transitions, stopped)
 
+    def _targets(self) -> list[Target]:
+        """The plan's targets (a puzzle's pieces among them once built), none without a plan."""
+        return list(self.plan.targets) if self.plan is not None else []
+
     def _truth_home_mm(self, target: Target) -> tuple[float, float, float] | None:
         """A puzzle piece's true home (x mm, y mm, yaw deg; evaluation only), None for other targets."""
-        assert isinstance(self.root, Arrangement)
-        home = self.puzzle_truth.home(target, self.root.targets)
+        home = self.puzzle_truth.home(target, self._targets())
         return (
             None
             if home is None
@@ -528,10 +543,9 @@ class Session:
 
     def _unsolved_pieces(self, transitions: list[Transition], stopped: str) -> list[ObjectOutcome]:
         """A failed outcome for each piece of a puzzle that was never solved, with the puzzle's reason."""
-        assert isinstance(self.root, Arrangement)
-        named = {t.obj for t in self.root.targets}
+        named = {t.obj for t in self._targets()}
         outcomes = []
-        for spec in self.root.puzzles:
+        for spec in self.plan.puzzles if self.plan is not None else ():
             reason = self._last_failure(transitions, spec.name) or stopped or "the puzzle was not solved"
             for name in spec.piece_names:
                 if name not in named:
@@ -563,29 +577,24 @@ class Session:
 
     def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
         """Within only when the offset with the camera's margin, and the yaw error, are under their thresholds."""
-        assert isinstance(self.root, Arrangement)
-        if final_offset_mm is None:
+        if final_offset_mm is None or self.plan is None:
             return "failed"
-        yaw_threshold = self.root.yaw_threshold_deg
-        yaw_within = yaw_threshold is None or final_yaw_error_deg is None or abs(final_yaw_error_deg) < yaw_threshold
-        within = final_offset_mm + self.camera_margin_mm < self.root.threshold_mm
-        return "within" if within and yaw_within else "outside"
+        within = self.plan.tolerance.within(final_offset_mm, final_yaw_error_deg, self.camera_margin_mm)
+        return "within" if within else "outside"
 
     def _truth_offset_mm(self, target: Target) -> float | None:
         """From the part to its target; a puzzle's piece, to its true home (``truth_home_mm``)."""
         if self.truth is None:
             return None
         x, y, _ = self.truth.planar_pose(self.part_of(target))
-        assert isinstance(self.root, Arrangement)
-        target = self.puzzle_truth.home_target(target, self.root.targets)
+        target = self.puzzle_truth.home_target(target, self._targets())
         return PlanarPose(x, y).distance_to(target.planar) * 1000
 
     def _truth_yaw_error_deg(self, target: Target) -> float | None:
         if self.truth is None:
             return None
         _, _, yaw = self.truth.planar_pose(self.part_of(target))
-        assert isinstance(self.root, Arrangement)
-        target = self.puzzle_truth.home_target(target, self.root.targets)
+        target = self.puzzle_truth.home_target(target, self._targets())
         return math.degrees(yaw_error_rad(target.object_type.shape, yaw, target.yaw_rad))
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from bt_arrange.calibration import BoardMount, CharucoBoard
 from bt_arrange.geometry import Pose, rotation_z
 from bt_arrange.motion import DEFAULT_HOME_Q
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange_sim.noise import CameraNoiseConfig
 from bt_arrange_sim.realcell import RealCellErrors

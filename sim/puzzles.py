@@ -101,8 +101,8 @@ def _free_spots(
     """
     import numpy as np
 
-    from bt_arrange.layout import Pads, start_clearance_m
     from bt_arrange.objects import object_type_of
+    from bt_arrange.plan.layout import Pads, start_clearance_m
     from bt_arrange.settings import ManipulationSettings
     from bt_arrange_sim.config import CameraConfig
     from bt_arrange_sim.scenes import MAX_RADIUS_M, X_RANGE_M, Y_RANGE_M, clearance_m

@@ -12,7 +12,7 @@ from bt_arrange.checks import whole_number
 from bt_arrange.deprecation import renamed_attributes
 from bt_arrange.errors import PlanError
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType, object_type_of
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 
 #: A part's starting pose on the table (``bt_arrange.objects.ObjectStart``: colour, x, y, yaw, name, type).
 PartStart = ObjectStart

@@ -17,7 +17,7 @@ import py_trees
 
 from bt_arrange.geometry import Pose
 from bt_arrange.perception import ColourTable
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.session import GroundTruth, Session, World
 from bt_arrange.uncertainty import IDEAL_CELL_CAMERA_MM

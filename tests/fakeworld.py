@@ -33,7 +33,7 @@ from fakes import CAMERA_HEIGHT_PX, CAMERA_WIDTH_PX, FakeArm, FakeCamera, FakeCl
 from bt_arrange.objects import CUBE, ObjectStart
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.perception.synthetic import SyntheticCube, sim_intrinsics, top_down_camera_pose
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraFrame, Robot
 from bt_arrange.session import Session, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings

@@ -1,8 +1,9 @@
-"""The simulator's layers (issue 31, item 4): no import circle in sim/, and the two engines are siblings.
+"""The house's floors: no import circle in bt_arrange/ or sim/, the plan below the tree, the engines siblings.
 
 Every import counts: at module level, inside a function, under ``TYPE_CHECKING`` (the same coupling).
-The neutral layer is every module of ``bt_arrange_sim`` outside its engine packages; it imports no
-engine, and neither engine imports the other.
+The plan's floor (``bt_arrange.plan``) imports no behaviour, tree builder or session. The neutral layer
+is every module of ``bt_arrange_sim`` outside its engine packages; it imports no engine, and neither
+engine imports the other.
 """
 
 from __future__ import annotations
@@ -12,14 +13,26 @@ from pathlib import Path
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 PACKAGE = "bt_arrange_sim"
+FRAMEWORK = Path(__file__).resolve().parents[1] / "bt_arrange"
+#: What the plan's floor must never import: the floors above it.
+ABOVE_THE_PLAN = (
+    "bt_arrange.behaviours",
+    "bt_arrange.decorators",
+    "bt_arrange.trees",
+    "bt_arrange.session",
+    "bt_arrange.runner",
+    "bt_arrange.xmltree",
+    "bt_arrange.plans",
+    "bt_arrange.cli",
+)
 ENGINES = ("bt_arrange_sim.pybullet", "bt_arrange_sim.mujoco")
 MAX_MODULE_LINES = 600
 
 
-def _modules() -> dict[str, Path]:
+def _modules(root: Path = SIM, package: str = PACKAGE) -> dict[str, Path]:
     modules = {}
-    for path in SIM.rglob("*.py"):
-        parts = [PACKAGE, *path.relative_to(SIM).with_suffix("").parts]
+    for path in root.rglob("*.py"):
+        parts = [package, *path.relative_to(root).with_suffix("").parts]
         if parts[-1] == "__init__":
             parts.pop()
         modules[".".join(parts)] = path
@@ -33,25 +46,25 @@ def _owner(name: str, modules: dict[str, Path]) -> str | None:
     return name or None
 
 
-def _imports(module: str, path: Path, modules: dict[str, Path]) -> set[str]:
+def _imports(module: str, path: Path, modules: dict[str, Path], prefix: str = PACKAGE) -> set[str]:
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found: set[str | None] = set()
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if isinstance(node, ast.Import):
-            found |= {_owner(alias.name, modules) for alias in node.names if alias.name.startswith(PACKAGE)}
+            found |= {_owner(alias.name, modules) for alias in node.names if alias.name.startswith(prefix)}
         elif isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:
                 anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join(anchor + ([base] if base else []))
-            if base.startswith(PACKAGE):
+            if base.startswith(prefix):
                 found |= {_owner(f"{base}.{alias.name}", modules) for alias in node.names}
     return {name for name in found if name is not None and name != module}
 
 
-def _graph() -> dict[str, set[str]]:
-    modules = _modules()
-    return {module: _imports(module, path, modules) for module, path in modules.items()}
+def _graph(root: Path = SIM, package: str = PACKAGE) -> dict[str, set[str]]:
+    modules = _modules(root, package)
+    return {module: _imports(module, path, modules, package) for module, path in modules.items()}
 
 
 def _engine_of(module: str) -> str | None:
@@ -92,6 +105,28 @@ def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 def test_no_import_circle_in_sim() -> None:
     assert _circles(_graph()) == []
+
+
+def test_no_import_circle_in_the_framework() -> None:
+    assert _circles(_graph(FRAMEWORK, "bt_arrange")) == []
+
+
+def test_the_plan_imports_nothing_above_it() -> None:
+    graph = _graph(FRAMEWORK, "bt_arrange")
+    offenders = sorted(
+        f"{module} -> {other}"
+        for module, imported in graph.items()
+        if module == "bt_arrange.plan" or module.startswith("bt_arrange.plan.")
+        for other in imported
+        if any(other == above or other.startswith(above + ".") for above in ABOVE_THE_PLAN)
+    )
+    assert offenders == []
+
+
+def test_the_framework_graph_sees_imports_inside_functions_and_type_checking() -> None:
+    graph = _graph(FRAMEWORK, "bt_arrange")
+    # plan.stacking takes Target under TYPE_CHECKING and parts_of inside a function: both are arrows.
+    assert "bt_arrange.plan.targets" in graph["bt_arrange.plan.stacking"]
 
 
 def test_the_circle_check_finds_a_circle() -> None:

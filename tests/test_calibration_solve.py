@@ -14,7 +14,7 @@ from bt_arrange.calibration.procedure import WORKING_TCP_HEIGHTS_M, BoardMount, 
 from bt_arrange.calibration.solve import check_view_count, solve_on_table_plane
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import Pose
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraIntrinsics
 
 TRUE_K = CameraIntrinsics(1920, 1080, 1385.0, 1383.0, 966.0, 533.0, (-0.12, 0.06, 8e-4, -5e-4, 0.0))

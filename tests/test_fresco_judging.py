@@ -11,15 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bt_arrange import layout, layout_judged
 from bt_arrange.errors import PlanError
-from bt_arrange.layout import Pads, plan_layout
 from bt_arrange.objects import ObjectType
+from bt_arrange.plan import layout, layout_judged
+from bt_arrange.plan.layout import Pads, plan_layout
+from bt_arrange.plan.targets import parts_of
 from bt_arrange.shapes import Prism
 from bt_arrange.shapes import fracture as fracture_module
 from bt_arrange.shapes.fracture import _cells, _dedupe, fracture
 from bt_arrange.trees import Target
-from bt_arrange.trees.targets import parts_of
 
 
 def _reference_cells(sites: np.ndarray, half_l: float, half_w: float, shrink_m: float) -> list[np.ndarray]:

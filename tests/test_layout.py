@@ -1,4 +1,4 @@
-"""The plan check by geometry (bt_arrange.layout): hand-made plans, the order and approach, the push sides."""
+"""The plan check by geometry (bt_arrange.plan.layout): hand-made plans, the order and approach, the push sides."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import pytest
 
 from bt_arrange.errors import PlanError
-from bt_arrange.layout import (
+from bt_arrange.plan.layout import (
     Pads,
     Part,
     Rect,

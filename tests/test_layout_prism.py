@@ -6,12 +6,22 @@ import math
 
 import pytest
 
-from bt_arrange.layout import Outline, Pads, Part, Rect, free_push_directions, gap_m, overlap, plan_layout, release_pads
 from bt_arrange.objects import ObjectType
+from bt_arrange.plan.layout import (
+    Outline,
+    Pads,
+    Part,
+    Rect,
+    free_push_directions,
+    gap_m,
+    overlap,
+    plan_layout,
+    release_pads,
+)
+from bt_arrange.plan.targets import parts_of
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism
 from bt_arrange.shapes.fracture import fracture, polygon_gap_m
 from bt_arrange.trees import Target
-from bt_arrange.trees.targets import parts_of
 
 PADS = Pads()
 ELL = Prism.from_outline([[0, 0], [0.06, 0], [0.06, 0.02], [0.02, 0.02], [0.02, 0.05], [0, 0.05]], 0.02)

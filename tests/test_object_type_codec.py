@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 from bt_arrange import plans, ports, treefile, xmltree
 from bt_arrange.errors import PortValueError, XmlTreeError
-from bt_arrange.layout import Release
 from bt_arrange.objects import BAR, CUBE, ObjectStart, ObjectType
+from bt_arrange.plan.layout import Release
 from bt_arrange.ports import DIRECTIONS_TYPE, LIMIT, OBJECT_TYPE, RELEASE
 from bt_arrange.shapes import Cuboid, Prism
 from bt_arrange.trees import Arrangement

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from bt_arrange.errors import PlanError
-from bt_arrange.layout import Part
 from bt_arrange.objects import BAR, CUBE, ObjectType
+from bt_arrange.plan.layout import Part
 from bt_arrange.shapes import ROBOTIQ_2F85, Cuboid, Prism, Shape
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -13,10 +13,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bt_arrange.errors import BtArrangeError, PlanError
-from bt_arrange.layout import Part, gap_m
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import PAINT_RGB
-from bt_arrange.plancheck import CameraView, check_plan, check_scene
+from bt_arrange.plan.check import CameraView, check_plan, check_scene
+from bt_arrange.plan.layout import Part, gap_m
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees import Target, arrangement, check_threshold, correction
 from bt_arrange_sim.config import CameraConfig

@@ -12,9 +12,9 @@ import pytest
 from bt_arrange import plans
 from bt_arrange.behaviours.puzzle import SurveyedPiece
 from bt_arrange.errors import PlanError
+from bt_arrange.plan.puzzle_targets import _sample_points, picture_turn
 from bt_arrange.puzzle import Placement, PuzzleSpec
 from bt_arrange.puzzle.picture import builtin_picture, check_picture, picture_rgb_at, read_picture
-from bt_arrange.puzzle.targets import _sample_points, picture_turn
 from bt_arrange.shapes.fracture import fracture
 
 PLAN = """

@@ -227,8 +227,8 @@ def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nob
     # Push stops short only when it knows the correction's threshold (issue 38 item 4): an irregular
     # part among neighbours gets it; a box (Table 1's pushes) and a free part do not.
     from bt_arrange.objects import CUBE, ObjectType
+    from bt_arrange.plan.targets import Target
     from bt_arrange.trees.steps import correction
-    from bt_arrange.trees.targets import Target
 
     triangle = ObjectType("triangle", shape=TRIANGLE)
     names = tuple(TRIANGLE.named_pushes(ROBOTIQ_2F85))

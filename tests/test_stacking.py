@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_arrange import plans, stacking
+from bt_arrange import plans
 from bt_arrange.errors import PlanError
-from bt_arrange.plancheck import check_plan
+from bt_arrange.plan import stacking
+from bt_arrange.plan.check import check_plan
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.trees import TARGETS, Target, plan_steps
 from bt_arrange_sim.config import CameraConfig

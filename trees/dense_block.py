@@ -2,7 +2,7 @@
 
 bt-arrange run trees/dense_block.py
 
-The layout (``bt_arrange.layout``) chooses where the pads go: the second and third cubes are
+The layout (``bt_arrange.plan.layout``) chooses where the pads go: the second and third cubes are
 released at their targets with the pads across their free faces, the last one, boxed in on two
 sides, is released 10 mm away where the pads fit and pushed home from a free side. After each cube
 its placed neighbours are looked at again and corrected if it moved them beyond the threshold.

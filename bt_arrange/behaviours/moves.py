@@ -229,9 +229,9 @@ def max_grip_width_m(settings: ManipulationSettings, object_type: ObjectType) ->
 def heights_m(settings: ManipulationSettings, object_type: ObjectType, z_m: float = 0.0) -> tuple[float, float, float]:
     """(grasp, approach, push) TCP heights for a part (``ManipulationSettings.tcp_heights_m``).
 
-    ``z_m``: the part's bottom face above the table (a raised part, ``bt_arrange.stacking.heights_at_m``).
+    ``z_m``: the part's bottom face above the table (a raised part, ``bt_arrange.plan.stacking.heights_at_m``).
     """
-    from bt_arrange.stacking import heights_at_m
+    from bt_arrange.plan.stacking import heights_at_m
 
     return heights_at_m(settings, object_type.shape, z_m)
 

@@ -32,11 +32,11 @@ from bt_arrange.behaviours.moves import (
 )
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, fold_yaw
-from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, Motion, gripper_down_pose, nearest_symmetric_yaw
 from bt_arrange.motion.bounds import joint_move_bound_s
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.plan.layout import Release
 from bt_arrange.ports import BOOL, RELEASE, Port
 from bt_arrange.settings import ManipulationSettings
 
@@ -74,7 +74,7 @@ class Pick(StagedBehaviour):
     symmetry). Only a grip still that wide lets go and fails.
     Among neighbours (``grasp``) there is no room for it: a turned grip lets go at once.
 
-    ``grasp`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    ``grasp`` (a :class:`~bt_arrange.plan.layout.Release`), for a part among neighbours: the pads
     close across that axis of the target's frame, opened only to ``grasp.opening_m``, so they
     come down in the free room beside two faces and nowhere else.
     """

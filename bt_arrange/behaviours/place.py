@@ -25,17 +25,17 @@ from bt_arrange.behaviours.moves import (
 )
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
-from bt_arrange.layout import Release
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.plan.layout import Release
 from bt_arrange.ports import BOOL, RELEASE, STRING, Port
 
 
 class Place(StagedBehaviour):
     """Carry the held object above its target (``/<obj>/target``), lower it to rest, open, retreat.
 
-    ``release`` (a :class:`~bt_arrange.layout.Release`), for a part among neighbours: the pads
+    ``release`` (a :class:`~bt_arrange.plan.layout.Release`), for a part among neighbours: the pads
     stand across that axis of the target's frame and open only to ``release.opening_m``, and a
     staged release lets go ``release.offset_m`` (target frame) away from the target, where the
     pads fit, for pushes to bring it home.

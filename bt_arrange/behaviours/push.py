@@ -37,16 +37,17 @@ from bt_arrange.behaviours.square_pushes import (  # noqa: F401 - re-exported: P
 )
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose, rotation_z
-from bt_arrange.layout import DIRECTIONS
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
+from bt_arrange.plan.choices import PushStrategy
+from bt_arrange.plan.layout import DIRECTIONS
 from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import ROBOTIQ_2F85, SquarePush
 
 #: Correction strategies: the paper's alternating push, and ours (``Push``'s docstring).
-PUSH_STRATEGIES = ("paper", "learned", "diagonal")
+PUSH_STRATEGIES = tuple(strategy.value for strategy in PushStrategy)
 
 
 class Push(StagedBehaviour):
@@ -126,7 +127,7 @@ class Push(StagedBehaviour):
         self,
         name: str,
         obj: str,
-        strategy: str = "paper",
+        strategy: PushStrategy | str = PushStrategy.PAPER,
         object_type: ObjectType | None = None,
         yaw_threshold_deg: float | None = None,
         *,
@@ -143,7 +144,7 @@ class Push(StagedBehaviour):
         self.z_m = float(z_m)
         if strategy not in PUSH_STRATEGIES:
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
-        self.strategy = strategy
+        self.strategy = PushStrategy(strategy)
         self.obj = obj
         self.object_type = object_type or CUBE
         #: With a yaw error (``/<obj>/yaw_error_deg``) at or above this, a push is made even when the

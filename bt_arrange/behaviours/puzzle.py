@@ -171,7 +171,7 @@ class SolvePuzzle(PuzzleNode):
         return [InstantStage(f"solve {self.spec.name}", self._solve)]
 
     def _solve(self, context: Context) -> str | None:
-        from bt_arrange.puzzle.targets import solved_targets
+        from bt_arrange.plan.puzzle_targets import solved_targets
 
         pieces: Sequence[SurveyedPiece] = self.read(keys.key(self.spec.name, PIECES), "SurveyPieces")
         started = time.process_time()

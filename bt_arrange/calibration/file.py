@@ -45,7 +45,7 @@ from bt_arrange import files
 from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.filelimits import read_limited
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraIntrinsics
 
 #: The number of distortion coefficients OpenCV accepts (k1 k2 p1 p2 [k3 [k4 k5 k6 [s1..s4 [tx ty]]]]).

@@ -28,7 +28,7 @@ from bt_arrange.calibration.behaviours import CaptureBoard, CaptureSheet, MoveBo
 from bt_arrange.calibration.board import CharucoBoard
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.motion import gripper_down_rotation
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 
 #: The heights above the table (m) the board's centre is taken to: 40 and 30 cm below the camera.
 BOARD_HEIGHTS_M = (0.30, 0.40)

@@ -1,6 +1,6 @@
 """The tree's share of arrangements in layers (issue 33): heights above the tower, standing, watching below.
 
-``arrangement`` asks these when a plan has raised targets (``bt_arrange.stacking.layered``):
+``arrangement`` asks these when a plan has raised targets (``bt_arrange.plan.stacking.layered``):
 
 - ``stack_settings``: every move above the table rises over the finished tower (a held part's
   bottom ``approach_clearance_m`` minus its grasp height clear of the highest top face), since a
@@ -19,29 +19,24 @@
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 
 import py_trees
 
 from bt_arrange.behaviours import CheckStanding, GraspGuard, Pick, Place, keys
 from bt_arrange.decorators import RepeatUntilWithin
-from bt_arrange.errors import PlanError
-from bt_arrange.footprints import overlap
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import Release
-from bt_arrange.settings import ManipulationSettings
-from bt_arrange.stacking import LEVEL_TOLERANCE_M, footprint_of, layered, top_m
+from bt_arrange.plan.layout import Release
+from bt_arrange.plan.stacking import (
+    LEVEL_TOLERANCE_M,
+    check_correct_mode,
+    same_layer,
+    stack_settings,
+    watched_below,
+)
+from bt_arrange.plan.targets import Target
 from bt_arrange.trees.steps import inspect
-from bt_arrange.trees.targets import Target
 
-#: A lower part's top face counts as hidden when a part above comes within this (m) of its footprint:
-#: the top camera looks down at a slant, so a part 5 cm higher and 10 cm off the optical axis hides
-#: about 8 mm more of what lies beside it (70 cm camera: 50 mm x 100 / 600).
-OCCLUSION_MARGIN_M = 0.01
-#: A lower part counts as below a raised one when their footprints come within this (m): the layout's
-#: neighbours (``bt_arrange.layout.neighbours_of``), so a tower's base and the parts around it, not a far one.
-BELOW_WITHIN_M = 0.03
 #: A raised part placed this far off or more (mm, by the camera) is picked up and placed again rather
 #: than pushed: a push drags the support under it by friction for as long as it slides, and a part
 #: pushed several millimetres across its support's edge has less of its margin left on the way.
@@ -53,66 +48,11 @@ REGRASP_YAW_DEG = 5.0
 MAX_RAISED_REGRASPS = 2
 
 
-def stack_settings(plan: Sequence[Target], settings: ManipulationSettings) -> ManipulationSettings:
-    """The settings with ``approach_height_m`` over the plan's highest top face (unchanged on the table alone)."""
-    if not layered(plan):
-        return settings
-    highest_m = max(top_m(t) for t in plan)
-    approach_m = highest_m + settings.approach_clearance_m
-    if approach_m <= settings.approach_height_m:
-        return settings
-    return dataclasses.replace(settings, approach_height_m=approach_m)
-
-
-def check_correct_mode(plan: Sequence[Target], correct: str) -> None:
-    """A plan in layers is corrected part by part: ``correct="after_all"`` is refused for it."""
-    if correct == "after_all" and layered(plan):
-        raised = next(t for t in plan if t.z_m > LEVEL_TOLERANCE_M)
-        raise PlanError(
-            f'correct = "after_all" places every part before correcting any, but target {raised.obj} stands on '
-            'others: a plan in layers corrects each part before the next is put on it (correct = "each")',
-            parts=(("target", raised.obj),),
-        )
-
-
-def same_layer(first: Target, second: Target) -> bool:
-    """True when two targets stand at one height."""
-    return abs(first.z_m - second.z_m) <= LEVEL_TOLERANCE_M
-
-
 def standing(target: Target) -> list[py_trees.behaviour.Behaviour]:
     """``CheckStanding`` for a raised target, nothing for one on the table."""
     if target.z_m <= LEVEL_TOLERANCE_M:
         return []
     return [CheckStanding(f"{target.obj} stands on its support", target.obj, target.object_type, target.z_m)]
-
-
-def hidden(lower: Target, placed: Sequence[Target], settings: ManipulationSettings) -> bool:
-    """True when a part placed above ``lower`` comes within ``OCCLUSION_MARGIN_M`` of its footprint."""
-    footprint = footprint_of(lower, settings)
-    return any(
-        other.z_m > lower.z_m + LEVEL_TOLERANCE_M
-        and overlap(footprint, footprint_of(other, settings), OCCLUSION_MARGIN_M)
-        for other in placed
-    )
-
-
-def watched_below(target: Target, placed: Sequence[Target], settings: ManipulationSettings) -> list[Target]:
-    """The parts placed before ``target``, lower than it, that the camera still sees once it is down.
-
-    Only for a raised target: placing one on the table is the planar layout's business (neighbours).
-    """
-    if target.z_m <= LEVEL_TOLERANCE_M:
-        return []
-    down = [*placed, target]
-    near = footprint_of(target, settings)
-    return [
-        p
-        for p in placed
-        if p.z_m < target.z_m - LEVEL_TOLERANCE_M
-        and overlap(near, footprint_of(p, settings), BELOW_WITHIN_M)
-        and not hidden(p, down, settings)
-    ]
 
 
 def regrasp_while_far(
@@ -164,3 +104,13 @@ def regrasp_while_far(
             yaw_threshold_deg=REGRASP_YAW_DEG,
         )
     ]
+
+
+__all__ = [
+    "check_correct_mode",
+    "regrasp_while_far",
+    "same_layer",
+    "stack_settings",
+    "standing",
+    "watched_below",
+]

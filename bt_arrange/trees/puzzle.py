@@ -23,9 +23,14 @@ from py_trees.common import Status
 
 from bt_arrange.behaviours import Detect, keys
 from bt_arrange.behaviours.puzzle import PIECES, PUZZLE_PORT, SOLVED, DetectSurveyed, SolvePuzzle, SurveyPieces
+from bt_arrange.checks import positive_number
 from bt_arrange.errors import BtArrangeError, XmlTreeError
+from bt_arrange.plan.compiled import ArrangementPlan, compile_plan
+from bt_arrange.plan.targets import check_threshold
+from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.ports import DOUBLE, INT, OFF_DOUBLE, STRING, Port
 from bt_arrange.puzzle.spec import PuzzleSpec
+from bt_arrange.trees.arrangement import render_targets
 
 #: The options of ``bt_arrange.trees.arrangement`` an ``ArrangeSolved`` builds its pieces' subtrees with.
 OPTIONS = ("threshold_mm", "yaw_threshold_deg", "max_pushes", "max_regrasps", "strategy", "keep_going")
@@ -84,6 +89,8 @@ class ArrangeSolved(py_trees.composites.Sequence):
         }
         self.options.update({"strategy": "paper", "keep_going": True, **options})
         self._setup_kwargs: dict[str, Any] = {}
+        #: The solved pieces' targets, once the children are built from them.
+        self.arranged: tuple[Any, ...] = ()
         self.blackboard = self.attach_blackboard_client(name=name)
         self.blackboard.register_key(keys.key(spec.name, SOLVED), access=py_trees.common.Access.READ)
         self.blackboard.register_key(keys.key(spec.name, PIECES), access=py_trees.common.Access.READ)
@@ -113,8 +120,6 @@ class ArrangeSolved(py_trees.composites.Sequence):
         return {piece.name: piece.centre_m for piece in pieces}
 
     def _build(self) -> str | None:
-        from bt_arrange.trees.arrangement import Arrangement, arrangement
-
         solved_key = keys.key(self.spec.name, SOLVED)
         if not self.blackboard.exists(solved_key):
             return f"{self.spec.name}: not solved (no {solved_key})"
@@ -122,9 +127,8 @@ class ArrangeSolved(py_trees.composites.Sequence):
         root: py_trees.behaviour.Behaviour = self
         while root.parent is not None:
             root = root.parent
-        shared: dict[str, Any] = (
-            {"colours": root.colours, "settings": root.settings} if isinstance(root, Arrangement) else {}
-        )
+        # The whole tree's plan (its colours and settings) when the root carries one: a rendered arrangement.
+        whole: ArrangementPlan | None = getattr(root, "plan", None)
         surveyed = self._surveyed()
 
         def locate(target: Any) -> py_trees.behaviour.Behaviour:
@@ -134,19 +138,28 @@ class ArrangeSolved(py_trees.composites.Sequence):
                 f"detect {target.obj}", target.obj, target.colour, target.object_type, surveyed[target.obj]
             )
 
+        options = dict(self.options)
         try:
-            built = arrangement(targets, **self.options, **shared, locate=locate)
+            threshold_mm = check_threshold(options.pop("threshold_mm"), whole.settings if whole else None)
+            yaw_threshold_deg = options.pop("yaw_threshold_deg")
+            if yaw_threshold_deg is not None:
+                positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
+            plan = compile_plan(
+                targets,
+                Tolerance(threshold_mm, yaw_threshold_deg),
+                **options,
+                **({"colours": whole.colours, "settings": whole.settings} if whole is not None else {}),
+            )
         except BtArrangeError as error:
             return f"{self.spec.name}: the solved places cannot be arranged: {error}"
-        steps = list(built.children[:-1])  # without its "park the arm": the root parks once, at the end
-        for child in steps:
-            built.remove_child(child)
+        for child in render_targets(plan, locate):
             self.add_child(child)
             for node in child.iterate():
                 node.setup(**self._setup_kwargs)
-        if isinstance(root, Arrangement):
-            known = {t.obj for t in root.targets}
-            root.targets.extend(t for t in targets if t.obj not in known)
+        #: The solved pieces' targets this node arranges (a run's report reads them).
+        self.arranged = tuple(targets)
+        if whole is not None:
+            root.plan = whole.joined(targets)  # type: ignore[attr-defined]
         return None
 
 

@@ -24,16 +24,16 @@ from bt_arrange.behaviours import (
     Push,
     keys,
 )
-from bt_arrange.behaviours.push import PUSH_STRATEGIES
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.layout import Release
 from bt_arrange.numbers import fixed
 from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
+from bt_arrange.plan.choices import PushStrategy
+from bt_arrange.plan.layout import Release
+from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
 from bt_arrange.settings import ManipulationSettings
-from bt_arrange.trees.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
 
 
 def set_target(target: Target) -> py_trees.behaviour.Behaviour:
@@ -102,7 +102,7 @@ def transfer(
     ``locate`` builds the behaviour that finds the object (default ``by_camera()``: Detect).
     ``kind_targets`` (identical parts: the targets of the kind) let a Detect choose a part that
     is not at one of them. ``release`` says where the pads go among neighbours
-    (``bt_arrange.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
+    (``bt_arrange.plan.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
     (``Pick(nearest_grasp=...)``, ``Place(nearest_turn=...)``), for a part neighbours are placed
     beside (issue 36: measured, the half turn and the short way round moved more of them out).
     """
@@ -240,11 +240,9 @@ def inspect(
     )
 
 
-def check_strategy(strategy: object) -> str:
-    """The push strategy's name, or a ``PlanError`` listing the strategies."""
-    if strategy not in PUSH_STRATEGIES:
-        raise PlanError(f"strategy={strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")
-    return str(strategy)
+def check_strategy(strategy: object) -> PushStrategy:
+    """The push strategy named ``strategy``, or a ``PlanError`` listing the strategies."""
+    return PushStrategy.parse(strategy, "strategy")
 
 
 #: Corrections in a row that close less than a tenth of the best offset or yaw error so far
@@ -257,7 +255,7 @@ def correction(
     target: Target,
     threshold_mm: float = 1.0,
     max_pushes: int = 10,
-    strategy: str = "paper",
+    strategy: PushStrategy | str = PushStrategy.PAPER,
     *,
     yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
     kind_targets: Sequence[PlanarPose] = (),
@@ -282,7 +280,7 @@ def correction(
     (``RepeatUntilWithin.margins``: 2 for a part a later neighbour's recheck reads again).
     """
     check_threshold(threshold_mm, settings)
-    check_strategy(strategy)
+    strategy = check_strategy(strategy)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
     obj = target.obj

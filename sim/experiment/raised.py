@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
+    from bt_arrange.plan.targets import Target
     from bt_arrange.report import SessionReport
     from bt_arrange.runner import Transition
-    from bt_arrange.trees.targets import Target
 
 #: The support's colour (the trial's cube is red).
 SUPPORT_COLOUR = "green"

@@ -7,7 +7,7 @@ cell it builds and the nominal pinhole its camera renders.
 
 from __future__ import annotations
 
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraIntrinsics
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.mujoco.cell import MujocoCell

@@ -12,7 +12,7 @@ The names other modules import from here (``ObjectOutcome``, ``SimulationReport`
 
 from __future__ import annotations
 
-from bt_arrange.plancheck import CameraView
+from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.session import (
     REASON_TYPES,
     SETTLE_S,

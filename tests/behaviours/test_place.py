@@ -43,7 +43,7 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
 
 
 def _release_yaw_rad(clock, object_type, target_yaw_rad: float) -> tuple[float, np.ndarray]:
-    from bt_arrange.layout import Release
+    from bt_arrange.plan.layout import Release
 
     context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
     write({"/p/target": PlanarPose(0.45, -0.1, target_yaw_rad)})
@@ -111,7 +111,7 @@ def test_a_part_that_stays_wedged_fails_the_place_naming_the_widths(clock) -> No
 
 
 def test_among_neighbours_the_release_opens_no_further_than_the_layout_allows(clock) -> None:
-    from bt_arrange.layout import Release
+    from bt_arrange.plan.layout import Release
 
     context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
     write({"/p/target": PlanarPose(0.45, -0.1, 0.0)})

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from bt_arrange.layout import Rect, gap_m
 from bt_arrange.objects import CUBE
 from bt_arrange.perception import PartDetector
 from bt_arrange.perception.detection import WorldRegion
+from bt_arrange.plan.layout import Rect, gap_m
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.config import CellConfig
 from bt_arrange_sim.pybullet.cell import WorkCell

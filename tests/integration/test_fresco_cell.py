@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from bt_arrange import treefile
-from bt_arrange.layout import Outline, gap_m
+from bt_arrange.plan.layout import Outline, gap_m
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 
 FRESCO = """

@@ -8,7 +8,7 @@ import py_trees
 import pytest
 
 from bt_arrange import treefile
-from bt_arrange.layout import Outline, gap_m
+from bt_arrange.plan.layout import Outline, gap_m
 from bt_arrange_sim.puzzles import PieceStart
 from bt_arrange_sim.pybullet.runs import SimulatedRun
 

@@ -1,6 +1,6 @@
 """What the layout's search has judged, kept while it searches and between the times a run asks.
 
-``bt_arrange.layout.plan_layout`` tries the same volumes (a staged release's pads, a push's
+``bt_arrange.plan.layout.plan_layout`` tries the same volumes (a staged release's pads, a push's
 sweep) under thousands of placed sets; a run asks for the same layout four times. These keep the
 verdicts for one search (``judging``: context variables, so nothing outlives it) and the last
 layouts (``KeptLayouts``), each the same answer as judging again: the same overlaps, the same
@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 
-from bt_arrange.footprints import Footprint, overlap
+from bt_arrange.plan.footprints import Footprint, overlap
 
 #: While ``plan_layout`` searches, every overlap it has judged, by volume and then by the placed
 #: footprint (its id, the footprint kept beside the verdict): the search asks the same volume

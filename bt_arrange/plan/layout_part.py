@@ -1,6 +1,6 @@
 """A part as the layout sees it: its target, its shape and the gripper holding it, asked what the pads need.
 
-Planar, in metres and radians, in the part's own frame. ``bt_arrange.layout`` plans with it.
+Planar, in metres and radians, in the part's own frame. ``bt_arrange.plan.layout`` plans with it.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import functools
 import math
 from dataclasses import dataclass
 
-from bt_arrange.footprints import Footprint, Outline, Rect
+from bt_arrange.plan.footprints import Footprint, Outline, Rect
 from bt_arrange.shapes.base import Shape, SquarePush
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 
