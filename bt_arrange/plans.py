@@ -65,6 +65,7 @@ from bt_arrange.filelimits import (
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
 from bt_arrange.plan.targets import Target
+from bt_arrange.plan.validate import LOOKS_LIKE_MILLIMETRES_M
 from bt_arrange.plan_colours import COLOUR_KEYS as COLOUR_KEYS  # the plan format's names, kept here
 from bt_arrange.plan_colours import read_colour_table
 from bt_arrange.puzzle.spec import painted_colours, read_puzzles
@@ -501,6 +502,12 @@ class _Reader:
                 f"x_mm = {_shown(entry['x_mm'])}, y_mm = {_shown(entry['y_mm'])} look like metres: the plan is in "
                 f"millimetres (x_mm = {x_mm * 1000:g}, y_mm = {y_mm * 1000:g})",
             )
+        if max(abs(x_mm), abs(y_mm)) > LOOKS_LIKE_MILLIMETRES_M * 1000:
+            raise self.fail(
+                where,
+                f"x_mm = {_shown(entry['x_mm'])}, y_mm = {_shown(entry['y_mm'])} lie "
+                f"{max(abs(x_mm), abs(y_mm)) / 1000:g} m from the table's origin: beyond any arm's reach",
+            )
         name = entry.get("name")
         if name is not None and (not isinstance(name, str) or not name.strip() or "/" in name):
             raise self.fail(where, f"name = {_shown(name)} must be a non-empty text without '/'")
@@ -515,6 +522,8 @@ class _Reader:
             raise self.fail(where, f"z_mm = {_shown(entry['z_mm'])}: a part's bottom face cannot lie below the table")
         if 0.0 < z_mm < LOOKS_LIKE_METRES_MM:
             raise self.fail(where, f"z_mm = {_shown(entry['z_mm'])} looks like metres: the plan is in millimetres")
+        if z_mm > LOOKS_LIKE_MILLIMETRES_M * 1000:
+            raise self.fail(where, f"z_mm = {_shown(entry['z_mm'])} is {z_mm / 1000:g} m up: beyond any arm's reach")
         return z_mm / 1000
 
     def targets(self, entries: Any, types: dict[str, ObjectType], colours: ColourTable) -> list[Any]:

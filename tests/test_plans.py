@@ -88,3 +88,10 @@ def test_every_example_loads_and_builds(name: str) -> None:
     plan = plans.load(path)
     assert isinstance(plan.create_root(), Arrangement)
     assert examples.describe(name)
+
+
+def test_a_plan_file_target_beyond_any_reach_is_refused_in_its_own_millimetres(tmp_path):
+    path = tmp_path / "far.toml"
+    path.write_text('[[targets]]\ncolour = "red"\nx_mm = 5000\ny_mm = 0\n')
+    with pytest.raises(PlanError, match=r"x_mm = 5000, y_mm = 0 lie 5 m from the table's origin: beyond any arm"):
+        plans.load(path).create_root()

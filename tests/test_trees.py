@@ -394,3 +394,12 @@ def test_a_bar_is_held_and_released_only_across_the_side_the_stroke_spans() -> N
     assert parts_of([RED])[0].grasp_axes == ("x", "y")
     steps = plan_steps([bar], order=None)
     assert steps[0].release.axis == "y"
+
+
+@pytest.mark.parametrize("field", ["x_m", "y_m", "z_m"])
+def test_a_python_target_in_millimetres_is_refused_in_one_line_that_says_so(field):
+    values = {"x_m": 0.5, "y_m": 0.0, "z_m": 0.0, field: 500}
+    with pytest.raises(
+        PlanError, match=rf"^target 1 \(red\): {field}=500 looks like millimetres: a Target is in metres"
+    ):
+        arrangement([Target("red", **values)])

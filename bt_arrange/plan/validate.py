@@ -51,6 +51,7 @@ def validate_targets(
             raise PlanError(f"target {index} is {target!r}, not a Target(colour, x_m, y_m, yaw_rad)")
         for field_name in ("x_m", "y_m", "yaw_rad", "z_m"):
             finite_number(field_name, getattr(target, field_name), where=f"target {index} ({target.colour}): ")
+        _check_metres(target, index)
         if not isinstance(target.object_type, ObjectType):
             raise PlanError(f"target {index} ({target.obj}): object_type {target.object_type!r} is not an ObjectType")
         if target.colour not in known:
@@ -111,6 +112,22 @@ def validate_targets(
                 ) from error
     plan_steps(checked, settings)
     return checked
+
+
+#: A position in metres beyond this (m) looks like millimetres: the UR5 reaches 0.85 m from its base.
+LOOKS_LIKE_MILLIMETRES_M = 3.0
+
+
+def _check_metres(target: Target, index: int) -> None:
+    """A ``PlanError`` for a position written in millimetres where metres are meant (``x_m=500`` for 0.5 m)."""
+    for field_name in ("x_m", "y_m", "z_m"):
+        value = float(getattr(target, field_name))
+        if abs(value) > LOOKS_LIKE_MILLIMETRES_M:
+            raise PlanError(
+                f"target {index} ({target.obj}): {field_name}={value:g} looks like millimetres: a Target is in "
+                f"metres ({field_name}={value / 1000:g} for {value:g} mm)",
+                parts=(("target", target.obj),),
+            )
 
 
 def reach_band_m(
