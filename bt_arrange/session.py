@@ -24,9 +24,9 @@ import errno
 import gc
 import math
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import py_trees
 from py_trees.common import Access, Status
@@ -60,7 +60,6 @@ from bt_arrange.plan.targets import Target
 from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
-from bt_arrange.robot import CameraFrame, Clock, Robot
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
 from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
@@ -68,6 +67,7 @@ from bt_arrange.shapes import yaw_error_rad
 from bt_arrange.trees import plan_of
 from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY, camera_margin_mm
+from bt_arrange.world import GroundTruth, World
 
 #: The longest the scene settles before the tree starts (parts put on the table come to rest), seconds.
 SETTLE_S = 0.3
@@ -85,76 +85,6 @@ REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
     SolvePuzzle,
     ArrangeSolved,
 )
-
-
-# ----------------------------------------------------------------------------------------------
-# The world a session runs against
-# ----------------------------------------------------------------------------------------------
-
-
-@runtime_checkable
-class GroundTruth(Protocol):
-    """What a world knows of its parts beyond its sensors: for evaluation only, never for the tree."""
-
-    def part_names(self) -> Sequence[str]:
-        """The names of the parts present in the world."""
-        ...
-
-    def planar_pose(self, name: str) -> tuple[float, float, float]:
-        """The true planar pose of part ``name``: ``(x_m, y_m, yaw_rad)`` in the world frame."""
-        ...
-
-
-@runtime_checkable
-class World(Protocol):
-    """One work cell a tree runs in: simulated, or real.
-
-    The session calls ``place`` and ``settle`` once, before the tree starts, then ``step`` between
-    ticks; ``capture_image`` only when recording; ``close`` at the end.
-    """
-
-    @property
-    def robot(self) -> Robot:
-        """The arm, gripper, camera and clock the behaviours use (``Context.create``)."""
-        ...
-
-    @property
-    def clock(self) -> Clock:
-        """World time, in seconds (the robot's clock)."""
-        ...
-
-    @property
-    def truth(self) -> GroundTruth | None:
-        """Ground truth for the report (evaluation only), or None: the report is then camera only."""
-        ...
-
-    def place(self, starts: Sequence[Any], colours: ColourTable) -> None:
-        """Put the parts where they start, painted with ``colours`` (a real cell: check that they are there).
-
-        A start is ``ObjectStart``-like: colour, x_m, y_m, yaw_rad, name and optionally object_type.
-        """
-        ...
-
-    def settle(self, seconds: float) -> None:
-        """Let world time pass with the robot still until the parts rest, at most ``seconds`` (or just that long)."""
-        ...
-
-    def step(self) -> None:
-        """Advance the world by one control period of the arm."""
-        ...
-
-    def capture_image(self) -> CameraFrame:
-        """A frame of the top camera for the recorded images (its ``rgb`` is saved)."""
-        ...
-
-    def close(self) -> None:
-        """Release the world (disconnect the simulator, stop the robot)."""
-        ...
-
-
-# ----------------------------------------------------------------------------------------------
-# The report
-# ----------------------------------------------------------------------------------------------
 
 
 class Session:
