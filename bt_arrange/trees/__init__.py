@@ -2,7 +2,7 @@
 
 ``steps`` holds the subtrees of one part (find, transfer, inspect, correct); ``arrangement`` renders
 a compiled plan (``render``, ``render_part``) under its root ``Arrangement``; ``puzzle`` a puzzle's
-subtree; ``render.arrangement`` is the public builder (compile, then render). What a plan is and
+subtree; ``builder.arrangement`` is the public builder (compile, then render). What a plan is and
 what is checked of it lives on the floor below, ``bt_arrange.plan``; its names are handed on here.
 """
 
@@ -20,7 +20,7 @@ from bt_arrange.plan.targets import (
 from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.plan.validate import plan_steps, validate_targets
 from bt_arrange.trees.arrangement import TARGETS, Arrangement, arrange_one, plan_of, render, render_part
-from bt_arrange.trees.render import arrangement
+from bt_arrange.trees.builder import arrangement
 from bt_arrange.trees.steps import (
     Locate,
     by_camera,

@@ -19,7 +19,7 @@ One part (``render_part`` of a ``PartStep``)::
 ``render_targets(plan)`` chains these per part (``CorrectMode.EACH``) or places every part before
 correcting them all (``AFTER_ALL``, the paper's Fig. 5); ``Arrangement`` is the root that carries
 the plan (``Arrangement.plan``), so a run reports per part. The public builder ``arrangement()``
-(``bt_arrange.trees.render``) compiles a plan (``bt_arrange.plan.compiled.compile_plan``) and
+(``bt_arrange.trees.builder``) compiles a plan (``bt_arrange.plan.compiled.compile_plan``) and
 renders it, puzzles included.
 
 ``locate`` says how a part is found before it is picked: ``by_camera()`` (the default, the top
