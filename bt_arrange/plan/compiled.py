@@ -51,16 +51,18 @@ class NeighbourCheck:
 class PartStep:
     """Everything one part's subtree needs: how it is released, pushed and looked at again.
 
-    ``layout`` is the layout's step (``bt_arrange.plan.layout.Step``). ``release`` is where the
+    ``layout`` is the layout's step (``bt_arrange.plan.layout.Step``; None for a part placed free
+    outside a compiled plan, ``PartStep.free``). ``release`` is where the
     pads let go among neighbours (None: anywhere at the target); ``push_towards`` the directions it
     may be pushed (None: any); ``restage`` per blocked direction a release on the other side;
     ``push_opening_m`` the pads' opening for a push among neighbours (None: free). ``rechecked``: a
     later part's step looks at it again, so its correction counts the camera's error twice
-    (``margins``). ``neighbours``: the parts looked at again once it is down.
+    (``margins``). ``neighbours``: the parts looked at again once it is down. ``nearest_grasp``: the
+    wrist takes its nearest grasp and turn (a part neighbours are placed beside).
     """
 
     target: Target
-    layout: Step
+    layout: Step | None
     among_neighbours: bool
     release: Release | None
     push_towards: tuple[str, ...] | None
@@ -69,6 +71,12 @@ class PartStep:
     kind_targets: tuple[PlanarPose, ...] = ()
     rechecked: bool = False
     neighbours: tuple[NeighbourCheck, ...] = ()
+    nearest_grasp: bool = False
+
+    @classmethod
+    def free(cls, target: Target, kind_targets: Iterable[PlanarPose] = ()) -> PartStep:
+        """The step of a part placed free, at its target, pushed from any side: a hand-composed tree's."""
+        return cls(target, None, False, None, None, None, None, tuple(kind_targets))
 
     @property
     def margins(self) -> int:
@@ -284,6 +292,7 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
                 kind_targets=siblings.get(target.obj, ()),
                 rechecked=target.obj in rechecked,
                 neighbours=tuple(neighbours),
+                nearest_grasp=dense or target.obj in rechecked,
             )
         )
     return tuple(steps)

@@ -38,6 +38,7 @@ import py_trees
 
 from bt_arrange.behaviours import MoveHome, Place, Recheck, keys
 from bt_arrange.checks import whole_number
+from bt_arrange.deprecation import warn_once
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.objects import ObjectStart
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
@@ -81,14 +82,7 @@ def render_part(part: PartStep, plan: ArrangementPlan, locate: Locate | None = N
     tolerance = plan.tolerance
     children: list[py_trees.behaviour.Behaviour] = [
         set_target(target),
-        transfer(
-            target,
-            plan.max_regrasps,
-            locate=locate,
-            kind_targets=part.kind_targets,
-            release=part.release,
-            nearest=part.among_neighbours or part.rechecked,
-        ),
+        transfer(part, plan, locate=locate),
         inspect(target, f"inspect {obj} after placing", after_placing=True, kind_targets=part.kind_targets),
         # Layers: a raised part must stand on its support; far off, it is placed again, not pushed.
         *layers.standing(target),
@@ -104,19 +98,7 @@ def render_part(part: PartStep, plan: ArrangementPlan, locate: Locate | None = N
                 )
             ]
         ),
-        correction(
-            target,
-            tolerance.threshold_mm,
-            plan.max_pushes,
-            plan.strategy,
-            yaw_threshold_deg=tolerance.yaw_threshold_deg,
-            kind_targets=part.kind_targets,
-            towards=part.push_towards,
-            restage=dict(part.restage) if part.restage is not None else None,
-            push_opening_m=part.push_opening_m,
-            settings=plan.settings,
-            margins=part.margins,
-        ),
+        correction(part, plan),
     ]
     children += [_look_again(neighbour, obj, plan) for neighbour in part.neighbours]
     return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
@@ -139,20 +121,7 @@ def _look_again(neighbour: NeighbourCheck, after: str, plan: ArrangementPlan) ->
                 kind_targets=neighbour.kind_targets,
                 z_m=neighbour.target.z_m,
             ),
-            correction(
-                neighbour.target,
-                plan.tolerance.threshold_mm,
-                plan.max_pushes,
-                plan.strategy,
-                yaw_threshold_deg=plan.tolerance.yaw_threshold_deg,
-                kind_targets=neighbour.kind_targets,
-                towards=neighbour.push_towards,
-                restage=dict(neighbour.restage),
-                push_opening_m=neighbour.push_opening_m,
-                count=False,
-                label=label,
-                settings=plan.settings,
-            ),
+            correction(neighbour, plan, count=False, label=label),
         ],
     )
     # A neighbour whose transfer failed (the tree going on past it) lies where it started: nothing
@@ -197,13 +166,7 @@ def render_targets(plan: ArrangementPlan, locate: Locate | None = None) -> list[
                     memory=True,
                     children=[
                         set_target(part.target),
-                        transfer(
-                            part.target,
-                            plan.max_regrasps,
-                            locate=locate,
-                            kind_targets=part.kind_targets,
-                            release=part.release,
-                        ),
+                        transfer(part, plan, locate=locate),
                         inspect(
                             part.target,
                             f"inspect {part.target.obj} after placing",
@@ -234,17 +197,7 @@ def render_targets(plan: ArrangementPlan, locate: Locate | None = None) -> list[
                         inspect(
                             part.target, f"inspect {part.target.obj} before correcting", kind_targets=part.kind_targets
                         ),
-                        correction(
-                            part.target,
-                            plan.tolerance.threshold_mm,
-                            plan.max_pushes,
-                            plan.strategy,
-                            yaw_threshold_deg=plan.tolerance.yaw_threshold_deg,
-                            kind_targets=part.kind_targets,
-                            towards=part.push_towards,
-                            restage=dict(part.restage) if part.restage is not None else None,
-                            settings=plan.settings,
-                        ),
+                        correction(part, plan),
                     ],
                 ),
                 part.target.obj,
@@ -282,7 +235,7 @@ def arrange_one(
     settings: ManipulationSettings | None = None,
     rechecked: bool = False,
 ) -> py_trees.behaviour.Behaviour:
-    """Algorithm 1 for one object, from a layout ``step`` and its ``neighbours`` (``render_part`` of a compiled step).
+    """Deprecated: ``render_part(step, plan)`` of a compiled plan. Algorithm 1 for one object, from a layout ``step``.
 
     ``step`` (from ``plan_steps``) places it among neighbours: its release, the sides it may be
     pushed from and how to release it again. ``neighbours`` are the parts placed before it nearby,
@@ -291,6 +244,7 @@ def arrange_one(
     neighbour's. ``rechecked``: a later part's step looks at this one again, so its correction counts
     the camera's error twice.
     """
+    warn_once("arrange_one(target, threshold_mm, max_pushes, ...)", "render_part(step, plan) of a compiled plan")
     settings = settings or ManipulationSettings()
     pads = Pads.from_settings(settings)
     dense = step is not None and is_among_neighbours(step)
@@ -299,7 +253,7 @@ def arrange_one(
     check_threshold(threshold_mm, settings)
     part = PartStep(
         target=target,
-        layout=step,  # type: ignore[arg-type]  # a free part has no layout step
+        layout=step,
         among_neighbours=dense,
         release=step.release if dense and step is not None else None,
         push_towards=step.push_towards if dense and step is not None else None,
@@ -307,6 +261,7 @@ def arrange_one(
         push_opening_m=pads.neighbour_push_opening_m(step.part, "x") if dense and step is not None else None,
         kind_targets=tuple(kind_targets),
         rechecked=rechecked,
+        nearest_grasp=dense or rechecked,
         neighbours=tuple(
             NeighbourCheck(
                 neighbour,

@@ -15,6 +15,7 @@ from typing import Any
 import py_trees
 
 from bt_arrange.checks import positive_number
+from bt_arrange.deprecation import warn_once
 from bt_arrange.errors import PlanError
 from bt_arrange.perception import ColourTable
 from bt_arrange.plan.choices import CorrectMode, PushStrategy
@@ -22,13 +23,74 @@ from bt_arrange.plan.compiled import ArrangementPlan, compile_plan
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
 from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees.arrangement import Arrangement, render
 from bt_arrange.trees.puzzle import OPTIONS as PUZZLE_OPTIONS
 from bt_arrange.trees.puzzle import arrange_puzzle
 from bt_arrange.trees.steps import Locate
 
+#: The keywords of ``arrangement`` beyond the targets, the threshold and ``locate``: the plan's options.
+PLAN_OPTIONS = (
+    "yaw_threshold_deg",
+    "correct",
+    "strategy",
+    "max_pushes",
+    "max_regrasps",
+    "keep_going",
+    "order",
+    "colours",
+    "settings",
+    "puzzles",
+)
+#: The former positional parameters after ``threshold_mm``, deprecated.
+_POSITIONAL = ("max_pushes", "correct")
+
 
 def arrangement(
+    targets: Iterable[Target],
+    threshold_mm: float = 1.0,
+    *legacy: Any,
+    locate: Locate | None = None,
+    **options: Any,
+) -> Arrangement:
+    """An arrangement of several parts, checked before anything moves: ``compile_plan``, then ``render``.
+
+    ``threshold_mm`` is the accuracy each part must end within; ``locate`` says how each part is
+    found before it is picked (default ``by_camera()``). The plan's ``options`` (``PLAN_OPTIONS``):
+
+    - ``yaw_threshold_deg`` (default 1; None: position only);
+    - ``correct``: ``"each"`` corrects every part right after placing it (Algorithm 1, the default),
+      ``"after_all"`` places all of them first (the paper's Fig. 5) (``CorrectMode``);
+    - ``strategy``: ``"paper"`` (alternating x and y, Table 1's), ``"learned"`` or ``"diagonal"``
+      (``PushStrategy``); ``max_pushes`` (10) and ``max_regrasps`` (3);
+    - ``keep_going`` (True): a part that cannot be finished does not stop the others;
+    - ``order``: the placing order (object names; default the layout's);
+    - ``colours``: the plan's colour table; ``settings``: the handling settings (the gripper among them);
+    - ``puzzles`` (``bt_arrange.puzzle.PuzzleSpec``s): slabs reassembled from the camera alone after
+      the targets; with puzzles, ``targets`` may be empty.
+
+    ``arrangement(targets, threshold_mm, max_pushes, correct)`` with those two positional still
+    works, with a ``DeprecationWarning`` once.
+    """
+    if legacy:
+        if len(legacy) > len(_POSITIONAL):
+            raise TypeError(f"arrangement() takes 2 positional arguments but {2 + len(legacy)} were given")
+        warn_once(
+            "arrangement(targets, threshold_mm, max_pushes, correct)", "arrangement(targets, threshold_mm, **options)"
+        )
+        for name, value in zip(_POSITIONAL, legacy, strict=False):
+            if name in options:
+                raise TypeError(f"arrangement() got multiple values for argument {name!r}")
+            options[name] = value
+    unknown = sorted(set(options) - set(PLAN_OPTIONS))
+    if unknown:
+        raise TypeError(
+            f"arrangement() got an unexpected keyword argument {unknown[0]!r}{did_you_mean(unknown[0], PLAN_OPTIONS)}"
+        )
+    return _arrangement(targets, threshold_mm, locate=locate, **options)
+
+
+def _arrangement(
     targets: Iterable[Target],
     threshold_mm: float = 1.0,
     max_pushes: int = 10,
@@ -44,28 +106,6 @@ def arrangement(
     settings: ManipulationSettings | None = None,
     puzzles: Sequence[Any] = (),
 ) -> Arrangement:
-    """An arrangement of several objects, checked before anything moves.
-
-    ``correct="each"`` corrects every object right after placing it (Algorithm 1);
-    ``"after_all"`` places all of them first and corrects them afterwards (the paper's Fig. 5).
-    With ``keep_going`` (the default) an object that cannot be finished does not stop the others:
-    its subtree's failure is kept in the log and in the report, and the next object is handled.
-    ``locate`` says how each object is found before it is picked (default ``by_camera()``).
-    ``order`` (object names) is the placing order; by default the layout chooses one
-    (``bt_arrange.plan.layout.plan_layout``: the plan's own order where it can be built). Among
-    neighbours each part is released where the pads fit, pushed only from free sides, and the
-    parts near it are looked at again once it is down.
-    ``strategy`` chooses the pushes: ``"paper"`` (alternating x and y, Table 1's), ``"learned"``
-    (``Push``: the larger axis first, each push's landing error learned) or ``"diagonal"`` (learned,
-    and the same push corrects the other axis too).
-    ``yaw_threshold_deg`` (default 1) is the yaw error each object must end under, too (None:
-    position only). ``colours`` is the colour table of the plan (default the cell's four; a
-    user's colours join it with ``DEFAULT_COLOUR_TABLE.with_colour(ColourRange.around_rgb(...))``).
-    ``settings`` (default ``ManipulationSettings()``) are the handling settings the plan is checked
-    and built with; the tree keeps them (``Arrangement.settings``) and a run hands them to the context.
-    ``puzzles`` (``bt_arrange.puzzle.PuzzleSpec``s) are slabs reassembled after the targets, each from
-    the camera alone (``bt_arrange.trees.puzzle``); with puzzles, ``targets`` may be empty.
-    """
     strategy = PushStrategy.parse(strategy, "strategy")
     correct = CorrectMode.parse(correct, "correct")
     targets = list(targets) if isinstance(targets, Iterable) and not isinstance(targets, (str, bytes)) else targets
@@ -74,7 +114,7 @@ def arrangement(
     check_threshold(threshold_mm, settings)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
-    tolerance = Tolerance(float(threshold_mm), yaw_threshold_deg)  # type: ignore[arg-type]
+    tolerance = Tolerance(float(threshold_mm), yaw_threshold_deg)
     options: dict[str, Any] = dict(
         settings=settings,
         correct=correct,
@@ -86,9 +126,9 @@ def arrangement(
         colours=colours,
     )
     if not puzzles:
-        return render(compile_plan(targets, tolerance, **options), locate)  # type: ignore[arg-type]
+        return render(compile_plan(targets, tolerance, **options), locate)
     # Without targets, a stand-in's plan checks the options and gives the run's settings; its steps are dropped.
-    plan = compile_plan(targets or [Target("red", 0.5, 0.0)], tolerance, **options)  # type: ignore[arg-type]
+    plan = compile_plan(targets or [Target("red", 0.5, 0.0)], tolerance, **options)
     if not targets:
         plan = dataclasses.replace(plan, targets=(), steps=())
     return _with_puzzles(render(dataclasses.replace(plan, puzzles=tuple(puzzles)), locate))
@@ -118,4 +158,4 @@ def _with_puzzles(root: Arrangement) -> Arrangement:
     return root
 
 
-__all__ = ["arrangement"]
+__all__ = ["PLAN_OPTIONS", "arrangement"]

@@ -138,18 +138,14 @@ class ArrangeSolved(py_trees.composites.Sequence):
                 f"detect {target.obj}", target.obj, target.colour, target.object_type, surveyed[target.obj]
             )
 
-        options = dict(self.options)
+        options: dict[str, Any] = dict(self.options)
         try:
             threshold_mm = check_threshold(options.pop("threshold_mm"), whole.settings if whole else None)
             yaw_threshold_deg = options.pop("yaw_threshold_deg")
             if yaw_threshold_deg is not None:
                 positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
-            plan = compile_plan(
-                targets,
-                Tolerance(threshold_mm, yaw_threshold_deg),
-                **options,
-                **({"colours": whole.colours, "settings": whole.settings} if whole is not None else {}),
-            )
+            shared: dict[str, Any] = {"colours": whole.colours, "settings": whole.settings} if whole else {}
+            plan = compile_plan(targets, Tolerance(threshold_mm, yaw_threshold_deg), **options, **shared)
         except BtArrangeError as error:
             return f"{self.spec.name}: the solved places cannot be arranged: {error}"
         for child in render_targets(plan, locate):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import py_trees
 
@@ -26,13 +27,16 @@ from bt_arrange.behaviours import (
 )
 from bt_arrange.checks import positive_number, whole_number
 from bt_arrange.decorators import RepeatUntilWithin
+from bt_arrange.deprecation import warn_once
 from bt_arrange.errors import PlanError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.numbers import fixed
 from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.plan.choices import PushStrategy
+from bt_arrange.plan.compiled import ArrangementPlan, NeighbourCheck, PartStep
 from bt_arrange.plan.layout import Release
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
+from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.settings import ManipulationSettings
 
 
@@ -89,6 +93,36 @@ def by_depth(
 
 
 def transfer(
+    step: PartStep | Target,
+    plan: ArrangementPlan | None = None,
+    *legacy: Any,
+    locate: Locate | None = None,
+    **legacy_keywords: Any,
+) -> py_trees.behaviour.Behaviour:
+    """Locate, pick and place one part: ``step`` is a compiled plan's ``PartStep``, or a ``Target`` placed free.
+
+    ``plan`` gives the regrasps (``max_regrasps``, default 3); ``locate`` builds the behaviour that
+    finds the part (default ``by_camera()``: Detect). The step says where the pads go among
+    neighbours and whether the wrist takes its nearest grasp. The older form
+    ``transfer(target, max_regrasps, kind_targets=, release=, nearest=)`` still works, with a
+    ``DeprecationWarning`` once.
+    """
+    if legacy or legacy_keywords or (plan is not None and not isinstance(plan, ArrangementPlan)):
+        warn_once("transfer(target, max_regrasps, kind_targets=, release=, nearest=)", "transfer(step, plan)")
+        target = step.target if isinstance(step, PartStep) else step
+        return _transfer(target, *(() if plan is None else (plan,)), *legacy, locate=locate, **legacy_keywords)
+    part = step if isinstance(step, PartStep) else PartStep.free(step)
+    return _transfer(
+        part.target,
+        plan.max_regrasps if plan is not None else 3,
+        locate=locate,
+        kind_targets=part.kind_targets,
+        release=part.release,
+        nearest=part.nearest_grasp,
+    )
+
+
+def _transfer(
     target: Target,
     max_regrasps: int = 3,
     *,
@@ -252,6 +286,73 @@ STALL_AFTER_PUSHES = 2
 
 
 def correction(
+    step: PartStep | NeighbourCheck | Target,
+    plan: ArrangementPlan | None = None,
+    *legacy: Any,
+    label: str = "",
+    count: bool = True,
+    **legacy_keywords: Any,
+) -> py_trees.behaviour.Behaviour:
+    """Push and inspect one part until it lies within the plan's tolerance of its target.
+
+    ``step`` is a compiled plan's ``PartStep`` (the sides it may be pushed from, its restaging, the
+    pads' opening, the camera's margin counted twice when it is looked at again), a
+    ``NeighbourCheck`` (a neighbour corrected after another part is down) or a ``Target`` placed
+    free. ``plan`` gives the tolerance, the pushes (``max_pushes``, ``strategy``) and the settings
+    (default: 1 mm, 1 deg, 10 pushes, the paper's strategy). ``count``: the loop's pushes are the
+    part's ``corrections``; ``label`` ends every node's name. The older form
+    ``correction(target, threshold_mm, max_pushes, strategy, yaw_threshold_deg=, ...)`` still works,
+    with a ``DeprecationWarning`` once.
+    """
+    if legacy or legacy_keywords or (plan is not None and not isinstance(plan, ArrangementPlan)):
+        warn_once(
+            "correction(target, threshold_mm, max_pushes, strategy, ...)", "correction(step, plan) of a compiled plan"
+        )
+        target = step.target if isinstance(step, (PartStep, NeighbourCheck)) else step
+        return _correction(
+            target, *(() if plan is None else (plan,)), *legacy, label=label, count=count, **legacy_keywords
+        )
+    plan = plan if plan is not None else ArrangementPlan.of([], Tolerance(1.0, DEFAULT_YAW_THRESHOLD_DEG))
+    towards: tuple[str, ...] | None
+    restage: dict[str, Release] | None
+    opening_m: float | None
+    if isinstance(step, NeighbourCheck):
+        target, towards, restage, opening_m, kind_targets, margins = (
+            step.target,
+            step.push_towards,
+            dict(step.restage),
+            step.push_opening_m,
+            step.kind_targets,
+            1,
+        )
+    else:
+        part = step if isinstance(step, PartStep) else PartStep.free(step)
+        target, towards, restage, opening_m, kind_targets, margins = (
+            part.target,
+            part.push_towards,
+            dict(part.restage) if part.restage is not None else None,
+            part.push_opening_m,
+            part.kind_targets,
+            part.margins,
+        )
+    return _correction(
+        target,
+        plan.tolerance.threshold_mm,
+        plan.max_pushes,
+        plan.strategy,
+        yaw_threshold_deg=plan.tolerance.yaw_threshold_deg,
+        kind_targets=kind_targets,
+        towards=towards,
+        restage=restage,
+        push_opening_m=opening_m,
+        count=count,
+        label=label,
+        settings=plan.settings,
+        margins=margins,
+    )
+
+
+def _correction(
     target: Target,
     threshold_mm: float = 1.0,
     max_pushes: int = 10,

@@ -138,7 +138,14 @@ def _cell_config(spec: TrialSpec) -> CellConfig:
 def _depth_grasp_tree(target, threshold_mm: float, seed: int, strategy: str = "paper"):  # noqa: ANN001, ANN202
     """Algorithm 1 with line 6 (pose estimation before picking) done by the depth-only substitute."""
     from bt_arrange.behaviours import MoveHome
-    from bt_arrange.trees import Arrangement, arrange_one, by_depth
+    from bt_arrange.plan import ArrangementPlan, PartStep, PushStrategy, Tolerance
+    from bt_arrange.trees import Arrangement, by_depth, render_part
 
-    arrange = arrange_one(target, threshold_mm, max_pushes=10, locate=by_depth(seed), strategy=strategy)
+    plan = ArrangementPlan(
+        targets=(target,),
+        tolerance=Tolerance(threshold_mm, 1.0),
+        strategy=PushStrategy.parse(strategy, "strategy"),
+        max_pushes=10,
+    )
+    arrange = render_part(PartStep.free(target), plan, by_depth(seed))
     return Arrangement("arrangement", [arrange, MoveHome("park the arm")], [target], threshold_mm)
