@@ -409,3 +409,15 @@ def test_live_view_compact_expands_only_running_subtrees() -> None:
     assert "--> <StatusQueue> b [*]" in text  # inside the running subtree, named by its type as the XML would
     assert "a [" not in text  # the finished subtree is folded
     assert "..." in text
+
+
+@needs_dot
+def test_a_six_part_plan_s_picture_stays_readable_in_width(tmp_path):
+    import cv2
+
+    from bt_arrange import examples, plans
+
+    root = plans.load(examples.path_of("six_in_a_row")).create_root()
+    path = Path(render_tree(root, "png", out=tmp_path / "six.png"))
+    height, width = cv2.imread(str(path)).shape[:2]
+    assert width <= 2500 < height, (width, height)

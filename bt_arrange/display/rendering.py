@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import textwrap
 import uuid
 from pathlib import Path
 
@@ -119,6 +120,21 @@ def _dot_node_names(root: py_trees.behaviour.Behaviour) -> dict[uuid.UUID, str]:
     return names
 
 
+#: Characters per line of a node's label in a picture.
+LABEL_WIDTH = 20
+
+
+def _wrap_labels(graph: pydot.Dot) -> None:
+    """Break each node's label into lines of at most ``LABEL_WIDTH`` characters (at spaces)."""
+    for node in graph.get_nodes():
+        label = node.get("label")
+        if not label:
+            continue
+        text = str(label).strip('"')
+        if len(text) > LABEL_WIDTH:
+            node.set("label", '"' + "\\n".join(textwrap.wrap(text, LABEL_WIDTH)) + '"')
+
+
 def dot_graph(root: py_trees.behaviour.Behaviour, *, blackboard: bool = False) -> pydot.Dot:
     """``py_trees.display.dot_tree(root)``, plus this tree's blackboard keys when asked.
 
@@ -128,6 +144,10 @@ def dot_graph(root: py_trees.behaviour.Behaviour, *, blackboard: bool = False) -
     so a second tree built in the same process would appear twice.
     """
     graph = py_trees.display.dot_tree(root)
+    # Left to right, labels wrapped: a plan's parts stack downwards, so a six-part tree stays about
+    # 2,000 px wide (top-down with one line per label it was 13,000).
+    graph.set_rankdir("LR")
+    _wrap_labels(graph)
     if not blackboard:
         return graph
     nodes = _dot_node_names(root)
