@@ -73,6 +73,14 @@ class RunReport(Protocol):
         """True when every object ended within the threshold, as the camera measured."""
         ...
 
+    def within_text(self) -> str:
+        """How many objects are within: ``3 of 4 objects within 1 mm and 1 deg``."""
+        ...
+
+    def not_within(self) -> str:
+        """Each object not within, with its offset and why (empty when all are)."""
+        ...
+
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` form."""
         ...

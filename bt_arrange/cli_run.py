@@ -146,6 +146,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "yaw",
             "yaw truth",
             "pushes",
+            "set down",
+            "placed again",
             "regrasps",
             "status",
         )
@@ -163,6 +165,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
                 deg(getattr(o, "final_yaw_error_deg", None)),
                 deg(getattr(o, "final_yaw_error_truth_deg", None)),
                 str(o.pushes),
+                str(getattr(o, "set_downs", 0)),
+                str(getattr(o, "placed_again", 0)),
                 str(getattr(o, "regrasps_after_placing", 0)),
                 status,
             )
@@ -182,7 +186,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
         print(
             "offsets in mm: placed and pushed measured by the camera after placing (the first time) and after "
             "pushing; "
-            f"regrasps: picked up again after placing; "
+            "set down: set down where picked, to look again and pick centred; placed again: placed at the "
+            "target again after the first placing; regrasps: picked up again after placing; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
         source = getattr(report, "camera_margin_source", "")
@@ -195,16 +200,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
         else:
             print(f"the record in {args.record} is incomplete (the line on stderr says which file and why)")
     speed = report.sim_seconds / report.wall_seconds if report.wall_seconds > 0 else float("inf")
-    ending = "stopped at the time limit" if report.timed_out else f"tree {report.tree_status}"
-    if report.objects:
-        within = sum(o.status == "within" for o in report.objects)
-        yaw_threshold = getattr(report, "yaw_threshold_deg", None)
-        yaw_text = f" and {yaw_threshold:g} deg" if yaw_threshold is not None else ""
-        verdict = f"{within} of {len(report.objects)} objects within {report.threshold_mm:g} mm{yaw_text}; "
-    else:
-        verdict = ""
-    # The last line is the verdict, and the exit status agrees with it (0 only when all are within).
-    print(
-        f"{Path(args.tree_file).name}: {verdict}{ending} after {report.sim_seconds:.1f} s of world time "
-        f"in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
-    )
+    timing = f"after {report.sim_seconds:.1f} s of world time in {report.wall_seconds:.1f} s ({speed:.1f}x real time)"
+    # The last line is the verdict, and the exit status agrees with it (0 only when all are within): how many
+    # parts are within and each that is not, with its offset and why; the tree's status only without parts.
+    head, missed = report.within_text(), report.not_within()
+    print(f"{Path(args.tree_file).name}: {head} {timing}" + (f"; not within: {missed}" if missed else ""))

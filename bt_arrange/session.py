@@ -206,6 +206,9 @@ class Session:
         self.faults = files.Faults()
         #: The camera's own error (mm) a measured offset must leave under the threshold, and whence.
         self.camera_margin_mm, self.camera_margin_source = camera_margin_mm(calibration, self.world)
+        #: Per part, its set-downs (to look again and pick centred) and its placings at the target.
+        self._set_downs: dict[str, int] = {}
+        self._placings: dict[str, int] = {}
         #: The subtree that places every part before any is corrected (the paper's Fig. 5), or None.
         self._place_all = getattr(root, "place_all", None)
         #: A live Foxglove server (``bt_arrange.foxglove.streams.LiveServer``, ``--foxglove``) to stream to, or None.
@@ -355,6 +358,9 @@ class Session:
             self.plan = self.plan.joined(node.arranged)  # a puzzle's pieces join the plan once it built them
         if transition.new != Status.SUCCESS.value:
             return
+        if isinstance(node, Place) and node.obj is not None:
+            counts = self._set_downs if node.where == "pick" else self._placings
+            counts[node.obj] = counts.get(node.obj, 0) + 1
         if isinstance(node, SurveyPieces):
             self.puzzle_truth.surveyed(node.spec, node.pieces)
         if self._rechecks and isinstance(node, Inspect):
@@ -454,6 +460,8 @@ class Session:
                     placed_again_offset_truth_mm=_rounded(again.offset_truth_mm),
                     placed_again_yaw_error_deg=_rounded(again.yaw_error_deg),
                     truth_home_mm=self._truth_home_mm(target),
+                    set_downs=self._set_downs.get(target.obj, 0),
+                    placed_again=max(0, self._placings.get(target.obj, 0) - 1),
                 )
             )
         return outcomes + self._unsolved_pieces(transitions, stopped)

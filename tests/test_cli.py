@@ -163,10 +163,18 @@ def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(caps
         return ObjectOutcome(name, (0.5, 0.0, 0.0), 0.5, 0.5, 0.5, 0.5, 0, status, "" if status == "within" else "x")
 
     args = cli.build_parser().parse_args(["run", "four.py"])
-    for statuses, expected in [
-        (["within"] * 4, "4 of 4 objects within 1 mm; tree SUCCESS"),
-        (["within", "within", "within", "failed"], "3 of 4 objects within 1 mm; tree SUCCESS"),
-        (["failed", "outside"], "0 of 2 objects within 1 mm; tree SUCCESS"),
+    for statuses, expected, missed in [
+        (["within"] * 4, "4 of 4 objects within 1 mm", ""),
+        (
+            ["within", "within", "within", "failed"],
+            "3 of 4 objects within 1 mm",
+            "; not within: 3 failed at 0.50 mm (x)",
+        ),
+        (
+            ["failed", "outside"],
+            "0 of 2 objects within 1 mm",
+            "; not within: 0 failed at 0.50 mm (x); 1 outside at 0.50 mm (x)",
+        ),
     ]:
         report = SimulationReport(
             [outcome(str(i), s) for i, s in enumerate(statuses)], "SUCCESS", 1.0, 10.0, 1.0, False
@@ -174,6 +182,8 @@ def test_the_last_line_counts_the_objects_within_and_the_exit_status_agrees(caps
         cli_run._print_report(report, args)
         last = capsys.readouterr().out.strip().splitlines()[-1]
         assert last.startswith(f"four.py: {expected} after 10.0 s of world time")
+        assert "SUCCESS" not in last, "the tree's status is never the verdict beside the parts"
+        assert last.endswith(missed) if missed else "not within" not in last
         assert report.all_within_threshold == (statuses == ["within"] * 4)
         assert report.to_dict()["objects_within"] == statuses.count("within")
 
@@ -197,7 +207,7 @@ def test_the_table_speaks_mm_and_degrees_and_the_last_line_names_the_yaw_thresho
     lines = capsys.readouterr().out.strip().splitlines()
     assert "target x, y (mm), yaw (deg)" in lines[0]
     assert "450.0, -50.0, 30.0" in lines[1]
-    assert lines[-1].startswith("plan.toml: 1 of 1 objects within 1 mm and 1 deg; tree SUCCESS")
+    assert lines[-1].startswith("plan.toml: 1 of 1 objects within 1 mm and 1 deg after 10.0 s of world time")
 
 
 def test_show_text_into_a_file_names_the_file(capsys, tmp_path) -> None:  # item 6
