@@ -31,21 +31,67 @@ Installing bt-arrange registers the pytest plugin :mod:`bt_arrange.testing.pytes
 ``Blackboard`` to set keys on), and it keeps the dependencies' warnings out of the test output.
 """
 
-from bt_arrange.testing.devices import (
-    CAMERA_HEIGHT_PX,
-    CAMERA_WIDTH_PX,
-    CONTROL_PERIOD_S,
-    GRIPPER_SPEED_M_S,
-    ArmCommand,
-    FakeArm,
-    FakeCamera,
-    FakeClock,
-    FakeGripper,
-    GripperCommand,
-    SyntheticPart,
-)
-from bt_arrange.testing.scene import fake_arm, fake_camera, fake_clock, fake_gripper, make_context, part
-from bt_arrange.testing.ticking import Run, Tick, brake_until_idle, tick_until_done
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from bt_arrange.testing.devices import (
+        CAMERA_HEIGHT_PX,
+        CAMERA_WIDTH_PX,
+        CONTROL_PERIOD_S,
+        GRIPPER_SPEED_M_S,
+        ArmCommand,
+        FakeArm,
+        FakeCamera,
+        FakeClock,
+        FakeGripper,
+        GripperCommand,
+        SyntheticPart,
+    )
+    from bt_arrange.testing.scene import fake_arm, fake_camera, fake_clock, fake_gripper, make_context, part
+    from bt_arrange.testing.ticking import Run, Tick, brake_until_idle, tick_until_done
+
+#: Where each name lives: the kit is imported when a name is first asked for, so that pytest, which
+#: loads the plugin (``bt_arrange.testing.pytest_plugin``) in every run, imports no robot for it.
+_MODULES = {
+    **dict.fromkeys(
+        (
+            "CAMERA_HEIGHT_PX",
+            "CAMERA_WIDTH_PX",
+            "CONTROL_PERIOD_S",
+            "GRIPPER_SPEED_M_S",
+            "ArmCommand",
+            "FakeArm",
+            "FakeCamera",
+            "FakeClock",
+            "FakeGripper",
+            "GripperCommand",
+            "SyntheticPart",
+        ),
+        "bt_arrange.testing.devices",
+    ),
+    **dict.fromkeys(
+        ("fake_arm", "fake_camera", "fake_clock", "fake_gripper", "make_context", "part"), "bt_arrange.testing.scene"
+    ),
+    **dict.fromkeys(("Run", "Tick", "brake_until_idle", "tick_until_done"), "bt_arrange.testing.ticking"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A name of the kit, imported from its module when first asked for."""
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module 'bt_arrange.testing' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_MODULES])
+
 
 __all__ = [
     "CAMERA_HEIGHT_PX",
