@@ -11,6 +11,7 @@ by its entry point, is not registered twice.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -105,9 +106,13 @@ def test_a_project_with_only_the_wheel_installed_runs_the_docs_test(tmp_path: Pa
 @pytest.mark.parametrize("registered_first", [True, False], ids=["by entry point", "by the conftest"])
 def test_the_checkouts_conftest_registers_the_plugin_once(registered_first: bool) -> None:
     """The conftest's guard: the plugin is registered once, whether its entry point loaded it first or not."""
-    import conftest
-
     from bt_arrange.testing import pytest_plugin
+
+    # By path: other folders of the suite have a conftest of their own, and one of them may be "conftest".
+    spec = importlib.util.spec_from_file_location("checkout_conftest", ROOT / "tests" / "conftest.py")
+    assert spec is not None and spec.loader is not None
+    conftest = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(conftest)
 
     manager = pytest.PytestPluginManager()
     if registered_first:

@@ -49,8 +49,10 @@ SyntheticPart: TypeAlias = SyntheticCube | SyntheticPrism
 CONTROL_PERIOD_S = 0.008
 #: Fingers of the fake gripper move at this speed (within the 2F-85's 20 to 150 mm/s).
 GRIPPER_SPEED_M_S = 0.05
-#: Smaller than the cell's 1920 x 1080: four times fewer pixels, still about 1 mm per pixel.
-CAMERA_WIDTH_PX, CAMERA_HEIGHT_PX = 960, 540
+#: The fake camera's image, smaller than the cell's 1920 x 1080: four times fewer pixels, still about
+#: 1 mm per pixel.
+CAMERA_WIDTH_PX = 960
+CAMERA_HEIGHT_PX = 540
 
 
 class FakeClock:

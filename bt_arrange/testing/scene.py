@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import cast
 
 from bt_arrange.behaviours import Context
 from bt_arrange.geometry import FloatArray
@@ -27,10 +28,8 @@ def part(
     """
     if object_type is None or object_type == CUBE:
         return SyntheticCube(colour, x_m, y_m, yaw_rad)
-    shape = object_type.shape
-    if not isinstance(shape, Prism):
-        raise TypeError(f"part({colour!r}): the fake camera draws prisms, not a {type(shape).__name__}")
-    return SyntheticPrism(colour, x_m, y_m, yaw_rad, shape)
+    # The drawing reads only the top face's outline and height, which every shape has.
+    return SyntheticPrism(colour, x_m, y_m, yaw_rad, cast(Prism, object_type.shape))
 
 
 def make_context(
