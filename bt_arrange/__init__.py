@@ -1,5 +1,7 @@
 """bt-arrange: behaviour trees for precise robotic arrangement (pick, place, inspect, push)."""
 
+from typing import TYPE_CHECKING, Any
+
 from bt_arrange.errors import (
     BtArrangeError,
     MotionError,
@@ -11,6 +13,9 @@ from bt_arrange.errors import (
 )
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.robot import Arm, Camera, CameraFrame, CameraIntrinsics, Clock, Gripper, Robot
+
+if TYPE_CHECKING:
+    from bt_arrange.xmltree.registry import register_node
 
 __version__ = "0.1.0"
 
@@ -31,4 +36,14 @@ __all__ = [
     "Robot",
     "TreeFileError",
     "UnreachableError",
+    "register_node",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``register_node``, imported when first asked for (the XML registry imports the behaviours and trees)."""
+    if name == "register_node":
+        from bt_arrange.xmltree.registry import register_node
+
+        return register_node
+    raise AttributeError(f"module 'bt_arrange' has no attribute {name!r}")

@@ -1,27 +1,31 @@
 """Fixtures every test shares: a clean py_trees blackboard around each test, and a test clock.
 
-The fake devices live in ``tests/fakes.py``; tests import them with ``from fakes import ...``
-(pytest puts this folder on ``sys.path``, as ``tests/`` has no ``__init__.py``).
+The fake devices are the testing kit's (``bt_arrange.testing``), and the clean blackboard is its
+pytest plugin's ``bt_blackboard`` fixture. Installing bt-arrange registers that plugin by entry
+point; a checkout whose install predates the entry point registers it here, once.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 
-import py_trees
 import pytest
-from fakes import FakeClock, make_context
 
 from bt_arrange.behaviours import Context
+from bt_arrange.testing import FakeClock, make_context, pytest_plugin
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Register the kit's plugin unless its entry point did (registering it twice is an error)."""
+    manager = config.pluginmanager
+    if not manager.is_registered(pytest_plugin) and not manager.has_plugin("bt_arrange"):
+        manager.register(pytest_plugin, "bt_arrange")
 
 
 @pytest.fixture(autouse=True)
-def clean_blackboard() -> Iterator[None]:
+def clean_blackboard(bt_blackboard: object) -> Iterator[None]:
     """No keys, clients or activity stream left over from another test, before or after."""
-    py_trees.blackboard.Blackboard.clear()
-    py_trees.blackboard.Blackboard.disable_activity_stream()
     yield
-    py_trees.blackboard.Blackboard.clear()
 
 
 @pytest.fixture
@@ -32,5 +36,5 @@ def clock() -> FakeClock:
 
 @pytest.fixture
 def context(clock: FakeClock) -> Context:
-    """A context over fake devices (arm at home, gripper open, no cubes) on the test clock."""
-    return make_context(clock)
+    """A context over fake devices (arm at home, gripper open, no parts) on the test clock."""
+    return make_context(clock=clock)

@@ -1,6 +1,6 @@
 """A kinematic fake world for ``bt_arrange.session``: no simulator, no ground truth for the report.
 
-``FakeWorld`` implements the ``World`` protocol over the fake devices of ``tests/fakes.py``:
+``FakeWorld`` implements the ``World`` protocol over the fake devices of the testing kit (``bt_arrange.testing``):
 
 - the arm tracks every setpoint perfectly (``FakeArm``);
 - a close of the gripper takes the cube between its pads (its centre within the open pads, the
@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 import py_trees
-from fakes import CAMERA_HEIGHT_PX, CAMERA_WIDTH_PX, FakeArm, FakeCamera, FakeClock, FakeGripper
 
 from bt_arrange.objects import CUBE, ObjectStart
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
@@ -37,6 +36,7 @@ from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraFrame, Robot
 from bt_arrange.session import Session, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.testing import CAMERA_HEIGHT_PX, CAMERA_WIDTH_PX, FakeArm, FakeCamera, FakeClock, FakeGripper
 
 SETTINGS = ManipulationSettings()
 EDGE_M = CUBE.size_m[0]
@@ -251,7 +251,7 @@ class _WorldCamera(FakeCamera):
     def capture(self, with_depth: bool = False, window: Any = None) -> CameraFrame:
         """Render the cubes, each painted with its colour."""
         world = self._world
-        self.cubes = [
+        self.parts = [
             SyntheticCube(p.colour, p.x_m, p.y_m, p.yaw_rad, rgb=world.colours[p.colour].paint_rgb, table_z_m=p.z_m)
             for p in world.parts.values()
         ]

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import py_trees
 import pytest
-from fakes import make_context
 from py_trees.common import Status
 
 from bt_arrange.behaviour_run import BehaviourRun
 from bt_arrange.errors import PlanError
+from bt_arrange.testing import make_context
 
 
 class FakeWorld:

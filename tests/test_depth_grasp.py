@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import py_trees
 import pytest
-from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import GraspGuard, Pick, keys
@@ -35,6 +34,7 @@ from bt_arrange.perception.depth_grasp import (
 from bt_arrange.perception.synthetic import sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
+from bt_arrange.testing import fake_arm, make_context, tick_until_done
 from bt_arrange.trees import Target, by_depth, transfer
 
 #: Rendered wider than the sensor's 1024 px, so the estimator resamples like it does the cell's frames.

@@ -233,6 +233,58 @@ def test_registering_a_class_without_ports_or_with_ports_its_constructor_lacks_i
     assert not {"Silent", "Odd", "Named"} & set(REGISTRY)
 
 
+def test_a_class_decorator_registers_a_node_with_its_ports_in_the_registration():
+    @register_node(ports=(Port("height_m", DOUBLE, 0.05, "how high"),), description="lift the part")
+    class Lift(py_trees.behaviours.Success):
+        def __init__(self, name: str, height_m: float = 0.05) -> None:
+            super().__init__(name)
+            self.height_m = height_m
+
+    @register_node
+    class Rest(py_trees.behaviours.Success):
+        @classmethod
+        def provided_ports(cls) -> tuple[Port, ...]:
+            return ()
+
+    @register_node("TakeABreak")
+    class Pause(Rest):
+        pass
+
+    try:
+        assert (REGISTRY["Lift"].cls, REGISTRY["Rest"].cls, REGISTRY["TakeABreak"].cls) == (Lift, Rest, Pause)
+        assert Lift.provided_ports() == REGISTRY["Lift"].ports and Lift.node_description == "lift the part"
+        root = py_trees.composites.Sequence("s", True, children=[Lift("up", 0.1), Rest("r"), Pause("p")])
+        text = xmltree.to_xml(root)
+        assert '<Lift name="up" height_m="0.1"/>' in text and '<TakeABreak name="p"/>' in text
+        assert '<input_port name="height_m" type="double" default="0.05">how high</input_port>' in text
+        assert '<Metadata description="lift the part"/>' in text
+        reloaded = xmltree.from_xml(text)
+        assert [type(node) for node in reloaded.children] == [Lift, Rest, Pause]
+        assert reloaded.children[0].height_m == 0.1
+
+        from bt_arrange.display.rendering import text_tree
+
+        assert "<TakeABreak (Pause)> p" in text_tree(root) and "<Lift> up" in text_tree(root)
+    finally:
+        for tag in ("Lift", "Rest", "TakeABreak"):
+            REGISTRY.pop(tag, None)
+
+
+def test_a_users_node_never_takes_the_tag_of_one_of_ours():
+    ours = REGISTRY["Push"]
+
+    class Push(py_trees.behaviours.Success):
+        pass
+
+    with pytest.raises(XmlTreeError, match=r"node Push: the tag is bt_arrange\.behaviours\.push\.Push's"):
+        register_node(ports=())(Push)
+    with pytest.raises(XmlTreeError, match=r"the tag is py_trees\..*register yours under another"):
+        register_node(Push, "Sequence", ports=())
+    assert REGISTRY["Push"] is ours
+    with pytest.raises(XmlTreeError, match=r"declares no provided_ports\(\) \(or give register_node ports=\)"):
+        register_node(Push, "MyPush")
+
+
 # ----------------------------------------------------------------------------------------------
 # The codecs' errors belong to the project's error family
 # ----------------------------------------------------------------------------------------------

@@ -6,11 +6,11 @@ import json
 
 import py_trees
 import pytest
-from fakes import FakeClock, cube, make_context
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Detect, Inspect, Pick
 from bt_arrange.runner import Runner, Transition, TransitionLog
+from bt_arrange.testing import FakeClock, make_context, part
 from bt_arrange.trees import Target, arrangement
 
 RED, GREEN = Target("red", 0.50, 0.0), Target("green", 0.50, -0.15)
@@ -47,7 +47,7 @@ def run_beside_a_full_walk(root, context) -> tuple[list[list[tuple]], list[list[
 def test_the_visitor_logs_every_change_a_full_walk_sees(correct: str, held_width_m: float | None) -> None:
     # None: every pick closes on nothing (retries, resets, FailureIsSuccess). 0.05: red is held, placed,
     # inspected and pushed (the fake camera still sees it where it lay). Green is not there.
-    context = make_context(FakeClock(), cubes=[cube("red", 0.60, -0.12)], object_width_m=held_width_m)
+    context = make_context(clock=FakeClock(), parts=[part("red", 0.60, -0.12)], object_width_m=held_width_m)
     root = arrangement([RED, GREEN], correct=correct, max_regrasps=1, max_pushes=2)
     by_visitor, by_walk, runner = run_beside_a_full_walk(root, context)
     assert sum(len(tick) for tick in by_walk) > 30, "the run changed many statuses"
@@ -56,7 +56,7 @@ def test_the_visitor_logs_every_change_a_full_walk_sees(correct: str, held_width
 
 
 def test_a_transition_names_its_node_by_id_and_its_object() -> None:
-    context = make_context(FakeClock(), cubes=[cube("red", 0.60, -0.12)], object_width_m=None)
+    context = make_context(clock=FakeClock(), parts=[part("red", 0.60, -0.12)], object_width_m=None)
     root = arrangement([RED], max_regrasps=0)
     _, _, runner = run_beside_a_full_walk(root, context)
     transitions = runner.log.transitions
@@ -70,7 +70,7 @@ def test_a_transition_names_its_node_by_id_and_its_object() -> None:
 
 
 def test_the_json_lines_keep_the_old_fields_and_add_the_node(tmp_path) -> None:
-    context = make_context(FakeClock(), cubes=[], object_width_m=None)
+    context = make_context(clock=FakeClock(), parts=[], object_width_m=None)
     log = TransitionLog(tmp_path / "log.jsonl")
     clock = context.robot.clock
     Runner(arrangement([RED], max_regrasps=0), context, lambda: clock.advance(0.008), log=log).run()

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import py_trees
 import pytest
-from fakes import FakeClock, cube, make_context
 
 from bt_arrange import session
 from bt_arrange.errors import PlanError
 from bt_arrange.session import Session, SessionReport, World
+from bt_arrange.testing import FakeClock, make_context, part
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.pybullet import runs
 from bt_arrange_sim.scenes import PartStart
@@ -25,13 +25,13 @@ RED_START = PartStart("red", 0.40, -0.20, 0.0)
 
 
 class FakeCell:
-    """What SimulatedRun uses of a WorkCell, over the fake devices of tests/fakes.py."""
+    """What SimulatedRun uses of a WorkCell, over the fake devices of the testing kit (bt_arrange.testing)."""
 
     built: list[FakeCell] = []
 
     def __init__(self, config: object = None, gui: bool = False) -> None:
         self.clock = FakeClock()
-        self.context = make_context(self.clock)
+        self.context = make_context(clock=self.clock)
         self.robot = self.context.robot
         self.camera = self.robot.camera
         self.starts: dict[str, PartStart] = {}
@@ -41,7 +41,7 @@ class FakeCell:
     def add_parts(self, starts) -> None:
         for start in starts:
             self.starts[start.name or start.colour] = start
-        self.camera.cubes = [cube(s.colour, s.x_m, s.y_m, s.yaw_rad) for s in self.starts.values()]
+        self.camera.parts = [part(s.colour, s.x_m, s.y_m, s.yaw_rad) for s in self.starts.values()]
 
     def settle(self, seconds: float) -> None:
         self.clock.advance(seconds)

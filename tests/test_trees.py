@@ -6,7 +6,6 @@ import math
 
 import py_trees
 import pytest
-from fakes import cube, fake_camera, make_context
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, StagedBehaviour
@@ -16,6 +15,7 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.shapes import ROBOTIQ_2F85
+from bt_arrange.testing import fake_camera, make_context, part
 from bt_arrange.trees import (
     Arrangement,
     Target,
@@ -323,7 +323,7 @@ def run_tree(root: py_trees.behaviour.Behaviour, context, max_ticks: int = 20000
 
 
 def test_max_regrasps_allows_that_many_attempts_after_the_first(clock) -> None:
-    context = make_context(clock, cubes=[])  # red is nowhere: every attempt fails at Detect
+    context = make_context(clock=clock, parts=[])  # red is nowhere: every attempt fails at Detect
     root = arrangement([RED], max_regrasps=1, keep_going=False)
     assert run_tree(root, context) == Status.FAILURE
     assert find(root, "detect red").feedback_message.startswith("red not_found")
@@ -331,7 +331,7 @@ def test_max_regrasps_allows_that_many_attempts_after_the_first(clock) -> None:
 
 
 def test_an_object_that_cannot_be_found_does_not_stop_the_others(clock) -> None:
-    context = make_context(clock, cubes=[])
+    context = make_context(clock=clock, parts=[])
     root = arrangement([RED, GREEN], max_regrasps=1)
     assert run_tree(root, context) == Status.SUCCESS
     assert find(root, "arrange red").status == Status.FAILURE
@@ -342,7 +342,7 @@ def test_an_object_that_cannot_be_found_does_not_stop_the_others(clock) -> None:
 
 def test_after_all_does_not_correct_an_object_that_was_not_placed(clock) -> None:
     # Red lies 25 cm from its target; the gripper closes on nothing, so every pick fails.
-    context = make_context(clock, cubes=[cube("red", 0.60, -0.12)], object_width_m=None)
+    context = make_context(clock=clock, parts=[part("red", 0.60, -0.12)], object_width_m=None)
     root = arrangement([RED], correct="after_all", max_regrasps=1)
     push = find(root, "push red")
     run_tree(root, context, stop=lambda: push.status != Status.INVALID)
@@ -351,7 +351,7 @@ def test_after_all_does_not_correct_an_object_that_was_not_placed(clock) -> None
 
 
 def test_each_skips_the_correction_of_an_object_that_was_not_placed(clock) -> None:
-    context = make_context(clock, cubes=[cube("red", 0.60, -0.12)], object_width_m=None)
+    context = make_context(clock=clock, parts=[part("red", 0.60, -0.12)], object_width_m=None)
     root = arrangement([RED], correct="each", max_regrasps=1)
     assert run_tree(root, context) == Status.SUCCESS
     assert find(root, "pick red").feedback_message.startswith("no part between the pads")

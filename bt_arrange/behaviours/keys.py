@@ -1,24 +1,50 @@
 """Blackboard keys, one namespace per object: ``/red/pose``, ``/red/offset_mm``, ...
 
-| key | type | written by | read by |
-|---|---|---|---|
-| ``/<obj>/target`` | ``PlanarPose`` | the tree (``SetBlackboardVariable``) | Place, Inspect, Push |
-| ``/<obj>/pose`` | ``Pose`` (part centre, world) | Detect, Inspect | Pick, Push |
-| ``/<obj>/offset_mm`` | ``float``, planar distance to the target | Inspect | RetryUntilThreshold |
-| ``/<obj>/offset_xy_mm`` | ``(float, float)``, target minus pose in the target's frame | Inspect | Push |
-| ``/<obj>/placed_offset_mm`` | ``float``, the first inspection after placing | Inspect(after placing) | reports |
-| ``/<obj>/corrections`` | ``int``, pushes made by the correction loop | RetryUntilThreshold | reports |
-| ``/<obj>/yaw_error_deg`` | ``float``, measured minus target yaw (folded) | Inspect | RepeatUntilWithin, Push |
-| ``/<obj>/placed_yaw_error_deg`` | ``float``, the yaw error after placing | Inspect(after placing) | reports |
-| ``/<obj>/push_axis`` | ``"x"`` or ``"y"``, the axis of the next push | Push | Push |
-| ``/<obj>/blocked_towards`` | ``"+x"`` ..., a push a neighbour blocks | Push | the tree's restaging |
-| ``/<obj>/moved_mm`` | ``float``, how far it moved since it was last looked at | Recheck | reports |
-| ``/<obj>/max_moved_mm`` | ``float``, the most later steps moved it (camera) | Recheck | reports |
-| ``/<obj>/push_bias_mm`` | ``(float, float)``, where pushes land beyond their aim ("learned") | Push | Push |
-| ``/<obj>/last_push`` | ``(axis, aim_mm)``, the last push's axis and aimed landing (strategy "learned") | Push | Push |
-| ``/<obj>/grasp_half_turn`` | ``bool``, the gripper holds it half a turn round (issue 36) | Pick | Place |
-| ``/<obj>/top_height_error_mm`` | ``float``, raised top face (depth) minus planned height | CheckStanding | reports |
-| ``/<obj>/tilt_deg`` | ``float``, the tilt of a raised part's top face from depth | CheckStanding | reports |
+A key is never typed: ``keys.pose("red")`` is ``"/red/pose"``, ``keys.offset_mm("red")`` is
+``"/red/offset_mm"``, one function per key below (``key(obj, FIELD)`` builds any of them from its
+field constant).
+
+- ``/<obj>/target``, ``PlanarPose``: where the part goes (world). Written by the tree's target setter
+  (``SetBlackboardVariable``), before the part's first step; read by Place, Inspect, Push; Pick and Detect among
+  identical parts.
+- ``/<obj>/pose``, ``Pose``: the part's centre as last measured (world). Written by Detect, Inspect and Recheck,
+  each time the camera finds the part (EstimateGraspFromDepth from depth); read by Pick, Push, CheckStanding.
+- ``/<obj>/offset_mm``, ``float``: the planar distance from the measured centre to the target (mm). Written by
+  Inspect, each time it finds the part; read by RepeatUntilWithin.
+- ``/<obj>/offset_xy_mm``, ``(float, float)``: target minus measured centre, in the target's frame (mm). Written by
+  Inspect, each time it finds the part; read by Push.
+- ``/<obj>/yaw_error_deg``, ``float``: measured minus target yaw, folded to the part's symmetry. Written by Inspect,
+  each time it finds the part; read by RepeatUntilWithin, Push.
+- ``/<obj>/placed_offset_mm``, ``float``: the offset at the first look after placing. Written by
+  ``Inspect(after_placing=True)``, once after Place; read by the report, and the trees (its existence says the part
+  was placed).
+- ``/<obj>/placed_yaw_error_deg``, ``float``: the yaw error at that look. Written by
+  ``Inspect(after_placing=True)``, once after Place; read by the report.
+- ``/<obj>/corrections``, ``int``: the pushes the correction loop has made. Written by RepeatUntilWithin, 0 as it
+  starts, then after each correction; read by the report.
+- ``/<obj>/pushes_stalled``, ``"no"``, or ``"stalled"`` once the pushes stopped converging. Written by
+  ``RepeatUntilWithin(stall_after=N)``, as it starts and as it gives up; read by the tree (a regrasp).
+- ``/<obj>/push_axis``, ``"x"`` or ``"y"``: the axis of the *next* push, not of the last one. Written by Push, as it
+  starts a push along the other axis; read by Push (the axes alternate).
+- ``/<obj>/blocked_towards``, ``"+x"`` ...: the push needed, which a neighbour blocks. Written by Push, as it fails
+  for that reason; read by the tree's restaging.
+- ``/<obj>/push_bias_mm``, ``(float, float)``: where pushes land beyond their aim. Written by Push with strategy
+  learned or diagonal, as it starts a push; read by Push.
+- ``/<obj>/last_push``, ``(axis, aim_mm)``: that push's axis and aimed landing. Written by Push with strategy
+  learned or diagonal, as it starts a push; read by Push.
+- ``/<obj>/moved_mm``, ``float``: how far the part moved since it was last looked at (camera). Written by Recheck,
+  when it finds the part again; read by the report.
+- ``/<obj>/max_moved_mm``, ``float``: the most later steps moved it. Written by Recheck, when it finds the part
+  again; read by the report.
+- ``/<obj>/grasp_half_turn``, ``bool``: the gripper holds the part half a turn round. Written by Pick, as it starts
+  (when it chooses the grasp); read by Place.
+- ``/<obj>/top_height_error_mm``, ``float``: a raised part's top face (depth) minus its planned height (mm). Written
+  by CheckStanding, when it measures; read by the report.
+- ``/<obj>/tilt_deg``, ``float``: the tilt of a raised part's top face (depth). Written by CheckStanding, when it
+  measures; read by the report.
+
+One key is not a part's: ``/camera/margin_mm`` (``bt_arrange.uncertainty.CAMERA_MARGIN_KEY``), the
+camera's own error, written by the session before the first tick and read by RepeatUntilWithin.
 """
 
 from __future__ import annotations
@@ -44,10 +70,10 @@ MOVED_MM = "moved_mm"
 MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
 LAST_PUSH = "last_push"
-#: Issue 36: Pick takes a part without half-turn symmetry with the gripper turned half a turn when
-#: that turns the last wrist joint less over the pick, the carry and the look after it.
+#: Pick takes a part without half-turn symmetry with the gripper turned half a turn when that
+#: turns the last wrist joint less over the pick, the carry and the look after it.
 GRASP_HALF_TURN = "grasp_half_turn"
-#: Layers (issue 33): written by ``CheckStanding``.
+#: A raised part's top face, measured by ``CheckStanding``.
 TOP_HEIGHT_ERROR_MM = "top_height_error_mm"
 TILT_DEG = "tilt_deg"
 
@@ -63,3 +89,96 @@ def object_of_key(absolute_key: str) -> str | None:
     if len(parts) == 3 and parts[0] == "" and parts[1] and parts[2]:
         return parts[1]
     return None
+
+
+# -- a part's keys: ``pose("red") == "/red/pose"``, one function per field above ------------------
+
+
+def target(obj: str) -> str:
+    """``/<obj>/target``: where the part goes, set by the tree before the part's first step."""
+    return key(obj, TARGET)
+
+
+def pose(obj: str) -> str:
+    """``/<obj>/pose``: the part's centre as last measured (Detect, Inspect, Recheck)."""
+    return key(obj, POSE)
+
+
+def offset_mm(obj: str) -> str:
+    """``/<obj>/offset_mm``: the planar distance to the target, written by Inspect each time it finds the part."""
+    return key(obj, OFFSET_MM)
+
+
+def offset_xy_mm(obj: str) -> str:
+    """``/<obj>/offset_xy_mm``: target minus measured centre in the target's frame (Inspect)."""
+    return key(obj, OFFSET_XY_MM)
+
+
+def yaw_error_deg(obj: str) -> str:
+    """``/<obj>/yaw_error_deg``: measured minus target yaw, folded to the part's symmetry (Inspect)."""
+    return key(obj, YAW_ERROR_DEG)
+
+
+def placed_offset_mm(obj: str) -> str:
+    """``/<obj>/placed_offset_mm``: the offset at the first look after placing (Inspect(after_placing=True))."""
+    return key(obj, PLACED_OFFSET_MM)
+
+
+def placed_yaw_error_deg(obj: str) -> str:
+    """``/<obj>/placed_yaw_error_deg``: the yaw error at the first look after placing."""
+    return key(obj, PLACED_YAW_ERROR_DEG)
+
+
+def corrections(obj: str) -> str:
+    """``/<obj>/corrections``: the pushes the correction loop has made (RepeatUntilWithin)."""
+    return key(obj, CORRECTIONS)
+
+
+def pushes_stalled(obj: str) -> str:
+    """``/<obj>/pushes_stalled``: ``"stalled"`` once the correction gave up on pushes that stopped converging."""
+    return key(obj, PUSHES_STALLED)
+
+
+def push_axis(obj: str) -> str:
+    """``/<obj>/push_axis``: the axis of the *next* push; Push writes it as it starts a push along the other."""
+    return key(obj, PUSH_AXIS)
+
+
+def blocked_towards(obj: str) -> str:
+    """``/<obj>/blocked_towards``: the push needed (``"+x"`` ...) that a neighbour blocks, written as Push fails."""
+    return key(obj, BLOCKED_TOWARDS)
+
+
+def push_bias_mm(obj: str) -> str:
+    """``/<obj>/push_bias_mm``: where pushes land beyond their aim (Push, strategies learned and diagonal)."""
+    return key(obj, PUSH_BIAS_MM)
+
+
+def last_push(obj: str) -> str:
+    """``/<obj>/last_push``: the last push's axis and aimed landing (Push, strategies learned and diagonal)."""
+    return key(obj, LAST_PUSH)
+
+
+def moved_mm(obj: str) -> str:
+    """``/<obj>/moved_mm``: how far the part moved since it was last looked at (Recheck)."""
+    return key(obj, MOVED_MM)
+
+
+def max_moved_mm(obj: str) -> str:
+    """``/<obj>/max_moved_mm``: the most later steps moved the part (Recheck)."""
+    return key(obj, MAX_MOVED_MM)
+
+
+def grasp_half_turn(obj: str) -> str:
+    """``/<obj>/grasp_half_turn``: the gripper holds the part half a turn round (Pick, for Place)."""
+    return key(obj, GRASP_HALF_TURN)
+
+
+def top_height_error_mm(obj: str) -> str:
+    """``/<obj>/top_height_error_mm``: a raised part's top face minus its planned height (CheckStanding)."""
+    return key(obj, TOP_HEIGHT_ERROR_MM)
+
+
+def tilt_deg(obj: str) -> str:
+    """``/<obj>/tilt_deg``: the tilt of a raised part's top face (CheckStanding)."""
+    return key(obj, TILT_DEG)

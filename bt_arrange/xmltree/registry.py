@@ -1,13 +1,17 @@
 """The nodes an XML tree may use: one ``NodeModel`` per tag, filled by the classes' own declarations.
 
-A node of the project declares its ports on its class (``provided_ports()``, as BehaviorTree.CPP's
-``providedPorts``) and is registered with one call, as BehaviorTree.CPP's
-``factory.registerNodeType<T>(ID)``::
+A node declares its ports on its class (``provided_ports()``, as BehaviorTree.CPP's
+``providedPorts``), or in the registration, and is registered with one call or class decorator, as
+BehaviorTree.CPP's ``factory.registerNodeType<T>(ID)``::
 
     register_node(Pick)                                      # tag "Pick", category from the base class
     register_node(RepeatUntilWithin, "RetryUntilThreshold")  # another tag
 
-The model is read from the class:
+    @register_node(ports=(Port("height_m", DOUBLE, 0.05, "how high"),), description="lift the part")
+    class Lift(StagedBehaviour): ...
+
+A registered node is read and written as XML, drawn by ``bt-arrange show`` under its tag, and shown
+in Groot2 with its ports (the ``TreeNodesModel``). The model is read from the class:
 
 - the tag is the class name unless given; the category (``Action``, ``Condition``, ``Control``,
   ``Decorator``) is ``node_category`` when the class sets it, else a py_trees decorator is a
@@ -25,9 +29,9 @@ py_trees' own nodes, which are not the project's classes, are registered with ad
 from __future__ import annotations
 
 import inspect
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, TypeVar, overload
 
 import py_trees
 
@@ -84,38 +88,99 @@ def register(model: NodeModel) -> NodeModel:
 NodeClass = TypeVar("NodeClass", bound=type)
 
 
-def register_node(cls: NodeClass, tag: str | None = None) -> NodeClass:
-    """Register a class that declares its ports (``provided_ports()``) under ``tag`` (default its name).
+@overload
+def register_node(
+    cls: NodeClass, tag: str | None = None, *, ports: Iterable[Port] | None = None, description: str | None = None
+) -> NodeClass: ...
 
-    Returns the class, so it also serves as a class decorator. A port the constructor does not
-    take (and no ``from_ports`` on the class) is refused here, not when a file is read.
+
+@overload
+def register_node(
+    cls: str | None = None,
+    tag: str | None = None,
+    *,
+    ports: Iterable[Port] | None = None,
+    description: str | None = None,
+) -> Callable[[NodeClass], NodeClass]: ...
+
+
+def register_node(
+    cls: Any = None, tag: str | None = None, *, ports: Iterable[Port] | None = None, description: str | None = None
+) -> Any:
+    """Register a node class for XML trees, ``bt-arrange show`` and Groot2, under ``tag`` (default its name).
+
+    A call, ``register_node(Wave)``, or a class decorator: ``@register_node``, ``@register_node("Tag")``
+    or ``@register_node(ports=(...), description="...")``. The ports are ``ports`` when given (the class
+    then answers ``provided_ports()`` with them), else the class's own ``provided_ports()``; the
+    description is ``description``, else the class's ``node_description``. Returns the class.
+
+    Refused here, not when a file is read: a class without ports declared, a port the constructor
+    does not take (and no ``from_ports`` on the class), and a tag that is already another node's.
     """
+    if cls is None or isinstance(cls, str):
+        named = cls if isinstance(cls, str) else tag
+
+        def decorate(node_class: NodeClass) -> NodeClass:
+            return _register_class(node_class, named, ports, description)
+
+        return decorate
+    return _register_class(cls, tag, ports, description)
+
+
+def _register_class(
+    cls: NodeClass, tag: str | None, ports: Iterable[Port] | None, description: str | None
+) -> NodeClass:
+    if not isinstance(cls, type):
+        raise XmlTreeError(f"register_node takes a class, got {cls!r}")
     tag = tag or cls.__name__
-    declare = getattr(cls, "provided_ports", None)
-    if not callable(declare):
-        raise XmlTreeError(f"node {tag}: {cls.__qualname__} declares no provided_ports()")
-    ports = tuple(declare())
+    if ports is not None:
+        declared = tuple(ports)
+        if not all(isinstance(port, Port) for port in declared):
+            raise XmlTreeError(f"node {tag}: ports= takes bt_arrange.ports.Port values, got {declared!r}")
+    else:
+        declare = getattr(cls, "provided_ports", None)
+        if not callable(declare):
+            raise XmlTreeError(
+                f"node {tag}: {cls.__qualname__} declares no provided_ports() (or give register_node ports=)"
+            )
+        declared = tuple(declare())
     category = getattr(cls, "node_category", None) or category_of(cls)
     if not hasattr(cls, "from_ports"):
         accepted = inspect.signature(cls).parameters
         takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
-        missing = [port.name for port in ports if port.name not in accepted and not takes_any]
+        missing = [port.name for port in declared if port.name not in accepted and not takes_any]
         if missing:
             raise XmlTreeError(
                 f"node {tag}: {cls.__qualname__}() takes no {', '.join(missing)} (give the class a from_ports)"
             )
+    known = REGISTRY.get(tag)
+    if known is not None and known.cls is not cls and _owned(known.cls):
+        raise XmlTreeError(
+            f"node {tag}: the tag is {known.cls.__module__}.{known.cls.__qualname__}'s: register yours under another"
+        )
+    text = description if description is not None else getattr(cls, "node_description", "")
     register(
         NodeModel(
             tag,
             category,
             cls,
-            ports,
+            declared,
             lambda name, values, children: build_node(cls, category, name, values, children),
-            lambda node: port_values(node, ports),
-            description=getattr(cls, "node_description", ""),
+            lambda node: port_values(node, declared),
+            description=text,
         )
     )
+    if ports is not None:
+        # The class answers for its ports as a declared one does (the registry's readers ask it).
+        cls.provided_ports = classmethod(lambda _cls: declared)  # type: ignore[attr-defined]
+    if description is not None:
+        cls.node_description = description  # type: ignore[attr-defined]
     return cls
+
+
+def _owned(cls: type) -> bool:
+    """A class of bt-arrange or of py_trees: a user's node never takes its tag."""
+    return cls.__module__.split(".")[0] in ("bt_arrange", "py_trees")
 
 
 def category_of(cls: type) -> str:

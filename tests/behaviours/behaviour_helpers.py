@@ -1,6 +1,6 @@
 """What the behaviour tests share: blackboard by hand, set-up, the never-blocks check, arm-command helpers.
 
-Every run is driven the way the runner drives a tree (``fakes.tick_until_done``: tick, brake step,
+Every run is driven the way the runner drives a tree (``bt_arrange.testing.tick_until_done``: tick, brake step,
 one control period of world time) and checked tick by tick: a feedback message on every tick, and
 at most one arm setpoint per tick (a behaviour never blocks). The fixtures (``clock``, ``context``,
 the clean blackboard) are in ``tests/conftest.py``.
@@ -13,13 +13,13 @@ from collections.abc import Callable
 import numpy as np
 import py_trees
 import pytest
-from fakes import ArmCommand, Run, Tick
 from py_trees.common import Access
 
 from bt_arrange.behaviours import Context
 from bt_arrange.geometry import Pose
 from bt_arrange.objects import BAR, CUBE
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.testing import ArmCommand, Run, Tick
 
 SETTINGS = ManipulationSettings()
 #: The paper's cube: its edge, the TCP height that grasps and pushes it, and the TCP's distance

@@ -7,18 +7,18 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import AWAY_Q, assert_never_blocks, exists, read, set_up, write
-from fakes import cube, fake_arm, fake_camera, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Detect, stages
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.robot import PixelWindow
+from bt_arrange.testing import fake_arm, fake_camera, make_context, part, tick_until_done
 
 # -- Detect --------------------------------------------------------------------------------------
 
 
 def test_detect_writes_the_measured_pose_under_the_object_name(clock) -> None:
-    context = make_context(clock, cubes=[cube("red", 0.55, -0.12, math.radians(20.0)), cube("blue", 0.4, 0.15)])
+    context = make_context(clock=clock, parts=[part("red", 0.55, -0.12, math.radians(20.0)), part("blue", 0.4, 0.15)])
     run = tick_until_done(set_up(Detect("detect the first", "first", colour="red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     pose = read("/first/pose")
@@ -32,7 +32,7 @@ def test_detect_writes_the_measured_pose_under_the_object_name(clock) -> None:
 
 
 def test_detect_parks_the_arm_before_looking(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, cubes=[cube("green", 0.5, 0.0)])
+    context = make_context(clock=clock, q=AWAY_Q, parts=[part("green", 0.5, 0.0)])
     run = tick_until_done(set_up(Detect("detect green", "green"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.ticks[0].feedback == stages.PARK
@@ -52,14 +52,14 @@ def test_detect_parks_the_arm_before_looking(clock) -> None:
 @pytest.mark.parametrize(
     ("cubes", "status", "why"),
     [
-        ([cube("blue", 0.5, 0.0)], "not_found", "no red blob"),
-        ([cube("red", 0.245, 0.0)], "partial", "cut by the image border"),
-        ([cube("red", 0.45, -0.1), cube("red", 0.55, 0.1)], "ambiguous", "two red cubes"),
+        ([part("blue", 0.5, 0.0)], "not_found", "no red blob"),
+        ([part("red", 0.245, 0.0)], "partial", "cut by the image border"),
+        ([part("red", 0.45, -0.1), part("red", 0.55, 0.1)], "ambiguous", "two red cubes"),
     ],
     ids=["not_found", "partial", "ambiguous"],
 )
 def test_detect_of_a_cube_the_camera_cannot_see_fails_saying_why(clock, cubes, status: str, why: str) -> None:
-    context = make_context(clock, cubes=cubes)
+    context = make_context(clock=clock, parts=cubes)
     run = tick_until_done(set_up(Detect("detect red", "red"), context), context)
     assert run.status == Status.FAILURE, why
     assert run.feedback.startswith(f"red {status}: ")
@@ -81,7 +81,7 @@ def test_detect_among_identical_parts_2_mm_apart_picks_the_free_one_not_the_pair
     # their targets (at neither): the search among identical parts reads the full frame instead.
     placed = [PlanarPose(0.452, 0.0, 0.0), PlanarPose(0.504, 0.0, 0.0)]
     free = PlanarPose(0.40, -0.20, 0.0)
-    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in (*placed, free)])
+    context = make_context(clock=clock, parts=[part("green", p.x_m, p.y_m) for p in (*placed, free)])
     write({"/green 3/target": PlanarPose(0.556, 0.0, 0.0)})
     kind_targets = [*placed, PlanarPose(0.556, 0.0, 0.0)]
     detect = Detect("detect green 3", "green 3", colour="green", kind_targets=kind_targets)
@@ -97,7 +97,7 @@ def test_detect_among_identical_parts_chooses_a_free_one_nearest_its_own_target(
     placed = [PlanarPose(0.45, 0.10, 0.0), PlanarPose(0.45, 0.0, 0.0)]
     own = PlanarPose(0.45, -0.09, 0.0)
     near_free, far_free = PlanarPose(0.62, -0.15, 0.0), PlanarPose(0.65, 0.20, 0.0)
-    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in (*placed, far_free, near_free)])
+    context = make_context(clock=clock, parts=[part("green", p.x_m, p.y_m) for p in (*placed, far_free, near_free)])
     write({"/green 3/target": own})
     detect = Detect("detect green 3", "green 3", colour="green", kind_targets=[*placed, own])
     run = tick_until_done(set_up(detect, context), context)
@@ -109,7 +109,7 @@ def test_detect_among_identical_parts_chooses_a_free_one_nearest_its_own_target(
 
 def test_detect_when_every_identical_part_is_at_a_target_fails_saying_so(clock) -> None:
     placed = [PlanarPose(0.45, 0.10, 0.0), PlanarPose(0.45, 0.0, 0.0)]
-    context = make_context(clock, cubes=[cube("green", p.x_m, p.y_m) for p in placed])
+    context = make_context(clock=clock, parts=[part("green", p.x_m, p.y_m) for p in placed])
     write({"/green 2/target": placed[1]})
     detect = Detect("detect green 2", "green 2", colour="green", kind_targets=placed)
     run = tick_until_done(set_up(detect, context), context)

@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import read, set_up, write
-from fakes import fake_camera, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Detect, Inspect
@@ -15,6 +14,7 @@ from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.objects import ObjectType
 from bt_arrange.perception.synthetic import SyntheticPrism
 from bt_arrange.shapes import Prism
+from bt_arrange.testing import fake_camera, make_context, tick_until_done
 
 #: The brief's non-convex fragment, 20 mm tall.
 FRAGMENT = ObjectType(
@@ -24,9 +24,9 @@ FRAGMENT = ObjectType(
 
 
 def test_detect_writes_a_prism_parts_pose(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     assert isinstance(FRAGMENT.shape, Prism)
-    fake_camera(context).cubes.append(SyntheticPrism("red", 0.55, -0.12, 2.5, FRAGMENT.shape))
+    fake_camera(context).parts.append(SyntheticPrism("red", 0.55, -0.12, 2.5, FRAGMENT.shape))
     behaviour = Detect("detect the fragment", "fragment", colour="red", object_type=FRAGMENT)
     run = tick_until_done(set_up(behaviour, context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -37,10 +37,10 @@ def test_detect_writes_a_prism_parts_pose(clock) -> None:
 
 
 def test_inspect_measures_a_prism_part_in_a_window_around_its_target(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     assert isinstance(FRAGMENT.shape, Prism)
     camera = fake_camera(context)
-    camera.cubes.append(SyntheticPrism("blue", 0.452, 0.099, math.radians(31.0), FRAGMENT.shape))
+    camera.parts.append(SyntheticPrism("blue", 0.452, 0.099, math.radians(31.0), FRAGMENT.shape))
     write({"/fragment/target": PlanarPose(0.45, 0.1, math.radians(30.0))})
     inspect = Inspect("inspect the fragment", "fragment", colour="blue", after_placing=True, object_type=FRAGMENT)
     run = tick_until_done(set_up(inspect, context), context)

@@ -12,11 +12,11 @@ from behaviour_helpers import (
     set_up,
     write,
 )
-from fakes import brake_until_idle, fake_arm, fake_clock, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, GraspGuard, Place, stages
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.testing import brake_until_idle, fake_arm, fake_clock, fake_gripper, make_context, tick_until_done
 
 # -- GraspGuard ----------------------------------------------------------------------------------
 
@@ -33,7 +33,7 @@ def guarded_place(context: Context) -> tuple[GraspGuard, Place]:
 
 
 def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
-    context = make_context(clock, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, object_width_m=CUBE_EDGE_M)
     guard, place = guarded_place(context)
     run = tick_until_done(guard, context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -44,7 +44,7 @@ def test_grasp_guard_runs_the_child_while_the_cube_is_held(clock) -> None:
 
 
 def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
-    context = make_context(clock, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, object_width_m=CUBE_EDGE_M)
     guard, place = guarded_place(context)
     run = tick_until_done(guard, context, until=after(f"holding; {stages.CARRY_ABOVE_TARGET}", 50))
     assert guard.status == Status.RUNNING and place.status == Status.RUNNING
@@ -72,7 +72,7 @@ def test_grasp_guard_fails_within_a_tick_when_the_cube_slips_out(clock) -> None:
 
 
 def test_grasp_guard_fails_at_once_when_nothing_is_held(clock) -> None:
-    context = make_context(clock, object_width_m=None)
+    context = make_context(clock=clock, object_width_m=None)
     guard, place = guarded_place(context)
     guard.tick_once()
     assert guard.status == Status.FAILURE
@@ -88,7 +88,7 @@ def test_grasp_guard_judges_a_sunk_grip_by_the_grip_it_found(clock) -> None:
     lift, it was judged gone (under the nominal less 3 mm) while held, and carried to the next pick.
     """
     sunk_m = 0.002
-    context = make_context(clock, object_width_m=CUBE_EDGE_M - sunk_m)
+    context = make_context(clock=clock, object_width_m=CUBE_EDGE_M - sunk_m)
     guard, place = guarded_place(context)
     tick_until_done(guard, context, until=after(f"holding; {stages.CARRY_ABOVE_TARGET}", 10))
     assert guard.grip_width_m is not None and abs(guard.grip_width_m - (CUBE_EDGE_M - sunk_m)) < 1e-9
@@ -118,7 +118,7 @@ def test_grasp_guard_judges_a_sunk_grip_by_the_grip_it_found(clock) -> None:
 
 def test_grasp_guard_never_raises_the_bound_above_the_nominal(clock) -> None:
     """A grip wider than the part (held across corners) keeps the nominal bound: it may sink that far."""
-    context = make_context(clock, object_width_m=CUBE_EDGE_M + 0.004)
+    context = make_context(clock=clock, object_width_m=CUBE_EDGE_M + 0.004)
     guard, _ = guarded_place(context)
     guard.tick_once()
     assert guard.status == Status.RUNNING

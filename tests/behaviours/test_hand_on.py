@@ -13,7 +13,6 @@ import numpy as np
 import py_trees
 import pytest
 from behaviour_helpers import AWAY_Q, CUBE_EDGE_M, SETTINGS, cube_pose, set_up, write
-from fakes import ArmCommand, fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import MoveHome, Pick, Place
@@ -21,6 +20,7 @@ from bt_arrange.behaviours.context import ArmBrake
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.motion import JointLimits, JointMotion
 from bt_arrange.motion.trajectory import LinearMotion
+from bt_arrange.testing import ArmCommand, fake_arm, fake_gripper, make_context, tick_until_done
 
 #: Finite differences of setpoints taken over from one motion by the next: a line's acceleration is
 #: handed on as its samples' second difference, so the first jerk sample may exceed a limit by the
@@ -54,7 +54,7 @@ def _one_setpoint_per_period(commands: list[ArmCommand], period_s: float) -> Non
 
 
 def test_a_lift_is_handed_on_at_speed_to_the_carry_within_the_joint_limits(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=CUBE_EDGE_M)
     write({"/red/pose": cube_pose(0.5, 0.1, math.radians(10.0)), "/red/target": PlanarPose(0.45, -0.15, 0.3)})
     pick, place = Pick("pick red", "red"), Place("place red", "red")
     sequence = py_trees.composites.Sequence("pick and place", memory=True, children=[pick, place])
@@ -75,7 +75,7 @@ def test_a_lift_is_handed_on_at_speed_to_the_carry_within_the_joint_limits(clock
 
 
 def test_a_retreat_is_handed_on_to_the_way_home_and_an_unclaimed_motion_runs_to_its_end(clock) -> None:
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
     place, home = Place("place red", "red"), MoveHome("park")
     sequence = py_trees.composites.Sequence("place and park", memory=True, children=[place, home])
@@ -91,7 +91,7 @@ def test_a_retreat_is_handed_on_to_the_way_home_and_an_unclaimed_motion_runs_to_
     np.testing.assert_allclose(arm.joint_positions(), context.home_q, atol=1e-9)
 
     # Place alone: its handed-on retreat, claimed by nothing, runs to the top of the line and stops there.
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
     run = tick_until_done(set_up(Place("place red", "red"), context), context)
     assert run.status == Status.SUCCESS

@@ -6,11 +6,11 @@ import math
 
 import pytest
 from behaviour_helpers import cube_pose, exists, read, set_up, write
-from fakes import cube, fake_camera, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Inspect, offset_in_target_frame_mm
 from bt_arrange.geometry import PlanarPose, Pose
+from bt_arrange.testing import fake_camera, make_context, part, tick_until_done
 
 # -- Inspect -------------------------------------------------------------------------------------
 
@@ -28,7 +28,7 @@ def test_offset_in_target_frame_is_target_minus_pose_turned_into_the_target() ->
     ids=["target yaw 0", "target yaw 90 deg"],
 )
 def test_inspect_writes_target_minus_pose_in_the_target_frame(clock, target_yaw_rad, expected_xy_mm) -> None:
-    context = make_context(clock, cubes=[cube("red", 0.502, -0.001, 0.2)])
+    context = make_context(clock=clock, parts=[part("red", 0.502, -0.001, 0.2)])
     write({"/red/target": PlanarPose(0.5, 0.0, target_yaw_rad)})
     run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -42,7 +42,7 @@ def test_inspect_writes_target_minus_pose_in_the_target_frame(clock, target_yaw_
 
 
 def test_inspect_after_placing_also_records_the_placed_offset(clock) -> None:
-    context = make_context(clock, cubes=[cube("yellow", 0.45, 0.1)])
+    context = make_context(clock=clock, parts=[part("yellow", 0.45, 0.1)])
     write({"/yellow/target": PlanarPose(0.45, 0.103, 0.0)})
     inspect = Inspect("inspect yellow after placing", "yellow", after_placing=True)
     run = tick_until_done(set_up(inspect, context), context)
@@ -52,7 +52,7 @@ def test_inspect_after_placing_also_records_the_placed_offset(clock) -> None:
 
 
 def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(clock) -> None:
-    context = make_context(clock, cubes=[])
+    context = make_context(clock=clock, parts=[])
     write({"/red/target": PlanarPose(0.5, 0.0), "/red/offset_mm": 4.0})
     run = tick_until_done(set_up(Inspect("inspect red", "red", after_placing=True), context), context)
     assert run.status == Status.FAILURE
@@ -62,7 +62,7 @@ def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(cloc
 
 
 def test_inspect_looks_through_a_window_around_the_target_only(clock) -> None:
-    context = make_context(clock, cubes=[cube("red", 0.507, 0.004, 0.3), cube("blue", 0.4, 0.15)])
+    context = make_context(clock=clock, parts=[part("red", 0.507, 0.004, 0.3), part("blue", 0.4, 0.15)])
     write({"/red/target": PlanarPose(0.5, 0.0)})
     run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -74,7 +74,7 @@ def test_inspect_looks_through_a_window_around_the_target_only(clock) -> None:
 
 
 def test_inspect_searches_the_whole_view_for_a_cube_far_from_its_target(clock) -> None:
-    context = make_context(clock, cubes=[cube("red", 0.62, -0.2, 0.3)])
+    context = make_context(clock=clock, parts=[part("red", 0.62, -0.2, 0.3)])
     write({"/red/target": PlanarPose(0.5, 0.0)})
     run = tick_until_done(set_up(Inspect("inspect red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -86,7 +86,7 @@ def test_inspect_searches_the_whole_view_for_a_cube_far_from_its_target(clock) -
 
 
 def test_a_detection_in_a_window_is_the_full_frames(clock) -> None:
-    context = make_context(clock, cubes=[cube("green", 0.47, 0.06, 0.4)])
+    context = make_context(clock=clock, parts=[part("green", 0.47, 0.06, 0.4)])
     camera, detector = fake_camera(context), context.detector
     window = detector.window_around(camera.intrinsics, camera.pose_world, 0.47, 0.06, 0.06)
     assert window is not None

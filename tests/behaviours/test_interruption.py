@@ -15,13 +15,13 @@ from behaviour_helpers import (
     speeds,
     write,
 )
-from fakes import brake_until_idle, fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import MoveHome, Pick, Place, stages
 from bt_arrange.errors import MotionError
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.testing import brake_until_idle, fake_arm, make_context, tick_until_done
 
 # -- interruption --------------------------------------------------------------------------------
 
@@ -35,7 +35,7 @@ from bt_arrange.settings import ManipulationSettings
     ids=["joint motion", "straight line"],
 )
 def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_rest(clock, make, during) -> None:
-    context = make_context(clock, q=AWAY_Q)
+    context = make_context(clock=clock, q=AWAY_Q)
     write({"/red/pose": cube_pose(0.5, 0.1)})
     behaviour = set_up(make(), context)
     run = tick_until_done(behaviour, context, until=after(during, 30))
@@ -54,7 +54,7 @@ def test_an_interrupted_motion_is_handed_to_the_brake_which_brings_the_arm_to_re
 
 
 def test_a_behaviour_started_while_the_arm_brakes_waits_for_it(clock) -> None:
-    context = make_context(clock, q=AWAY_Q)
+    context = make_context(clock=clock, q=AWAY_Q)
     first = set_up(MoveHome("park"), context)
     tick_until_done(first, context, until=after(stages.MOVE_HOME, 40))
     first.stop(Status.INVALID)
@@ -76,7 +76,7 @@ def test_a_behaviour_started_while_the_arm_brakes_waits_for_it(clock) -> None:
 
 def test_each_tick_sends_at_most_one_arm_command_even_without_settling(clock) -> None:
     context = make_context(
-        clock, gripper_width_m=0.05, object_width_m=0.05, settings=ManipulationSettings(settle_s=0.0)
+        clock=clock, gripper_width_m=0.05, object_width_m=0.05, settings=ManipulationSettings(settle_s=0.0)
     )
     write({"/red/target": PlanarPose(0.45, -0.1, 0.2)})
     run = tick_until_done(set_up(Place("place red", "red"), context), context)
@@ -85,7 +85,7 @@ def test_each_tick_sends_at_most_one_arm_command_even_without_settling(clock) ->
 
 
 def test_an_error_raised_mid_motion_is_a_failure_with_the_reason_and_the_motion_goes_to_the_brake(clock) -> None:
-    context = make_context(clock, q=AWAY_Q)
+    context = make_context(clock=clock, q=AWAY_Q)
     behaviour = set_up(MoveHome("park"), context)
     run = tick_until_done(behaviour, context, until=after(stages.MOVE_HOME, 30))
     assert run.status == Status.RUNNING

@@ -8,18 +8,18 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import CUBE_EDGE_M, CUBE_GRASP_HEIGHT_M, SETTINGS, assert_never_blocks, command_at, set_up, write
-from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import CheckStanding, Pick, Place, keys
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.robot import CameraFrame, PixelWindow
+from bt_arrange.testing import fake_arm, fake_gripper, make_context, tick_until_done
 
 Z_M = 0.05  # one 5 cm cube below
 
 
 def test_place_on_a_support_releases_at_its_height_and_retreats_above_the_raised_part(clock) -> None:
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     write({"/red/target": PlanarPose(0.5, 0.0, 0.0)})
     run = tick_until_done(set_up(Place("place red", "red", z_m=Z_M), context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -40,7 +40,7 @@ def test_place_on_a_support_releases_at_its_height_and_retreats_above_the_raised
 
 
 def test_pick_off_a_support_closes_at_the_raised_part_s_grasp_height(clock) -> None:
-    context = make_context(clock, gripper_width_m=0.085, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=0.085, object_width_m=CUBE_EDGE_M)
     write({"/red/pose": Pose.from_planar(0.5, 0.0, 0.0, Z_M + CUBE_EDGE_M)})
     run = tick_until_done(set_up(Pick("pick red", "red", z_m=Z_M), context), context)
     assert run.status == Status.SUCCESS, run.feedback
@@ -82,7 +82,7 @@ class PlaneCamera:
 
 
 def standing_run(clock, top_m: float, tilt_deg: float = 0.0):
-    context = make_context(clock)
+    context = make_context(clock=clock)
     context.robot = dataclasses.replace(context.robot, camera=PlaneCamera(context.robot.camera, 0.5, top_m, tilt_deg))
     write({"/red/pose": Pose.from_planar(0.5, 0.0, 0.2, Z_M + CUBE_EDGE_M)})
     return tick_until_done(set_up(CheckStanding("red stands", "red", z_m=Z_M), context), context)
@@ -116,7 +116,7 @@ def test_a_raised_part_is_pushed_at_its_own_height_along_the_gentler_line(clock)
     from bt_arrange.behaviours import Push
     from bt_arrange.motion import LinearMotion
 
-    context = make_context(clock)
+    context = make_context(clock=clock)
     write(
         {
             "/red/pose": Pose.from_planar(0.5, 0.0, 0.0, Z_M + CUBE_EDGE_M),

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from behaviour_helpers import AWAY_Q, SETTINGS, assert_never_blocks, set_up
-from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, MoveHome, stages
+from bt_arrange.testing import fake_arm, make_context, tick_until_done
 
 # -- MoveHome ------------------------------------------------------------------------------------
 
@@ -21,7 +21,7 @@ def test_move_home_when_parked_succeeds_at_once_without_moving(context: Context)
 
 
 def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
-    context = make_context(clock, q=AWAY_Q)
+    context = make_context(clock=clock, q=AWAY_Q)
     run = tick_until_done(set_up(MoveHome("park"), context), context)
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "at home, out of the camera's view"
@@ -38,7 +38,7 @@ def test_move_home_brings_the_arm_home_one_setpoint_per_tick(clock) -> None:
 
 
 def test_move_home_waits_while_the_arm_still_moves_but_no_longer_than_settle_s(clock) -> None:
-    context = make_context(clock, q=AWAY_Q)
+    context = make_context(clock=clock, q=AWAY_Q)
     arm = fake_arm(context)
     real_velocities = arm.joint_velocities
     arm.joint_velocities = lambda: real_velocities() + 0.01  # type: ignore[method-assign] - a joint that creeps on

@@ -19,7 +19,6 @@ from behaviour_helpers import (
     set_up,
     write,
 )
-from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Pick, Place, stages
@@ -28,6 +27,7 @@ from bt_arrange.geometry import PlanarPose, fold_yaw
 from bt_arrange.motion import ArmKinematics, gripper_down_pose
 from bt_arrange.objects import BAR
 from bt_arrange.shapes import ROBOTIQ_2F85, preferred_grasp
+from bt_arrange.testing import fake_arm, fake_gripper, make_context, tick_until_done
 
 # -- Pick ----------------------------------------------------------------------------------------
 
@@ -36,7 +36,7 @@ BAR_GRASP_HEIGHT_M = preferred_grasp(BAR.shape, ROBOTIQ_2F85).height_m
 
 
 def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=CUBE_EDGE_M)
     yaw = math.radians(17.0)
     write({"/red/pose": cube_pose(0.5, 0.1, yaw)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
@@ -63,7 +63,7 @@ def test_pick_grasps_at_the_measured_pose_and_lifts(clock) -> None:
 
 
 def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
-    context = make_context(clock, object_width_m=None)
+    context = make_context(clock=clock, object_width_m=None)
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
@@ -79,7 +79,7 @@ def test_pick_that_closes_on_nothing_fails_naming_the_width(clock) -> None:
 def test_pick_that_still_holds_a_turned_cube_by_its_corners_after_squaring_lets_go_and_fails(clock) -> None:
     # A cube turned ~30 degrees under the pads is gripped across two vertical edges, 68 mm apart,
     # and (in this fake) the squaring closes leave it so.
-    context = make_context(clock, object_width_m=0.068)
+    context = make_context(clock=clock, object_width_m=0.068)
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
@@ -107,7 +107,7 @@ def test_a_target_out_of_reach_fails_before_any_arm_command(context: Context, ma
 
 
 def test_fingers_that_never_stop_fail_after_the_gripper_timeout(clock) -> None:
-    context = make_context(clock, stuck_gripper=True)
+    context = make_context(clock=clock, stuck_gripper=True)
     write({"/red/pose": cube_pose(0.5, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
@@ -129,7 +129,7 @@ def test_pick_without_a_pose_on_the_blackboard_fails_naming_the_key(context: Con
 
 def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(clock) -> None:
     assert BAR.size_m == (0.08, 0.04, 0.04)
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.04)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.04)
     yaw = math.radians(17.0)
     write({"/bar/pose": bar_pose(0.5, 0.1, yaw)})
     run = tick_until_done(set_up(Pick("pick bar", "bar", object_type=BAR), context), context)
@@ -156,7 +156,7 @@ def _recorded_closes(clock, object_type, object_width_m: float) -> list[tuple[fl
     """Pick a part and return each close command's (opening when sent, speed)."""
     from bt_arrange.geometry import Pose
 
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=object_width_m)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=object_width_m)
     write({"/red/pose": Pose.from_planar(0.5, 0.1, math.radians(17.0), object_type.shape.height_m / 2)})
     gripper = fake_gripper(context)
     closes: list[tuple[float, float | None]] = []

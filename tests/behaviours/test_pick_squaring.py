@@ -17,13 +17,13 @@ from behaviour_helpers import (
     set_up,
     write,
 )
-from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Pick, stages
 from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import Pose
 from bt_arrange.settings import ManipulationSettings
+from bt_arrange.testing import fake_arm, fake_gripper, make_context, tick_until_done
 
 
 def _squared_by_the_second_close(context: Context, squared_width_m: float) -> None:
@@ -40,7 +40,7 @@ def _squared_by_the_second_close(context: Context, squared_width_m: float) -> No
 
 def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> None:
     shift = ManipulationSettings(squaring="shift")
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.068, settings=shift)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, object_width_m=0.068, settings=shift)
     _squared_by_the_second_close(context, 0.0505)
     write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
@@ -76,7 +76,7 @@ def test_pick_squares_a_cube_pinched_across_its_corners_and_holds_it(clock) -> N
 
 
 def test_pick_squaring_by_a_sweep_pushes_along_the_closing_axis_towards_the_base(clock) -> None:
-    context = make_context(clock, object_width_m=0.069, settings=ManipulationSettings(squaring="sweep"))
+    context = make_context(clock=clock, object_width_m=0.069, settings=ManipulationSettings(squaring="sweep"))
     _squared_by_the_second_close(context, 0.051)
     write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
@@ -101,7 +101,7 @@ def test_pick_squaring_by_a_sweep_pushes_along_the_closing_axis_towards_the_base
 
 
 def test_pick_with_squaring_off_lets_a_cube_pinched_across_its_corners_go_at_once(clock) -> None:
-    context = make_context(clock, object_width_m=0.068, settings=ManipulationSettings(squaring="off"))
+    context = make_context(clock=clock, object_width_m=0.068, settings=ManipulationSettings(squaring="off"))
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
@@ -144,7 +144,7 @@ TURN = ManipulationSettings(squaring="turn")
 
 
 def test_pick_squaring_by_a_turn_turns_the_wrist_once_when_that_squares_the_cube(clock) -> None:
-    context = make_context(clock, q=AWAY_Q, gripper_width_m=0.0, settings=TURN)
+    context = make_context(clock=clock, q=AWAY_Q, gripper_width_m=0.0, settings=TURN)
     _closes_stop_at(context, [0.068, 0.0505])
     write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
@@ -173,7 +173,7 @@ def test_pick_squaring_by_a_turn_turns_the_wrist_once_when_that_squares_the_cube
 
 
 def test_pick_squaring_by_a_turn_turns_the_other_way_only_when_the_first_turn_left_it_pinched(clock) -> None:
-    context = make_context(clock, settings=TURN)
+    context = make_context(clock=clock, settings=TURN)
     # Turned the other way: +22.5 deg leaves the corners on the pads, -22.5 from the first yaw squares it.
     _closes_stop_at(context, [0.068, 0.070, 0.051])
     write({"/red/pose": cube_pose(0.5, 0.1, 0.0)})
@@ -201,7 +201,7 @@ def test_pick_squaring_by_a_turn_turns_the_other_way_only_when_the_first_turn_le
 
 
 def test_pick_squaring_by_a_turn_that_leaves_it_pinched_both_ways_lets_go_and_fails(clock) -> None:
-    context = make_context(clock, object_width_m=0.068, settings=TURN)
+    context = make_context(clock=clock, object_width_m=0.068, settings=TURN)
     write({"/red/pose": cube_pose(0.45, -0.05)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.FAILURE
@@ -225,7 +225,7 @@ def test_pick_squaring_by_a_turn_that_leaves_it_pinched_both_ways_lets_go_and_fa
 
 
 def test_pick_squaring_by_a_turn_leaves_a_square_grasp_alone(clock) -> None:
-    context = make_context(clock, object_width_m=CUBE_EDGE_M, settings=TURN)
+    context = make_context(clock=clock, object_width_m=CUBE_EDGE_M, settings=TURN)
     write({"/red/pose": cube_pose(0.45, -0.05, 0.3)})
     run = tick_until_done(set_up(Pick("pick red", "red"), context), context)
     assert run.status == Status.SUCCESS, run.feedback

@@ -7,17 +7,17 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import CUBE_EDGE_M, CUBE_GRASP_HEIGHT_M, SETTINGS, assert_never_blocks, command_at, set_up, write
-from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Place, stages
 from bt_arrange.geometry import PlanarPose, fold_yaw
+from bt_arrange.testing import fake_arm, fake_gripper, make_context, tick_until_done
 
 # -- Place ---------------------------------------------------------------------------------------
 
 
 def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     target = PlanarPose(0.45, -0.1, math.radians(30.0))
     write({"/red/target": target})
     run = tick_until_done(set_up(Place("place red", "red"), context), context)
@@ -45,7 +45,7 @@ def test_place_lowers_the_cube_onto_its_target_and_releases_it(clock) -> None:
 def _release_yaw_rad(clock, object_type, target_yaw_rad: float) -> tuple[float, np.ndarray]:
     from bt_arrange.plan.layout import Release
 
-    context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
+    context = make_context(clock=clock, gripper_width_m=0.04, object_width_m=0.04)
     write({"/p/target": PlanarPose(0.45, -0.1, target_yaw_rad)})
     place = Place("place p", "p", object_type, release=Release("x", 0.05, (0.003, -0.002), (0.003, -0.002)))
     run = tick_until_done(set_up(place, context), context)
@@ -85,7 +85,7 @@ def test_among_neighbours_a_cube_takes_the_gripper_half_turn_nearest_the_wrist(c
 
 
 def test_a_release_held_short_by_a_wedged_part_opens_all_the_way_and_then_succeeds(clock) -> None:
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
     gripper = fake_gripper(context)
     gripper.wedge(CUBE_EDGE_M + 0.001, opens=1)
@@ -101,7 +101,7 @@ def test_a_release_held_short_by_a_wedged_part_opens_all_the_way_and_then_succee
 
 
 def test_a_part_that_stays_wedged_fails_the_place_naming_the_widths(clock) -> None:
-    context = make_context(clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
+    context = make_context(clock=clock, gripper_width_m=CUBE_EDGE_M, object_width_m=CUBE_EDGE_M)
     write({"/red/target": PlanarPose(0.45, -0.1, 0.0)})
     fake_gripper(context).wedge(0.0402, opens=2)
     run = tick_until_done(set_up(Place("place red", "red"), context), context)
@@ -113,7 +113,7 @@ def test_a_part_that_stays_wedged_fails_the_place_naming_the_widths(clock) -> No
 def test_among_neighbours_the_release_opens_no_further_than_the_layout_allows(clock) -> None:
     from bt_arrange.plan.layout import Release
 
-    context = make_context(clock, gripper_width_m=0.04, object_width_m=0.04)
+    context = make_context(clock=clock, gripper_width_m=0.04, object_width_m=0.04)
     write({"/p/target": PlanarPose(0.45, -0.1, 0.0)})
     gripper = fake_gripper(context)
     gripper.wedge(0.041, opens=1)  # a pad stopped by a neighbour's side, or the part: the layout's limit holds

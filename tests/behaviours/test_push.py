@@ -19,7 +19,6 @@ from behaviour_helpers import (
     set_up,
     write,
 )
-from fakes import Run, fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Push, stages
@@ -27,6 +26,7 @@ from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
 from bt_arrange.motion import LinearMotion
 from bt_arrange.objects import BAR, CUBE, ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, footprint_m, preferred_grasp
+from bt_arrange.testing import Run, fake_arm, fake_gripper, make_context, tick_until_done
 
 # -- Push ----------------------------------------------------------------------------------------
 
@@ -111,7 +111,7 @@ def test_push_with_nothing_to_push_succeeds_without_moving(context: Context) -> 
 def test_push_starts_behind_the_cube_and_pushes_it_towards_the_target(
     clock, target_yaw_rad, offset_xy_mm, direction, distance_mm
 ) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     centre = np.array([0.5, 0.05])
     push = push_setup(context, cube_pose(*centre, 0.1), target_yaw_rad, offset_xy_mm)
     arm, s = fake_arm(context), SETTINGS

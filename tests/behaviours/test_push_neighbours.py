@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 from behaviour_helpers import cube_pose, read, set_up, write
-from fakes import fake_arm, fake_gripper, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Push
 from bt_arrange.behaviours.push import Blocked
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.testing import fake_arm, fake_gripper, tick_until_done
 
 # -- pushes only from free sides (neighbours as the layout names them) ---------------------
 

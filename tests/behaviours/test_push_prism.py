@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import SETTINGS, set_up, write
-from fakes import fake_arm, fake_gripper, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Push
 from bt_arrange.geometry import PlanarPose, Pose
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import ROBOTIQ_2F85, Prism
+from bt_arrange.testing import fake_arm, fake_gripper, tick_until_done
 
 #: A right triangle, legs 60 mm along x and y: square pushes on the two legs and the hypotenuse.
 TRIANGLE = ObjectType("triangle", shape=Prism.from_outline([[0, 0], [0.06, 0], [0, 0.06]], 0.02))

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from behaviour_helpers import CUBE_GRASP_HEIGHT_M, CUBE_PUSH_REACH_M, SETTINGS, cube_pose, read, set_up, write
-from fakes import fake_arm, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context, Push
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import PlanarPose
+from bt_arrange.testing import fake_arm, make_context, tick_until_done
 
 # -- the learned push strategy (ours; the paper's stays the default) ----------------------------
 
@@ -69,7 +69,7 @@ def test_a_diagonal_push_moves_the_cube_across_its_axis_by_the_other_offset_with
 
 
 def test_a_diagonal_push_goes_sideways_while_the_pads_touch_and_says_so(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     centre = np.array([0.5, 0.05])
     write({"/red/pose": cube_pose(*centre), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)})
     push = set_up(Push("push red", "red", strategy="diagonal"), context)
@@ -91,7 +91,7 @@ def test_a_diagonal_push_goes_sideways_while_the_pads_touch_and_says_so(clock) -
 
 
 def test_a_diagonal_push_does_not_go_sideways_towards_a_blocked_side(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     write(
         {"/red/pose": cube_pose(0.5, 0.05), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (3.0, 1.0)}
     )

@@ -11,7 +11,6 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import read, set_up, write
-from fakes import fake_camera, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours.puzzle import SolvePuzzle, SurveyPieces
@@ -19,6 +18,7 @@ from bt_arrange.objects import ObjectType
 from bt_arrange.perception.synthetic import SyntheticPrism
 from bt_arrange.puzzle import PuzzleSpec
 from bt_arrange.shapes.fracture import fracture
+from bt_arrange.testing import fake_camera, make_context, tick_until_done
 from bt_arrange.trees import Arrangement, Target
 from bt_arrange.trees.puzzle import ArrangeSolved
 
@@ -38,10 +38,10 @@ def scattered(seed: int) -> list[tuple[SyntheticPrism, tuple[float, float, float
 
 
 def solve_in_fake_camera(clock, seed: int):
-    context = make_context(clock)
+    context = make_context(clock=clock)
     camera = fake_camera(context)
     pieces = scattered(seed)
-    camera.cubes.extend(prism for prism, _ in pieces)
+    camera.parts.extend(prism for prism, _ in pieces)
     survey = tick_until_done(set_up(SurveyPieces("survey slab", SPEC), context), context)
     assert survey.status == Status.SUCCESS, survey.feedback
     solve = tick_until_done(set_up(SolvePuzzle("solve slab", SPEC), context), context)
@@ -91,9 +91,9 @@ def test_survey_and_solve_from_the_camera_alone_find_every_piece_s_home(clock, s
 
 
 def test_a_hidden_piece_is_a_failure_naming_the_count(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     camera = fake_camera(context)
-    camera.cubes.extend(prism for prism, _ in scattered(0)[:5])
+    camera.parts.extend(prism for prism, _ in scattered(0)[:5])
     run = tick_until_done(set_up(SurveyPieces("survey slab", SPEC), context), context)
     assert run.status == Status.FAILURE
     assert run.feedback == "slab: the camera sees 5 pieces of red, the puzzle has 6"
@@ -115,7 +115,7 @@ def test_arrange_solved_builds_a_fresco_s_steps_from_the_solve_and_joins_the_roo
     node = ArrangeSolved("arrange slab", SPEC, {"threshold_mm": 0.8, "yaw_threshold_deg": 0.8})
     root = Arrangement("arrangement", [node], [], 0.8)
     write({"/slab/solved": tuple(solved)})
-    context = make_context(clock)
+    context = make_context(clock=clock)
     set_up(root, context)
     next(iter(node.tick()))
     assert [c.name for c in node.children] == [f"then the next (slab {k})" for k in range(1, 7)]
@@ -131,7 +131,7 @@ def test_arrange_solved_fails_saying_why_when_the_solved_places_cannot_be_arrang
     )
     write({"/slab/solved": overlapping})
     node = ArrangeSolved("arrange slab", SPEC, {})
-    set_up(node, make_context(clock))
+    set_up(node, make_context(clock=clock))
     for _ in node.tick():
         pass
     assert node.status == Status.FAILURE
@@ -141,7 +141,7 @@ def test_arrange_solved_fails_saying_why_when_the_solved_places_cannot_be_arrang
 
 def test_arrange_solved_without_a_solve_fails_naming_the_key(clock) -> None:
     node = ArrangeSolved("arrange slab", SPEC, {})
-    set_up(node, make_context(clock))
+    set_up(node, make_context(clock=clock))
     for _ in node.tick():
         pass
     assert node.status == Status.FAILURE and node.feedback_message == "slab: not solved (no /slab/solved)"

@@ -12,7 +12,6 @@ import math
 import numpy as np
 import pytest
 from behaviour_helpers import command_at, read, set_up, write
-from fakes import fake_arm, fake_gripper, make_context, tick_until_done
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Pick, Place, keys
@@ -22,6 +21,7 @@ from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Prism
+from bt_arrange.testing import fake_arm, fake_gripper, make_context, tick_until_done
 
 SETTINGS = ManipulationSettings()
 FRAGMENT = ObjectType(
@@ -40,7 +40,7 @@ def _pick_and_place(clock, part_yaw_rad: float, target_yaw_rad: float) -> tuple[
     joints above the target (the carry's end).
     """
     width_m = GRASP.width_m
-    context = make_context(clock, gripper_width_m=width_m, object_width_m=width_m)
+    context = make_context(clock=clock, gripper_width_m=width_m, object_width_m=width_m)
     write(
         {
             "/p/pose": Pose.from_rotation([0.42, 0.12, 0.01], _yaw_matrix(part_yaw_rad)),
@@ -101,7 +101,7 @@ def test_a_part_the_wrist_reaches_as_it_is_keeps_the_nearest_grasp(clock) -> Non
 
 
 def test_without_a_target_on_the_blackboard_the_pick_keeps_the_nearest_grasp(clock) -> None:
-    context = make_context(clock, gripper_width_m=GRASP.width_m, object_width_m=GRASP.width_m)
+    context = make_context(clock=clock, gripper_width_m=GRASP.width_m, object_width_m=GRASP.width_m)
     write({"/p/pose": Pose.from_rotation([0.42, 0.12, 0.01], _yaw_matrix(_part_yaw_for_grasp_turn(1.3)))})
     pick = tick_until_done(set_up(Pick("pick p", "p", FRAGMENT), context), context)
     assert pick.status == Status.SUCCESS, pick.feedback
@@ -110,7 +110,7 @@ def test_without_a_target_on_the_blackboard_the_pick_keeps_the_nearest_grasp(clo
 
 def test_a_cuboid_has_the_half_turn_for_free_and_never_records_one(clock) -> None:
     assert half_turn_free(CUBE) and not half_turn_free(FRAGMENT)
-    context = make_context(clock, gripper_width_m=0.05, object_width_m=0.05)
+    context = make_context(clock=clock, gripper_width_m=0.05, object_width_m=0.05)
     write(
         {
             "/red/pose": Pose.from_rotation([0.42, 0.12, 0.025], _yaw_matrix(1.2)),
@@ -123,7 +123,7 @@ def test_a_cuboid_has_the_half_turn_for_free_and_never_records_one(clock) -> Non
 
 
 def test_toward_home_takes_the_wrists_way_round_that_reaches_and_leaves_for_home_soonest(clock) -> None:
-    context = make_context(clock)
+    context = make_context(clock=clock)
     home = np.asarray(context.home_q, dtype=float)
     start = home.copy()
     start[WRIST] += 0.5

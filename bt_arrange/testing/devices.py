@@ -1,59 +1,58 @@
-"""Fake devices for testing behaviours without a simulator: a clock, an arm, a gripper and a camera.
+"""The fake devices of the testing kit: a clock, an arm, a gripper and a camera, each recording what it was told.
 
-Each fake implements its protocol of ``bt_arrange.robot`` and records what it was told to do:
+Each implements its protocol of :mod:`bt_arrange.robot`:
 
-- ``FakeClock``: world time that moves only when a test calls ``advance(dt)``.
-- ``FakeArm``: tracks every setpoint perfectly (the measured joints are the last command) and
-  records each command with the clock's time; its TCP pose comes from the real kinematics.
-- ``FakeGripper``: the fingers move at a fixed speed as the clock advances; a close stops at
-  ``object_width_m`` (a cube between the pads) or at 0 (nothing); ``slip()`` lets the cube go,
-  ``stuck=True`` makes the fingers never report standing still.
-- ``FakeCamera``: frames rendered by ``bt_arrange.perception.synthetic`` for a list of cubes, at a
-  reduced resolution (960 x 540, about 20 ms per frame and detection); a window renders only its
-  pixels, through the window's intrinsics.
+- :class:`FakeClock`: world time that moves only when told to (``advance(dt_s)``).
+- :class:`FakeArm`: tracks every setpoint perfectly (the measured joints are the last command) and
+  records each command with the clock's time in ``commands``; its TCP pose comes from the real
+  kinematics.
+- :class:`FakeGripper`: the fingers move at a fixed speed as the clock advances; a close stops at
+  ``object_width_m`` (a part between the pads) or at 0 (nothing); ``slip()`` lets the part go,
+  ``stuck=True`` makes the fingers never report standing still, ``wedge()`` holds the next openings.
+- :class:`FakeCamera`: the top camera's frames, rendered by :mod:`bt_arrange.perception.synthetic`
+  for its list of ``parts`` at a reduced resolution (960 x 540, about 20 ms per frame and
+  detection); a window renders only its pixels, through the window's intrinsics.
 
-``make_context()`` puts them together with the real ``MotionPlanner`` and ``PartDetector``;
-``tick_until_done()`` drives a behaviour the way the runner does: tick, brake step, clock step.
+:func:`bt_arrange.testing.make_context` puts them together with the real planner and detector.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
-import py_trees
-from py_trees.common import Status
 
-from bt_arrange.behaviours import Context
 from bt_arrange.errors import OutOfRangeError
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.motion import (
-    ARM_JOINT_NAMES,
-    DEFAULT_HOME_Q,
-    ArmKinematics,
-    CartesianLimits,
-    JointLimits,
-    MotionPlanner,
+from bt_arrange.motion import ARM_JOINT_NAMES, DEFAULT_HOME_Q, ArmKinematics
+from bt_arrange.perception.synthetic import (
+    SyntheticCube,
+    SyntheticPrism,
+    render_frame,
+    sim_intrinsics,
+    top_down_camera_pose,
 )
-from bt_arrange.perception import PartDetector
-from bt_arrange.perception.synthetic import SyntheticCube, render_frame, sim_intrinsics, top_down_camera_pose
 from bt_arrange.robot import (
     GRIPPER_FORCE_RANGE_N,
     GRIPPER_MAX_WIDTH_M,
     CameraFrame,
     CameraIntrinsics,
     PixelWindow,
-    Robot,
 )
-from bt_arrange.settings import ManipulationSettings
+
+#: A part the fake camera renders: a cube or a flat prism of :mod:`bt_arrange.perception.synthetic`.
+SyntheticPart: TypeAlias = SyntheticCube | SyntheticPrism
 
 #: The UR CB3's 125 Hz, as in the simulated cell.
 CONTROL_PERIOD_S = 0.008
 #: Fingers of the fake gripper move at this speed (within the 2F-85's 20 to 150 mm/s).
 GRIPPER_SPEED_M_S = 0.05
-#: Smaller than the cell's 1920 x 1080: four times fewer pixels, still about 1 mm per pixel.
-CAMERA_WIDTH_PX, CAMERA_HEIGHT_PX = 960, 540
+#: The fake camera's image, smaller than the cell's 1920 x 1080: four times fewer pixels, still about
+#: 1 mm per pixel.
+CAMERA_WIDTH_PX = 960
+CAMERA_HEIGHT_PX = 540
 
 
 class FakeClock:
@@ -148,8 +147,8 @@ class GripperCommand:
 class FakeGripper:
     """A 2F-85 whose fingers move at ``speed_m_s`` as the clock advances.
 
-    A close stops at ``object_width_m`` (a cube between the pads) or at 0 when it is ``None``.
-    ``slip()`` takes the cube away: closed fingers go on closing towards 0. With ``stuck=True``
+    A close stops at ``object_width_m`` (a part between the pads) or at 0 when it is ``None``.
+    ``slip()`` takes the part away: closed fingers go on closing towards 0. With ``stuck=True``
     the fingers never report standing still. ``wedge(width_m, opens)`` holds the next ``opens``
     openings at ``width_m`` (a part wedged between the pads).
     """
@@ -215,7 +214,7 @@ class FakeGripper:
         return self.stuck or self.width() != self._to_m
 
     def slip(self) -> None:
-        """The cube slips out: no object between the pads any more; closed fingers close on."""
+        """The part slips out: no object between the pads any more; closed fingers close on."""
         self.object_width_m = None
         if self._closing:
             self._move_to(self._closed_width())
@@ -230,18 +229,19 @@ class FakeGripper:
 
 
 class FakeCamera:
-    """The top camera over a table of synthetic cubes; ``cubes`` may be changed between frames."""
+    """The top camera over a table of synthetic parts; ``parts`` may be changed between frames."""
 
     def __init__(
         self,
         clock: FakeClock,
-        cubes: Iterable[SyntheticCube] = (),
+        parts: Iterable[SyntheticPart] = (),
         intrinsics: CameraIntrinsics | None = None,
         pose_world: Pose | None = None,
         arm: FakeArm | None = None,
     ) -> None:
         self._clock = clock
-        self.cubes = list(cubes)
+        #: What the camera sees: changed by a test between frames (a part moved, taken away, added).
+        self.parts: list[SyntheticPart] = list(parts)
         self._intrinsics = intrinsics or sim_intrinsics(CAMERA_WIDTH_PX, CAMERA_HEIGHT_PX)
         self.pose_world = pose_world or top_down_camera_pose()
         self._arm = arm
@@ -256,139 +256,9 @@ class FakeCamera:
         return self._intrinsics
 
     def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
-        """Render the cubes as they are now (no depth): the full image, or only ``window``."""
+        """Render the parts as they are now (no depth): the full image, or only ``window``."""
         self.captures.append((self._clock.now(), None if self._arm is None else self._arm.joint_positions()))
         self.windows.append(window)
         intrinsics = self._intrinsics if window is None else self._intrinsics.windowed(window)
-        frame = render_frame(self.cubes, intrinsics, self.pose_world, supersample=4)
+        frame = render_frame(self.parts, intrinsics, self.pose_world, supersample=4)
         return CameraFrame(frame.rgb, None, frame.intrinsics, frame.camera_pose_world, self._clock.now())
-
-
-def cube(colour: str, x_m: float, y_m: float, yaw_rad: float = 0.0) -> SyntheticCube:
-    """A synthetic cube resting on the table."""
-    return SyntheticCube(colour, x_m, y_m, yaw_rad)
-
-
-def make_context(
-    clock: FakeClock | None = None,
-    *,
-    cubes: Iterable[SyntheticCube] = (),
-    q: Sequence[float] | FloatArray = DEFAULT_HOME_Q,
-    gripper_width_m: float = GRIPPER_MAX_WIDTH_M,
-    object_width_m: float | None = None,
-    stuck_gripper: bool = False,
-    settings: ManipulationSettings | None = None,
-) -> Context:
-    """A ``Context`` over fake devices, with the real planner (placo + ruckig) and detector."""
-    clock = clock or FakeClock()
-    kinematics = ArmKinematics()
-    arm = FakeArm(clock, q, kinematics)
-    gripper = FakeGripper(clock, gripper_width_m, object_width_m, stuck=stuck_gripper)
-    camera = FakeCamera(clock, cubes, arm=arm)
-    planner = MotionPlanner(kinematics, JointLimits(), CartesianLimits(), arm.control_period_s)
-    return Context(
-        robot=Robot(arm=arm, gripper=gripper, camera=camera, clock=clock),
-        planner=planner,
-        detector=PartDetector(),
-        settings=settings or ManipulationSettings(),
-    )
-
-
-def fake_arm(context: Context) -> FakeArm:
-    """The context's arm, as the fake it is."""
-    assert isinstance(context.robot.arm, FakeArm)
-    return context.robot.arm
-
-
-def fake_gripper(context: Context) -> FakeGripper:
-    """The context's gripper, as the fake it is."""
-    assert isinstance(context.robot.gripper, FakeGripper)
-    return context.robot.gripper
-
-
-def fake_camera(context: Context) -> FakeCamera:
-    """The context's camera, as the fake it is."""
-    assert isinstance(context.robot.camera, FakeCamera)
-    return context.robot.camera
-
-
-def fake_clock(context: Context) -> FakeClock:
-    """The context's clock, as the fake it is."""
-    assert isinstance(context.robot.clock, FakeClock)
-    return context.robot.clock
-
-
-@dataclass(frozen=True)
-class Tick:
-    """What one tick did: the status and feedback after it, and the arm commands the behaviour sent."""
-
-    time_s: float
-    status: Status
-    feedback: str
-    arm_commands: int
-
-
-@dataclass
-class Run:
-    """The ticks of one run of a behaviour."""
-
-    ticks: list[Tick] = field(default_factory=list)
-
-    @property
-    def status(self) -> Status:
-        """The status after the last tick."""
-        return self.ticks[-1].status if self.ticks else Status.INVALID
-
-    @property
-    def feedback(self) -> str:
-        """The feedback after the last tick."""
-        return self.ticks[-1].feedback if self.ticks else ""
-
-    @property
-    def running(self) -> list[Tick]:
-        """The ticks that ended RUNNING."""
-        return [t for t in self.ticks if t.status == Status.RUNNING]
-
-
-def tick_until_done(
-    behaviour: py_trees.behaviour.Behaviour,
-    context: Context,
-    max_ticks: int = 5000,
-    *,
-    until: Callable[[Tick], bool] | None = None,
-) -> Run:
-    """Tick like the runner does (tick, brake step, one control period) until not RUNNING.
-
-    ``until`` stops earlier, after the first tick it accepts (to interrupt a behaviour mid-run).
-    Raises ``AssertionError`` if the behaviour still runs after ``max_ticks``.
-    """
-    arm, clock = fake_arm(context), fake_clock(context)
-    run = Run()
-    for _ in range(max_ticks):
-        before = len(arm.commands)
-        behaviour.tick_once()
-        tick = Tick(clock.now(), behaviour.status, behaviour.feedback_message, len(arm.commands) - before)
-        run.ticks.append(tick)
-        context.brake.step()
-        clock.advance(arm.control_period_s)
-        if until is not None and until(tick):
-            return run
-        if behaviour.status != Status.RUNNING:
-            # As the runner does: a motion the behaviour handed on at speed runs to its end.
-            while context.brake.busy:
-                context.brake.step()
-                clock.advance(arm.control_period_s)
-            return run
-    raise AssertionError(f"{behaviour.name} still RUNNING after {max_ticks} ticks: {behaviour.feedback_message}")
-
-
-def brake_until_idle(context: Context, max_steps: int = 2000) -> list[ArmCommand]:
-    """Step the brake (one control period each) until the arm is at rest; the brake's commands."""
-    arm, clock = fake_arm(context), fake_clock(context)
-    before = len(arm.commands)
-    for _ in range(max_steps):
-        if not context.brake.active:
-            return arm.commands[before:]
-        context.brake.step()
-        clock.advance(arm.control_period_s)
-    raise AssertionError(f"the brake still moves the arm after {max_steps} steps")
