@@ -50,9 +50,11 @@ class CellBackend:
         picks and drawn from ``inject_seed`` (``injection.named``); the report lists them (``injected``).
         """
         if inject:
-            from bt_arrange_sim.injection.named import parse_errors
+            from bt_arrange_sim.injection.named import check_named, parse_errors
 
-            inject = parse_errors(inject)  # an unknown name is refused before the world is built
+            # An unknown name, or a tree that names no part to put them in, is refused before the world is built.
+            inject = parse_errors(inject)
+            check_named(root)
         config = self.cell_config(cell, run_seed)
         run = self.open_cell_run(
             root,

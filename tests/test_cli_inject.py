@@ -14,16 +14,18 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import py_trees
 import pytest
 
 import bt_arrange_sim.pybullet.cell
 import bt_arrange_sim.pybullet.runs
 from bt_arrange import backends, cli, cli_run
+from bt_arrange.errors import PlanError
 from bt_arrange.report import ObjectOutcome, SessionReport
 from bt_arrange.trees import Target, arrangement
 from bt_arrange_sim.engine import CellBackend
 from bt_arrange_sim.experiment.rows import ROW_INJECTORS
-from bt_arrange_sim.injection.named import ERRORS, Injected, _specs, part_seed, parts_of
+from bt_arrange_sim.injection.named import ERRORS, Injected, _specs, check_named, part_seed, parts_of
 from bt_arrange_sim.injection.registry import make_injector
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
@@ -179,8 +181,10 @@ def test_the_parts_are_those_the_tree_picks_in_tick_order_then_the_plan_s_other_
     assert parts_of(run) == ["green", "red"]
     run.plan = SimpleNamespace(targets=[*targets, Target("blue", 0.55, 0.05), Target("pink", 0.55, -0.05)])
     assert parts_of(run) == ["green", "red", "blue"]  # pink is no part of the cell
-    run.root, run.plan = SimpleNamespace(iterate=lambda: iter(())), None
-    assert parts_of(run) == ["red", "green", "blue"]  # nothing named yet (a puzzle): every part of the cell
+    run.root, run.plan = py_trees.behaviours.Success("a puzzle's survey"), None
+    assert parts_of(run) == []
+    with pytest.raises(PlanError, match="^--inject: this tree names no part it picks"):
+        check_named(run.root)
 
 
 def test_each_part_draws_from_its_own_seed() -> None:
@@ -207,4 +211,11 @@ def test_the_report_lists_what_was_injected_into_which_part_at_the_experiment_s_
     assert report.to_dict()["injected"] == [record]
     assert cli_run._injected_line([record, {**record, "part": "blue", "fired": False}]) == (
         "injected: translation into red, blue (not reached) (the experiment's magnitudes; what each did: --json)"
+    )
+
+
+def test_a_tree_that_names_no_part_it_picks_is_refused_before_the_world_is_built() -> None:
+    code, _, err = call(["run", "puzzle", "--inject", "translation"])
+    assert "--inject: this tree names no part it picks (a puzzle's pieces are named by its solve)" in one_line(
+        code, err
     )

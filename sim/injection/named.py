@@ -20,10 +20,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import py_trees
 
 from bt_arrange.behaviours import Pick
 from bt_arrange.errors import PlanError
 from bt_arrange.suggest import did_you_mean
+from bt_arrange.trees import plan_of
 from bt_arrange_sim.experiment.rows import RAISED_ROWS, ROW_INJECTORS, ROWS
 from bt_arrange_sim.injection.framework import InjectableRun, Injector
 from bt_arrange_sim.injection.registry import attach_all, make_injector
@@ -80,7 +82,8 @@ class Injection:
         specs = _specs(parse_errors(errors))
         parts = parts_of(run)
         if not parts:
-            raise PlanError("--inject: this tree picks no part of the cell, so there is nothing to inject into")
+            check_named(run.root)
+            raise PlanError(f"--inject: no part the tree names is in the cell (its parts: {', '.join(run.cell.parts)})")
         self.seed = int(seed)
         self.injected: list[Injected] = []
         for rank, part in enumerate(parts):
@@ -105,18 +108,27 @@ def _specs(errors: Sequence[str]) -> list[tuple[str, str]]:
     return sorted(((e, s) for s, e in wanted.items()), key=lambda pair: order.get(pair[1], len(order)))
 
 
-def parts_of(run: InjectableRun) -> list[str]:
-    """The parts to inject into: those the tree picks, in tick order, then the plan's other targets.
+def named_parts(root: py_trees.behaviour.Behaviour, plan: Any = None) -> list[str]:
+    """The parts a tree names: those it picks, in tick order, then its plan's other targets.
 
-    Only parts of the cell; a tree that builds its picks while it runs (a puzzle's) and names no
-    target gets every part of the cell.
+    A tree that builds its picks while it runs (a puzzle's: its pieces are named by the solve, not
+    by the cell) names none: an injector waits for its own part's behaviours, so it is refused.
     """
-    cell_parts = list(run.cell.parts)
-    names: list[str] = []
-    for node in run.root.iterate():
-        if isinstance(node, Pick) and isinstance(node.obj, str):
-            names.append(node.obj)
-    plan = getattr(run, "plan", None)
-    names += [target.obj for target in getattr(plan, "targets", ())]
-    chosen = [name for name in dict.fromkeys(names) if name in cell_parts]
-    return chosen or ([] if names else cell_parts)
+    names = [node.obj for node in root.iterate() if isinstance(node, Pick) and isinstance(node.obj, str)]
+    names += [target.obj for target in getattr(plan if plan is not None else plan_of(root), "targets", ())]
+    return list(dict.fromkeys(names))
+
+
+def check_named(root: py_trees.behaviour.Behaviour) -> None:
+    """A one-line ``PlanError``, before the world is built, when ``root`` names no part to inject into."""
+    if not named_parts(root):
+        raise PlanError(
+            "--inject: this tree names no part it picks (a puzzle's pieces are named by its solve), "
+            "so an error has nothing to wait for; inject into a tree or plan of named parts"
+        )
+
+
+def parts_of(run: InjectableRun) -> list[str]:
+    """The parts of ``run``'s cell to inject into: ``named_parts`` of its tree and plan, in that order."""
+    cell_parts = run.cell.parts
+    return [name for name in named_parts(run.root, getattr(run, "plan", None)) if name in cell_parts]
