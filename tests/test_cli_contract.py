@@ -289,6 +289,7 @@ def test_a_good_run_reaches_the_world_and_a_good_experiment_its_trials(tmp_path:
     "argv",
     [
         ["run", SINGLE, "--seed", "-5"],
+        ["run", SINGLE, "--inject", "nonsense"],
         ["experiment", "--trials", "0"],
         ["experiment", "--rows", "bogus"],
         ["show", SINGLE, "--format", "gif"],
@@ -310,6 +311,8 @@ run_options = st.lists(
     st.one_of(
         st.tuples(st.sampled_from(["--seed", "--threshold-mm", "--time-limit-s"]), values),
         st.tuples(st.sampled_from(["--json", "--live", "--gui", "--bogus"])),
+        st.tuples(st.just("--inject"), st.sampled_from(["translation", "all,tilt", "nonsense", ",", ""])),
+        st.tuples(st.just("--cell"), st.sampled_from(["ideal", "real"])),
     ),
     max_size=3,
 )
