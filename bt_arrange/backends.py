@@ -26,7 +26,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import py_trees
 
-from bt_arrange.errors import BackendError
+from bt_arrange.errors import BackendError, PlanError
+from bt_arrange.suggest import did_you_mean
 
 #: The entry-point group backends are declared in.
 ENTRY_POINT_GROUP = "bt_arrange.backends"
@@ -178,6 +179,47 @@ class Backend(Protocol):
     def experiment(self) -> Experiment | None:
         """The paper's evaluation, or None when this backend cannot run it."""
         ...
+
+
+@runtime_checkable
+class InjectingBackend(Protocol):
+    """An optional capability of a backend: the paper's Sec. 3 errors put into any run (``run --inject``).
+
+    ``injectable_errors`` are the names it knows (the sim backends: those of ``experiment --rows``
+    that inject an error, and ``all``); ``open_run(..., inject=names, inject_seed=seed)`` puts them
+    into every part the tree picks, at the experiment's magnitudes, drawn from the seed, and the
+    run's report lists what was injected into which part (``injected``). A backend without it (a
+    real robot) has nothing to inject into: ``check_inject`` refuses ``--inject`` in one line.
+    """
+
+    name: str
+
+    @property
+    def injectable_errors(self) -> Sequence[str]:
+        """The error names ``open_run(inject=...)`` takes."""
+        ...
+
+
+def check_inject(backend: Backend, text: str) -> list[str]:
+    """The errors of ``--inject ERROR[,ERROR...]`` for ``backend``, checked before anything moves.
+
+    A one-line ``BackendError`` when the backend cannot inject errors; a ``PlanError`` for an empty
+    list or an unknown name, naming the known ones. Duplicates are dropped.
+    """
+    if not isinstance(backend, InjectingBackend):
+        raise BackendError(
+            f"backend {backend.name!r} cannot inject errors (--inject): it has no simulated world to put them in"
+        )
+    known = list(backend.injectable_errors)
+    names = list(dict.fromkeys(item.strip() for item in text.split(",") if item.strip()))
+    if not names:
+        raise PlanError(f"--inject is empty; the errors are {', '.join(known)}")
+    for name in names:
+        if name not in known:
+            raise PlanError(
+                f"--inject {name}: unknown error{did_you_mean(name, known)}; the errors are {', '.join(known)}"
+            )
+    return names
 
 
 _registered: dict[str, Callable[[], Backend]] = {}

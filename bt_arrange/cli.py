@@ -1,7 +1,7 @@
 """The ``bt-arrange`` command line.
 
     bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
-                   [--gui] [--live] [--record DIR] [--json]
+                   [--calibration FILE] [--inject ERROR[,ERROR...]] [--gui] [--live] [--record DIR] [--json]
                    [--groot [PORT]] [--groot-wait-s S] [--groot-bind ADDR] [--pace F]
                    [--foxglove [PORT]] [--foxglove-bind ADDR]
     bt-arrange show TREE_FILE [--format text|dot|png|svg|xml] [--blackboard] [--out FILE]
@@ -196,6 +196,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="a camera.toml from bt-arrange calibrate: the detector uses its intrinsics, distortion and pose "
         "(default: the cell's nominal camera)",
+    )
+    run.add_argument(
+        "--inject",
+        metavar="ERROR[,ERROR...]",
+        help="inject the paper's Sec. 3 errors into every part the tree picks, by the names of experiment --rows "
+        "(translation, orientation, perception, surface, slip, sticking, release, tilt, or all), at Table 1's "
+        "magnitudes, drawn from --seed; --json lists what went into which part (the sim backends)",
     )
     run.add_argument(
         "--groot",

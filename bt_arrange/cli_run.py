@@ -16,9 +16,11 @@ from bt_arrange.cli_common import (
     EXIT_NOT_WITHIN,
     EXIT_OK,
     _check_threshold_option,
-    _note_uncalibrated,
 )
 from bt_arrange.errors import BtArrangeError, RecordError
+
+#: How a real cell's camera is calibrated: what the refusal of ``--cell real`` without ``--calibration`` says.
+CALIBRATE_COMMAND = "bt-arrange calibrate --cell real --out camera.toml"
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -26,14 +28,15 @@ def _run(args: argparse.Namespace) -> int:
     _check_groot_options(args)
     if args.foxglove is None and args.foxglove_bind is not None:
         raise BtArrangeError("--foxglove-bind serves a run to Foxglove only with --foxglove [PORT]")
+    _check_calibrated(args.cell, args.calibration)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
     seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
     backend = backends.load(args.backend)
+    inject = backends.check_inject(backend, args.inject) if args.inject is not None else []
     # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
     starts = treefile.scene(module, seed, backend=backend)
-    _note_uncalibrated(args.cell, args.calibration)
     # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
     with (
         _groot_publisher(root, args) as groot,
@@ -48,6 +51,8 @@ def _run(args: argparse.Namespace) -> int:
             # Only a non-default cell is passed on: a backend without real-cell errors need not know the option.
             **({"cell": args.cell, "run_seed": seed} if args.cell != "ideal" else {}),
             **({"calibration": args.calibration} if args.calibration is not None else {}),
+            # The errors are drawn from the run's seed, as the scene is (a backend without them refused them above).
+            **({"inject": inject, "inject_seed": seed} if inject else {}),
         ) as run,
     ):
         if groot is not None:
@@ -81,6 +86,15 @@ def _run(args: argparse.Namespace) -> int:
     if fault is not None:
         raise fault
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _check_calibrated(cell: str, calibration: Path | None) -> None:
+    """Refuse a real cell on its nominal camera (a lens and a pose off by centimetres: every part would fail)."""
+    if calibration is None and cell.strip() == "real":
+        raise BtArrangeError(
+            f"--cell real needs a calibrated camera (its nominal one puts parts centimetres off): "
+            f"{CALIBRATE_COMMAND}, then add --calibration camera.toml"
+        )
 
 
 def _check_groot_options(args: argparse.Namespace) -> None:
@@ -193,6 +207,9 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
         source = getattr(report, "camera_margin_source", "")
         if source:
             print(f"within: the camera's offset plus its own error under the threshold; camera error {source}")
+    injected = getattr(report, "injected", None)
+    if injected is not None:
+        print(_injected_line(injected))
     if args.record:
         if recorded:
             mcap = ", run.mcap" if (Path(args.record) / "run.mcap").is_file() else ""
@@ -205,3 +222,15 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
     # parts are within and each that is not, with its offset and why; the tree's status only without parts.
     head, missed = report.within_text(), report.not_within()
     print(f"{Path(args.tree_file).name}: {head} {timing}" + (f"; not within: {missed}" if missed else ""))
+
+
+def _injected_line(records: list[dict[str, Any]]) -> str:
+    """One line: each injected error and the parts it went into (a part it never reached says so)."""
+    parts: dict[str, list[str]] = {}
+    for record in records:
+        part = str(record.get("part"))
+        parts.setdefault(str(record.get("error")), []).append(part if record.get("fired") else f"{part} (not reached)")
+    if not parts:
+        return "injected: nothing (no part to inject into)"
+    listed = "; ".join(f"{error} into {', '.join(names)}" for error, names in parts.items())
+    return f"injected: {listed} (the experiment's magnitudes; what each did: --json)"

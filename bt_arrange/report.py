@@ -82,6 +82,9 @@ class SessionReport:
     #: within, and where the figure comes from (``bt_arrange.uncertainty``).
     camera_margin_mm: float = 0.0
     camera_margin_source: str = ""
+    #: The errors injected into the run (``run --inject``): one JSON-able record per error and part,
+    #: ``{"error", "part", "injector", <its magnitude>, "fired", <what it did>}``; None when none were asked for.
+    injected: list[dict] | None = None
 
     def verdict(self) -> str:
         """How many parts are within and, for each that is not, its offset and why (never the tree's status).
@@ -116,7 +119,7 @@ class SessionReport:
         return all(o.status == "within" for o in self.objects)
 
     def to_dict(self) -> dict:
-        """The ``--json`` form of the report (``"ground_truth": false`` only for a camera-only report)."""
+        """The ``--json`` form (``"ground_truth": false`` only when camera only, ``"injected"`` only with errors)."""
         data = {
             # target is [x_m, y_m, yaw_rad]; target_mm and target_yaw_deg repeat it in a plan's units (mm, degrees),
             # as the table shows it.
@@ -139,6 +142,8 @@ class SessionReport:
         }
         if not self.ground_truth:
             data["ground_truth"] = False
+        if self.injected is not None:
+            data["injected"] = self.injected
         return data
 
 

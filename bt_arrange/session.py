@@ -96,7 +96,8 @@ class Session:
     camera report its intrinsics, distortion and pose, so the detector uses them (and the plan check
     its view); without it, the world's camera as it reports itself. ``transition_hooks`` are
     called with every status change (e.g. to inject an error at the moment the paper names),
-    ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick.
+    ``tick_hooks`` after every tick, ``runner_hooks`` with the runner before its first tick,
+    ``report_hooks`` with the report before it is recorded (e.g. to list the injected errors).
     ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
     campaign's trial, ``experiment --record``): written whole at the end, or a fault.
 
@@ -192,6 +193,8 @@ class Session:
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
         #: Called with the runner once it is built, before the first tick (e.g. to time its ticks).
         self.runner_hooks: list[Callable[[Runner], None]] = []
+        #: Called with the report once it is made, before it is recorded or returned (e.g. to add what was injected).
+        self.report_hooks: list[Callable[[SessionReport], None]] = []
         #: Each part's first placing, its regrasps and its last placing again, for the report.
         self.placements = PlacementLog()
         #: Ground truth (evaluation only) of each object when last looked at, and the most it moved between looks.
@@ -263,6 +266,8 @@ class Session:
             camera_margin_mm=self.camera_margin_mm,
             camera_margin_source=self.camera_margin_source,
         )
+        for report_hook in self.report_hooks:
+            report_hook(report)
         if streams is not None:
             streams.finish(report)
             if self.mcap_path is not None and streams.records:

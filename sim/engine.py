@@ -38,15 +38,25 @@ class CellBackend:
         cell: str = "ideal",
         run_seed: int = 0,
         calibration: str | Path | None = None,
+        inject: Sequence[str] = (),
+        inject_seed: int = 0,
     ) -> Any:
         """A run (a ``world.CellRun``): the plan and scene checked, the cell built, not yet ticked.
 
         ``cell`` is ``ideal``, ``real`` or a ``.toml`` file (``bt_arrange_sim.realcell``; a bad one is a
         one-line ``PlanError`` before the world is built); ``run_seed`` seeds a real cell's per-run errors;
         ``calibration`` is a ``camera.toml`` (``bt-arrange calibrate``) whose camera the detector uses.
+        ``inject`` names errors of ``injectable_errors`` (``run --inject``), put into every part the tree
+        picks and drawn from ``inject_seed`` (``injection.named``); the report lists them (``injected``).
         """
+        if inject:
+            from bt_arrange_sim.injection.named import check_named, parse_errors
+
+            # An unknown name, or a tree that names no part to put them in, is refused before the world is built.
+            inject = parse_errors(inject)
+            check_named(root)
         config = self.cell_config(cell, run_seed)
-        return self.open_cell_run(
+        run = self.open_cell_run(
             root,
             starts,
             config,
@@ -56,6 +66,20 @@ class CellBackend:
             title=title,
             calibration=read_calibration_option(calibration, config.camera),
         )
+        if inject:
+            try:
+                attach_errors(run, inject, inject_seed)
+            except BaseException:
+                run.close()
+                raise
+        return run
+
+    @property
+    def injectable_errors(self) -> tuple[str, ...]:
+        """The errors ``open_run(inject=...)`` knows: the paper's Sec. 3, by the names of ``experiment --rows``."""
+        from bt_arrange_sim.injection.named import ERRORS
+
+        return ERRORS
 
     def open_cell_run(
         self, root: py_trees.behaviour.Behaviour, starts: Iterable[Any], config: Any, **options: Any
@@ -140,6 +164,18 @@ class CellBackend:
         from bt_arrange_sim.experiment.engine_experiment import EngineExperiment
 
         return EngineExperiment(self)
+
+
+def attach_errors(run: Any, errors: Sequence[str], seed: int) -> None:
+    """Put ``errors`` into every part ``run`` picks (``injection.named.Injection``); the report lists them."""
+    from bt_arrange_sim.injection.named import Injection
+
+    injection = Injection(run, errors, seed)
+
+    def add_to_report(report: Any) -> None:
+        report.injected = injection.records()
+
+    run.report_hooks.append(add_to_report)
 
 
 def read_calibration_option(path: str | Path | None, camera: Any = None) -> Any:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import math
 import subprocess
 import sys
 import textwrap
@@ -24,6 +25,9 @@ import bt_arrange_sim.experiment
 import bt_arrange_sim.pybullet.cell
 import bt_arrange_sim.pybullet.runs
 from bt_arrange import cli
+from bt_arrange.calibration import CameraCalibration, rpy_matrix, write_calibration
+from bt_arrange.geometry import Pose
+from bt_arrange.robot import CameraIntrinsics
 
 TREES = Path(__file__).resolve().parents[1] / "trees"
 SINGLE = str(TREES / "single_cube.py")
@@ -245,8 +249,21 @@ def test_a_bad_cell_is_refused_in_one_line_naming_the_key(
 def test_a_good_cell_reaches_the_world(tmp_path: Path) -> None:
     mine = tmp_path / "mine.toml"
     mine.write_text('preset = "real"\ncell_seed = 3\n[friction]\nenabled = false\n[gripper]\ncoupling_erp = 0.5\n')
+    camera = write_calibration(
+        CameraCalibration(
+            intrinsics=CameraIntrinsics(1920, 1080, 1371.0, 1371.0, 959.5, 539.5),
+            camera_to_base=Pose.from_rotation([0.5, 0.0, 0.7], rpy_matrix(math.pi, 0.0, math.radians(-93.0))),
+            reprojection_error_px=0.1,
+            views=20,
+            cell="real",
+            date="2026-12-01T10:00:00+00:00",
+        ),
+        tmp_path / "camera.toml",
+    )
     for cell in ("real", "ideal", str(mine)):
-        assert call(["run", SINGLE, "--cell", cell])[0] == "simulated"
+        # A real cell runs on a calibrated camera only (refused without one: tests/test_cli_inject.py).
+        calibration = ["--calibration", str(camera)] if cell == "real" else []
+        assert call(["run", SINGLE, "--cell", cell, *calibration])[0] == "simulated"
         out = tmp_path / cell.replace("/", "_")
         assert call(["experiment", "--trials", "1", "--rows", "system", "--cell", cell, "--out", str(out)])[0] == (
             "simulated"
@@ -272,6 +289,7 @@ def test_a_good_run_reaches_the_world_and_a_good_experiment_its_trials(tmp_path:
     "argv",
     [
         ["run", SINGLE, "--seed", "-5"],
+        ["run", SINGLE, "--inject", "nonsense"],
         ["experiment", "--trials", "0"],
         ["experiment", "--rows", "bogus"],
         ["show", SINGLE, "--format", "gif"],
@@ -293,6 +311,8 @@ run_options = st.lists(
     st.one_of(
         st.tuples(st.sampled_from(["--seed", "--threshold-mm", "--time-limit-s"]), values),
         st.tuples(st.sampled_from(["--json", "--live", "--gui", "--bogus"])),
+        st.tuples(st.just("--inject"), st.sampled_from(["translation", "all,tilt", "nonsense", ",", ""])),
+        st.tuples(st.just("--cell"), st.sampled_from(["ideal", "real"])),
     ),
     max_size=3,
 )
