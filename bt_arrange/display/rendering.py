@@ -146,7 +146,7 @@ def dot_graph(root: py_trees.behaviour.Behaviour, *, blackboard: bool = False) -
     graph = py_trees.display.dot_tree(root)
     # Left to right, labels wrapped: a plan's parts stack downwards, so a six-part tree stays about
     # 2,000 px wide (top-down with one line per label it was 13,000).
-    graph.set_rankdir("LR")
+    graph.set("rankdir", "LR")
     _wrap_labels(graph)
     if not blackboard:
         return graph
