@@ -327,13 +327,23 @@ _PAGE = r"""<!DOCTYPE html>
     rows.push(row);
   });
 
+  // The verdict is the parts': how many are within, and each that is not with its offset and why.
+  // The tree's own status is shown only for a tree without parts.
   var summary = data.summary || {};
   var parts = [];
-  if (summary.tree_status) parts.push("ended " + summary.tree_status);
+  var objects = summary.objects || [];
+  if (objects.length) {
+    var within = objects.filter(function (o) { return o.status === "within"; }).length;
+    var limit = summary.threshold_mm === undefined || summary.threshold_mm === null ? "" : " " + summary.threshold_mm + " mm";
+    parts.push(within + " of " + objects.length + " within" + limit);
+  } else if (summary.tree_status) {
+    parts.push("ended " + summary.tree_status);
+  }
   if (summary.sim_seconds !== undefined) parts.push(summary.sim_seconds.toFixed(1) + " s of world time");
-  (summary.objects || []).forEach(function (o) {
+  objects.forEach(function (o) {
     var offset = o.final_offset_mm === null ? "" : " " + o.final_offset_mm.toFixed(2) + " mm";
-    parts.push(o.name + ": " + o.status + offset);
+    var reason = o.status !== "within" && o.reason ? " (" + o.reason + ")" : "";
+    parts.push(o.name + ": " + o.status + offset + reason);
   });
   document.getElementById("summary").textContent = parts.join(" | ");
 

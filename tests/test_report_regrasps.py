@@ -13,7 +13,7 @@ import json
 import py_trees
 from fakeworld import FakeWorld, camera_view
 
-from bt_arrange.behaviours import Inspect, Pick, Place
+from bt_arrange.behaviours import Detect, Inspect, Pick, Place
 from bt_arrange.objects import ObjectStart
 from bt_arrange.report import Placement, PlacementLog
 from bt_arrange.session import Session
@@ -99,3 +99,27 @@ def test_the_placement_log_counts_picks_after_the_first_placing_only() -> None:
     assert log.inspected("red", True, lambda first: next(figures)) == "after_placing_red_again_1"
     assert log.regrasps == {"red": 1}
     assert log.first["red"].offset_mm == 4.0 and log.again["red"].offset_mm == 0.3
+
+
+def test_the_report_counts_set_downs_and_placings_again() -> None:
+    report = _stalled_run()
+    (red,) = report.objects
+    assert red.placed_again == 1 and red.set_downs == 0  # the stalled correction's fallback placed it again
+    # A part set down where it was picked, looked at and picked again centred (as among neighbours).
+    children = [
+        set_target(RED),
+        Detect("detect red", "red"),
+        Pick("pick red", "red"),
+        Place("set red down to look again", "red", where="pick"),
+        Detect("detect red again", "red"),
+        Pick("pick red centred", "red"),
+        Place("place red", "red"),
+        Inspect("inspect red after placing", "red", after_placing=True),
+    ]
+    root = Arrangement("set down", children, [RED], 1.0)
+    world = FakeWorld(truth=True)
+    with Session(root, [RED_START], lambda: world, view=camera_view()) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert (red.set_downs, red.placed_again) == (1, 0)
+    assert report.to_dict()["objects"][0]["set_downs"] == 1

@@ -109,3 +109,24 @@ def test_a_screenshot_of_the_page(four_cubes_xml_record, tmp_path):
     picture = cv2.imread(str(out))
     assert picture.shape[:2] == (900, 1400)
     assert picture.std() > 10, "not a blank page"
+
+
+def test_the_header_counts_the_parts_within_and_names_each_that_is_not(tmp_path):
+    import py_trees
+
+    recorder = replay.ReplayRecorder(py_trees.behaviours.Success("arrangement"))
+    recorder.observe(0.0)
+    summary = {
+        "tree_status": "SUCCESS",
+        "threshold_mm": 1.0,
+        "sim_seconds": 20.0,
+        "objects": [
+            {"name": "red", "status": "within", "final_offset_mm": 0.2, "reason": ""},
+            {"name": "slab 5", "status": "outside", "final_offset_mm": 3.27, "reason": "offset still 3.27 mm"},
+        ],
+    }
+    page = recorder.write(tmp_path / "replay.html", title="t", summary=summary)
+    header = re.search(r'<div id="summary">([^<]*)</div>', replay.dump_dom(page)).group(1)
+    assert header.startswith("1 of 2 within 1 mm | 20.0 s of world time")
+    assert "slab 5: outside 3.27 mm (offset still 3.27 mm)" in header
+    assert "SUCCESS" not in header, "the tree's status is never the verdict beside a part outside"
