@@ -334,7 +334,8 @@ _PAGE = r"""<!DOCTYPE html>
   var objects = summary.objects || [];
   if (objects.length) {
     var within = objects.filter(function (o) { return o.status === "within"; }).length;
-    var limit = summary.threshold_mm === undefined || summary.threshold_mm === null ? "" : " " + summary.threshold_mm + " mm";
+    var known = summary.threshold_mm !== undefined && summary.threshold_mm !== null;
+    var limit = known ? " " + summary.threshold_mm + " mm" : "";
     parts.push(within + " of " + objects.length + " within" + limit);
   } else if (summary.tree_status) {
     parts.push("ended " + summary.tree_status);
