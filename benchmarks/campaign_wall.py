@@ -8,7 +8,7 @@ once with this checkout, alternating, each in a fresh process. Prints each run's
 (the child's user + system), the ratio this / reference of each, and how many trial records are
 identical (all the reference's fields but the wall time; fields added since are named, not
 compared). The default revision ``f7bbbaf`` is the code before the
-cycle-time work of issue 23 (Table 1 wall time target: this / reference <= 0.6).
+cycle-time work (Table 1 wall time target: this / reference <= 0.6).
 
 Wall time depends on the machine and on what else runs on it: read the ratio of one run, and
 the CPU ratio beside it when the machine is shared.
@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-#: The last commit before issue 23's cycle-time work: Table 1's "today" of that issue.
+#: The last commit before the cycle-time work: Table 1's "today" of that work.
 BEFORE_CYCLE_TIME = "f7bbbaf"
 #: Fields of a trial record that measure the machine, not the trial.
 MACHINE_FIELDS = ("wall_seconds",)

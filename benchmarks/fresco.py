@@ -1,4 +1,4 @@
-"""Fresco reassembly (issue 20): a slab broken into pieces, put back together with its gaps, over seeds.
+"""Fresco reassembly: a slab broken into pieces, put back together with its gaps, over seeds.
 
     python benchmarks/fresco.py [--seeds 0 1 2] [--pieces 6] [--gap-mm 2] [--inject pick_translation]
                                 [--threshold-mm 0.25 --yaw-threshold-deg 0.25] [--moved-limit-mm 0.1]
@@ -12,7 +12,7 @@ only): each piece's final offset and yaw error, the smallest gap between two pie
 before its last look (``moved_by_later_truth_mm``). Each run is printed as a JSON line as it
 ends; the last line sums them up against the issue's targets (1 mm, 1 deg, no touching, 0.3 mm).
 With ``--threshold-mm`` (and ``--yaw-threshold-deg``) the plan is run to that threshold, and a
-piece counts as within by truth under it (issue 38 item 4: gaps down to 0.5 mm at 0.25 mm).
+piece counts as within by truth under it (gaps down to 0.5 mm at 0.25 mm).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ fracture's draws, every piece's checks, the layout's search over placing orders)
 (``Plan.create_root``) and the plan check (``check_plan``). This sweeps slabs from 40 to 600 mm
 long and 40 to 400 mm wide, 3 to 12 pieces, two fracture seeds, at a 2 mm gap (threshold 1 mm)
 and at 0.5 mm (threshold 0.25 mm), and prints each plan's CPU seconds and outcome as it goes (a
-line each), then the hardest: the figure issue 35 bounds (any plan within the file's limits
+line each), then the hardest: the figure the file limits bound (any plan within the file's limits
 judged in under 2 s). ``--quick`` takes a sixth of the grid.
 
 Times are CPU seconds of this process (``time.process_time``); the machine and its load average

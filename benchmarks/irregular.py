@@ -1,4 +1,4 @@
-"""Irregular parts arranged end to end (issue 20, in progress): five outlines, each turned at its target.
+"""Irregular parts arranged end to end (in progress): five outlines, each turned at its target.
 
     python benchmarks/irregular.py [--seeds 0 1 2] [--json]
 

@@ -3,7 +3,7 @@
     python benchmarks/outline_limits.py [--json]
 
 1. The self-crossing check (``bt_arrange.shapes.polygon.first_crossing``, a sweep line) against
-   testing every pair of edges (the check before issue 35), on simple polygons of n points: CPU
+   testing every pair of edges (the check before it was bounded), on simple polygons of n points: CPU
    seconds, and the sweep's time over n log2 n (flat if it grows as n log n) and the pairs' over n^2.
 2. The grasp search of one type (``bt_arrange.shapes.antipodal``) on 32-point outlines, with the
    rough judgement of every centre at once and with the exact loop alone (the same grasps).
@@ -56,7 +56,7 @@ def cpu_s(call, repeat: int = 1) -> float:  # noqa: ANN001 - any callable
 
 
 def every_pair(points: np.ndarray) -> bool:
-    """The check before issue 35: every pair of edges that are not neighbours tested."""
+    """The check before it was bounded: every pair of edges that are not neighbours tested."""
     count = len(points)
     for i in range(count):
         for j in range(i + 1, count):

@@ -2,7 +2,7 @@
 
     python benchmarks/outlines.py --poses 100 --seed 0 --json [--cell] [--method edge_lines]
 
-Five outlines (issue 20): a scalene triangle, the issue's L, an asymmetric trapezoid, a regular
+Five outlines: a scalene triangle, an L, an asymmetric trapezoid, a regular
 pentagon (72-degree symmetry: its yaw is folded) and a non-convex fragment, each 20 mm tall.
 Every pose puts one part at a random place over the visible table (whole in the image at any
 yaw), yaw over the full circle, 45..100 % light, and renders it three ways with

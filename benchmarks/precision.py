@@ -1,4 +1,4 @@
-"""Irregular parts and fresco pieces at a fine threshold, by ground truth and by the camera (issue 38, item 2).
+"""Irregular parts and fresco pieces at a fine threshold, by ground truth and by the camera.
 
     python benchmarks/precision.py [--plans irregular fresco] [--seeds 0 1 2] [--threshold-mm 0.25]
                                    [--yaw-threshold-deg 0.25] [--inject pick_translation] [--json]
@@ -13,7 +13,7 @@ sums every part up against the issue's targets: within 0.3 mm and 0.3 deg by tru
 0.15 mm.
 
 ``--cell real`` runs them in the real-cell model (``CellConfig.real``, its per-run errors seeded by
-each seed, as ``bt-arrange run --cell real --seed N``) with a calibrated camera (issue 38, item 5):
+each seed, as ``bt-arrange run --cell real --seed N``) with a calibrated camera:
 ``--calibration FILE``, or, without it, one made first as a user would (``bt-arrange calibrate
 --cell real --views 20``, its summary printed). ``--plan-thresholds`` keeps each plan's own
 thresholds; ``--as-shipped`` runs the plans as shipped: their own thresholds (the examples': 1 mm

@@ -1,4 +1,4 @@
-"""Puzzles (issue 32): a slab broken into pieces nobody describes, seen, solved and reassembled, over seeds.
+"""Puzzles: a slab broken into pieces nobody describes, seen, solved and reassembled, over seeds.
 
     python benchmarks/puzzle.py [--pieces 4 6 9 12] [--seeds 0 1 2 3 4] [--gap-mm 2] [--picture] [--out runs.jsonl]
 

@@ -1,4 +1,4 @@
-"""The puzzle solver alone (issue 32): the simulator's breaks, turned, shuffled and noised, put back, over seeds.
+"""The puzzle solver alone: the simulator's breaks, turned, shuffled and noised, put back, over seeds.
 
     python benchmarks/puzzle_solve.py [--pieces 4 6 9 12] [--seeds 0 1 2 3 4] [--gaps-mm 2 1]
                                       [--noise-mm 0.05] [--camera] [--out runs.jsonl]

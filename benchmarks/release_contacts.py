@@ -1,4 +1,4 @@
-"""What holds the pads at a release: each pad's contacts with the part, by ground truth (issue 38, item 1).
+"""What holds the pads at a release: each pad's contacts with the part, by ground truth.
 
     python benchmarks/release_contacts.py [--plan trees/irregular_parts.toml] [--seeds 0] [--json]
 

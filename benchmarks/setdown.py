@@ -1,4 +1,4 @@
-"""Where a part's set-down error comes from, stage by stage (issue 38, item 1).
+"""Where a part's set-down error comes from, stage by stage.
 
     python benchmarks/setdown.py [--seeds 0 1 2] [--fresco-seeds 3] [--isolated] [--json]
 

@@ -1,4 +1,4 @@
-"""Arrangements in layers (issue 33): the tower, the pyramid and the pallet, over seeds, plain and with a pick error.
+"""Arrangements in layers: the tower, the pyramid and the pallet, over seeds, plain and with a pick error.
 
     python benchmarks/stacking.py [--plans tower pyramid pallet] [--seeds 0 1 2] [--inject pick_translation]
                                   [--displace-mm D] [--backend pybullet|mujoco] [--record DIR]

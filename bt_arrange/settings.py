@@ -37,14 +37,14 @@ class ManipulationSettings:
     approach_height_m: float = 0.10
     #: A taller part raises the moves above the table: the TCP stays at least this far above its top.
     approach_clearance_m: float = 0.05
-    #: Issue 36: a tree built for a plan of parts all lower than a cube moves above the table at
+    #: A tree built for a plan of parts all lower than a cube moves above the table at
     #: ``approach_clearance_m`` over the plan's tallest part instead (0.07 m for 20 mm parts: the pads'
     #: bottoms as far above them as above a cube at 0.10 m; shorter descents, lifts and lowerings).
     #: False keeps ``approach_height_m`` as the floor: for a table holding taller things than the plan's parts.
     approach_over_plan: bool = True
     #: The held part is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
-    #: Layers (issue 33): a part released on others is let go at least this far above its support. A
+    #: Layers: a part released on others is let go at least this far above its support. A
     #: held part sinks along the pads in the carry (about 0.4 mm in MuJoCo's soft pads), so at 0.5 mm it
     #: could be let go already standing on its support, and the opening pads dragged it and its
     #: support with it by friction; at 2 mm the drop moved the support 0.2 mm (docs/stacking.md).
@@ -96,13 +96,13 @@ class ManipulationSettings:
     finest_push_m: float = 0.00005
     #: Two targets closer than this could touch once each lies within the threshold: twice the
     #: threshold, at most 2 mm (the gap a 1 mm threshold needs, and what coarser ones keep) and at
-    #: least ``finest_gap_m``. ``for_threshold`` sets it from the run's threshold (issue 38 item 4).
+    #: least ``finest_gap_m``. ``for_threshold`` sets it from the run's threshold.
     min_target_gap_m: float = DEFAULT_TARGET_GAP_M
     #: The least gap between two targets at all (m): twice the 0.25 mm the precision runs are held to.
     finest_gap_m: float = 0.0005
     #: The line that pushes: slower than the planner's lines, so the part stops when the pads do.
     push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=0.5, jerk_m_s3=3.5)
-    #: Layers (issue 33): the gentler line that pushes a part standing on others. It drags its support
+    #: Layers: the gentler line that pushes a part standing on others. It drags its support
     #: by friction however fast it goes, but at a third of the speed the pads meet the face with a
     #: ninth of the kinetic energy, and the part stops within less of its support's edge.
     raised_push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.05, acceleration_m_s2=0.25, jerk_m_s3=2.0)
@@ -118,7 +118,7 @@ class ManipulationSettings:
     #: 1.6 N of the pads' 96 N of friction at 40 N); measured in Table 1 (40 trials a row) and the
     #: four-cube tree, the parts landed as close as at 2 rad/s and 8 rad/s^2. A part held off its
     #: centre of mass (an irregular part's grasp) takes it too: the irregular and fresco benchmarks
-    #: (three seeds each) held 15 of 15 and 18 of 18 within, as at the planner's limits (issue 36).
+    #: (three seeds each) held 15 of 15 and 18 of 18 within, as at the planner's limits.
     carry_joint_limits: JointLimits = JointLimits(
         velocity_rad_s=HARDWARE_JOINT_VELOCITY_RAD_S, acceleration_rad_s2=16.0, jerk_rad_s3=200.0
     )
@@ -146,9 +146,9 @@ class ManipulationSettings:
     #: A close that meets a part at ``squaring_finger_speed_m_s`` (an off-centre grasp's, whose pads
     #: meeting the outline fast turn the part) runs at ``finger_speed_m_s`` until the pads stand this
     #: far (m) from the grasped side on each side: the pads meet the part as slowly as before, without
-    #: crossing the rest of the stroke slowly (85 mm to a 50 mm side took 0.7 s; issue 36).
+    #: crossing the rest of the stroke slowly (85 mm to a 50 mm side took 0.7 s).
     slow_close_clearance_per_side_m: float = 0.003
-    #: Layers (issue 33): the finger speed of a release on others (the datasheet's slowest). Two pads
+    #: Layers: the finger speed of a release on others (the datasheet's slowest). Two pads
     #: never leave a part at the same instant: the later one drags it, and a part standing on others
     #: drags its support with it by friction.
     raised_release_finger_speed_m_s: float = 0.02

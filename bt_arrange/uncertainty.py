@@ -2,7 +2,7 @@
 
 A part counts as within only when its measured offset plus this margin is under the threshold
 (``RepeatUntilWithin``, the report's status), so a part the camera measures just under the
-threshold is pushed once more instead of being accepted where it may lie just over it (issue 38).
+threshold is pushed once more instead of being accepted where it may lie just over it.
 The margin is what the camera's detections were measured to miss by, about 95 % of the time:
 
 - **A calibrated camera** (``--calibration camera.toml``): twice the calibration's own RMS

@@ -63,7 +63,7 @@ class PhysicsConfig:
     #: contact solve: at 50 iterations the pads ended 1.0 to 1.8 mm into a 20 to 60 g prism (0.05 mm
     #: into a cube; a 15 mm prism of 0.1 kg 0.3 mm), unevenly, and it was carried up to 0.8 mm off
     #: along the closing axis and set down 0.48 mm off on average, 1.0 mm at most, in isolation. At
-    #: 150, 0.09 and 0.17 mm (``benchmarks/setdown.py``; docs/irregular.md, issue 38 item 1). With
+    #: 150, 0.09 and 0.17 mm (``benchmarks/setdown.py``; docs/irregular.md). With
     #: such a part in the cell, it solves with ``light_part_solver_iterations`` from each close of the
     #: fingers (a grasp) until they are narrowed for a push: the release, the retreat and the look
     #: under the solve that held the part (switched back at the release, a released part moved up to

@@ -1,4 +1,4 @@
-"""A puzzle's scene (issue 32): the slab broken from the run's seed, its pieces scattered turned at random.
+"""A puzzle's scene: the slab broken from the run's seed, its pieces scattered turned at random.
 
 Only the simulator knows how the slab broke: the pieces' outlines and homes (where each belongs in
 the whole the plan places) travel in ``PieceStart``s to the world, which keeps the homes for the

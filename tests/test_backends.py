@@ -1,4 +1,4 @@
-"""The framework reaches its simulator only through a backend found by name (issue 9, item 2)."""
+"""The framework reaches its simulator only through a backend found by name."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""bt_arrange.checks: one home for "finite / positive / whole"; errors carry their fields (issue 9, item 5)."""
+"""bt_arrange.checks: one home for "finite / positive / whole"; errors carry their fields."""
 
 from __future__ import annotations
 

@@ -447,7 +447,7 @@ def test_a_generated_plan_file_runs_or_is_refused_by_the_contract(tmp_path: Path
 
 
 # ----------------------------------------------------------------------------------------------
-# Generated XML trees and cell files (issue 22): accepted, or one line and exit 2, never a traceback
+# Generated XML trees and cell files: accepted, or one line and exit 2, never a traceback
 # ----------------------------------------------------------------------------------------------
 
 xml_tags = st.sampled_from(

@@ -128,7 +128,7 @@ def test_the_changelog_lists_every_alias():
     from pathlib import Path
 
     changelog = (Path(__file__).parent.parent / "CHANGELOG.md").read_text()
-    deprecated = changelog.split("### Deprecated (issue 31", 1)[1].split("\n### ", 1)[0]
+    deprecated = changelog.split("words for any part)", 1)[1].split("\n### ", 1)[0]
     # Each old name is followed, on its line, by "-> `new`".
     after = {old: deprecated.split(f"{old}`", 1)[1][:40] if f"{old}`" in deprecated else "" for _, old, _ in ALIASES}
     assert [f"{old} -> {new}" for _, old, new in ALIASES if f"-> `{new}`" not in after[old]] == []

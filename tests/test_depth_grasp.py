@@ -457,7 +457,7 @@ def test_transfer_located_by_depth_mirrors_transfer():
         transfer(Target("red", 0.5, 0.1), max_regrasps=-1, locate=by_depth())
 
 
-def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # issue 9, item 8: no import circle
+def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # No import circle
     import subprocess
     import sys
 

@@ -1,4 +1,4 @@
-"""No broken links (issue 37, item 3): every relative link and image of README.md and docs/ resolves.
+"""No broken links: every relative link and image of README.md and docs/ resolves.
 
 A link to a page must name a file of the repository; a link with an anchor (``cli.md#the-replay-page``,
 ``#object-types``) a heading of that page, as GitHub makes its anchor; an image a file that exists.

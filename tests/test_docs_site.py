@@ -1,4 +1,4 @@
-"""The documentation site (issue 37, items 2 and 4): built as the README says, complete, and working in a browser.
+"""The documentation site: built as the README says, complete, and working in a browser.
 
 ``mkdocs build --strict`` (mkdocs.yml at the root) must pass: any warning (a broken link or anchor, a page
 left out of the navigation, a docstring mkdocstrings cannot render) fails it. The site must hold every

@@ -1,4 +1,4 @@
-"""Every ```python block of README.md and docs/ runs as written (issue 37, a contract), and so does every ```bash
+"""Every ```python block of README.md and docs/ runs as written (a contract), and so does every ```bash
 block of our commands that is not marked to skip.
 
 Each block runs alone in a fresh interpreter (``python -c``; ``bash -e`` for a shell block), headless, in a

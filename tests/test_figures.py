@@ -1,4 +1,4 @@
-"""``scripts/figures.py`` (issue 35, "Figures"): each README figure read from its benchmark's output.
+"""``scripts/figures.py`` ("Figures"): each README figure read from its benchmark's output.
 
 The benchmarks themselves take minutes; here each one's output is given (in the shape the benchmark
 prints it) and the line the script makes of it is checked, so a renamed key or a miscount fails

@@ -1,4 +1,4 @@
-"""A fresco plan judged in bounded work, to the same pieces and layouts as one step at a time (issue 35).
+"""A fresco plan judged in bounded work, to the same pieces and layouts as one step at a time.
 
 The fracture's cells are clipped for every cell at once, the layout's search keeps what it
 judged: each is checked here against the plain way of doing it (the reference below, the loop
@@ -23,7 +23,7 @@ from bt_arrange.trees import Target
 
 
 def _reference_cells(sites: np.ndarray, half_l: float, half_w: float, shrink_m: float) -> list[np.ndarray]:
-    """The cells as clipped before issue 35: one cell, one bisector, one corner at a time, in numpy."""
+    """The cells as clipped before they were bounded: one cell, one bisector, one corner at a time, in numpy."""
 
     def clip(polygon: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
         out = []

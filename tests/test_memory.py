@@ -1,4 +1,4 @@
-"""What a run leaves behind in a long-lived process (issue 35, item 4): nothing that grows run by run.
+"""What a run leaves behind in a long-lived process: nothing that grows run by run.
 
 The resident memory itself is measured by ``benchmarks/memory.py`` (a figure, not a test: it
 depends on the allocator and the machine). Here the per-run leftovers that were found are checked

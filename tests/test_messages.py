@@ -1,4 +1,4 @@
-"""Messages a user can act on (issue 22): each message added shows here, with what it says.
+"""Messages a user can act on: each message added shows here, with what it says.
 
 The pre-run check of the blackboard and the first real cause of a failure; plan errors naming the
 file and the entry, in the file's units, with the fix; nearest-name suggestions; the mass limits;

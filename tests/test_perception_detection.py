@@ -291,7 +291,7 @@ def test_clutter_gives_outcomes_never_exceptions() -> None:
             assert detection.found == (detection.pose_world is not None)
 
 
-def test_the_evaluation_shows_a_sign_of_life_before_each_row(monkeypatch, capsys) -> None:  # issue 8, item 9
+def test_the_evaluation_shows_a_sign_of_life_before_each_row(monkeypatch, capsys) -> None:
     from bt_arrange.perception import evaluate
 
     monkeypatch.setattr(evaluate, "make_trials", lambda n, **_: [])

@@ -1,4 +1,4 @@
-"""The coarse search joins the fragments of one face the opening cut apart, and nothing else (issue 36)."""
+"""The coarse search joins the fragments of one face the opening cut apart, and nothing else."""
 
 from __future__ import annotations
 

@@ -4,7 +4,7 @@ Synthetic frames of two neighbouring pieces of a fracture, one moved towards the
 their gap is under the two pixels the mask's morphology closes. Where the image shows the gap (no
 blur: a line of pixels off the colour), the mask is cut along it and each piece is a whole face.
 Where a blur hides it, the faces are one blob: looked for around its expected place (a region of
-interest, as Inspect looks at a target), or anywhere (Detect before picking, issue 38 item 6),
+interest, as Inspect looks at a target), or anywhere (Detect before picking),
 each piece is registered into the merged blob on the edges the blob's contour follows; an
 outline that does not lie in the blob there is not found. A whole slab laid out with
 sub-millimetre gaps: every piece is found where it lies, or said to be ambiguous; none is

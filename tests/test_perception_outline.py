@@ -25,7 +25,7 @@ def part(name: str, points_mm: list[list[float]], height_mm: float = 20.0) -> Ob
     return ObjectType(name, shape=Prism.from_outline(np.asarray(points_mm, dtype=float) / 1000, height_mm / 1000))
 
 
-#: The brief's non-convex fragment, the issue's L, a scalene triangle, a regular pentagon.
+#: The brief's non-convex fragment, an L, a scalene triangle, a regular pentagon.
 FRAGMENT = part("fragment", [[0, 0], [45, 4], [60, 30], [35, 28], [30, 50], [5, 40]])
 ELL = part("ell", [[0, 0], [60, 0], [60, 20], [20, 20], [20, 50], [0, 50]])
 TRIANGLE = part("triangle", [[0, 0], [60, 0], [15, 45]])

@@ -1,4 +1,4 @@
-"""Two cubes of one colour closer than a pixel (issue 33: a pyramid's raised twin bumped towards its neighbour).
+"""Two cubes of one colour closer than a pixel (a pyramid's raised twin bumped towards its neighbour).
 
 The corner pipeline cannot measure such a face: the two faces are one blob ("ambiguous"), or the
 side facing the twin cannot be measured below a pixel ("partial"). Looked for around where it is

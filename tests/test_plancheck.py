@@ -1,6 +1,6 @@
 """The plan check that knows the cell: camera view, objects in the scene, the threshold floor.
 
-Each mistake of issue 8 is one ``PlanError`` naming it; generated plans (hypothesis) are either
+Each mistake a user can make is one ``PlanError`` naming it; generated plans (hypothesis) are either
 accepted and valid or refused with a ``BtArrangeError`` that names the problem, never another exception.
 """
 
@@ -96,14 +96,14 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
 @pytest.mark.parametrize(
     ("threshold_mm", "min_push_mm"), [(1.0, 0.2), (0.3, 0.2), (0.25, 0.25 / math.sqrt(2)), (0.08, 0.08 / math.sqrt(2))]
 )
-def test_a_fine_threshold_lowers_the_shortest_push_to_fit(threshold_mm: float, min_push_mm: float) -> None:  # issue 38
+def test_a_fine_threshold_lowers_the_shortest_push_to_fit(threshold_mm: float, min_push_mm: float) -> None:
     root = arrangement([RED], threshold_mm=threshold_mm)
     assert root.settings.min_push_m * 1000 == pytest.approx(min_push_mm)
     assert root.settings.min_threshold_mm <= max(threshold_mm, ManipulationSettings().finest_threshold_mm) + 1e-9
 
 
 @pytest.mark.parametrize(("threshold_mm", "gap_mm"), [(3.0, 2.0), (1.0, 2.0), (0.6, 1.2), (0.25, 0.5), (0.1, 0.5)])
-def test_the_least_gap_between_targets_is_twice_the_threshold(threshold_mm: float, gap_mm: float) -> None:  # issue 38
+def test_the_least_gap_between_targets_is_twice_the_threshold(threshold_mm: float, gap_mm: float) -> None:
     root = arrangement([RED], threshold_mm=threshold_mm)
     assert root.settings.min_target_gap_m * 1000 == pytest.approx(gap_mm)
     assert ManipulationSettings().gap_for_threshold_m(threshold_mm) * 1000 == pytest.approx(gap_mm)

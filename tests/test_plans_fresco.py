@@ -1,4 +1,4 @@
-"""Plan files with frescoes: ``[fresco.NAME]`` (issue 20's contract), every bad key one line naming it."""
+"""Plan files with frescoes: ``[fresco.NAME]`` (the contract), every bad key one line naming it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Plan files with irregular parts: ``outline_mm`` and ``height_mm`` (issue 20's contract), checked up front."""
+"""Plan files with irregular parts: ``outline_mm`` and ``height_mm`` (the contract), checked up front."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A puzzle's ground truth for the report (issue 32): pieces matched where seen, homes under the whole's symmetry."""
+"""A puzzle's ground truth for the report: pieces matched where seen, homes under the whole's symmetry."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A painted slab (issue 32, item 4): the picture's contract, and its colours telling the whole's turns apart."""
+"""A painted slab: the picture's contract, and its colours telling the whole's turns apart."""
 
 from __future__ import annotations
 

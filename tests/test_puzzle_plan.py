@@ -1,4 +1,4 @@
-"""A plan's ``[puzzle.NAME]`` (issue 32): the contract's keys, one line per mistake, the scene the simulator breaks."""
+"""A plan's ``[puzzle.NAME]``: the contract's keys, one line per mistake, the scene the simulator breaks."""
 
 from __future__ import annotations
 

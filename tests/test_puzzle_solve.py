@@ -1,4 +1,4 @@
-"""The puzzle solver alone (issue 32): outlines of the simulator's break, turned, shuffled and noised, put back.
+"""The puzzle solver alone: outlines of the simulator's break, turned, shuffled and noised, put back.
 
 The outlines come from ``bt_arrange_sim.puzzles.measured_break`` (the scene's own break, each
 vertex moved 0.05 mm in a random direction): the solve sees only them, the truths judge it.

@@ -135,7 +135,7 @@ def test_a_plan_s_yaw_threshold_sets_the_regrasp_of_its_tree() -> None:
 
 
 def test_a_cuboid_s_tree_has_no_regrasp() -> None:
-    # The fallback of a correction that stalls places any free part again (issue 38): not a regrasp while turned.
+    # The fallback of a correction that stalls places any free part again: not a regrasp while turned.
     assert not [
         node for node in arrange_one(RED_CUBE).iterate() if "regrasp" in node.name or "while turned" in node.name
     ]

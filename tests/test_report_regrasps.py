@@ -1,4 +1,4 @@
-"""A regrasp in the report (issue 35, "Reports"): the first placing's figures kept, the regrasps counted.
+"""A regrasp in the report ("Reports"): the first placing's figures kept, the regrasps counted.
 
 A part picked up again after it was placed (turned too far, its pushes stalled, a push needing a
 blocked side) used to overwrite the "after placing" figures with those of its placing again, and

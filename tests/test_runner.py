@@ -97,7 +97,7 @@ class _Counting(py_trees.behaviour.Behaviour):
         return Status.SUCCESS if self.ticks >= 2 else Status.RUNNING
 
 
-def test_a_transition_carries_the_facts_its_node_states(tmp_path) -> None:  # issue 19, item 3
+def test_a_transition_carries_the_facts_its_node_states(tmp_path) -> None:
     counting, silent = _Counting(), py_trees.behaviours.Success("silent")
     root = py_trees.composites.Sequence("both", memory=True, children=[counting, silent])
     log = TransitionLog(tmp_path / "log.jsonl")

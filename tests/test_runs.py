@@ -85,7 +85,7 @@ def test_the_scene_settles_while_a_part_moves_at_most_the_settle_time(
     assert run.cell.clock.now() == pytest.approx(round(runs.SETTLE_S / 0.008) * 0.008)
 
 
-def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:  # issue 19, item 2
+def test_a_simulated_run_is_a_session_on_the_cell_as_a_world(fake_cell) -> None:
     with runs.SimulatedRun(arrangement([RED]), [RED_START], time_limit_s=0.02) as run:
         assert isinstance(run, Session) and isinstance(run.world, runs.SimWorld) and isinstance(run.world, World)
         assert run.cell is fake_cell.built[0] and run.world.truth is run.world
@@ -127,7 +127,7 @@ def test_the_window_without_a_display_is_refused_first(fake_cell, monkeypatch) -
     assert fake_cell.built == []
 
 
-def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  # issue 9, item 1
+def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:
     target = Target("red", 0.50, 0.0, name="red cube")
     start = PartStart("red", 0.40, -0.20, 0.0, name="red cube")
     with runs.SimulatedRun(arrangement([target], max_regrasps=0), [start]) as run:
@@ -138,7 +138,7 @@ def test_an_object_whose_name_has_a_space_keeps_its_reason(fake_cell) -> None:  
     assert red.reason.startswith("no part between the pads"), red.reason
 
 
-def test_the_injectors_find_a_node_by_type_and_object_not_by_name() -> None:  # issue 9, item 1
+def test_the_injectors_find_a_node_by_type_and_object_not_by_name() -> None:
     from bt_arrange import treefile
     from bt_arrange.behaviours import Place
     from bt_arrange_sim.injection import _NodeFinder

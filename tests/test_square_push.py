@@ -86,7 +86,7 @@ def test_within_reach_but_turned_it_is_squared_where_the_pads_stand_widest() -> 
 
 
 def test_among_neighbours_two_free_pushes_close_an_offset_between_them_by_their_own_shares() -> None:
-    # Issue 38 item 4. With +x and the hypotenuse's push (-135 deg) free and +y blocked, an offset of
+    # With +x and the hypotenuse's push (-135 deg) free and +y blocked, an offset of
     # (-0.25, -1) mm is 0.75 mm along +x plus 1.41 mm along -135 deg. Pushed by its whole projection
     # (0.88 mm along -135 deg), the part would be left (0.375, -0.375) mm off: a -y push, blocked, then.
     pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
@@ -117,7 +117,7 @@ def test_far_from_its_target_a_part_among_neighbours_is_pushed_by_the_projection
 
 
 def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
-    # Issue 38 item 4: a staged part pushed all the way home landed 0.2 to 0.35 mm beside its place, on
+    # A staged part pushed all the way home landed 0.2 to 0.35 mm beside its place, on
     # a side only a blocked push reaches. It stops APPROACH_RESERVE_MM short, for a push that also moves it across.
     from bt_arrange.behaviours.push import APPROACH_RESERVE_MM, LONG_PUSH_MM, SquareMove
 
@@ -195,7 +195,7 @@ def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push
 
 
 def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_nearly_opposite_pushes() -> None:
-    # Issue 38 item 4 (seed 1's fracture, 0.5 mm gaps): free pushes at -178.7, 56.1 and -1.3 deg. 1 mm
+    # Tight gaps (seed 1's fracture, 0.5 mm gaps): free pushes at -178.7, 56.1 and -1.3 deg. 1 mm
     # from home, their shares sent the piece 1.6 mm along -178.7 deg, past its place into a neighbour.
     from bt_arrange.behaviours.push import SquareMove
     from bt_arrange.shapes.base import SquarePush
@@ -210,7 +210,7 @@ def test_among_neighbours_a_part_near_its_place_is_never_pushed_past_it_by_two_n
 
 
 def test_among_neighbours_a_part_left_between_2_and_3_mm_from_its_place_goes_there_in_one_slanted_push() -> None:
-    # Issue 38 item 4 (seed 8's fracture, 1 mm gaps): a piece turned 2 deg at its set-down ended its long
+    # Tight gaps (seed 8's fracture, 1 mm gaps): a piece turned 2 deg at its set-down ended its long
     # push 2.2 mm short and 0.75 mm beside its line; pushed by its projection it met a neighbour.
     from bt_arrange.behaviours.push import CONE_MAX_OFFSET_MM, LONG_PUSH_MM, SLANT_STEP_RESERVE_MM, SquareMove
 
@@ -224,7 +224,7 @@ def test_among_neighbours_a_part_left_between_2_and_3_mm_from_its_place_goes_the
 
 
 def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nobody_else() -> None:
-    # Push stops short only when it knows the correction's threshold (issue 38 item 4): an irregular
+    # Push stops short only when it knows the correction's threshold: an irregular
     # part among neighbours gets it; a box (Table 1's pushes) and a free part do not.
     from bt_arrange.objects import CUBE, ObjectType
     from bt_arrange.plan.targets import Target

@@ -1,4 +1,4 @@
-"""Plans in layers (issue 33, item 1): z_mm, the build order bottom-up, and one refusal per problem, in one line."""
+"""Plans in layers: z_mm, the build order bottom-up, and one refusal per problem, in one line."""
 
 from __future__ import annotations
 
@@ -216,7 +216,7 @@ def test_a_raised_part_among_neighbours_is_picked_off_its_support_as_the_layout_
     assert len(again.kind_targets) == 2
 
 
-# -- issue 36: flat parts come down to the approach clearance over the tallest --------------------
+# -- Flat parts come down to the approach clearance over the tallest --------------------
 
 
 @pytest.mark.parametrize(
@@ -253,7 +253,7 @@ def test_a_plan_exported_to_xml_moves_above_the_table_at_the_plans_own_height(
 
 @pytest.mark.parametrize(("example", "nearest"), [("irregular_parts", False), ("fresco", True)])
 def test_parts_neighbours_are_placed_beside_keep_the_wrists_nearest_grasp_and_turn(example: str, nearest: bool) -> None:
-    """Issue 36: the half turn and the short way round are for parts placed free; among neighbours as planned."""
+    """The half turn and the short way round are for parts placed free; among neighbours as planned."""
     from bt_arrange.behaviours import Pick, Place
 
     root = plans.load(examples_path(example)).create_root()

@@ -172,7 +172,7 @@ def arrange_red(indent: int, threshold: str = "1") -> list[str]:
 
 
 def correct_red(indent: int, threshold: str = "1") -> list[str]:
-    """Algorithm 1's inner loop, and the fallback that places the part again when its pushes stall (issue 38)."""
+    """Algorithm 1's inner loop, and the fallback that places the part again when its pushes stall."""
     pad = "  " * indent
     return [
         f"{pad}Selector correct red, else place it again",
@@ -360,7 +360,7 @@ def test_each_skips_the_correction_of_an_object_that_was_not_placed(clock) -> No
     assert isinstance(find(root, "park the arm"), MoveHome)
 
 
-# -- the layout check on each type's real footprint (issues 10 and 14 together) ------------------
+# -- the layout check on each type's real footprint ------------------
 
 SMALL = ObjectType("small", (0.03, 0.03, 0.03))
 BAR = ObjectType("bar", (0.08, 0.04, 0.04))

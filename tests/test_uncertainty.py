@@ -1,4 +1,4 @@
-"""The camera's own error as a margin under the threshold (issue 38, item 5): the decorator, the source, the report."""
+"""The camera's own error as a margin under the threshold: the decorator, the source, the report."""
 
 from __future__ import annotations
 
@@ -122,7 +122,7 @@ def test_the_world_s_figure_without_a_calibration_and_none_without_either() -> N
 
 
 # ----------------------------------------------------------------------------------------------
-# Pushes that stop converging (issue 38, item 5)
+# Pushes that stop converging
 # ----------------------------------------------------------------------------------------------
 
 

@@ -1,4 +1,4 @@
-"""Near-symmetric outlines (issue 38 item 3): the feature that tells a part's yaws apart, and the plan's limit.
+"""Near-symmetric outlines: the feature that tells a part's yaws apart, and the plan's limit.
 
 A part whose outline, turned to another yaw that is no symmetry, comes within 0.3 mm of itself is
 refused before anything moves, in millimetres; anything more the camera's sub-pixel edges tell

@@ -1,4 +1,4 @@
-"""A 3 x 3 grid of nine identical green cubes with 3 mm gaps (issue 10's grid target).
+"""A 3 x 3 grid of nine identical green cubes with 3 mm gaps (the grid target).
 
 python benchmarks/dense.py benchmarks/dense_trees/grid_3x3_3mm_identical.py --seeds 0
 

@@ -79,7 +79,7 @@ def _nearest_m(points: FloatArray, contour: cKDTree, cap_m: float = math.inf) ->
     """Each point's distance to the nearest contour point (pixels about a pixel apart), at most ``cap_m``.
 
     A k-d tree of the contour answers in log time what a brute-force search answered in the
-    contour's length (9.9 s of a 29 s fresco run; issue 36).
+    contour's length (9.9 s of a 29 s fresco run).
     """
     distances, _ = contour.query(points, distance_upper_bound=cap_m)
     return np.minimum(distances, cap_m)

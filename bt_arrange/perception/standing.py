@@ -1,4 +1,4 @@
-"""Does a raised part stand on its support? Its top face's plane from the depth image (issue 33, item 2).
+"""Does a raised part stand on its support? Its top face's plane from the depth image.
 
 The colour detection measures a raised part on the plane its top face should lie on (``z_m`` plus
 its height); depth says whether it does. ``measure_top_face`` takes a frame with depth and the

@@ -97,7 +97,7 @@ def validate_targets(
                 parts=(("object", target.object_type.name), ("target", target.obj)),
             )
     kinematics = kinematics or ArmKinematics()
-    # Layers (issue 33): heights, support, overlaps between heights, the arm's reach above a tower.
+    # Layers: heights, support, overlaps between heights, the arm's reach above a tower.
     stacking.check_layers(checked, settings, kinematics)
     for target in checked:
         grasp_m, approach_m, _ = stacking.raised_heights_m(settings, target)

@@ -1,4 +1,4 @@
-"""Puzzles (issue 32): a broken slab reassembled from its pieces alone, seen, solved and put back together.
+"""Puzzles: a broken slab reassembled from its pieces alone, seen, solved and put back together.
 
 ``spec`` is a plan's ``[puzzle.NAME]``; ``solve`` reassembles the slab from the pieces' measured
 outlines alone; ``targets`` turns a solve into the targets the arrangement steps reach;

@@ -1,4 +1,4 @@
-"""A puzzle's ground truth, for the report only (issue 32): which part of the world each piece is, where it belongs.
+"""A puzzle's ground truth, for the report only: which part of the world each piece is, where it belongs.
 
 The tree names the pieces ``NAME 1`` ... ``NAME N`` as its camera found them; the world knows its
 parts by its own names and knows where each belongs (its home, by the simulator's break). When the

@@ -1,4 +1,4 @@
-"""A painted slab (issue 32, item 4): the picture on its top face, and the camera's colours held against it.
+"""A painted slab: the picture on its top face, and the camera's colours held against it.
 
 ``picture = "PATH.png"`` in a ``[puzzle.NAME]`` prints an image over the slab's whole top face:
 its columns run along the slab's length (x), its rows across it, the first row at the slab's +y

@@ -1,4 +1,4 @@
-"""Reassemble a broken slab from its pieces' measured outlines alone (issue 32): which piece goes where, turned how.
+"""Reassemble a broken slab from its pieces' measured outlines alone: which piece goes where, turned how.
 
 ``solve(pieces, size_m, gap_m)`` takes each piece's top face as the camera measured it on the
 table and returns an :class:`Assembly`: per piece a :class:`Placement`, the rigid motion (a turn

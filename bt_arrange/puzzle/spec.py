@@ -1,4 +1,4 @@
-"""A puzzle: a slab broken into pieces whose outlines and places nobody gives (issue 32).
+"""A puzzle: a slab broken into pieces whose outlines and places nobody gives.
 
 A plan's ``[puzzle.NAME]`` table says only what the whole is and where it goes::
 

@@ -1,4 +1,4 @@
-"""The tree's share of arrangements in layers (issue 33): heights above the tower, standing, watching below.
+"""The tree's share of arrangements in layers: heights above the tower, standing, watching below.
 
 ``arrangement`` asks these when a plan has raised targets (``bt_arrange.plan.stacking.layered``):
 

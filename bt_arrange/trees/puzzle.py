@@ -1,4 +1,4 @@
-"""The subtree of a puzzle (issue 32): survey the pieces, solve the puzzle, arrange what the solve found.
+"""The subtree of a puzzle: survey the pieces, solve the puzzle, arrange what the solve found.
 
 Its shape::
 

@@ -138,7 +138,7 @@ def _transfer(
     is not at one of them. ``release`` says where the pads go among neighbours
     (``bt_arrange.plan.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
     (``Pick(nearest_grasp=...)``, ``Place(nearest_turn=...)``), for a part neighbours are placed
-    beside (issue 36: measured, the half turn and the short way round moved more of them out).
+    beside (measured, the half turn and the short way round moved more of them out).
     """
     obj = target.obj
     kind = target.object_type
@@ -150,7 +150,7 @@ def _transfer(
         return finder
 
     look_again: list[py_trees.behaviour.Behaviour] = []
-    # Layers (issue 33): a part going onto others is set down and picked centred first, as among
+    # Layers: a part going onto others is set down and picked centred first, as among
     # neighbours: an offset in the pads would put its centre of mass off its support.
     if release is not None or target.z_m > 0.0:
         # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
@@ -162,7 +162,7 @@ def _transfer(
                 Place(f"set {obj} down to look again", obj, kind, where="pick"),
             ),
             find(),
-            # Issue 36: among neighbours the wrist's nearest grasp, as the layout planned it; the half
+            # Among neighbours the wrist's nearest grasp, as the layout planned it; the half
             # turn was not measured to help there (the tight-gap fresco benchmark, docs/motion.md).
             Pick(f"pick {obj} centred", obj, kind, nearest_grasp=True),
         ]
@@ -187,7 +187,7 @@ def _transfer(
 #: A part placed turned this far or more from its target's yaw (deg, measured by the camera) is picked
 #: up again rather than pushed. A push that moves a part a long way also squares it (a triangle 2.45 deg
 #: off, pushed 3.7 mm, ended 0.01 deg off), but near its place a squaring press turns it back 0.16 to
-#: 0.33 deg (issue 36's runs, seeds 0 and 4: an ell 2.07 deg off took two presses, stalled and was
+#: 0.33 deg (the runs, seeds 0 and 4: an ell 2.07 deg off took two presses, stalled and was
 #: placed again, 0.01 deg off); a push with its look costs 2.4 s of world time, a placing again about 3 s.
 #: Over ``irregular_parts`` at seeds 0 to 9, 1.5 deg took 3.87 s a part against 3.97 s at 12 deg.
 REGRASP_YAW_DEG = 1.5
@@ -281,7 +281,7 @@ def check_strategy(strategy: object) -> PushStrategy:
 
 #: Corrections in a row that close less than a tenth of the best offset or yaw error so far
 #: (``RepeatUntilWithin.stall_after``) before a free part is picked up and placed again. Two: with three,
-#: a fragment whose small pushes moved nothing spent its ten pushes at 0.58 mm (issue 38).
+#: a fragment whose small pushes moved nothing spent its ten pushes at 0.58 mm.
 STALL_AFTER_PUSHES = 2
 
 
@@ -410,7 +410,7 @@ def _correction(
         children=[push, inspect(target, f"inspect {obj}{label}", kind_targets=kind_targets)],
     )
     # A free part whose pushes stop converging is picked up and placed again, and corrected once more,
-    # rather than spending the rest of its pushes (issue 38). Among neighbours the release and the
+    # rather than spending the rest of its pushes. Among neighbours the release and the
     # sides to push from are the layout's: there the loop keeps its pushes.
     free = towards is None and not restage
     loop = RepeatUntilWithin(

@@ -1,4 +1,4 @@
-"""The raised rows' trials (``rows.RAISED_ROWS``, issue 33): the trial's cube placed on top of another.
+"""The raised rows' trials (``rows.RAISED_ROWS``): the trial's cube placed on top of another.
 
 The trial's target is drawn as every row's (``trial._run_trial``); ``raised_plan`` puts a support
 of the same type under it, turned from it, and lifts the target onto the support's top face. The

@@ -2,7 +2,7 @@
 
 A row is a name (``ROWS``; its position seeds the row's trials), a label for the tables and
 figures, the injectors it attaches and, for Table 1's rows, the paper's simulated figures.
-``RAISED_ROWS`` place the trial's cube on top of another (issue 33, arrangements in layers).
+``RAISED_ROWS`` place the trial's cube on top of another (arrangements in layers).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Layers (issue 33, item 2): Pick, Place and Push at a support's height; CheckStanding from depth."""
+"""Layers: Pick, Place and Push at a support's height; CheckStanding from depth."""
 
 from __future__ import annotations
 

@@ -124,7 +124,7 @@ def test_pick_without_a_pose_on_the_blackboard_fails_naming_the_key(context: Con
     assert "/red/pose" in run.feedback
 
 
-# -- a bar: grasp, push and squaring from the type's size (issue 14) ---------------------------
+# -- a bar: grasp, push and squaring from the type's size ---------------------------
 
 
 def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(clock) -> None:
@@ -149,7 +149,7 @@ def test_pick_of_a_bar_closes_across_its_40_mm_side_at_the_types_grasp_height(cl
     assert fold_yaw(grasp.yaw_rad - (yaw + math.pi / 2), math.pi) == pytest.approx(0.0, abs=1e-4)
 
 
-# -- the close of a part held off its centre (issue 36) --------------------------------------------
+# -- the close of a part held off its centre --------------------------------------------
 
 
 def _recorded_closes(clock, object_type, object_width_m: float) -> list[tuple[float, float | None]]:

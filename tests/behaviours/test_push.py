@@ -191,7 +191,7 @@ def test_the_leading_corner_of_a_turned_part_meets_a_pad_not_the_gap_between_the
     )
 
 
-# -- a bar: grasp, push and squaring from the type's size (issue 14) ---------------------------
+# -- a bar: grasp, push and squaring from the type's size ---------------------------
 
 
 def push_bar_setup(context: Context, offset_xy_mm: tuple[float, float], yaw_error_deg: float | None = None) -> Push:

@@ -55,7 +55,7 @@ def test_a_push_among_neighbours_opens_only_to_keep_the_fingers_within_the_face(
     assert [(c.kind, c.value) for c in fake_gripper(context).commands] == [("open", 0.024)]
 
 
-# -- a squaring push among neighbours (issues 10 and 14 together) ----------------------------
+# -- a squaring push among neighbours ----------------------------
 
 
 def test_a_squaring_push_among_neighbours_goes_from_a_free_side(context: Context) -> None:

@@ -95,7 +95,7 @@ def test_an_ell_whose_square_pushes_leave_the_offset_out_is_pushed_along_an_axis
 
 
 def test_among_neighbours_a_push_that_also_moves_across_meets_the_edge_straight_then_slants(context: Context) -> None:
-    # Issue 38 item 4: free pushes +x and +y only, the part 0.3 mm off towards +y (a -y push is blocked):
+    # Free pushes +x and +y only, the part 0.3 mm off towards +y (a -y push is blocked):
     # pushed along +x, 0.4 mm short of its place (SLANT_STEP_RESERVE_MM), its pads 0.3 mm towards -y.
     names = {round(math.degrees(p.heading_rad)): n for n, p in TRIANGLE.shape.named_pushes(ROBOTIQ_2F85).items()}
     push = setup(context, TRIANGLE, (1.0, -0.3), towards=(names[0], names[90]), threshold_mm=0.25)

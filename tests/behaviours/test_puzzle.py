@@ -1,4 +1,4 @@
-"""SurveyPieces, SolvePuzzle and ArrangeSolved with a fake camera and a hand-filled blackboard (issue 32).
+"""SurveyPieces, SolvePuzzle and ArrangeSolved with a fake camera and a hand-filled blackboard.
 
 The survey and the solve see the pieces through a synthetic camera only: the context has no world,
 so these tests are also the honesty check of item 5 (the solve's only input is camera frames).

@@ -1,4 +1,4 @@
-"""Issue 36: a part without half-turn symmetry is picked and carried turning the last wrist joint least.
+"""A part without half-turn symmetry is picked and carried turning the last wrist joint least.
 
 Pick may take it with the gripper half a turn round (``/<obj>/grasp_half_turn``) and Place reads
 that, so the part still lands at its target's yaw; the carry takes the way round that, with the park

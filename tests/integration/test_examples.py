@@ -33,7 +33,7 @@ def test_an_example_plan_arranges_every_part(name: str) -> None:
 
 
 def test_a_thin_outline_cut_apart_in_the_binned_search_view_is_still_found() -> None:
-    """Issue 36's runs: at scene seed 5 the ell's 20 mm arms fell apart in the 6x binned search view.
+    """the runs: at scene seed 5 the ell's 20 mm arms fell apart in the 6x binned search view.
 
     The two pieces read as two green parts and the ell was never picked ("2 green blobs, none a
     whole ell"); joined as one face's fragments, the window at full resolution measures it.
@@ -48,7 +48,7 @@ def test_a_thin_outline_cut_apart_in_the_binned_search_view_is_still_found() -> 
 
 
 def test_a_released_prism_is_not_dragged_by_a_pad() -> None:
-    """Issue 36's runs: at scene seed 1 the opening pads dragged the triangle 8 mm and lifted it.
+    """the runs: at scene seed 1 the opening pads dragged the triangle 8 mm and lifted it.
 
     Bullet had kept a contact point of its hull whose normal faced the wrong way
     (``PhysicsConfig.fresh_prism_release_contacts``): placed 9.0 mm off by the camera, it took

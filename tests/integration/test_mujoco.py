@@ -1,4 +1,4 @@
-"""The MuJoCo backend (issue 25): the same trees, behaviours and perception in a second engine, headless.
+"""The MuJoCo backend: the same trees, behaviours and perception in a second engine, headless.
 
 Skipped only where the engine cannot run: no ``mujoco`` package, or no OSMesa for headless
 rendering (``scripts/setup-system.sh`` installs Debian's ``libosmesa6``).

@@ -130,7 +130,7 @@ def test_a_cube_turned_33_degrees_either_way_is_squared_by_a_wrist_turn_and_held
 
 
 def test_a_blended_pick_grasps_and_a_blended_place_lands_within_a_third_of_a_millimetre(monkeypatch):
-    """Issue 23: motions handed on at speed (lift into carry, retreat into the way home) keep the grasp and the place.
+    """Motions handed on at speed (lift into carry, retreat into the way home) keep the grasp and the place.
 
     The whole single-cube tree, steered by the camera; ground truth only measures the result.
     """

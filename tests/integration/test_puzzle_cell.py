@@ -1,4 +1,4 @@
-"""``bt-arrange run puzzle`` in the pybullet cell (issue 32): seen, solved and reassembled from the camera alone."""
+"""``bt-arrange run puzzle`` in the pybullet cell: seen, solved and reassembled from the camera alone."""
 
 from __future__ import annotations
 

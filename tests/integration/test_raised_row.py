@@ -1,4 +1,4 @@
-"""The campaign's raised rows (issue 33): a cube placed on top of another, reported as Table 1's rows are."""
+"""The campaign's raised rows: a cube placed on top of another, reported as Table 1's rows are."""
 
 import json
 import math

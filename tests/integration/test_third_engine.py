@@ -1,4 +1,4 @@
-"""A third engine is one backend and its name: the campaign runs its trials with no edit of its own (issue 31)."""
+"""A third engine is one backend and its name: the campaign runs its trials with no edit of its own."""
 
 from __future__ import annotations
 

@@ -66,7 +66,7 @@ def test_a_plan_of_prisms_exported_to_xml_runs_as_the_plan(stem, tmp_path):
         plan = tmp_path / "fresco.toml"
         plan.write_text(text.replace("pieces = 6 ", "pieces = 3 "), encoding="utf-8")
     else:
-        # At 1 mm every part is set down within (issue 38 item 1): at 0.3 mm some are pushed.
+        # At 1 mm every part is set down within: at 0.3 mm some are pushed.
         text = plan.read_text(encoding="utf-8")
         assert "threshold_mm = 1.0\n" in text
         plan = tmp_path / f"{stem}.toml"
