@@ -54,7 +54,7 @@ from bt_arrange.foxglove import streams as foxglove_streams
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
-from bt_arrange.plan.check import CameraView, check_plan, check_scene
+from bt_arrange.plan.check import CameraView, check_plan, check_puzzles, check_scene
 from bt_arrange.plan.compiled import ArrangementPlan
 from bt_arrange.plan.targets import Target
 from bt_arrange.puzzle.evaluation import PuzzleTruth
@@ -159,6 +159,7 @@ class Session:
                     )
                 else:  # a puzzle's targets come from its solve: its scene and its whole's place are checked
                     check_scene(scene, view=view, colours=self.colours, settings=settings)
+                check_puzzles(checked.puzzles, checked.targets, checked.tolerance.threshold_mm, settings)
                 check_puzzles_in_view(list(checked.puzzles), view)
                 check_colours_apart(list(checked.targets), self.colours)
             except PlanError as error:

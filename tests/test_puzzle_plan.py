@@ -119,3 +119,33 @@ def test_the_xml_twin_is_the_plan_s_tree_and_scene() -> None:
     assert xml_root.puzzles == plan_root.puzzles
     assert xmltree.to_xml(xml_root, tree_id="puzzle") == xmltree.to_xml(plan_root, tree_id="puzzle")
     assert treefile.scene(xml, 2) == treefile.scene(plan, 2)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            "threshold_mm = 1.5\n",
+            r"\[puzzle\.slab\]: gap_mm = 2 is under twice the threshold \(3 mm at threshold_mm = 1\.5\).*"
+            r"make gap_mm at least 3 or threshold_mm at most 1$",
+        ),
+        (
+            '[[targets]]\ncolour = "red"\nx_mm = 520\ny_mm = 40\n',
+            r"target 1 \(red\) lies where \[puzzle\.slab\] is put back together: move the target or the slab$",
+        ),
+        (
+            '[[targets]]\ncolour = "ochre"\nx_mm = 400\ny_mm = 250\n',
+            r"target 1 \(ochre\) is ochre, the colour of \[puzzle\.slab\]'s pieces",
+        ),
+        (
+            '[puzzle.other]\nsize_mm = [100, 80, 20]\npieces = 4\ngap_mm = 2\ncolour = "blue"\nx_mm = 560\ny_mm = 30\n',
+            r"\[puzzle\.slab\] and \[puzzle\.other\]: the two slabs overlap where they are put back together",
+        ),
+    ],
+    ids=["gap under twice the threshold", "a target under the slab", "a target of its colour", "slabs overlap"],
+)
+def test_a_puzzle_the_run_would_fail_on_is_refused_before_anything_moves(tmp_path: Path, extra, message) -> None:
+    text = (extra + PUZZLE) if extra.startswith("threshold") else PUZZLE + extra
+    with pytest.raises(PlanError, match=message) as caught:
+        plans.load(write(tmp_path, text)).create_root()
+    assert "fragment" not in str(caught.value), "the message names only what the plan names"

@@ -35,6 +35,7 @@ from bt_arrange.objects import ObjectType, object_type_of
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE
 from bt_arrange.plan import stacking
 from bt_arrange.plan.camera_view import CameraView
+from bt_arrange.plan.footprints import overlap
 from bt_arrange.plan.layout import Pads, Rect, gap_m, start_clearance_m
 from bt_arrange.plan.targets import Target, check_threshold, parts_of
 from bt_arrange.plan.validate import reach_text, validate_targets
@@ -252,3 +253,55 @@ def check_plan(
                     parts=(("start", _start_name(start)), ("target", part.name)),
                 )
     return plan
+
+
+def check_puzzles(
+    puzzles: Iterable[Any],
+    targets: Iterable[Target],
+    threshold_mm: float,
+    settings: ManipulationSettings | None = None,
+) -> None:
+    """A ``PlanError`` for a puzzle that the run would fail on for sure, named as the plan names it.
+
+    A slab's gap under twice the threshold (two pieces, each within the threshold, could meet and
+    the layout would refuse the solved places); a slab that overlaps another slab or a target (its
+    pieces would land on them); a target of a slab's colour (the camera tells parts apart by colour).
+    """
+    settings = settings or ManipulationSettings()
+    specs = list(puzzles)
+    plan = list(targets)
+    clearance_m = settings.gap_for_threshold_m(threshold_mm)
+
+    def slab(spec: Any) -> Rect:
+        # The reassembled whole: its size and a gap along each side for the fractures' gaps it carries.
+        return Rect(spec.x_m, spec.y_m, spec.yaw_rad, spec.size_m[0] / 2 + spec.gap_m, spec.size_m[1] / 2 + spec.gap_m)
+
+    for index, spec in enumerate(specs):
+        gap_mm = spec.gap_m * 1000
+        if gap_mm < 2 * threshold_mm - 1e-9:
+            raise PlanError(
+                f"[puzzle.{spec.name}]: gap_mm = {gap_mm:g} is under twice the threshold ({2 * threshold_mm:g} mm at "
+                f"threshold_mm = {threshold_mm:g}): two pieces each within the threshold could meet; make gap_mm at "
+                f"least {2 * threshold_mm:g} or threshold_mm at most {gap_mm / 2:g}",
+                parts=(("puzzle", spec.name),),
+            )
+        for other in specs[index + 1 :]:
+            if overlap(slab(spec), slab(other), clearance_m):
+                raise PlanError(
+                    f"[puzzle.{spec.name}] and [puzzle.{other.name}]: the two slabs overlap where they are put "
+                    "back together: move one of them",
+                    parts=(("puzzle", spec.name), ("puzzle", other.name)),
+                )
+        for number, target in enumerate(plan, start=1):
+            if target.colour == spec.colour:
+                raise PlanError(
+                    f"target {number} ({target.obj}) is {target.colour}, the colour of [puzzle.{spec.name}]'s pieces: "
+                    "the camera tells parts apart by colour, so a puzzle's colour is its own",
+                    parts=(("target", target.obj), ("puzzle", spec.name)),
+                )
+            if overlap(slab(spec), stacking.footprint_of(target, settings), clearance_m):
+                raise PlanError(
+                    f"target {number} ({target.obj}) lies where [puzzle.{spec.name}] is put back together: "
+                    "move the target or the slab",
+                    parts=(("target", target.obj), ("puzzle", spec.name)),
+                )

@@ -18,6 +18,7 @@ from bt_arrange.checks import positive_number
 from bt_arrange.deprecation import warn_once
 from bt_arrange.errors import PlanError
 from bt_arrange.perception import ColourTable
+from bt_arrange.plan.check import check_puzzles
 from bt_arrange.plan.choices import CorrectMode, PushStrategy
 from bt_arrange.plan.compiled import ArrangementPlan, compile_plan
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
@@ -127,6 +128,7 @@ def _arrangement(
     )
     if not puzzles:
         return render(compile_plan(targets, tolerance, **options), locate)
+    check_puzzles(puzzles, targets, float(threshold_mm), settings)
     # Without targets, a stand-in's plan checks the options and gives the run's settings; its steps are dropped.
     plan = compile_plan(targets or [Target("red", 0.5, 0.0)], tolerance, **options)
     if not targets:
