@@ -395,22 +395,27 @@ def _for_btcpp(xml: str) -> tuple[str, dict[str, str]]:
     behaviortreepy registers nodes without ports (BT.CPP would refuse their attributes) and cannot
     register a control node: what BT.CPP would check with declared ports (every attribute is a port
     of the node's model) is checked here, and a custom control node is read as a ``Sequence``.
+    Inside a ``<BehaviorTree>`` a ``<SubTree>`` uses, a reference ``{port}`` names one of the SubTree
+    model's ports or an entry of the part (``{target}``); the ``<SubTree>`` elements, their ports and
+    remappings (``{/red/offset_mm}``) and the SubTree models are BT.CPP's to read, and are left as they are.
     """
     document = ET.fromstring(xml)
     models = {
         model.get("ID"): (model.tag, {port.get("name") for port in model if port.tag.endswith("_port")})
         for model in document.find("TreeNodesModel")
+        if model.tag != "SubTree"
     }
-    for element in document.find("BehaviorTree").iter():
-        if element.tag not in models:
-            continue  # BT.CPP's own node: BT.CPP checks its attributes itself
-        category, ports = models[element.tag]
-        attributes = set(element.attrib) - {"name", "_uid"}
-        assert attributes <= ports, f"<{element.tag}> has attributes {sorted(attributes - ports)} not in its model"
-        for attribute in attributes:
-            del element.attrib[attribute]
-        if category == "Control":
-            element.tag = "Sequence"
+    for tree in document.findall("BehaviorTree"):
+        for element in tree.iter():
+            if element.tag not in models:
+                continue  # BT.CPP's own node, or a SubTree: BT.CPP checks its attributes itself
+            category, ports = models[element.tag]
+            attributes = set(element.attrib) - {"name", "_uid"}
+            assert attributes <= ports, f"<{element.tag}> has attributes {sorted(attributes - ports)} not in its model"
+            for attribute in attributes:
+                del element.attrib[attribute]
+            if category == "Control":
+                element.tag = "Sequence"
     return ET.tostring(document, encoding="unicode"), {tag: category for tag, (category, _) in models.items()}
 
 
