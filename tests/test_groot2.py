@@ -448,6 +448,41 @@ def test_every_shipped_tree_as_xml_loads_and_ticks_in_bt_cpp_4(path):
         assert tree.tick_while_running() == bt.NodeStatus.SUCCESS
 
 
+def test_bt_cpp_4_passes_a_part_subtrees_ports_in_and_its_results_out():
+    """BT.CPP 4 reads four_cubes' one part definition four times: each SubTree's ``obj`` and ``target_pose``
+    reach inside, the thresholds come from the SubTree model's defaults, and what the part writes to its
+    entries lands at the keys its SubTree remaps them to (BT.CPP's own ``Script`` nodes write them here)."""
+    bt = pytest.importorskip("behaviortreepy")
+    root = treefile.build_root(treefile.load(TREES / "four_cubes.py"))
+    xml, categories = _for_btcpp(xmltree.to_xml(root, tree_id="four_cubes"))
+    document = ET.fromstring(xml)
+    (definition,) = [tree for tree in document.findall("BehaviorTree") if tree.get("ID") == "arrange_cube"]
+    part = definition[0][0]  # ForceSuccess "then the next ({obj})", then Sequence "arrange {obj}"
+    for index, code in enumerate(
+        [
+            "offset_mm := obj",
+            "corrections := target_pose",
+            "placed_offset_mm := threshold_mm",
+            "yaw_error_deg := yaw_threshold_deg",
+        ]
+    ):
+        part.insert(index, ET.Element("Script", {"code": code}))
+    tree = _btcpp_factory(bt, categories).create_tree_from_text(ET.tostring(document, encoding="unicode"))
+    assert tree.tick_while_running() == bt.NodeStatus.SUCCESS
+    blackboard = tree.root_blackboard()
+    for target in root.targets:
+        written = {field: blackboard.get_string(f"/{target.obj}/{field}") for field in ("offset_mm", "corrections")}
+        assert written == {"offset_mm": target.obj, "corrections": f"{target.x_m!r};{target.y_m!r};{target.yaw_rad!r}"}
+        assert blackboard.get_string(f"/{target.obj}/placed_offset_mm") == "1.0"
+        assert blackboard.get_string(f"/{target.obj}/yaw_error_deg") == "1.0"
+
+
+def test_a_file_written_before_the_subtrees_still_loads_and_ticks_in_bt_cpp_4():
+    bt = pytest.importorskip("behaviortreepy")
+    xml, categories = _for_btcpp((ROOT / "tests" / "data" / "four_cubes_before_subtrees.xml").read_text())
+    assert _btcpp_factory(bt, categories).create_tree_from_text(xml).tick_while_running() == bt.NodeStatus.SUCCESS
+
+
 def test_bt_cpp_numbers_the_served_four_cubes_as_we_do():
     bt = pytest.importorskip("behaviortreepy")
     root = treefile.build_root(treefile.load(TREES / "four_cubes.py"))
