@@ -58,7 +58,9 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             Port("offset_key", KEY, description="blackboard key of the offset [mm]"),
             Port("threshold_mm", LIMIT, description="succeed once the offset is under this [mm] (inf: yaw only)"),
             Port("max_attempts", INT, 10, "corrections before giving up"),
-            Port("corrections_key", KEY, None, "blackboard key counting the corrections (empty: none)", direction=OUTPUT),
+            Port(
+                "corrections_key", KEY, None, "blackboard key counting the corrections (empty: none)", direction=OUTPUT
+            ),
             Port("yaw_key", KEY, None, "blackboard key of the yaw error [deg] (empty: position only)"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "succeed once the yaw error is under this too [deg] (0: off)"),
             Port("stall_after", INT, 0, "fail once this many corrections in a row closed nothing (0: off)"),

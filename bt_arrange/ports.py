@@ -456,6 +456,8 @@ ENTRY = PortType("BlackboardEntry", _parse_key, _format_key)
 def entry_port(name: str, direction: str, description: str) -> Port:
     """A blackboard entry port (``ENTRY``): ``name`` is the entry's field (``pose`` is ``/<obj>/pose``)."""
     return Port(name, ENTRY, None, description, optional=True, direction=direction)
+
+
 #: A text whose empty value means "none" (``None`` in Python).
 OFF_STRING = PortType("std::string", lambda text: text or None, lambda value: value or "")
 DOUBLE = PortType("double", _parse_float, _format_float)

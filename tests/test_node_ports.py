@@ -217,7 +217,9 @@ def test_a_new_behaviour_is_its_class_plus_one_registration(user_nodes):
     assert '<RunTwice name="again" label="x">' in text and 'pause_s="0.5"' in text
     assert '<Action ID="Wave">' in text and '<Decorator ID="RunTwice">' in text
     assert '<input_port name="times" type="int" default="1"/>' in text  # the ports the file writes
-    assert '<input_port name="times" type="int" default="1">how often</input_port>' in xmltree.to_xml(root, model="full")
+    assert '<input_port name="times" type="int" default="1">how often</input_port>' in xmltree.to_xml(
+        root, model="full"
+    )
     reloaded = xmltree.from_xml(text)
     assert list(xmltree.iter_structure(reloaded)) == list(xmltree.iter_structure(root))
     wave, twice = reloaded.children

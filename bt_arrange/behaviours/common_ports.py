@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from bt_arrange.objects import CUBE
 from bt_arrange.behaviours import keys
+from bt_arrange.objects import CUBE
 from bt_arrange.ports import DOUBLE, INOUT, INPUT, OBJECT_TYPE, OUTPUT, POSES, STRING, Port, entry_port
 
 OBJ = Port("obj", STRING, description="the object's name: its blackboard namespace (/<obj>/pose ...)")
@@ -38,7 +38,9 @@ _ENTRY_MEANINGS = {
 }
 
 
-def entries(inputs: tuple[str, ...] = (), outputs: tuple[str, ...] = (), inouts: tuple[str, ...] = ()) -> tuple[Port, ...]:
+def entries(
+    inputs: tuple[str, ...] = (), outputs: tuple[str, ...] = (), inouts: tuple[str, ...] = ()
+) -> tuple[Port, ...]:
     """The blackboard entries a node reads (``inputs``), writes (``outputs``) or both, as its entry ports.
 
     Each defaults to the object's own entry (``{pose}``: ``/<obj>/pose``, as ``keys.key`` builds it);

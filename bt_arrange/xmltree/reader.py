@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import re
 import xml.parsers.expat
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Mapping
 from typing import Any, NoReturn
 
 import py_trees
@@ -122,12 +122,19 @@ class _Reader:
         self.document = document
         self.trees: dict[str, Element] = {}
         self.subtree_defaults: dict[str, dict[str, str]] = {}
+        self.served: dict[str, Element] = {}
         for child in document.children:
             if child.tag == "BehaviorTree":
                 tree_id = child.attributes.get("ID")
                 if not tree_id:
                     self.fail(child, "<BehaviorTree> needs an ID")
-                if tree_id in self.trees:
+                fullpath = child.attributes.get("_fullpath")
+                if fullpath:
+                    # BehaviorTree.CPP's Groot2 view: one tree per SubTree, the SubTree names it by its _fullpath.
+                    self.served[fullpath] = child
+                    if tree_id in self.trees:
+                        continue
+                elif tree_id in self.trees and "_fullpath" not in self.trees[tree_id].attributes:
                     self.fail(child, f"a second <BehaviorTree ID={tree_id!r}>")
                 self.trees[tree_id] = child
             elif child.tag == "TreeNodesModel":
@@ -173,7 +180,7 @@ class _Reader:
         target's fields); its points are its ``X:Y`` vertices.
         """
         seen: dict[str, Element] = {}
-        stack = list(self.trees.values())
+        stack = [*self.trees.values(), *self.served.values()]
         while stack:
             element = stack.pop()
             stack.extend(element.children)
@@ -204,13 +211,17 @@ class _Reader:
         SubTrees of the next is refused in milliseconds, however far it would double.
         """
         local: dict[str, tuple[int, int, list[tuple[int, str, Element]]]] = {}
-        for tree_id, tree in self.trees.items():
+        # The Groot2 view's trees (one per SubTree, named by its _fullpath) are measured as trees of their own.
+        trees = {**self.trees, **self.served}
+        for tree_id, tree in trees.items():
             count, deepest, calls = 0, 0, []
             stack = [(child, 1) for child in tree.children]
             while stack:
                 element, level = stack.pop()
                 if element.tag == "SubTree":
-                    calls.append((level - 1, element.attributes.get("ID", ""), element))
+                    fullpath = element.attributes.get("_fullpath", "")
+                    called = fullpath if fullpath in self.served else element.attributes.get("ID", "")
+                    calls.append((level - 1, called, element))
                     continue
                 count += 1
                 deepest = max(deepest, level)
@@ -223,7 +234,7 @@ class _Reader:
             tree_id, ready = pending.pop()
             if tree_id in sizes:
                 continue
-            calls = [(level, called, element) for level, called, element in local[tree_id][2] if called in self.trees]
+            calls = [(level, called, element) for level, called, element in local[tree_id][2] if called in trees]
             if not ready:
                 if tree_id in visiting:
                     return  # a cycle: _subtree names it at its line
@@ -251,7 +262,7 @@ class _Reader:
                     )
             if count > MAX_TREE_NODES:
                 self.fail(
-                    self.trees[tree_id],
+                    trees[tree_id],
                     f"<BehaviorTree ID={tree_id!r}> has {count:,} nodes, over the limit of {MAX_TREE_NODES:,} "
                     "(bt_arrange.filelimits.MAX_TREE_NODES)",
                 )
@@ -333,15 +344,17 @@ class _Reader:
         namespace = values.get("obj") if "obj" in ports and isinstance(values.get("obj"), str) else None
         for port in model.ports:
             if port.type is KEY:
-                text = texts.get(port.name)
-                if text is None:
+                given = texts.get(port.name)
+                if given is None:
                     if port.required:
                         self.fail(element, f"<{element.tag}> needs port {port.name!r} ({port.type.name})")
                     values[port.name] = port.default
                     continue
-                reference = _reference(text)
+                reference = _reference(given)
                 values[port.name] = (
-                    scope.key(reference, namespace) if reference is not None else self._parse(element, name, port, text)
+                    scope.key(reference, namespace)
+                    if reference is not None
+                    else self._parse(element, name, port, given)
                 )
             elif port.entry:
                 reference = _reference(texts.get(port.name, "")) or port.name
@@ -396,7 +409,8 @@ class _Reader:
             else:
                 remaps[port] = scope.key(reference, None)
         inner = _Scope(literals, remaps, literals.get("obj"))
-        root = self._tree(self.trees[subtree_id], entered, inner)
+        tree = self.served.get(element.attributes.get("_fullpath", ""), self.trees[subtree_id])
+        root = self._tree(tree, entered, inner)
         if "obj" in literals and "target_pose" in literals:
             # A part's SubTree: the writer writes it as one again (``render_part`` marks a part so).
             pose = PLANAR_POSE.parse(literals["target_pose"])
@@ -438,4 +452,3 @@ class _Scope:
         if not self.literals or "{" not in name:
             return name
         return substitute(name, self.literals)
-

@@ -84,9 +84,10 @@ class _Element:
     category: str = ""
 
     def signature(self) -> tuple[Any, ...]:
+        """What the element says, but for the ``_uid`` the Groot2 view numbers it with."""
         return (
             self.tag,
-            tuple((name, text) for name, text, _ in self.attributes),
+            tuple((name, text) for name, text, _ in self.attributes if name != "_uid"),
             tuple(child.signature() for child in self.children),
         )
 
@@ -100,32 +101,40 @@ def to_xml(
     generic: bool = False,
     subtrees: bool | None = None,
     model: str = "used",
+    subtree_uids: Mapping[py_trees.behaviour.Behaviour, int] | None = None,
 ) -> str:
     """The tree as a BehaviorTree.CPP v4 document, with the ``TreeNodesModel`` of the non-builtin nodes it uses.
 
     ``uids`` (node to number) adds each node's ``_uid`` attribute; ``generic`` writes an unregistered
-    node under its class name instead of refusing it. ``subtrees`` (default: without ``uids``)
-    writes each part as a ``<SubTree>``; ``model="full"`` lists every port of each node in the
-    ``TreeNodesModel`` (default ``"used"``: the ports the file writes).
+    node under its class name instead of refusing it. ``subtrees`` (default True) writes each part
+    as a ``<SubTree>``; ``model="full"`` lists every port of each node in the ``TreeNodesModel``
+    (default ``"used"``: the ports the file writes).
+
+    With ``uids`` the parts are written as BehaviorTree.CPP's publisher serves its SubTrees to Groot2:
+    each ``<SubTree>`` has its own ``_uid`` (``subtree_uids``, by the part's top node, as
+    ``subtree_roots`` finds them) and its own ``<BehaviorTree ID=... _fullpath="ID::UID">`` with the
+    part's nodes as they are (their own names and values, each with its ``_uid``).
     """
     if model not in ("used", "full"):
         raise XmlTreeError(f"model={model!r} is not 'used' or 'full'")
     used: dict[str, NodeModel] = {}
     options = _Options(uids or {}, generic)
     main = _element(root, used, options)
-    definitions: dict[str, _Element] = {}
-    subtree_ports: dict[str, list[tuple[str, str, str | None]]] = {}
-    if subtrees if subtrees is not None else not uids:
-        _Parts(root, definitions, subtree_ports).extract(main)
+    parts = _Parts(root, subtree_uids if uids else None)
+    if subtrees is None or subtrees:
+        parts.extract(main)
     lines = ['<?xml version="1.0" encoding="UTF-8"?>']
     if comment:
         lines.append(f"<!-- {comment.replace('--', '- -')} -->")
     lines.append(f'<root BTCPP_format="{FORMAT_VERSION}" main_tree_to_execute={quoteattr(tree_id)}>')
-    for identity, top in [(tree_id, main), *definitions.items()]:
-        lines.append(f"  <BehaviorTree ID={quoteattr(identity)}>")
+    served = ' _fullpath=""' if uids else ""
+    for identity, fullpath, top in [(tree_id, None, main), *parts.trees]:
+        shown = served if fullpath is None else f" _fullpath={quoteattr(fullpath)}"
+        lines.append(f"  <BehaviorTree ID={quoteattr(identity)}{shown}>")
         _write(top, lines, 2)
         lines.append("  </BehaviorTree>")
-    written = _written_ports(main, definitions.values())
+    written = _written_ports(main, [top for _, _, top in parts.trees])
+    subtree_ports = parts.ports
     lines.append("  <TreeNodesModel>")
     for tag in sorted(used):
         node_model = used[tag]
@@ -230,10 +239,7 @@ class _Parts:
     """Turns each part's subtree into a ``<SubTree>`` of a shared ``<BehaviorTree>`` (see the module)."""
 
     def __init__(
-        self,
-        root: py_trees.behaviour.Behaviour,
-        definitions: dict[str, _Element],
-        ports: dict[str, list[tuple[str, str, str | None]]],
+        self, root: py_trees.behaviour.Behaviour, served: Mapping[py_trees.behaviour.Behaviour, int] | None = None
     ) -> None:
         plan = getattr(root, "plan", None)
         tolerance = getattr(plan, "tolerance", None)
@@ -245,21 +251,32 @@ class _Parts:
                 "yaw_threshold_deg": OFF_DOUBLE.format(tolerance.yaw_threshold_deg),
             }
         )
-        self.definitions = definitions
-        self.ports = ports
+        #: The SubTrees' uids by their parts' top nodes: the Groot2 view (each part's own tree, as it is).
+        self.served = served
+        #: The BehaviorTrees besides the main one: ID, ``_fullpath`` (the Groot2 view only), root element.
+        self.trees: list[tuple[str, str | None, _Element]] = []
+        self.definitions: dict[str, _Element] = {}
+        #: Each definition's SubTree ports: name, direction, default.
+        self.ports: dict[str, list[tuple[str, str, str | None]]] = {}
+        #: The top node of each part written as a SubTree.
+        self.tops: list[py_trees.behaviour.Behaviour] = []
         #: Per definition: its template's signature, and the values of each instance.
         self.signatures: dict[tuple[Any, ...], str] = {}
         self.instances: dict[str, list[_Element]] = {}
 
-    def extract(self, element: _Element) -> None:
+    def extract(self, main: _Element) -> None:
+        """Replace each part's subtree under ``main`` by its ``<SubTree>``, in the tree's order."""
+        self._replace(main)
+        self._finish()
+
+    def _replace(self, element: _Element) -> None:
         for index, child in enumerate(element.children):
             part = _part_below(child)
             instance = self._instance(child, part) if part is not None else None
             if instance is None:
-                self.extract(child)
+                self._replace(child)
             else:
                 element.children[index] = instance
-        self._finish()
 
     def _instance(self, element: _Element, part: Any) -> _Element | None:
         values = {
@@ -269,6 +286,8 @@ class _Parts:
             **self.thresholds,
         }
         template, used = _template(element, values)
+        if self.served is not None and element.node not in self.served:
+            return None
         if _expand(template, {name: values[name] for name in used}, values["obj"]).signature() != element.signature():
             return None  # it would not read back as it is: inline
         signature = template.signature()
@@ -277,10 +296,18 @@ class _Parts:
             identity = _identity(part, self.definitions)
             self.signatures[signature] = identity
             self.definitions[identity] = template
+            if self.served is None:
+                self.trees.append((identity, None, template))
             self.ports[identity] = [(name, "input", None) for name in PART_VALUES if name in used]
             self.ports[identity] += [(name, "output", None) for name in PART_RESULTS]
             self.instances[identity] = []
         attributes: list[tuple[str, str, Port | None]] = [("ID", identity, None)]
+        self.tops.append(element.node)
+        if self.served is not None:
+            uid = self.served.get(element.node)
+            fullpath = f"{identity}::{uid}"
+            attributes += [("_fullpath", fullpath, None), ("_uid", str(uid), None)]
+            self.trees.append((identity, fullpath, element))
         attributes += [(name, values[name], None) for name in PART_VALUES if name in used]
         attributes += [(name, "{" + keys.key(values["obj"], name) + "}", None) for name in PART_RESULTS]
         instance = _Element("SubTree", attributes)
@@ -301,6 +328,13 @@ class _Parts:
                 ]
                 for instance in instances:
                     instance.attributes = [item for item in instance.attributes if item[0] != shared]
+
+
+def subtree_roots(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
+    """The top nodes of the parts ``to_xml`` writes as SubTrees, in the tree's order (for the Groot2 view's uids)."""
+    parts = _Parts(root)
+    parts.extract(_element(root, {}, _Options({}, True)))
+    return parts.tops
 
 
 def _part_below(element: _Element) -> Any:
@@ -336,6 +370,8 @@ def _template(element: _Element, values: Mapping[str, str]) -> tuple[_Element, s
         node_obj = next((text for name, text, _ in source.attributes if name == "obj"), None)
         attributes: list[tuple[str, str, Port | None]] = []
         for name, text, port in source.attributes:
+            if name == "_uid":
+                continue
             if port is None:
                 if name == "name" and "{" not in text and "}" not in text and own.search(text):
                     text = own.sub("{obj}", text)
@@ -386,7 +422,11 @@ def _expand(template: _Element, literals: Mapping[str, str], obj: str) -> _Eleme
             text = literals[text[1:-1]]
         attributes.append((name, text, port))
     return _Element(
-        template.tag, attributes, [_expand(child, literals, obj) for child in template.children], None, template.category
+        template.tag,
+        attributes,
+        [_expand(child, literals, obj) for child in template.children],
+        None,
+        template.category,
     )
 
 
