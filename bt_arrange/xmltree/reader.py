@@ -2,8 +2,15 @@
 
 Nothing the file names is imported or evaluated: a tag is looked up in ``REGISTRY`` and each
 port's text converted by the port's declared type. Any other tag, a script attribute
-(``_skipIf`` ...), a blackboard reference, an ``<Include>`` or a ``<!DOCTYPE>`` is refused with a
-one-line ``XmlTreeError`` naming the line, the node and, for a bad value, the port and the text.
+(``_skipIf`` ...), a blackboard reference where a port takes a value, an ``<Include>`` or a
+``<!DOCTYPE>`` is refused with a one-line ``XmlTreeError`` naming the line, the node and, for a
+bad value, the port and the text.
+
+A ``<SubTree>`` gives its tree ports, as in BehaviorTree.CPP 4: a literal (``obj="red"``), read
+inside as ``{obj}`` (in a port's value, and in a name), or a remapped blackboard entry
+(``offset_mm="{/red/offset_mm}"``), which a node's key or entry port inside names as
+``{offset_mm}``. A blackboard entry no SubTree remaps is its object's own (``/<obj>/<entry>``).
+The thresholds' defaults come from the ``TreeNodesModel``'s ``<SubTree ID=...>`` ports.
 """
 
 from __future__ import annotations

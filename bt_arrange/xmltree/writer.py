@@ -99,7 +99,7 @@ def to_xml(
     comment: str | None = None,
     uids: Mapping[py_trees.behaviour.Behaviour, int] | None = None,
     generic: bool = False,
-    subtrees: bool | None = None,
+    subtrees: bool = True,
     model: str = "used",
     subtree_uids: Mapping[py_trees.behaviour.Behaviour, int] | None = None,
 ) -> str:
@@ -120,8 +120,9 @@ def to_xml(
     used: dict[str, NodeModel] = {}
     options = _Options(uids or {}, generic)
     main = _element(root, used, options)
-    parts = _Parts(root, subtree_uids if uids else None)
-    if subtrees is None or subtrees:
+    # The Groot2 view: a part is a SubTree only where its SubTree has a UID (none given: all inline).
+    parts = _Parts(root, dict(subtree_uids or {}) if uids else None)
+    if subtrees:
         parts.extract(main)
     lines = ['<?xml version="1.0" encoding="UTF-8"?>']
     if comment:
