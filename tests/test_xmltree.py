@@ -349,3 +349,13 @@ def test_a_reference_to_no_port_of_its_subtree_is_refused_with_its_line():
     </root>"""
     with pytest.raises(XmlTreeError, match=r"line 3: <Detect> colour='\{color\}': ports take values.*obj"):
         xmltree.from_xml(text)
+
+
+def test_the_full_model_lists_every_port_with_its_description(capsys):
+    assert cli.main(["show", str(TREES / "four_cubes.py"), "--format", "xml", "--full-model"]) == 0
+    text = capsys.readouterr().out
+    assert '<output_port name="pose" type="BlackboardEntry" default="{pose}">the measured pose</output_port>' in text
+    assert '<input_port name="object_type" type="ObjectType" default="">' in text and "<MetadataFields>" in text
+    assert list(xmltree.iter_structure(xmltree.from_xml(text))) == list(
+        xmltree.iter_structure(build(TREES / "four_cubes.py"))
+    )
