@@ -109,7 +109,10 @@ def _show_xml(root: Any, args: argparse.Namespace) -> int:
 
     stem = Path(args.tree_file).stem
     text = xmltree.to_xml(
-        root, tree_id=stem, comment=f"generated from {Path(args.tree_file).name} by bt-arrange show (format xml)"
+        root,
+        tree_id=stem,
+        comment=f"generated from {Path(args.tree_file).name} by bt-arrange show (format xml)",
+        model="full" if args.full_model else "used",
     )
     if args.out is None:
         print(text, end="")
@@ -283,6 +286,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="default text; xml: BehaviorTree.CPP v4 for Groot2",
     )
     show.add_argument("--blackboard", action="store_true", help="include the blackboard keys read and written")
+    show.add_argument(
+        "--full-model",
+        action="store_true",
+        help="xml: every port of each node, described, in the TreeNodesModel (an editor's palette)",
+    )
     show.add_argument("--out", type=Path, metavar="FILE", help="write to FILE (png/svg default: <tree>.png/.svg)")
     show.set_defaults(handler=_show)
 

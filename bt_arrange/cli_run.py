@@ -115,7 +115,7 @@ def _groot_publisher(root: Any, args: argparse.Namespace) -> Any:
     )
     print(
         f"bt-arrange: serving the tree to Groot2 on {publisher.address} "
-        f"({len(publisher.nodes)} nodes; btview snapshot -p {publisher.port})",
+        f"({len(publisher.served)} nodes; btview snapshot -p {publisher.port})",
         file=sys.stderr,
     )
     return publisher

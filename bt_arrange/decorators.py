@@ -21,7 +21,7 @@ from bt_arrange.behaviours import keys
 from bt_arrange.checks import whole_number
 from bt_arrange.numbers import fixed
 from bt_arrange.plan.tolerance import Tolerance
-from bt_arrange.ports import BOOL, INT, LIMIT, OFF_DOUBLE, OFF_STRING, STRING, Port
+from bt_arrange.ports import BOOL, INT, KEY, LIMIT, OFF_DOUBLE, OUTPUT, Port
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY
 
 #: A correction that closes less than this share of the best offset (and of the best yaw error)
@@ -55,11 +55,13 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
     def provided_ports(cls) -> tuple[Port, ...]:
         """The offset's key and threshold, the attempts, the counter's key, the yaw's (``providedPorts``)."""
         return (
-            Port("offset_key", STRING, description="blackboard key of the offset [mm]"),
+            Port("offset_key", KEY, description="blackboard key of the offset [mm]"),
             Port("threshold_mm", LIMIT, description="succeed once the offset is under this [mm] (inf: yaw only)"),
             Port("max_attempts", INT, 10, "corrections before giving up"),
-            Port("corrections_key", OFF_STRING, None, "blackboard key counting the corrections (empty: none)"),
-            Port("yaw_key", OFF_STRING, None, "blackboard key of the yaw error [deg] (empty: position only)"),
+            Port(
+                "corrections_key", KEY, None, "blackboard key counting the corrections (empty: none)", direction=OUTPUT
+            ),
+            Port("yaw_key", KEY, None, "blackboard key of the yaw error [deg] (empty: position only)"),
             Port("yaw_threshold_deg", OFF_DOUBLE, None, "succeed once the yaw error is under this too [deg] (0: off)"),
             Port("stall_after", INT, 0, "fail once this many corrections in a row closed nothing (0: off)"),
             Port("accumulate", BOOL, False, "count on from what the corrections key holds (a second loop)"),

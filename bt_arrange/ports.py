@@ -78,13 +78,22 @@ class _Required:
 REQUIRED: Any = _Required()
 
 
+#: A port's directions, as the ``TreeNodesModel`` names them (``input_port`` ...).
+INPUT, OUTPUT, INOUT = "input", "output", "inout"
+
+
 @dataclass(frozen=True)
 class Port:
-    """An input port: its name, type, default and what it means.
+    """A port: its name, type, default, what it means and its direction (``input``, ``output``, ``inout``).
 
     A port without a default (``REQUIRED``) must be given. An ``optional`` port (one added after
     files were written without it) is written only when its text is not the default's, so those
     files stay as they were.
+
+    A port of type ``ENTRY`` is a blackboard entry the node reads or writes, named by the port
+    (``pose``, ``offset_mm``): its default, ``{pose}``, is the entry of the node's object
+    (``/<obj>/pose``); an XML author remaps it (``pose="{/elsewhere/pose}"``), and a ``SubTree``
+    remaps the entries of its part.
     """
 
     name: str
@@ -92,6 +101,12 @@ class Port:
     default: Any = REQUIRED
     description: str = ""
     optional: bool = False
+    direction: str = INPUT
+
+    @property
+    def entry(self) -> bool:
+        """A blackboard entry of the node's object (``ENTRY``), not a value the node is built with."""
+        return self.type is ENTRY
 
     @property
     def required(self) -> bool:
@@ -416,6 +431,33 @@ def starts_type(make: Callable[..., PartOnTable]) -> PortType:
 
 
 STRING = PortType("std::string", str, str)
+
+
+def _parse_key(text: str) -> str | None:
+    """A blackboard key: ``{/red/pose}`` (a reference, the writer's form) or ``/red/pose`` (files before it)."""
+    text = text.strip()
+    if text.startswith("{") and text.endswith("}"):
+        text = text[1:-1].strip()
+    return text or None
+
+
+def _format_key(key: str | None) -> str:
+    return "{" + key + "}" if key else ""
+
+
+#: A blackboard key a node is built with (``offset_key`` ...): written ``{/red/offset_mm}``, read with or
+#: without the braces; empty is None.
+KEY = PortType("std::string", _parse_key, _format_key)
+#: A blackboard entry of the node's object (``Port.entry``): None is the object's own (``/<obj>/<port>``),
+#: else the absolute key it is remapped to, written ``{/elsewhere/pose}``.
+ENTRY = PortType("BlackboardEntry", _parse_key, _format_key)
+
+
+def entry_port(name: str, direction: str, description: str) -> Port:
+    """A blackboard entry port (``ENTRY``): ``name`` is the entry's field (``pose`` is ``/<obj>/pose``)."""
+    return Port(name, ENTRY, None, description, optional=True, direction=direction)
+
+
 #: A text whose empty value means "none" (``None`` in Python).
 OFF_STRING = PortType("std::string", lambda text: text or None, lambda value: value or "")
 DOUBLE = PortType("double", _parse_float, _format_float)

@@ -395,22 +395,27 @@ def _for_btcpp(xml: str) -> tuple[str, dict[str, str]]:
     behaviortreepy registers nodes without ports (BT.CPP would refuse their attributes) and cannot
     register a control node: what BT.CPP would check with declared ports (every attribute is a port
     of the node's model) is checked here, and a custom control node is read as a ``Sequence``.
+    Inside a ``<BehaviorTree>`` a ``<SubTree>`` uses, a reference ``{port}`` names one of the SubTree
+    model's ports or an entry of the part (``{target}``); the ``<SubTree>`` elements, their ports and
+    remappings (``{/red/offset_mm}``) and the SubTree models are BT.CPP's to read, and are left as they are.
     """
     document = ET.fromstring(xml)
     models = {
         model.get("ID"): (model.tag, {port.get("name") for port in model if port.tag.endswith("_port")})
         for model in document.find("TreeNodesModel")
+        if model.tag != "SubTree"
     }
-    for element in document.find("BehaviorTree").iter():
-        if element.tag not in models:
-            continue  # BT.CPP's own node: BT.CPP checks its attributes itself
-        category, ports = models[element.tag]
-        attributes = set(element.attrib) - {"name", "_uid"}
-        assert attributes <= ports, f"<{element.tag}> has attributes {sorted(attributes - ports)} not in its model"
-        for attribute in attributes:
-            del element.attrib[attribute]
-        if category == "Control":
-            element.tag = "Sequence"
+    for tree in document.findall("BehaviorTree"):
+        for element in tree.iter():
+            if element.tag not in models:
+                continue  # BT.CPP's own node, or a SubTree: BT.CPP checks its attributes itself
+            category, ports = models[element.tag]
+            attributes = set(element.attrib) - {"name", "_uid"}
+            assert attributes <= ports, f"<{element.tag}> has attributes {sorted(attributes - ports)} not in its model"
+            for attribute in attributes:
+                del element.attrib[attribute]
+            if category == "Control":
+                element.tag = "Sequence"
     return ET.tostring(document, encoding="unicode"), {tag: category for tag, (category, _) in models.items()}
 
 
@@ -443,25 +448,78 @@ def test_every_shipped_tree_as_xml_loads_and_ticks_in_bt_cpp_4(path):
         assert tree.tick_while_running() == bt.NodeStatus.SUCCESS
 
 
+def test_bt_cpp_4_passes_a_part_subtrees_ports_in_and_its_results_out():
+    """BT.CPP 4 reads four_cubes' one part definition four times: each SubTree's ``obj`` and ``target_pose``
+    reach inside, the thresholds come from the SubTree model's defaults, and what the part writes to its
+    entries lands at the keys its SubTree remaps them to (BT.CPP's own ``Script`` nodes write them here)."""
+    bt = pytest.importorskip("behaviortreepy")
+    root = treefile.build_root(treefile.load(TREES / "four_cubes.py"))
+    xml, categories = _for_btcpp(xmltree.to_xml(root, tree_id="four_cubes"))
+    document = ET.fromstring(xml)
+    (definition,) = [tree for tree in document.findall("BehaviorTree") if tree.get("ID") == "arrange_cube"]
+    part = definition[0][0]  # ForceSuccess "then the next ({obj})", then Sequence "arrange {obj}"
+    for index, code in enumerate(
+        [
+            "offset_mm := obj",
+            "corrections := target_pose",
+            "placed_offset_mm := threshold_mm",
+            "yaw_error_deg := yaw_threshold_deg",
+        ]
+    ):
+        part.insert(index, ET.Element("Script", {"code": code}))
+    tree = _btcpp_factory(bt, categories).create_tree_from_text(ET.tostring(document, encoding="unicode"))
+    assert tree.tick_while_running() == bt.NodeStatus.SUCCESS
+    blackboard = tree.root_blackboard()
+    for target in root.targets:
+        written = {field: blackboard.get_string(f"/{target.obj}/{field}") for field in ("offset_mm", "corrections")}
+        assert written == {"offset_mm": target.obj, "corrections": f"{target.x_m!r};{target.y_m!r};{target.yaw_rad!r}"}
+        assert blackboard.get_string(f"/{target.obj}/placed_offset_mm") == "1.0"
+        assert blackboard.get_string(f"/{target.obj}/yaw_error_deg") == "1.0"
+
+
+def test_a_file_written_before_the_subtrees_still_loads_and_ticks_in_bt_cpp_4():
+    bt = pytest.importorskip("behaviortreepy")
+    xml, categories = _for_btcpp((ROOT / "tests" / "data" / "four_cubes_before_subtrees.xml").read_text())
+    assert _btcpp_factory(bt, categories).create_tree_from_text(xml).tick_while_running() == bt.NodeStatus.SUCCESS
+
+
 def test_bt_cpp_numbers_the_served_four_cubes_as_we_do():
+    """BT.CPP 4 serves the file's four SubTrees of one definition as we serve the running tree: each SubTree
+    a node with its own UID before its part's nodes; we show each part's nodes by their own names, BT.CPP
+    by the definition's (``pick {obj}``)."""
     bt = pytest.importorskip("behaviortreepy")
     root = treefile.build_root(treefile.load(TREES / "four_cubes.py"))
     port, reference_port = free_port_pair(), free_port_pair()
-    with Groot2Publisher(root, port, tree_id="four_cubes") as ours:
-        xml, categories = _for_btcpp(ours.xml)
+    with Groot2Publisher(root, port, tree_id="four_cubes"):
+        xml, categories = _for_btcpp(xmltree.to_xml(root, tree_id="four_cubes"))
         reference_tree = _btcpp_factory(bt, categories).create_tree_from_text(xml)
         reference = bt.Groot2Publisher(reference_tree, reference_port)
         ours_client, theirs_client = btview_client(port), btview_client(reference_port)
         try:
             mine, theirs = structure(ours_client.fetch_tree()), structure(theirs_client.fetch_tree())
+            served = ours_client.fetch_tree_xml()
         finally:
             ours_client.close()
             theirs_client.close()
         del reference
-    assert len(mine) == 102  # 58, and per cube the 11 nodes that place it again when its pushes stall
-    # the same names and UIDs; the tags too, but for the Arrangement BT.CPP reads as a Sequence here
-    assert [(name, uid, n) for _, name, uid, n in mine] == [(name, uid, n) for _, name, uid, n in theirs]
+    # 58, and per cube the 11 nodes that place it again when its pushes stall; each cube's SubTree a node too
+    assert len(mine) == 102 + 4
+    assert [uid for tag, _, uid, _ in mine if tag == "SubTree"] == [2, 28, 54, 80]
+    assert served.count('<BehaviorTree ID="arrange_cube" _fullpath="arrange_cube::') == 4
+    # the same UIDs and names (BT.CPP's with each SubTree's obj put in); the tags too, but for the
+    # Arrangement BT.CPP reads as a Sequence here
+    objs = iter(["red", "green", "blue", "yellow"])
+    obj, named = "", []
+    for tag, name, uid, children in theirs:
+        obj = next(objs) if tag == "SubTree" else obj
+        named.append((name.replace("{obj}", obj), uid, children))
+    assert [(name, uid, n) for tag, name, uid, n in mine if tag != "SubTree"] == [
+        entry for (tag, *_), entry in zip(theirs, named, strict=True) if tag != "SubTree"
+    ]
+    assert [uid for *_, uid, _ in mine] == [uid for *_, uid, _ in theirs]
     assert [("Sequence" if tag == "Arrangement" else tag) for tag, *_ in mine] == [tag for tag, *_ in theirs]
+    # and the view reads back as the tree it shows
+    assert list(xmltree.iter_structure(xmltree.from_xml(served))) == list(xmltree.iter_structure(root))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -539,11 +597,13 @@ def test_a_paced_fresco_run_is_served_live_to_btview():
         by_name = {node.name: node for node in tree.walk()}
         names = {node.uid: node.name for node in tree.walk()}
         running_seen: set[str] = set()
+        running_uids: set[int] = set()
         while run.poll() is None:
             try:
                 polled = client.poll()
             except Exception:
                 break  # the run ended between two polls
+            running_uids |= {uid for uid, state in polled.statuses.items() if state.raw == protocol.RUNNING}
             running_seen |= {names[uid] for uid, state in polled.statuses.items() if state.raw == protocol.RUNNING}
             time.sleep(0.05)
         out, err = run.communicate(timeout=120)
@@ -555,7 +615,11 @@ def test_a_paced_fresco_run_is_served_live_to_btview():
     assert '"timed_out": true' in out
     # Every node of the fresco's tree, as built from its plan (222 on 6 December 2026).
     built = treefile.build_root(treefile.load("fresco"))
-    assert len(list(tree.walk())) == len(list(built.iterate())) and by_name["pick tile 1"].registration == "Pick"
+    subtrees = [node for node in tree.walk() if node.registration == "SubTree"]
+    # each piece its own part: a SubTree node above its part's nodes, shown by their own names
+    assert [node.children[0].name for node in subtrees] == [f"then the next (tile {i})" for i in range(1, 7)]
+    assert {subtrees[0].uid, subtrees[1].uid} <= running_uids  # a SubTree runs while its part does
+    assert len(list(tree.walk())) == len(list(built.iterate())) + 6 and by_name["pick tile 1"].registration == "Pick"
     assert by_name["regrasp tile 1 while turned 12 deg or more"].registration == "RetryUntilThreshold"
     assert {"pick tile 1", "place tile 1", "arrange tile 2"} <= running_seen, sorted(running_seen)
     assert 'object_type="tile 1=outline_mm ' in served

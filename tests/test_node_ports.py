@@ -21,7 +21,7 @@ OURS = sorted(tag for tag, model in REGISTRY.items() if model.cls.__module__.sta
 SAMPLE_TEXT = {
     "std::string": "red",
     "double": "2.5",
-    "int": "3",
+    "int": "7",
     "bool": "true",
     "ObjectType": "bar=outline_mm -40:-20 40:-20 40:20 -40:20 height_mm 40",
     "PlanarPoses": "0.5,0.1,0.0;0.4,0.1,0.0",
@@ -30,9 +30,17 @@ SAMPLE_TEXT = {
     "Targets": "red,0.5,0.0,0.0;blue,0.5,0.1,0.0",
     "Colours": "teal:rgb:0.0,0.5,0.5",
     "Puzzle": "slab;0.16,0.12,0.02;6;0.002;red;0.5,0,0",
+    "BlackboardEntry": "{/elsewhere/entry}",
 }
 #: Ports whose values are one of a few words.
-SAMPLE_PORT_TEXT = {"where": "pick", "strategy": "learned", "opening_m": "0.03", "offset_key": "/red/offset_mm"}
+SAMPLE_PORT_TEXT = {
+    "where": "pick",
+    "strategy": "learned",
+    "opening_m": "0.03",
+    "offset_key": "{/red/offset_mm}",
+    "corrections_key": "{/red/corrections}",
+    "yaw_key": "{/red/yaw_error_deg}",
+}
 
 
 def document(node: str) -> str:
@@ -73,19 +81,32 @@ def test_the_project_registers_its_nodes_by_their_classes():
 
 @pytest.mark.parametrize("tag", OURS)
 def test_a_nodes_xml_ports_are_its_class_declaration(tag):
-    """The TreeNodesModel the writer gives the node lists the class's ports: names, types, defaults, descriptions."""
+    """The full TreeNodesModel gives the node the class's ports: names, directions, types, defaults, descriptions.
+
+    A blackboard entry's default is BehaviorTree.CPP's ``{pose}``: the object's own entry.
+    """
     model = REGISTRY[tag]
     declared = model.cls.provided_ports()
     assert model.ports == declared
     node = xmltree.from_xml(document(element(tag, every_port_set(tag))))
-    written = parse_elements(xmltree.to_xml(node))
+    written = parse_elements(xmltree.to_xml(node, model="full"))
     (nodes_model,) = [e for e in written.children if e.tag == "TreeNodesModel"]
     (entry,) = [e for e in nodes_model.children if e.attributes["ID"] == tag]
     assert entry.tag == model.category
-    ports = [e for e in entry.children if e.tag == "input_port"]
-    assert [(p.attributes["name"], p.attributes["type"], p.attributes.get("default")) for p in ports] == [
-        (port.name, port.type.name, None if port.required else port.type.format(port.default)) for port in declared
+    ports = [e for e in entry.children if e.tag.endswith("_port")]
+    assert [(p.tag, p.attributes["name"], p.attributes["type"], p.attributes.get("default")) for p in ports] == [
+        (
+            f"{port.direction}_port",
+            port.name,
+            port.type.name,
+            "{" + port.name + "}" if port.entry else None if port.required else port.type.format(port.default),
+        )
+        for port in declared
     ]
+    # The file's own model lists the ports it writes: all of them here, none that it leaves at their defaults.
+    compact = parse_elements(xmltree.to_xml(node)).children[-1]
+    (used,) = [e for e in compact.children if e.attributes["ID"] == tag]
+    assert [p.attributes["name"] for p in used.children] == [p.attributes["name"] for p in ports]
     metadata = [e for e in entry.children if e.tag == "MetadataFields"]
     assert metadata[0].children[0].attributes["description"] == model.cls.node_description
 
@@ -98,7 +119,8 @@ def test_a_nodes_constructor_takes_its_ports_unless_the_class_builds_itself(tag)
         assert tag in ("Arrangement", "ArrangeSolved", "SolvePuzzle", "SurveyPieces"), "only these build themselves"
         return
     parameters = inspect.signature(cls).parameters
-    assert {port.name for port in cls.provided_ports()} <= set(parameters)
+    # A blackboard entry port is not the constructor's: the reader remaps the entry on the node built.
+    assert {port.name for port in cls.provided_ports() if not port.entry} <= set(parameters)
 
 
 @pytest.mark.parametrize("tag", OURS)
@@ -194,7 +216,10 @@ def test_a_new_behaviour_is_its_class_plus_one_registration(user_nodes):
     assert '<Wave name="hello" who="Alice" times="3"/>' in text
     assert '<RunTwice name="again" label="x">' in text and 'pause_s="0.5"' in text
     assert '<Action ID="Wave">' in text and '<Decorator ID="RunTwice">' in text
-    assert '<input_port name="times" type="int" default="1">how often</input_port>' in text
+    assert '<input_port name="times" type="int" default="1"/>' in text  # the ports the file writes
+    assert '<input_port name="times" type="int" default="1">how often</input_port>' in xmltree.to_xml(
+        root, model="full"
+    )
     reloaded = xmltree.from_xml(text)
     assert list(xmltree.iter_structure(reloaded)) == list(xmltree.iter_structure(root))
     wave, twice = reloaded.children

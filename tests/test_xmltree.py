@@ -253,3 +253,109 @@ def test_a_push_strategy_survives_xml_and_an_unknown_one_is_refused_with_its_lin
     assert [n.strategy for n in reloaded.iterate() if isinstance(n, Push)] == ["diagonal", "diagonal"]
     with pytest.raises(XmlTreeError, match=r"line \d+: <Push name='push red'>: push strategy 'sideways'"):
         xmltree.from_xml(text.replace('strategy="diagonal"', 'strategy="sideways"'))
+
+
+# ----------------------------------------------------------------------------------------------
+# Parts as SubTrees with remapped ports; blackboard entries as ports
+# ----------------------------------------------------------------------------------------------
+
+BEFORE_SUBTREES = Path(__file__).resolve().parent / "data" / "four_cubes_before_subtrees.xml"
+
+
+def elements(text: str) -> list:
+    import xml.etree.ElementTree as ET
+
+    return list(ET.fromstring(text).iter())
+
+
+def test_four_cubes_is_one_part_definition_and_four_subtrees_within_80_elements(capsys):
+    assert cli.main(["show", str(TREES / "four_cubes.py"), "--format", "xml"]) == 0
+    text = capsys.readouterr().out
+    document = elements(text)
+    assert len(document) <= 80  # every element: the trees and the TreeNodesModel (186 before the SubTrees)
+    trees = [e.get("ID") for e in document if e.tag == "BehaviorTree"]
+    assert trees == ["four_cubes", "arrange_cube"]
+    instances = [e for e in document if e.tag == "SubTree" and e.get("obj")]
+    assert [e.get("obj") for e in instances] == ["red", "green", "blue", "yellow"]
+    assert all(e.get("offset_mm") == "{/" + e.get("obj") + "/offset_mm}" for e in instances)  # remapped
+    # the threshold's value once for the parts: the SubTree's port default, read as {threshold_mm} inside
+    assert text.count('"{threshold_mm}"') == 2 and text.count('name="threshold_mm" default="1.0"') == 1
+    assert 'threshold_mm="1.0"' in text.split("<SubTree")[0]  # and the plan's, on the Arrangement
+    assert "object_type=" not in text and 'obj="{obj}"' in text and 'name="detect {obj}"' in text
+    root = xmltree.from_xml(text)
+    assert list(xmltree.iter_structure(root)) == list(xmltree.iter_structure(build(TREES / "four_cubes.py")))
+
+
+def test_a_file_written_before_the_subtrees_reads_and_runs_as_the_python_tree():
+    """The former form (every part inline, every port written, keys as plain text) reads as it did."""
+    text = BEFORE_SUBTREES.read_text()
+    assert "<SubTree" not in text and 'offset_key="/red/offset_mm"' in text
+    original, before = build(TREES / "four_cubes.py"), xmltree.load_xml(BEFORE_SUBTREES)
+    assert list(xmltree.iter_structure(before)) == list(xmltree.iter_structure(original))
+    assert keys_of(before) == keys_of(original)
+    # Written again it stays inline (its parts carry no SubTree's ports), the ports at their defaults left out.
+    inline = xmltree.to_xml(original, tree_id="four_cubes", subtrees=False)
+    assert xmltree.to_xml(before, tree_id="four_cubes") == inline
+    module = xmltree.load_module(BEFORE_SUBTREES)
+    assert treefile.scene(module, 3) == treefile.scene(treefile.load(TREES / "four_cubes.py"), 3)
+
+
+@pytest.mark.parametrize(
+    "path", [*PYTHON_TREES, TREES / "fresco.toml", TREES / "irregular_parts.toml"], ids=lambda p: p.name
+)
+def test_parts_that_differ_get_their_own_definitions_and_every_tree_reads_back(path):
+    root = build(path)
+    text = xmltree.to_xml(root, tree_id=path.stem)
+    reloaded = xmltree.from_xml(text)
+    assert list(xmltree.iter_structure(reloaded)) == list(xmltree.iter_structure(root))
+    assert keys_of(reloaded) == keys_of(root)
+    assert xmltree.to_xml(reloaded, tree_id=path.stem) == text  # read and written again: the same file
+    inline = xmltree.to_xml(root, tree_id=path.stem, subtrees=False)
+    assert "<SubTree" not in inline
+    assert list(xmltree.iter_structure(xmltree.from_xml(inline))) == list(xmltree.iter_structure(root))
+
+
+def test_an_xml_author_remaps_an_entry_of_a_node_and_of_a_subtree():
+    text = """<root BTCPP_format="4" main_tree_to_execute="Main">
+      <BehaviorTree ID="Main">
+        <Sequence name="all">
+          <SetBlackboardVariable name="target" variable_name="/red/target" variable_value="0.5;0.0;0.0"/>
+          <Detect name="look" obj="red" pose="{/camera/red}"/>
+          <SubTree ID="Take" obj="red" seen="{/camera/red}"/>
+        </Sequence>
+      </BehaviorTree>
+      <BehaviorTree ID="Take"><Pick name="pick {obj}" obj="{obj}" pose="{seen}"/></BehaviorTree>
+    </root>"""
+    root = xmltree.from_xml(text)
+    _, detect, pick = root.children
+    assert pick.name == "pick red"
+    for node in (detect, pick):  # the node asks for /red/pose; its client keeps it at /camera/red
+        assert dict(node.blackboard.remappings)["/red/pose"] == "/camera/red"
+    from bt_arrange.keycheck import check_keys, required_reads, written_keys
+
+    assert "/camera/red" in written_keys(detect) and "/camera/red" in required_reads(pick)
+    check_keys(root)  # Pick's pose is written before it, at the key both remap it to
+    detect.blackboard.set("/red/pose", "seen")
+    assert py_trees.blackboard.Blackboard.get("/camera/red") == "seen"
+    assert not py_trees.blackboard.Blackboard.exists("/red/pose")
+    written = xmltree.to_xml(root)
+    assert written.count('pose="{/camera/red}"') == 2
+
+
+def test_a_reference_to_no_port_of_its_subtree_is_refused_with_its_line():
+    text = """<root BTCPP_format="4" main_tree_to_execute="Main">
+      <BehaviorTree ID="Main"><SubTree ID="Look" obj="red"/></BehaviorTree>
+      <BehaviorTree ID="Look"><Detect name="look" obj="{obj}" colour="{color}"/></BehaviorTree>
+    </root>"""
+    with pytest.raises(XmlTreeError, match=r"line 3: <Detect> colour='\{color\}': ports take values.*obj"):
+        xmltree.from_xml(text)
+
+
+def test_the_full_model_lists_every_port_with_its_description(capsys):
+    assert cli.main(["show", str(TREES / "four_cubes.py"), "--format", "xml", "--full-model"]) == 0
+    text = capsys.readouterr().out
+    assert '<output_port name="pose" type="BlackboardEntry" default="{pose}">the measured pose</output_port>' in text
+    assert '<input_port name="object_type" type="ObjectType" default="">' in text and "<MetadataFields>" in text
+    assert list(xmltree.iter_structure(xmltree.from_xml(text))) == list(
+        xmltree.iter_structure(build(TREES / "four_cubes.py"))
+    )

@@ -21,6 +21,7 @@ import numpy as np
 import py_trees
 from py_trees.common import Access, Status
 
+from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage_names
 from bt_arrange.behaviours.context import Context
 from bt_arrange.errors import BtArrangeError, PlanError
@@ -429,3 +430,42 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         if self.context is None:
             raise BtArrangeError(f"behaviour {self.name!r} was not set up: call tree.setup(context=...) first")
         return self.context
+
+
+def entry_remaps(node: py_trees.behaviour.Behaviour) -> dict[str, str]:
+    """The entries of ``node``'s object it reads or writes elsewhere: field -> absolute key (none: all its own)."""
+    remaps: dict[str, str] = node.__dict__.get("entry_remaps", {})
+    return remaps
+
+
+def remap_entry(node: py_trees.behaviour.Behaviour, field: str, key: str) -> None:
+    """Make ``node`` read and write its object's entry ``field`` (``/<obj>/<field>``) at ``key`` instead.
+
+    The node keeps asking for ``/<obj>/<field>``; its blackboard client stores it at ``key``
+    (py_trees' ``remap_to``), so the pre-run key check and a watcher see the key it really uses.
+    An entry the node has not registered (a key it reads only in some trees) is remembered all the same.
+    """
+    canonical = keys.key(node.obj, field)  # type: ignore[attr-defined]
+    remaps = node.__dict__.setdefault("entry_remaps", {})
+    if key == canonical:
+        remaps.pop(field, None)
+    else:
+        remaps[field] = key
+    for client in node.blackboards:
+        held = [
+            access
+            for access, names in (
+                (Access.READ, client.read),
+                (Access.WRITE, client.write),
+                (Access.EXCLUSIVE_WRITE, client.exclusive),
+            )
+            if canonical in names
+        ]
+        if not held:
+            continue
+        metadata = py_trees.blackboard.Blackboard.metadata.get(client.remappings.get(canonical, canonical))
+        if metadata is not None:
+            for holders in (metadata.read, metadata.write, metadata.exclusive):
+                holders.discard(client.unique_identifier)
+        for access in held:
+            client.register_key(canonical, access=access, remap_to=key)

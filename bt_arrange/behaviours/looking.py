@@ -11,7 +11,16 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT, Z_PORT
+from bt_arrange.behaviours.common_ports import (
+    COLOUR,
+    DETECT_ENTRIES,
+    INSPECT_ENTRIES,
+    KIND_TARGETS,
+    OBJ,
+    OBJECT_TYPE_PORT,
+    Z_PORT,
+    entries,
+)
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import JointMovePlan
 from bt_arrange.geometry import PlanarPose, Pose, rotation_z
@@ -215,7 +224,7 @@ class Detect(StagedBehaviour):
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
         """The object, its colour and type, the targets of its kind (BehaviorTree.CPP's ``providedPorts``)."""
-        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, *DETECT_ENTRIES)
 
     def __init__(
         self,
@@ -319,7 +328,7 @@ class Inspect(Detect):
     def provided_ports(cls) -> tuple[Port, ...]:
         """Detect's ports and ``after_placing`` (BehaviorTree.CPP's ``providedPorts``)."""
         after_placing = Port("after_placing", BOOL, False, "also write /<obj>/placed_offset_mm")
-        return (OBJ, COLOUR, after_placing, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
+        return (OBJ, COLOUR, after_placing, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, *INSPECT_ENTRIES)
 
     def __init__(
         self,
@@ -386,7 +395,16 @@ class Recheck(Inspect):
     def provided_ports(cls) -> tuple[Port, ...]:
         """Detect's ports and ``after``, the step checked (BehaviorTree.CPP's ``providedPorts``)."""
         after = Port("after", STRING, "", "the step whose effect is checked")
-        return (OBJ, COLOUR, after, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT)
+        return (
+            OBJ,
+            COLOUR,
+            after,
+            OBJECT_TYPE_PORT,
+            KIND_TARGETS,
+            Z_PORT,
+            *INSPECT_ENTRIES,
+            *entries(outputs=(keys.MOVED_MM,), inouts=(keys.MAX_MOVED_MM,)),
+        )
 
     def __init__(
         self,

@@ -10,7 +10,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, OnlyIf, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -101,7 +101,14 @@ class Pick(StagedBehaviour):
             "gripper half a turn round when the wrist then turns less to it, to its target and home)",
             optional=True,
         )
-        return (OBJ, OBJECT_TYPE_PORT, grasp, Z_PORT, nearest_grasp)
+        return (
+            OBJ,
+            OBJECT_TYPE_PORT,
+            grasp,
+            Z_PORT,
+            nearest_grasp,
+            *entries((keys.POSE, keys.TARGET), (keys.GRASP_HALF_TURN,)),
+        )
 
     def __init__(
         self,

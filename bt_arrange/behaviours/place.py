@@ -9,7 +9,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     axis_yaw_offset_rad,
@@ -68,7 +68,15 @@ class Place(StagedBehaviour):
             "placed free is carried the way round that, with the park after it, turns the wrist least)",
             optional=True,
         )
-        return (OBJ, OBJECT_TYPE_PORT, release, where, Z_PORT, nearest_turn)
+        return (
+            OBJ,
+            OBJECT_TYPE_PORT,
+            release,
+            where,
+            Z_PORT,
+            nearest_turn,
+            *entries((keys.TARGET, keys.POSE, keys.GRASP_HALF_TURN)),
+        )
 
     def __init__(
         self,

@@ -9,7 +9,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import (
     heights_m,
@@ -120,6 +120,11 @@ class Push(StagedBehaviour):
                 "the correction's threshold [mm]: among neighbours a push stops short of the place only where "
                 "that leaves the part well outside it (0: never)",
                 optional=True,
+            ),
+            *entries(
+                (keys.POSE, keys.OFFSET_XY_MM, keys.TARGET, keys.YAW_ERROR_DEG),
+                (keys.BLOCKED_TOWARDS,),
+                (keys.PUSH_AXIS, keys.PUSH_BIAS_MM, keys.LAST_PUSH),
             ),
         )
 

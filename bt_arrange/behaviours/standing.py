@@ -14,7 +14,7 @@ import math
 
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours.base import InstantStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT
+from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.errors import PerceptionError
@@ -50,6 +50,7 @@ class CheckStanding(StagedBehaviour):
             Z_PORT,
             Port("height_tolerance_m", DOUBLE, STANDING_HEIGHT_TOLERANCE_M, "the top face's height tolerance [m]"),
             Port("max_tilt_deg", DOUBLE, STANDING_MAX_TILT_DEG, "the most the top face may tilt [deg]"),
+            *entries((keys.POSE,), (keys.TOP_HEIGHT_ERROR_MM, keys.TILT_DEG)),
         )
 
     def __init__(

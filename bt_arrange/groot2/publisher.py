@@ -57,6 +57,17 @@ MAX_NODES = 0xFFFF
 INSTALL_HINT = "pip install 'bt-arrange[groot]'"
 
 
+@dataclasses.dataclass(frozen=True)
+class SubTreeNode:
+    """A part's ``<SubTree>`` in the Groot2 view: a node of BehaviorTree.CPP's with no py_trees node of its own.
+
+    It shows the status of ``top``, the part's top node (the decorator BehaviorTree.CPP's
+    ``SubTreeNode`` is: it resets its tree once that finishes).
+    """
+
+    top: py_trees.behaviour.Behaviour
+
+
 class GrootError(BtArrangeError, ValueError):
     """The publisher cannot serve: a port out of range or in use, an address not of this machine, pyzmq missing."""
 
@@ -135,6 +146,8 @@ class Groot2Publisher:
         self._packb = msgpack.packb
         self._xmltree = xmltree
         self.nodes: list[py_trees.behaviour.Behaviour] = []
+        self.served: list[Any] = []
+        self._subtree_of: dict[int, int] = {}
         self._status = bytearray()
         self.port = check_port(port)
         self.bind = bind
@@ -198,39 +211,70 @@ class Groot2Publisher:
         return sock
 
     def _number(self, nodes: list[py_trees.behaviour.Behaviour]) -> None:
-        """Number ``nodes`` (pre-order) and serve them under a new tree UUID, keeping the statuses already shown."""
-        if len(nodes) > MAX_NODES:
-            raise GrootError(f"the tree has {len(nodes)} nodes; Groot2 numbers at most {MAX_NODES}")
-        uids = {node: uid for uid, node in enumerate(nodes, 1)}
-        xml = self._xmltree.to_xml(self.root, tree_id=self.tree_id, uids=uids, generic=True)
-        position = {node: index for index, node in enumerate(nodes)}
+        """Number ``nodes`` (pre-order) and serve them under a new tree UUID, keeping the statuses already shown.
+
+        Each part the XML writes as a ``<SubTree>`` (``xmltree.subtree_roots``) is served as
+        BehaviorTree.CPP serves one: the SubTree is a node of its own, numbered just before the
+        part's top node, showing that node's status.
+        """
+        try:
+            tops = set(self._xmltree.subtree_roots(self.root))
+        except self._xmltree.XmlTreeError:
+            tops = set()
+        served: list[Any] = []
+        for node in nodes:
+            if node in tops:
+                served.append(SubTreeNode(node))
+            served.append(node)
+        if len(served) > MAX_NODES:
+            raise GrootError(f"the tree has {len(served)} nodes; Groot2 numbers at most {MAX_NODES}")
+        uids = {node: uid for uid, node in enumerate(served, 1)}
+        subtree_uids = {entry.top: uid for entry, uid in uids.items() if isinstance(entry, SubTreeNode)}
+        xml = self._xmltree.to_xml(self.root, tree_id=self.tree_id, uids=uids, generic=True, subtree_uids=subtree_uids)
+        position = {node: index for index, node in enumerate(served)}
+
+        def children(entry: Any) -> list[Any]:
+            if isinstance(entry, SubTreeNode):
+                return [entry.top]
+            return [SubTreeNode(child) if child in tops else child for child in entry.children]
+
         # Pre-order: the descendants of node i are i+1 .. end[i]-1.
-        end = [0] * len(nodes)
-        for node in self.root.iterate():  # children before their parent
-            index = position[node]
-            end[index] = end[position[node.children[-1]]] if node.children else index + 1
+        end = [0] * len(served)
+        for index in range(len(served) - 1, -1, -1):
+            below = children(served[index])
+            end[index] = end[position[below[-1]]] if below else index + 1
         # Who BehaviorTree.CPP resets when a node finishes: below it (a control node or decorator: from i+1),
-        # the node too (under a decorator, or the root: from i), or nobody (a leaf elsewhere: None).
-        reset_from: list[int | None] = [None] * len(nodes)
-        for index, node in enumerate(nodes):
-            if index == 0 or isinstance(node.parent, py_trees.decorators.Decorator):
+        # the node too (under a decorator or a SubTree, or the root: from i), or nobody (a leaf elsewhere: None).
+        reset_from: list[int | None] = [None] * len(served)
+        for index, entry in enumerate(served):
+            node = entry.top if isinstance(entry, SubTreeNode) else entry
+            under_subtree = node in tops and not isinstance(entry, SubTreeNode)
+            if index == 0 or under_subtree or isinstance(node.parent, py_trees.decorators.Decorator):
                 reset_from[index] = index
-            elif node.children:
+            elif children(entry):
                 reset_from[index] = index + 1
         with self._lock:
-            shown = {node: (self._status[3 * i + 2], self._last[i]) for i, node in enumerate(self.nodes)}
+            shown = {node: (self._status[3 * i + 2], self._last[i]) for i, node in enumerate(self.served)}
             status, last = bytearray(), []
-            for uid, node in enumerate(nodes, 1):
-                code, before = shown.get(node, (protocol.IDLE, protocol.IDLE))
+            for uid, entry in enumerate(served, 1):
+                code, before = shown.get(entry, (protocol.IDLE, protocol.IDLE))
                 status += uid.to_bytes(2, "little") + bytes((code,))
                 last.append(before)
             self.nodes = nodes
+            #: What is numbered: the nodes, and before each part's top node its ``SubTreeNode``.
+            self.served = served
             #: Each node's UID, as in the XML served.
-            self.uids: dict[py_trees.behaviour.Behaviour, int] = uids
+            self.uids: dict[Any, int] = uids
             #: The tree as BehaviorTree.CPP XML with ``_uid`` attributes (an unregistered node under its class name).
             self.xml = xml
             self._xml_bytes = xml.encode("utf-8")
-            self._index = {str(node.id): index for index, node in enumerate(nodes)}
+            self._index = {
+                str(entry.id): index for index, entry in enumerate(served) if not isinstance(entry, SubTreeNode)
+            }
+            #: A part's top node's index -> its SubTree's, which shows the same status.
+            self._subtree_of = {
+                position[entry.top]: index for index, entry in enumerate(served) if isinstance(entry, SubTreeNode)
+            }
             self._end, self._reset_from = end, reset_from
             self._status, self._last = status, last
             # A new UUID in every reply's header: how a client learns that the tree it holds is not the one served.
@@ -258,7 +302,7 @@ class Groot2Publisher:
         """Read every node's status (for a tree ticked without a session's transition hooks), after a tick."""
         codes = protocol.CODES
         self._renumber_if_grown()
-        position = {node: index for index, node in enumerate(self.nodes)}
+        position = {node: index for index, node in enumerate(self.served)}
         for node in self.root.iterate():  # children before their parent, as a tick reports them
             index = position[node]
             now = codes[node.status.value]
@@ -266,6 +310,10 @@ class Groot2Publisher:
                 self._set(index, now)
 
     def _set(self, index: int, now: int) -> None:
+        subtree = self._subtree_of.get(index)
+        if subtree is not None:
+            # BehaviorTree.CPP ticks the SubTree, then its tree: the SubTree shows its part's status first.
+            self._set(subtree, now)
         with self._lock:
             before, self._last[index] = self._last[index], now
             buffer = self._status

@@ -101,7 +101,10 @@ def render_part(part: PartStep, plan: ArrangementPlan, locate: Locate | None = N
         correction(part, plan),
     ]
     children += [_look_again(neighbour, obj, plan) for neighbour in part.neighbours]
-    return py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
+    subtree = py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
+    #: The part this subtree arranges: the XML writer writes it as a SubTree of the part's ports.
+    subtree.part = target  # type: ignore[attr-defined]
+    return subtree
 
 
 def _look_again(neighbour: NeighbourCheck, after: str, plan: ArrangementPlan) -> py_trees.behaviour.Behaviour:

@@ -68,7 +68,7 @@ from bt_arrange.xmltree.reader import (
 )
 from bt_arrange.xmltree.registry import REGISTRY, NodeModel, model_of, register, register_node, tag_of, type_label
 from bt_arrange.xmltree.tree_module import iter_structure, load_module
-from bt_arrange.xmltree.writer import FORMAT_VERSION, to_xml
+from bt_arrange.xmltree.writer import FORMAT_VERSION, subtree_roots, to_xml
 
 __all__ = [
     "BOOL",
@@ -102,6 +102,7 @@ __all__ = [
     "parse_elements",
     "register",
     "register_node",
+    "subtree_roots",
     "tag_of",
     "to_xml",
     "type_label",

@@ -18,7 +18,7 @@ from py_trees.common import ParallelPolicy
 
 from bt_arrange.errors import XmlTreeError
 from bt_arrange.geometry import PlanarPose
-from bt_arrange.ports import BOOL, INT, PLANAR_POSE, STRING, Port
+from bt_arrange.ports import BOOL, INT, KEY, OUTPUT, PLANAR_POSE, STRING, Port
 from bt_arrange.xmltree.registry import Builder, Children, NodeModel, register
 
 
@@ -48,7 +48,7 @@ register(
         "Action",
         py_trees.behaviours.SetBlackboardVariable,
         (
-            Port("variable_name", STRING, description="absolute blackboard key"),
+            Port("variable_name", KEY, description="absolute blackboard key", direction=OUTPUT),
             Port("variable_value", PLANAR_POSE, description="x_m;y_m;yaw_rad"),
             Port("overwrite", BOOL, True),
         ),
@@ -68,7 +68,7 @@ register(
         "CheckBlackboardVariableExists",
         "Condition",
         py_trees.behaviours.CheckBlackboardVariableExists,
-        (Port("variable_name", STRING, description="absolute blackboard key"),),
+        (Port("variable_name", KEY, description="absolute blackboard key"),),
         lambda name, v, _: py_trees.behaviours.CheckBlackboardVariableExists(
             name=name, variable_name=v["variable_name"]
         ),
@@ -94,7 +94,7 @@ register(
         "Condition",
         py_trees.behaviours.CheckBlackboardVariableValue,
         (
-            Port("variable_name", STRING, description="absolute blackboard key"),
+            Port("variable_name", KEY, description="absolute blackboard key"),
             Port("expected_value", STRING, description="succeed when the variable equals this text"),
         ),
         lambda name, v, _: py_trees.behaviours.CheckBlackboardVariableValue(

@@ -35,6 +35,7 @@ from typing import Any, TypeVar, overload
 
 import py_trees
 
+from bt_arrange.behaviours.base import entry_remaps, remap_entry
 from bt_arrange.errors import XmlTreeError
 from bt_arrange.ports import Port
 
@@ -148,7 +149,7 @@ def _register_class(
     if not hasattr(cls, "from_ports"):
         accepted = inspect.signature(cls).parameters
         takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
-        missing = [port.name for port in declared if port.name not in accepted and not takes_any]
+        missing = [port.name for port in declared if not port.entry and port.name not in accepted and not takes_any]
         if missing:
             raise XmlTreeError(
                 f"node {tag}: {cls.__qualname__}() takes no {', '.join(missing)} (give the class a from_ports)"
@@ -195,7 +196,13 @@ def category_of(cls: type) -> str:
 def build_node(
     cls: type, category: str, name: str, values: Mapping[str, Any], children: Children
 ) -> py_trees.behaviour.Behaviour:
-    """The generic build: the class's ``from_ports``, else its constructor with the port values as keywords."""
+    """The generic build: the class's ``from_ports``, else its constructor with the port values as keywords.
+
+    The blackboard entry ports (``Port.entry``) are not the constructor's: an entry given a key
+    (not None) is remapped on the node built (``remap_entry``).
+    """
+    remapped = {name: value for name, value in values.items() if name in _entry_names(cls)}
+    values = {name: value for name, value in values.items() if name not in remapped}
     from_ports = getattr(cls, "from_ports", None)
     if from_ports is not None:
         node: py_trees.behaviour.Behaviour = from_ports(name, dict(values), list(children))
@@ -205,16 +212,27 @@ def build_node(
         node = cls(name=name, children=list(children), **values)
     else:
         node = cls(name=name, **values)
+    for field, key in remapped.items():
+        if key is not None:
+            remap_entry(node, field, key)
     return node
+
+
+def _entry_names(cls: type) -> frozenset[str]:
+    declare = getattr(cls, "provided_ports", None)
+    return frozenset(port.name for port in declare() if port.entry) if callable(declare) else frozenset()
 
 
 def port_values(node: Any, ports: tuple[Port, ...]) -> dict[str, Any]:
     """The generic read-back: the node's ``port_values()``, else its attribute of each port's name."""
     own = getattr(node, "port_values", None)
+    remaps = entry_remaps(node)
     if own is not None:
         values: dict[str, Any] = own()
-        return values
-    return {port.name: getattr(node, port.name) for port in ports}
+    else:
+        values = {port.name: getattr(node, port.name) for port in ports if not port.entry}
+    values.update({port.name: remaps.get(port.name) for port in ports if port.entry})
+    return values
 
 
 def generic_model(cls: type) -> NodeModel:
