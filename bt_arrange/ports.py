@@ -165,7 +165,7 @@ def _parse_targets(text: str, make: Callable[..., PartOnTable]) -> list[Any]:
         colour, x, y, yaw = fields[:4]
         name = fields[4] if len(fields) >= 5 and fields[4] else None
         kind = _parse_object_type(fields[5]) if len(fields) >= 6 else DEFAULT_TYPE
-        # A raised target's height (issue 33): only a target has one, and only when not on the table.
+        # A raised target's height: only a target has one, and only when not on the table.
         raised = {"z_m": _parse_float(fields[6])} if len(fields) == 7 and _parse_float(fields[6]) != 0.0 else {}
         targets.append(
             make(colour, _parse_float(x), _parse_float(y), _parse_float(yaw), name=name, object_type=kind, **raised)

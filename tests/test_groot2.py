@@ -220,7 +220,7 @@ def test_the_blackboard_of_the_requested_tree_as_msgpack(client, publisher):
         ([protocol.pack_header(ord("B"), 1)], protocol.TWO_PARTS),
         ([protocol.pack_header(ord("r"), 1)], protocol.TWO_PARTS),
         ([protocol.pack_header(ord("Z"), 1)], protocol.NOT_RECOGNIZED),
-        # Another protocol version (issue 35): an error, not the tree in a version the client cannot read.
+        # Another protocol version: an error, not the tree in a version the client cannot read.
         ([protocol.pack_header(ord("T"), 1, protocol=1)], protocol.WRONG_PROTOCOL),
         ([protocol.pack_header(ord("S"), 1, protocol=3)], protocol.WRONG_PROTOCOL),
         ([protocol.pack_header(ord("T"), 1, protocol=255)], protocol.WRONG_PROTOCOL),

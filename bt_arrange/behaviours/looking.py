@@ -122,7 +122,7 @@ def look(
        full frame, whose outcome and reason stand.
 
     ``object_type`` (default the cube) sets the size the detector expects; ``z_m`` (a raised part's
-    bottom face above the table, issue 33) the plane its top face is measured on. A window shows the
+    bottom face above the table) the plane its top face is measured on. A window shows the
     pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
     camera = context.robot.camera
@@ -237,7 +237,7 @@ class Detect(StagedBehaviour):
     ) -> None:
         super().__init__(name)
         self.obj = obj
-        #: Layers (issue 33): the height of the part's bottom face (0: the table), its top face's plane above it.
+        #: Layers: the height of the part's bottom face (0: the table), its top face's plane above it.
         self.z_m = float(z_m)
         self.colour = colour or obj
         self.object_type = object_type or CUBE

@@ -135,7 +135,7 @@ def line_to(  # noqa: ANN201 - a planning function
     """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
 
     ``pushing``: at the settings' push limits, slower than the planner's, so the part does not slide on;
-    ``gentle`` with it: at ``raised_push_limits``, for a part standing on others (issue 33).
+    ``gentle`` with it: at ``raised_push_limits``, for a part standing on others.
     ``free``: the pads hold nothing and touch nothing on the way (down to a part, up from a released
     one): at the settings' free-space line and joint limits.
     """

@@ -121,9 +121,9 @@ class Pick(StagedBehaviour):
     ) -> None:
         super().__init__(name)
         self.obj = obj
-        #: Issue 36: True keeps a free grasp to the wrist's nearest, never the half turn (``_half_turn_shorter``).
+        #: True keeps a free grasp to the wrist's nearest, never the half turn (``_half_turn_shorter``).
         self.nearest_grasp = bool(nearest_grasp)
-        #: Layers (issue 33): the height of the part's bottom face where it is picked (0: the table).
+        #: Layers: the height of the part's bottom face where it is picked (0: the table).
         self.z_m = float(z_m)
         #: The part's type: the pads take its shape's preferred grasp (``Shape.grasps``).
         self.object_type = object_type or CUBE

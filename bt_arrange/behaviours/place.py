@@ -89,9 +89,9 @@ class Place(StagedBehaviour):
         nearest_turn: bool = False,
     ) -> None:
         super().__init__(name)
-        #: Issue 36: True keeps the carry to the wrist's nearest way round (``toward_home_q`` otherwise).
+        #: True keeps the carry to the wrist's nearest way round (``toward_home_q`` otherwise).
         self.nearest_turn = bool(nearest_turn)
-        #: Layers (issue 33): the height of the support it is released on (0: the table); the lowering
+        #: Layers: the height of the support it is released on (0: the table); the lowering
         #: ends with the part's bottom ``release_clearance_m`` above it, the pads clear of the layer below.
         self.z_m = float(z_m)
         if where not in ("target", "pick"):
@@ -154,7 +154,7 @@ class Place(StagedBehaviour):
         ]
 
     def _free_transfer(self, kind: ObjectType) -> bool:
-        """A part without half-turn symmetry placed at its target, not among neighbours (issue 36)."""
+        """A part without half-turn symmetry placed at its target, not among neighbours."""
         return not (self.nearest_turn or half_turn_free(kind)) and self.release is None and self.where == "target"
 
     @staticmethod

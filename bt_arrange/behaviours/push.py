@@ -145,7 +145,7 @@ class Push(StagedBehaviour):
         #: The correction's threshold (mm; None: unknown): a square push among neighbours stops short
         #: of the place (``plan_square_push``) only by what leaves the part ``STOP_SHORT_FACTOR`` of it away.
         self.threshold_mm = threshold_mm
-        #: Layers (issue 33): the height of the part's bottom face (0: the table); the pads push at its own height.
+        #: Layers: the height of the part's bottom face (0: the table); the pads push at its own height.
         self.z_m = float(z_m)
         if strategy not in PUSH_STRATEGIES:
             raise BtArrangeError(f"push strategy {strategy!r}: choose one of {', '.join(PUSH_STRATEGIES)}")

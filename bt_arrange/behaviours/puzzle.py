@@ -1,4 +1,4 @@
-"""Behaviours of a puzzle (issue 32): see the unknown pieces, solve where each goes.
+"""Behaviours of a puzzle: see the unknown pieces, solve where each goes.
 
 ``SurveyPieces`` photographs the table (the arm parked) and measures the top-face outline of every
 piece of the puzzle's colour from the image alone (``bt_arrange.perception.outline_unknown``),

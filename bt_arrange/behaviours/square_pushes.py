@@ -2,7 +2,7 @@
 
 Pure planning on the offset (mm, the target's frame) and the part's named square pushes
 (``Shape.named_pushes``), for ``Push``: no motion, no blackboard. Among neighbours (some pushes
-not free) a long push stops short and a push may also move the part across (issue 38 item 4).
+not free) a long push stops short and a push may also move the part across.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ CONE_MAX_TRAVEL_RATIO = 4.0
 #: Among neighbours a square push longer than this (mm; a staged part's way home) stops
 #: ``APPROACH_RESERVE_MM`` short of the target: its pads can still move it across the push then.
 #: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
-#: it about the pads), on a side only a blocked push reaches (issue 38 item 4).
+#: it about the pads), on a side only a blocked push reaches.
 LONG_PUSH_MM = 3.0
 #: The most a long push among neighbours moves the part across on its way (mm).
 LONG_PUSH_MAX_ACROSS_MM = 1.0

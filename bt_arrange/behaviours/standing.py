@@ -1,4 +1,4 @@
-"""CheckStanding (issue 33, item 2): a raised part stands on its support, level, at its height.
+"""CheckStanding: a raised part stands on its support, level, at its height.
 
 After the Inspect of a raised part (``z_m`` above the table, measured on its own top face's plane)
 the camera's depth says whether it really lies there: its top face's plane

@@ -18,6 +18,6 @@ for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard,
 # The tag keeps the decorator's former name: XML files written with it stay readable.
 register_node(RepeatUntilWithin, "RetryUntilThreshold")
 register_node(Arrangement)
-# A puzzle (issue 32): its survey, its solve, and the arrangement its solve decides.
+# A puzzle: its survey, its solve, and the arrangement its solve decides.
 for _puzzle_node in (SurveyPieces, SolvePuzzle, ArrangeSolved):
     register_node(_puzzle_node)
