@@ -108,7 +108,7 @@ def test_text_names_each_node_by_its_bt_cpp_type_with_the_py_trees_class_where_i
     lines = render_tree(two_cubes()).splitlines()
     assert lines[0].startswith("{-} <Arrangement> ")
     assert any(line.strip().startswith("-^- <ForceSuccess (py_trees FailureIsSuccess)> ") for line in lines)
-    assert any(line.strip().startswith("-^- <RetryUntilThreshold (RepeatUntilWithin)> ") for line in lines)
+    assert any(line.strip().startswith("-^- <RepeatUntilWithin> ") for line in lines)
     assert any(line.strip().startswith("--> <Pick> pick red") for line in lines)
 
 

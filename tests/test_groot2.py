@@ -620,7 +620,7 @@ def test_a_paced_fresco_run_is_served_live_to_btview():
     assert [node.children[0].name for node in subtrees] == [f"then the next (tile {i})" for i in range(1, 7)]
     assert {subtrees[0].uid, subtrees[1].uid} <= running_uids  # a SubTree runs while its part does
     assert len(list(tree.walk())) == len(list(built.iterate())) + 6 and by_name["pick tile 1"].registration == "Pick"
-    assert by_name["regrasp tile 1 while turned 12 deg or more"].registration == "RetryUntilThreshold"
+    assert by_name["regrasp tile 1 while turned 12 deg or more"].registration == "RepeatUntilWithin"
     assert {"pick tile 1", "place tile 1", "arrange tile 2"} <= running_seen, sorted(running_seen)
     assert 'object_type="tile 1=outline_mm ' in served
     assert list(xmltree.iter_structure(xmltree.from_xml(served))) == list(

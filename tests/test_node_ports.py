@@ -73,7 +73,7 @@ def test_the_project_registers_its_nodes_by_their_classes():
         "Place",
         "Push",
         "Recheck",
-        "RetryUntilThreshold",
+        "RepeatUntilWithin",
         "SolvePuzzle",
         "SurveyPieces",
     ]
@@ -281,8 +281,9 @@ def test_a_class_decorator_registers_a_node_with_its_ports_in_the_registration()
         root = py_trees.composites.Sequence("s", True, children=[Lift("up", 0.1), Rest("r"), Pause("p")])
         text = xmltree.to_xml(root)
         assert '<Lift name="up" height_m="0.1"/>' in text and '<TakeABreak name="p"/>' in text
-        assert '<input_port name="height_m" type="double" default="0.05">how high</input_port>' in text
-        assert '<Metadata description="lift the part"/>' in text
+        palette = xmltree.to_xml(root, model="full")  # an editor's palette: every port, described
+        assert '<input_port name="height_m" type="double" default="0.05">how high</input_port>' in palette
+        assert '<Metadata description="lift the part"/>' in palette
         reloaded = xmltree.from_xml(text)
         assert [type(node) for node in reloaded.children] == [Lift, Rest, Pause]
         assert reloaded.children[0].height_m == 0.1

@@ -68,9 +68,10 @@ def test_tag_of_and_type_label():
     assert xmltree.type_label(py_trees.decorators.Retry("r", child=leaf, num_failures=2)) == (
         "RetryUntilSuccessful (py_trees Retry)"
     )
-    assert xmltree.type_label(
-        RepeatUntilWithin("c", leaf, offset_key="/red/offset_mm", threshold_mm=1.0, max_attempts=3)
-    ).startswith("RetryUntilThreshold (")
+    assert (
+        xmltree.type_label(RepeatUntilWithin("c", leaf, offset_key="/red/offset_mm", threshold_mm=1.0, max_attempts=3))
+        == "RepeatUntilWithin"
+    )
 
     class Mine(py_trees.behaviour.Behaviour):
         def update(self) -> Status:

@@ -13,10 +13,8 @@ from bt_arrange.trees import Arrangement
 from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.xmltree.registry import register_node
 
-for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard, CheckStanding):
+for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard, CheckStanding, RepeatUntilWithin):
     register_node(_node)
-# The tag keeps the decorator's former name: XML files written with it stay readable.
-register_node(RepeatUntilWithin, "RetryUntilThreshold")
 register_node(Arrangement)
 # A puzzle: its survey, its solve, and the arrangement its solve decides.
 for _puzzle_node in (SurveyPieces, SolvePuzzle, ArrangeSolved):

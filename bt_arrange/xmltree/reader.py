@@ -37,7 +37,7 @@ from bt_arrange.filelimits import (
 )
 from bt_arrange.ports import ENTRY, KEY, PLANAR_POSE, Port
 from bt_arrange.suggest import did_you_mean
-from bt_arrange.xmltree.registry import REGISTRY, NodeModel
+from bt_arrange.xmltree.registry import FORMER_TAGS, REGISTRY, NodeModel
 from bt_arrange.xmltree.writer import FORMAT_VERSION, SubTreePart, substitute
 
 #: Attributes BehaviorTree.CPP and Groot2 keep on any node as metadata (never code): ignored.
@@ -284,7 +284,7 @@ class _Reader:
     def _node(self, element: Element, entered: tuple[str, ...], scope: _Scope) -> py_trees.behaviour.Behaviour:
         if element.tag == "SubTree":
             return self._subtree(element, entered, scope)
-        model = REGISTRY.get(element.tag)
+        model = REGISTRY.get(FORMER_TAGS.get(element.tag, element.tag))
         if model is None:
             self.fail(
                 element,

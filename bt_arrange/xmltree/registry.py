@@ -5,7 +5,7 @@ A node declares its ports on its class (``provided_ports()``, as BehaviorTree.CP
 BehaviorTree.CPP's ``factory.registerNodeType<T>(ID)``::
 
     register_node(Pick)                                      # tag "Pick", category from the base class
-    register_node(RepeatUntilWithin, "RetryUntilThreshold")  # another tag
+    register_node(Arrangement, "Plan")                      # another tag
 
     @register_node(ports=(Port("height_m", DOUBLE, 0.05, "how high"),), description="lift the part")
     class Lift(StagedBehaviour): ...
@@ -72,6 +72,10 @@ class NodeModel:
 
 
 REGISTRY: dict[str, NodeModel] = {}
+
+
+#: Tags of former releases, read as today's: a file written with one still loads (the writer writes today's).
+FORMER_TAGS = {"RetryUntilThreshold": "RepeatUntilWithin"}
 
 
 def register(model: NodeModel) -> NodeModel:

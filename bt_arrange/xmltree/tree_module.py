@@ -41,7 +41,7 @@ def load_module(path: str | Path) -> ModuleType:
         if threshold_mm is not None:
             raise XmlTreeError(
                 f"{path}: an XML tree states its threshold in its ports (threshold_mm of Arrangement and "
-                "RetryUntilThreshold): edit them instead of passing --threshold-mm"
+                "RepeatUntilWithin): edit them instead of passing --threshold-mm"
             )
         return from_xml(source, source=str(path))
 
