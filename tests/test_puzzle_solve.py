@@ -176,3 +176,26 @@ def test_fewer_than_two_pieces_or_a_self_crossing_outline_is_a_puzzle_error_in_o
     assert crossed.value.parts == (("piece", "b"),)
     with pytest.raises(PuzzleError, match="share a label"):
         solve([MeasuredPiece("a", square), MeasuredPiece("a", square + 0.06)], (0.1, 0.05), 0.002)
+
+
+def test_solved_places_closer_than_the_layout_s_gap_are_spread_evenly_until_they_clear_it() -> None:
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.plan.footprints import gap_m
+    from bt_arrange.plan.puzzle_targets import spread_to_gap
+    from bt_arrange.plan.targets import Target, parts_of
+    from bt_arrange.puzzle import PuzzleSpec
+    from bt_arrange.settings import ManipulationSettings
+
+    spec = PuzzleSpec("slab", (0.102, 0.05, 0.02), 2, 0.002, "ochre", 0.5, 0.0, 0.0)
+    half = ObjectType("slab half", (0.05, 0.05, 0.02))
+    settings = ManipulationSettings()  # twice a 1 mm threshold: 2 mm between two targets
+    measured = [Target("ochre", 0.5 - 0.025995, 0.0, name="slab 1", object_type=half),
+                Target("ochre", 0.5 + 0.025995, 0.0, name="slab 2", object_type=half)]  # fmt: skip
+    first, second = parts_of(measured, settings)
+    assert gap_m(first.footprint, second.footprint) < settings.min_target_gap_m  # 1.99 mm: the layout refuses it
+    spread = spread_to_gap(measured, spec, settings)
+    first, second = parts_of(spread, settings)
+    assert settings.min_target_gap_m <= gap_m(first.footprint, second.footprint) < settings.min_target_gap_m + 1e-4
+    assert spread[0].x_m + spread[1].x_m == pytest.approx(2 * spec.x_m)  # the whole keeps its place
+    apart = [Target(t.colour, t.x_m * 1.01, t.y_m, name=t.name, object_type=half) for t in measured]
+    assert spread_to_gap(apart, spec, settings) is apart  # places that clear the gap are returned as they are

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -110,7 +111,48 @@ def solved_targets(
                 object_type=ObjectType(piece.name, shape=prism),
             )
         )
-    return targets
+    return spread_to_gap(targets, spec, settings)
 
 
-__all__ = ["solved_targets"]
+#: How far beyond the layout's least gap (m) the solved places are spread: clear of its check's rounding.
+SPREAD_MARGIN_M = 1e-5
+
+
+def spread_to_gap(targets: list[Any], spec: PuzzleSpec, settings: ManipulationSettings | None = None) -> list[Any]:
+    """The solved targets moved out from the whole's centre until every two lie the layout's least gap apart.
+
+    The pieces' outlines are measured, so a solve along a 2 mm gap can put two neighbours 1.99 mm
+    apart, and the layout (``min_target_gap_m``, twice a 1 mm threshold) would refuse every seed:
+    the measurement's noise is the solver's to absorb, not the user's. The whole is spread evenly
+    (every centre scaled out from the slab's place by one factor, the least that clears the gap);
+    solved places that already clear it are returned as they are.
+    """
+    from bt_arrange.plan.footprints import gap_m
+    from bt_arrange.plan.targets import parts_of
+
+    settings = settings or ManipulationSettings()
+    needed_m = settings.min_target_gap_m + SPREAD_MARGIN_M
+    scale = 1.0
+    spread = targets
+    for _ in range(12):
+        parts = parts_of(spread, settings)
+        worst = min(
+            (
+                (gap_m(a.footprint, b.footprint), math.hypot(a.x_m - b.x_m, a.y_m - b.y_m))
+                for i, a in enumerate(parts)
+                for b in parts[i + 1 :]
+            ),
+            default=(math.inf, 0.0),
+        )
+        gap, apart_m = worst
+        if gap >= needed_m or apart_m <= 0.0:
+            return spread
+        scale *= 1.0 + (needed_m - gap) / apart_m
+        spread = [
+            dataclasses.replace(t, x_m=spec.x_m + scale * (t.x_m - spec.x_m), y_m=spec.y_m + scale * (t.y_m - spec.y_m))
+            for t in targets
+        ]
+    return spread
+
+
+__all__ = ["solved_targets", "spread_to_gap"]

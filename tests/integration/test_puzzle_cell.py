@@ -59,3 +59,20 @@ def test_the_tree_s_blackboard_holds_what_the_camera_measured_never_the_break(re
         for item in value if isinstance(value, tuple) else (value,):
             assert not isinstance(item, PieceStart), key
             assert getattr(item, "home", None) not in homes, key
+
+
+def test_a_puzzle_at_the_default_gap_and_threshold_is_solved_and_placed(tmp_path) -> None:
+    """2 mm gaps at a 1 mm threshold: the solved places (1.99 mm apart as measured) are spread to the layout's 2 mm."""
+    from bt_arrange import examples
+
+    text = examples.path_of("puzzle").read_text(encoding="utf-8")
+    assert "threshold_mm = 0.8\n" in text and "gap_mm = 2 " in text
+    plan = tmp_path / "defaults.toml"
+    plan.write_text(text.replace("threshold_mm = 0.8\n", "").replace("yaw_threshold_deg = 0.8\n", ""))
+    module = treefile.load(plan)
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, 0)) as run:
+        report = run.run()
+    assert report.threshold_mm == 1.0 and report.sim_seconds > 30.0, "the pieces moved"
+    for outcome in report.to_dict()["objects"]:
+        assert outcome["status"] == "within", outcome
+        assert outcome["final_offset_truth_mm"] < 1.0, outcome
