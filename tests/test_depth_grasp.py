@@ -32,6 +32,7 @@ from bt_arrange.perception.depth_grasp import (
     scaled_intrinsics,
 )
 from bt_arrange.perception.synthetic import sim_intrinsics, top_down_camera_pose
+from bt_arrange.plan import compile_plan
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
 from bt_arrange.testing import fake_arm, make_context, tick_until_done
@@ -447,14 +448,15 @@ def test_the_hint_is_used_and_the_seed_restarts_at_setup():
 
 
 def test_transfer_located_by_depth_mirrors_transfer():
-    tree = transfer(Target("red", 0.5, 0.1), max_regrasps=2, locate=by_depth(seed=4))
+    plan = compile_plan([Target("red", 0.5, 0.1)], max_regrasps=2)
+    tree = transfer(plan.steps[0], plan, locate=by_depth(seed=4))
     assert isinstance(tree, py_trees.decorators.Retry)
     assert tree.num_failures == 3
     estimate, pick, guard = tree.decorated.children
     assert isinstance(estimate, EstimateGraspFromDepth) and estimate.seed == 4 and estimate.obj == "red"
     assert isinstance(pick, Pick) and isinstance(guard, GraspGuard)
     with pytest.raises(PlanError, match="max_regrasps"):
-        transfer(Target("red", 0.5, 0.1), max_regrasps=-1, locate=by_depth())
+        compile_plan([Target("red", 0.5, 0.1)], max_regrasps=-1)
 
 
 def test_the_estimator_behaviour_does_not_import_the_tree_builders():  # No import circle

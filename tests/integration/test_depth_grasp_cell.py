@@ -82,7 +82,7 @@ def row_four_tree(target: Target, seed: int) -> Arrangement:
             set_target(target),
             transfer(target, locate=by_depth(seed)),
             Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-            correction(target, threshold_mm=1.0),
+            correction(target),  # a free part, to the default 1 mm and 1 deg
             MoveHome("park the arm"),
         ],
         [target],
