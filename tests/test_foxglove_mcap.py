@@ -258,3 +258,38 @@ def test_an_error_in_the_recording_stops_it_not_the_run(tmp_path, monkeypatch) -
     assert [fault.path.name for fault in error.faults] == ["run.mcap"]
     assert "the recording stopped (ValueError: a world without joints)" in str(error)
     assert not (tmp_path / "run.mcap").exists() and (tmp_path / "replay.html").is_file()
+
+
+def test_tf_carries_the_calibrated_camera_pose_perception_used(tmp_path) -> None:  # noqa: ANN001
+    """With a calibration, world -> camera on /tf is the calibrated pose, not the world's own camera's."""
+    from fakeworld import FakeWorld, camera_view
+
+    from bt_arrange.calibration import CameraCalibration
+    from bt_arrange.foxglove import scene as foxglove_scene
+    from bt_arrange.geometry import Pose
+    from bt_arrange.objects import ObjectStart
+    from bt_arrange.session import Session
+    from bt_arrange.trees import Target, arrangement
+
+    view = camera_view()
+    shifted = Pose.from_rotation(
+        view.camera_pose_world.position_m + np.array([0.004, -0.003, 0.0]), view.camera_pose_world.rotation
+    )
+    calibration = CameraCalibration(view.intrinsics, shifted, 0.1, 20, "real", "2026-12-07T10:00:00+00:00")
+    root = arrangement([Target("red", 0.50, 0.05)])
+    starts = [ObjectStart("red", 0.42, -0.22, 0.1)]
+    with Session(
+        root, starts, FakeWorld, view=view, calibration=calibration, record_dir=tmp_path, time_limit_s=1.0
+    ) as run:
+        run.run()
+    _, decoded = read(tmp_path)
+    cameras = [
+        t
+        for _, channel, _, value in decoded
+        if channel.topic == "/tf"
+        for t in value.transforms
+        if t.child_frame_id == foxglove_scene.CAMERA_FRAME
+    ]
+    assert cameras, "the camera is on /tf"
+    last = cameras[-1].translation
+    np.testing.assert_allclose([last.x, last.y, last.z], shifted.position_m, atol=1e-9)

@@ -53,7 +53,6 @@ from bt_arrange.foxglove.links import RobotLinks
 from bt_arrange.groot2.publisher import preorder
 from bt_arrange.motion.urdf import ARM_JOINT_NAMES, FINGER_JOINT_NAMES, default_urdf_path
 from bt_arrange.robot import CameraFrame, PixelWindow
-from bt_arrange.trees import Arrangement
 from bt_arrange.xmltree import tag_of
 
 #: The least world time between two ``/tf`` messages: a decimation of the control period (8 ms: every third), smooth
@@ -159,6 +158,9 @@ class RunObserver:
         self._row_of = {str(node.id): row for node, row in zip(self.nodes, self._node_rows, strict=True)}
         self._tree_changed = False
         self._last_tf_s = -math.inf
+        #: The camera perception uses (set before the first tick), and how many targets the scene drew.
+        self._camera: Any = None
+        self._scene_targets = 0
         self._last_time_ns = 0
         #: Messages logged per topic (for the benchmark and the tests).
         self.counts: dict[str, int] = {}
@@ -185,6 +187,8 @@ class RunObserver:
         """Before the first tick: tap the camera, log what never changes and the first poses."""
         context = runner.context
         context.robot = dataclasses.replace(context.robot, camera=TappedCamera(context.robot.camera, self))
+        # The camera perception uses (calibrated when the run is): its pose is the one /tf carries.
+        self._camera = context.robot.camera
         self._urdf_text = self.urdf_path.read_text(encoding="utf-8")
         self._scene_update = self._scene()
         time_ns = self.now_ns()
@@ -221,6 +225,10 @@ class RunObserver:
     def on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
         """After a tick: ``/tree`` if a node changed, ``/tf`` once per ``TF_PERIOD_S`` of world time."""
         time_ns = self.now_ns()
+        if len(self._targets) != self._scene_targets:
+            # Parts that join the plan as it runs (a puzzle's pieces, once solved): the scene again.
+            self._scene_update = self._scene()
+            self._publish_statics(time_ns)
         if self._tree_changed:
             self._publish_tree(time_ns)
         if time_ns / 1e9 - self._last_tf_s >= TF_PERIOD_S - 1e-9:
@@ -309,7 +317,7 @@ class RunObserver:
         # The framework's kinematics put the base at the world origin (ArmKinematics' default).
         transforms = [transform(scene.WORLD_FRAME, self.links.base_link, (0, 0, 0), (0, 0, 0, 1))]
         transforms += [transform(*joint) for joint in self.links.transforms(positions)]
-        camera = robot.camera.pose_world
+        camera = (self._camera if self._camera is not None else robot.camera).pose_world
         transforms.append(transform(scene.WORLD_FRAME, scene.CAMERA_FRAME, camera.position_m, camera.quaternion_xyzw))
         offsets = []
         for name, position, quaternion in self._part_poses():
@@ -327,8 +335,8 @@ class RunObserver:
 
     @property
     def _targets(self) -> dict[str, Any]:
-        root = self.session.root
-        return {t.obj: t for t in root.targets} if isinstance(root, Arrangement) else {}
+        plan = getattr(self.session, "plan", None)
+        return {t.obj: t for t in plan.targets} if plan is not None else {}
 
     def _part_poses(self) -> list[tuple[str, Any, Any]]:
         """Each part's true pose (evaluation only): the world's full pose where it has one, else planar on the table."""
@@ -349,14 +357,14 @@ class RunObserver:
         return poses
 
     def _scene(self) -> SceneUpdate:
-        root = self.session.root
         entities = []
-        if isinstance(root, Arrangement):
-            for target in root.targets:
-                shape = target.object_type.shape
-                rgb = self.session.colours[target.colour].paint_rgb
-                entities.append(scene.part_entity(target.obj, shape, rgb))
-                entities.append(scene.target_entity(target.obj, shape, rgb, target.x_m, target.y_m, target.yaw_rad))
+        targets = self._targets
+        for target in targets.values():
+            shape = target.object_type.shape
+            rgb = self.session.colours[target.colour].paint_rgb
+            entities.append(scene.part_entity(target.obj, shape, rgb))
+            entities.append(scene.target_entity(target.obj, shape, rgb, target.x_m, target.y_m, target.yaw_rad))
+        self._scene_targets = len(targets)
         return SceneUpdate(entities=entities)
 
 
