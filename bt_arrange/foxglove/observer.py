@@ -339,18 +339,25 @@ class RunObserver:
         return {t.obj: t for t in plan.targets} if plan is not None else {}
 
     def _part_poses(self) -> list[tuple[str, Any, Any]]:
-        """Each part's true pose (evaluation only): the world's full pose where it has one, else planar on the table."""
+        """Each part's true pose (evaluation only): the world's full pose where it has one, else planar on the table.
+
+        A part is named as the plan names it where the plan has a target for it (a puzzle's piece
+        ``slab 3`` is the world's ``slab fragment 5`` once surveyed), so its scene entity follows it.
+        """
         truth = self.session.truth
         if truth is None:
             return []
         full = getattr(truth, "pose_truth", None)
+        part_of = getattr(self.session, "part_of", None)
+        shown = {part_of(t): name for name, t in self._targets.items()} if part_of is not None else {}
         poses = []
-        for name in truth.part_names():
+        for world_name in truth.part_names():
+            name = shown.get(world_name, world_name)
             if full is not None:
-                pose = full(name)
+                pose = full(world_name)
                 poses.append((name, pose.position_m, pose.quaternion_xyzw))
                 continue
-            x, y, yaw = truth.planar_pose(name)
+            x, y, yaw = truth.planar_pose(world_name)
             target = self._targets.get(name)
             half_m = float(target.object_type.shape.height_m) / 2 if target is not None else 0.0
             poses.append((name, (x, y, half_m), scene.yaw_quaternion(yaw)))

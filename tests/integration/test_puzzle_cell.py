@@ -70,9 +70,20 @@ def test_a_puzzle_at_the_default_gap_and_threshold_is_solved_and_placed(tmp_path
     plan = tmp_path / "defaults.toml"
     plan.write_text(text.replace("threshold_mm = 0.8\n", "").replace("yaw_threshold_deg = 0.8\n", ""))
     module = treefile.load(plan)
-    with SimulatedRun(treefile.build_root(module), treefile.scene(module, 0)) as run:
+    record = tmp_path / "record"
+    with SimulatedRun(treefile.build_root(module), treefile.scene(module, 0), record_dir=record) as run:
         report = run.run()
     assert report.threshold_mm == 1.0 and report.sim_seconds > 30.0, "the pieces moved"
     for outcome in report.to_dict()["objects"]:
         assert outcome["status"] == "within", outcome
         assert outcome["final_offset_truth_mm"] < 1.0, outcome
+    # The record shows every piece: the solved targets join the scene on /parts and the offsets on /offsets.
+    pytest.importorskip("mcap_protobuf")
+    from test_foxglove_mcap import read
+
+    _, decoded = read(record)
+    pieces = {f"slab {k}" for k in range(1, 7)}
+    scenes = [value for _, channel, _, value in decoded if channel.topic == "/parts"]
+    assert {e.id for e in scenes[-1].entities} >= {f"part/{name}" for name in pieces}
+    offsets = [value for _, channel, _, value in decoded if channel.topic == "/offsets"]
+    assert {part["name"] for part in offsets[-1]["parts"]} == pieces
