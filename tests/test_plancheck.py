@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.colours import PAINT_RGB
+from bt_arrange.plan import ArrangementPlan, Tolerance
 from bt_arrange.plan.check import CameraView, check_plan, check_scene
 from bt_arrange.plan.layout import Part, gap_m
 from bt_arrange.settings import ManipulationSettings
@@ -84,7 +85,7 @@ def test_a_threshold_below_what_a_push_corrects_is_refused_naming_the_floor(thre
     message = rf"threshold {threshold_mm:g} mm is below 0\.07 mm, the smallest offset a push can correct"
     for build in (
         lambda: arrangement([RED], threshold_mm=threshold_mm),
-        lambda: correction(RED, threshold_mm),
+        lambda: correction(RED, ArrangementPlan.of([RED], Tolerance(threshold_mm))),
         lambda: check_threshold(threshold_mm),
         lambda: check_plan([RED], threshold_mm=threshold_mm),
     ):

@@ -18,7 +18,7 @@ from bt_arrange.behaviours import GraspGuard, Inspect, Pick, Place, keys
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.objects import ObjectType
 from bt_arrange.shapes import Prism
-from bt_arrange.trees import Target, arrange_one
+from bt_arrange.trees import Target
 from bt_arrange.trees.steps import (
     MAX_TURNED_REGRASPS,
     REGRASP_ANY_YAW_DEG,
@@ -104,7 +104,7 @@ def test_the_regrasp_picks_the_part_again_at_its_camera_pose_places_it_and_looks
 
 
 def test_an_irregular_part_s_tree_regrasps_between_the_inspect_after_placing_and_the_pushes() -> None:
-    names = [child.name for child in arrange_one(ORANGE).children]
+    names = [child.name for child in one_part(ORANGE).children]
     assert names.index("inspect orange after placing") + 1 == names.index(
         f"regrasp orange while turned {REGRASP_YAW_DEG:g} deg or more"
     )
@@ -128,17 +128,15 @@ def test_how_far_turned_a_free_part_is_placed_again(
 
 
 def test_a_plan_s_yaw_threshold_sets_the_regrasp_of_its_tree() -> None:
-    names = [child.name for child in arrange_one(ORANGE, yaw_threshold_deg=3.0).children]
+    names = [child.name for child in one_part(ORANGE, yaw_threshold_deg=3.0).children]
     assert "regrasp orange while turned 3 deg or more" in names
-    names = [child.name for child in arrange_one(ORANGE, yaw_threshold_deg=None).children]
+    names = [child.name for child in one_part(ORANGE, yaw_threshold_deg=None).children]
     assert f"regrasp orange while turned {REGRASP_ANY_YAW_DEG:g} deg or more" in names
 
 
 def test_a_cuboid_s_tree_has_no_regrasp() -> None:
     # The fallback of a correction that stalls places any free part again: not a regrasp while turned.
-    assert not [
-        node for node in arrange_one(RED_CUBE).iterate() if "regrasp" in node.name or "while turned" in node.name
-    ]
+    assert not [node for node in one_part(RED_CUBE).iterate() if "regrasp" in node.name or "while turned" in node.name]
 
 
 def test_a_part_placed_nearly_square_is_not_picked_again_and_nothing_waits_a_tick() -> None:
@@ -175,3 +173,11 @@ def test_no_inspect_before_the_regrasp_is_a_failure_not_a_blind_pick() -> None:
     node, script = scripted([0.0])
     node.tick_once()
     assert node.status == Status.FAILURE and script.runs == 0
+
+
+def one_part(target, threshold_mm=1.0, yaw_threshold_deg=1.0):  # noqa: ANN001, ANN201
+    """Algorithm 1 for one part placed free, as a compiled plan renders it."""
+    from bt_arrange.plan import ArrangementPlan, PartStep, Tolerance
+    from bt_arrange.trees import render_part
+
+    return render_part(PartStep.free(target), ArrangementPlan.of([target], Tolerance(threshold_mm, yaw_threshold_deg)))

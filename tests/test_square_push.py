@@ -234,7 +234,12 @@ def test_the_tree_gives_an_irregular_part_among_neighbours_its_threshold_and_nob
     names = tuple(TRIANGLE.named_pushes(ROBOTIQ_2F85))
 
     def thresholds(target: Target, towards: tuple[str, ...] | None) -> set[float | None]:
-        tree = correction(target, 0.25, towards=towards)
+        import dataclasses
+
+        from bt_arrange.plan import ArrangementPlan, PartStep, Tolerance
+
+        step = dataclasses.replace(PartStep.free(target), push_towards=towards)
+        tree = correction(step, ArrangementPlan.of([target], Tolerance(0.25, 1.0)))
         return {node.threshold_mm for node in tree.iterate() if isinstance(node, Push)}
 
     assert thresholds(Target("red", 0.5, 0.0, object_type=triangle), names[:2]) == {0.25}

@@ -19,7 +19,6 @@ from bt_arrange.testing import fake_camera, make_context, part
 from bt_arrange.trees import (
     Arrangement,
     Target,
-    arrange_one,
     arrangement,
     kinds,
     parts_of,
@@ -194,7 +193,7 @@ def correct_red(indent: int, threshold: str = "1") -> list[str]:
 
 
 def test_arrange_one_is_algorithm_1() -> None:
-    assert outline(arrange_one(RED, threshold_mm=0.5)) == arrange_red(0, "0.5")
+    assert outline(one_part(RED, threshold_mm=0.5)) == arrange_red(0, "0.5")
 
 
 def test_correct_each_arranges_the_objects_one_after_the_other_then_parks() -> None:
@@ -275,7 +274,7 @@ def test_the_options_reach_the_nodes_that_use_them() -> None:
 
 
 def test_the_target_node_writes_the_target_to_the_blackboard() -> None:
-    node = find(arrange_one(GREEN), "green target")
+    node = find(one_part(GREEN), "green target")
     node.tick_once()
     assert node.status == Status.SUCCESS
     assert py_trees.blackboard.Blackboard.get("/green/target") == PlanarPose(0.45, -0.10, 0.3)
@@ -403,3 +402,11 @@ def test_a_python_target_in_millimetres_is_refused_in_one_line_that_says_so(fiel
         PlanError, match=rf"^target 1 \(red\): {field}=500 looks like millimetres: a Target is in metres"
     ):
         arrangement([Target("red", **values)])
+
+
+def one_part(target, threshold_mm=1.0, yaw_threshold_deg=1.0):  # noqa: ANN001, ANN201
+    """Algorithm 1 for one part placed free, as a compiled plan renders it."""
+    from bt_arrange.plan import ArrangementPlan, PartStep, Tolerance
+    from bt_arrange.trees import render_part
+
+    return render_part(PartStep.free(target), ArrangementPlan.of([target], Tolerance(threshold_mm, yaw_threshold_deg)))

@@ -24,7 +24,7 @@ def correct_only(target: Target) -> Arrangement:
         [
             set_target(target),
             Inspect(f"inspect {obj} after placing", obj, target.colour, after_placing=True),
-            correction(target, threshold_mm=1.0, max_pushes=10),
+            correction(target),  # placed free: 1 mm, 1 deg, 10 pushes
             MoveHome("park the arm"),
         ],
         [target],
