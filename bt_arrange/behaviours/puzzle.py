@@ -23,13 +23,15 @@ from bt_arrange.behaviours.looking import Detect, is_parked, park_stage
 from bt_arrange.errors import BtArrangeError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.objects import ObjectType
-from bt_arrange.ports import Port
-from bt_arrange.puzzle.spec import PuzzleSpec, puzzle_port_type
+from bt_arrange.ports import Port, PortType
+from bt_arrange.puzzle.spec import PuzzleSpec, format_spec, parse_spec
 from bt_arrange.shapes.polygon import centroid_m
 
 #: The port every node of a puzzle takes: the puzzle's whole (its spec), as text.
 PUZZLE_PORT = Port(
-    "puzzle", puzzle_port_type(), description="name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad"
+    "puzzle",
+    PortType("Puzzle", parse_spec, format_spec),
+    description="name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad",
 )
 #: ``/<puzzle>/pieces``: the pieces the camera measured (``MeasuredPiece``s, in the order of their names).
 PIECES = "pieces"

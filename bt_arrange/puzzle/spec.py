@@ -76,14 +76,16 @@ class PuzzleSpec:
         return (0.0, math.pi)
 
 
-def _format_spec(spec: PuzzleSpec) -> str:
+def format_spec(spec: PuzzleSpec) -> str:
+    """A puzzle as its XML port writes it: ``name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad``."""
     numbers = ",".join(f"{v:.9g}" for v in spec.size_m)
     pose = ",".join(f"{v:.9g}" for v in (spec.x_m, spec.y_m, spec.yaw_rad))
     text = f"{spec.name};{numbers};{spec.pieces};{spec.gap_m:.9g};{spec.colour};{pose}"
     return text if spec.picture is None else f"{text};{spec.picture}"
 
 
-def _parse_spec(text: str) -> PuzzleSpec:
+def parse_spec(text: str) -> PuzzleSpec:
+    """A puzzle read back from its XML port's text (``format_spec``'s); a ``ValueError`` says what is wrong."""
     fields = text.split(";")
     if len(fields) not in (6, 7):
         raise ValueError("a puzzle is name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad[;picture]")
@@ -101,13 +103,6 @@ def _parse_spec(text: str) -> PuzzleSpec:
     return PuzzleSpec(
         name, (edges[0], edges[1], edges[2]), count, float(gap), colour, where[0], where[1], where[2], picture=picture
     )
-
-
-def puzzle_port_type() -> Any:
-    """The XML port type of a puzzle: ``name;length_m,width_m,height_m;pieces;gap_m;colour;x_m,y_m,yaw_rad``."""
-    from bt_arrange.ports import PortType
-
-    return PortType("Puzzle", _parse_spec, _format_spec)
 
 
 def _picture_of(reader: Any, entry: dict[str, Any], where: str) -> str | None:
