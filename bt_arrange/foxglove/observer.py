@@ -225,7 +225,8 @@ class RunObserver:
     def on_tick(self, root: py_trees.behaviour.Behaviour) -> None:
         """After a tick: ``/tree`` if a node changed, ``/tf`` once per ``TF_PERIOD_S`` of world time."""
         time_ns = self.now_ns()
-        if len(self._targets) != self._scene_targets:
+        plan = getattr(self.session, "plan", None)
+        if plan is not None and len(plan.targets) != self._scene_targets:
             # Parts that join the plan as it runs (a puzzle's pieces, once solved): the scene again.
             self._scene_update = self._scene()
             self._publish_statics(time_ns)
@@ -341,15 +342,15 @@ class RunObserver:
     def _part_poses(self) -> list[tuple[str, Any, Any]]:
         """Each part's true pose (evaluation only): the world's full pose where it has one, else planar on the table.
 
-        A part is named as the plan names it where the plan has a target for it (a puzzle's piece
-        ``slab 3`` is the world's ``slab fragment 5`` once surveyed), so its scene entity follows it.
+        A puzzle's piece is named as the plan names it once surveyed (``slab 3`` is the world's
+        ``slab fragment 5``), so its scene entity follows it; every other part has the plan's name.
         """
         truth = self.session.truth
         if truth is None:
             return []
         full = getattr(truth, "pose_truth", None)
-        part_of = getattr(self.session, "part_of", None)
-        shown = {part_of(t): name for name, t in self._targets.items()} if part_of is not None else {}
+        puzzle_truth = getattr(self.session, "puzzle_truth", None)
+        shown = {world: name for name, world in puzzle_truth.parts.items()} if puzzle_truth is not None else {}
         poses = []
         for world_name in truth.part_names():
             name = shown.get(world_name, world_name)

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from typing import cast
+from typing import TypeVar, cast
 
 from bt_arrange.behaviours import Context
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, CartesianLimits, JointLimits, MotionPlanner
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import PartDetector
-from bt_arrange.perception.synthetic import SyntheticCube, SyntheticPrism
+from bt_arrange.perception.synthetic import SyntheticPrism
 from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, Robot
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import Prism
@@ -26,10 +26,8 @@ def part(
     (default the paper's 5 cm cube, :data:`bt_arrange.objects.CUBE`) gives its shape: any prism,
     drawn at its area centroid.
     """
-    if object_type is None or object_type == CUBE:
-        return SyntheticCube(colour, x_m, y_m, yaw_rad)
-    # The drawing reads only the top face's outline and height, which every shape has.
-    return SyntheticPrism(colour, x_m, y_m, yaw_rad, cast(Prism, object_type.shape))
+    # The drawing reads only the top face's outline and height, which every shape has (a box is a prism).
+    return SyntheticPrism(colour, x_m, y_m, yaw_rad, cast(Prism, (object_type or CUBE).shape))
 
 
 def make_context(
@@ -67,33 +65,31 @@ def make_context(
 
 def fake_arm(context: Context) -> FakeArm:
     """The context's arm, as the fake it is (its ``commands``)."""
-    arm = context.robot.arm
-    if not isinstance(arm, FakeArm):
-        raise TypeError(f"the context's arm is a {type(arm).__name__}, not a FakeArm (make_context makes one)")
-    return arm
+    return _fake(context.robot.arm, FakeArm, "arm")
 
 
 def fake_gripper(context: Context) -> FakeGripper:
     """The context's gripper, as the fake it is (its ``commands``, ``slip()``, ``wedge()``)."""
-    gripper = context.robot.gripper
-    if not isinstance(gripper, FakeGripper):
-        raise TypeError(
-            f"the context's gripper is a {type(gripper).__name__}, not a FakeGripper (make_context makes one)"
-        )
-    return gripper
+    return _fake(context.robot.gripper, FakeGripper, "gripper")
 
 
 def fake_camera(context: Context) -> FakeCamera:
     """The context's camera, as the fake it is (its ``parts``, ``captures`` and ``windows``)."""
-    camera = context.robot.camera
-    if not isinstance(camera, FakeCamera):
-        raise TypeError(f"the context's camera is a {type(camera).__name__}, not a FakeCamera (make_context makes one)")
-    return camera
+    return _fake(context.robot.camera, FakeCamera, "camera")
 
 
 def fake_clock(context: Context) -> FakeClock:
     """The context's clock, as the fake it is (``advance(dt_s)``)."""
-    clock = context.robot.clock
-    if not isinstance(clock, FakeClock):
-        raise TypeError(f"the context's clock is a {type(clock).__name__}, not a FakeClock (make_context makes one)")
-    return clock
+    return _fake(context.robot.clock, FakeClock, "clock")
+
+
+D = TypeVar("D")
+
+
+def _fake(device: object, fake: type[D], role: str) -> D:
+    """``device`` as the fake it must be, or a ``TypeError`` naming the device the context has instead."""
+    if not isinstance(device, fake):
+        raise TypeError(
+            f"the context's {role} is a {type(device).__name__}, not a {fake.__name__} (make_context makes one)"
+        )
+    return device

@@ -9,7 +9,8 @@ renders the tree of its parts (``bt_arrange.trees.arrangement``), each puzzle's 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping, Sequence
+import inspect
+from collections.abc import Iterable
 from typing import Any
 
 import py_trees
@@ -17,32 +18,20 @@ import py_trees
 from bt_arrange.checks import positive_number
 from bt_arrange.deprecation import warn_once
 from bt_arrange.errors import PlanError
-from bt_arrange.perception import ColourTable
 from bt_arrange.plan.check import check_puzzles
 from bt_arrange.plan.choices import CorrectMode, PushStrategy
 from bt_arrange.plan.compiled import ArrangementPlan, compile_plan
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
 from bt_arrange.plan.tolerance import Tolerance
-from bt_arrange.settings import ManipulationSettings
 from bt_arrange.suggest import did_you_mean
 from bt_arrange.trees.arrangement import Arrangement, render
 from bt_arrange.trees.puzzle import OPTIONS as PUZZLE_OPTIONS
 from bt_arrange.trees.puzzle import arrange_puzzle
 from bt_arrange.trees.steps import Locate
 
-#: The keywords of ``arrangement`` beyond the targets, the threshold and ``locate``: the plan's options.
-PLAN_OPTIONS = (
-    "yaw_threshold_deg",
-    "correct",
-    "strategy",
-    "max_pushes",
-    "max_regrasps",
-    "keep_going",
-    "order",
-    "colours",
-    "settings",
-    "puzzles",
-)
+#: The keywords of ``arrangement`` beyond the targets, the threshold and ``locate``: the plan's options,
+#: ``compile_plan``'s own and the two the builder takes itself.
+PLAN_OPTIONS = ("yaw_threshold_deg", "puzzles", *list(inspect.signature(compile_plan).parameters)[2:])
 #: The former positional parameters after ``threshold_mm``, deprecated.
 _POSITIONAL = ("max_pushes", "correct")
 
@@ -88,44 +77,18 @@ def arrangement(
         raise TypeError(
             f"arrangement() got an unexpected keyword argument {unknown[0]!r}{did_you_mean(unknown[0], PLAN_OPTIONS)}"
         )
-    return _arrangement(targets, threshold_mm, locate=locate, **options)
-
-
-def _arrangement(
-    targets: Iterable[Target],
-    threshold_mm: float = 1.0,
-    max_pushes: int = 10,
-    correct: CorrectMode | str = CorrectMode.EACH,
-    *,
-    max_regrasps: int = 3,
-    keep_going: bool = True,
-    locate: Locate | None = None,
-    order: Sequence[str] | None = None,
-    strategy: PushStrategy | str = PushStrategy.PAPER,
-    yaw_threshold_deg: float | None = DEFAULT_YAW_THRESHOLD_DEG,
-    colours: ColourTable | Mapping[str, object] | None = None,
-    settings: ManipulationSettings | None = None,
-    puzzles: Sequence[Any] = (),
-) -> Arrangement:
-    strategy = PushStrategy.parse(strategy, "strategy")
-    correct = CorrectMode.parse(correct, "correct")
+    yaw_threshold_deg = options.pop("yaw_threshold_deg", DEFAULT_YAW_THRESHOLD_DEG)
+    puzzles = tuple(options.pop("puzzles", ()))
+    options["strategy"] = PushStrategy.parse(options.get("strategy", PushStrategy.PAPER), "strategy")
+    options["correct"] = correct = CorrectMode.parse(options.get("correct", CorrectMode.EACH), "correct")
     targets = list(targets) if isinstance(targets, Iterable) and not isinstance(targets, (str, bytes)) else targets
     if puzzles and correct is not CorrectMode.EACH:
         raise PlanError(f"correct={correct.value!r}: a plan with a [puzzle] is corrected part by part (each)")
+    settings = options.get("settings")
     check_threshold(threshold_mm, settings)
     if yaw_threshold_deg is not None:
         positive_number("yaw_threshold_deg", yaw_threshold_deg, "deg")
     tolerance = Tolerance(float(threshold_mm), yaw_threshold_deg)
-    options: dict[str, Any] = dict(
-        settings=settings,
-        correct=correct,
-        strategy=strategy,
-        order=order,
-        max_pushes=max_pushes,
-        max_regrasps=max_regrasps,
-        keep_going=keep_going,
-        colours=colours,
-    )
     if not puzzles:
         return render(compile_plan(targets, tolerance, **options), locate)
     check_puzzles(puzzles, targets, float(threshold_mm), settings)
@@ -133,7 +96,7 @@ def _arrangement(
     plan = compile_plan(targets or [Target("red", 0.5, 0.0)], tolerance, **options)
     if not targets:
         plan = dataclasses.replace(plan, targets=(), steps=())
-    return _with_puzzles(render(dataclasses.replace(plan, puzzles=tuple(puzzles)), locate))
+    return _with_puzzles(render(dataclasses.replace(plan, puzzles=puzzles), locate))
 
 
 def _with_puzzles(root: Arrangement) -> Arrangement:
