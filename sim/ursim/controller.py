@@ -360,7 +360,7 @@ class Controller:
         return "Protective stop releasing"
 
     def clear_faults(self) -> None:
-        """The faults port's ``clear``: stops released, the arm powered and running again (the program stays stopped)."""
+        """The faults port's ``clear``: stops released, the arm powered and running (the program stays stopped)."""
         self.protective_stop_on_contact = False
         self.safety_mode = SAFETY_MODE_NORMAL
         self.robot_mode = ROBOT_MODE_RUNNING

@@ -175,8 +175,10 @@ class ScriptServer(TcpServer):
         print(
             f"ursim: program {name!r} is not interpreted: only its output register writes take effect", file=sys.stderr
         )
-        writes = [(sum(int(t) for t in m.group(1).split("+") if t.strip()), int(m.group(2))) for m in
-                  self.OUTPUT_INT_WRITE.finditer(program)]  # fmt: skip
+        writes = [
+            (sum(int(t) for t in m.group(1).split("+") if t.strip()), int(m.group(2)))
+            for m in self.OUTPUT_INT_WRITE.finditer(program)
+        ]
 
         def run() -> None:
             if not header.startswith("sec "):
