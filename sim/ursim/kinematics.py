@@ -49,8 +49,9 @@ class UrKinematics:
         self.lower_rad = self._model.lower_rad
         self.upper_rad = self._model.upper_rad
         zero = np.zeros(6)
-        # The URDF's ``tcp`` (between the pads) seen from the flange: fixed, so found once.
-        self._flange_to_urdf_tcp = (
+        #: The URDF's ``tcp`` (between the finger pads, mid-pad) seen from the flange: ``set_tcp`` this
+        #: (``matrix_to_pose``) and the controller's TCP is the simulated backend's.
+        self.flange_to_pads_tcp = (
             np.linalg.inv(self._model.forward(zero, FLANGE_FRAME).matrix) @ self._model.forward(zero, TCP_FRAME).matrix
         )
 
@@ -70,7 +71,7 @@ class UrKinematics:
     def inverse(self, tcp_pose: list[float], tcp_offset: list[float], seed_q: np.ndarray) -> np.ndarray:
         """A joint vector on ``seed_q``'s branch that puts the TCP at ``tcp_pose``; raises when there is none."""
         flange = pose_to_matrix(tcp_pose) @ np.linalg.inv(pose_to_matrix(tcp_offset))
-        urdf_tcp = BASE_LINK_TO_BASE @ flange @ self._flange_to_urdf_tcp
+        urdf_tcp = BASE_LINK_TO_BASE @ flange @ self.flange_to_pads_tcp
         return self._model.inverse(Pose.from_matrix(urdf_tcp), seed_q)
 
     def within_limits(self, q: np.ndarray) -> bool:

@@ -66,8 +66,9 @@ class RobotiqGripper:
         self.values.update({"STA": 0, "PRE": 0, "OBJ": 0, "FLT": 0})
         self.values["POS"] = 0
         self._actual_position = device_position(gripper.width())  # type: ignore[attr-defined]
-        #: Set by a SET with GTO 1 (or a change of ACT): the physics thread has something to do.
-        self._pending = False
+        #: What a SET asked the physics thread to do: open the fingers for the activation, start a move.
+        self._activate = False
+        self._new_goal = False
         self._activation_left_s = 0.0
         self._goal: tuple[int, int, int] | None = None
         self._closing = False
@@ -82,14 +83,23 @@ class RobotiqGripper:
             if name not in SETTABLE or not 0 <= value <= SETTABLE[name]:
                 return False
         with self._lock:
+            values = self.values
             for name, value in assignments:
-                self.values[name] = value
-            if self.values["GTO"] == 1 and self.values["STA"] == 3 and self.values["ACT"] == 1:
-                # The device echoes the request and reports motion at once: a client that waits for PRE
-                # and then polls OBJ never sees the previous move's status.
-                self.values["PRE"] = self.values["POS"]
-                self.values["OBJ"] = 0
-            self._pending = True
+                values[name] = value
+            # The registers answer at once (a client that polls STA, or PRE then OBJ, sees the new
+            # state); the fingers move from the next control period (``tick``).
+            if values["ACT"] == 0:
+                values["STA"] = 0
+                values["OBJ"] = 0
+                self._goal = None
+            elif values["STA"] == 0:
+                values["STA"] = 1
+                self._activation_left_s = ACTIVATION_S
+                self._activate = True
+            elif values["STA"] == 3 and values["GTO"] == 1:
+                values["PRE"] = values["POS"]
+                values["OBJ"] = 0
+                self._new_goal = True
         return True
 
     def get(self, name: str) -> str:
@@ -109,10 +119,13 @@ class RobotiqGripper:
         with self._lock:
             if self.emergency_stopped:
                 return
-            pending, self._pending = self._pending, False
             values = self.values
-            if pending:
-                self._apply_request(values)
+            if self._activate:
+                self._activate = False
+                gripper.open(ROBOTIQ_2F85.stroke_m)  # type: ignore[attr-defined]
+            if self._new_goal:
+                self._new_goal = False
+                self._start_goal(values)
             if values["STA"] == 1:
                 self._activation_left_s -= self._period_s
                 if self._activation_left_s <= 0:
@@ -125,23 +138,9 @@ class RobotiqGripper:
             if self._goal is not None and self.values["STA"] == 3:
                 self._update_object_status(width, moving)
 
-    def _apply_request(self, values: dict[str, int]) -> None:
-        """ACT 0 resets; ACT 1 activates (from reset); GTO 1 starts a move to POS at SPE and FOR."""
-        if values["ACT"] == 0:
-            values["STA"] = 0
-            values["OBJ"] = 0
-            self._goal = None
-            return
-        if values["STA"] == 0:
-            values["STA"] = 1
-            self._activation_left_s = ACTIVATION_S
-            self._gripper.open(ROBOTIQ_2F85.stroke_m)  # type: ignore[attr-defined]
-            return
-        if values["STA"] != 3 or values["GTO"] != 1:
-            return
+    def _start_goal(self, values: dict[str, int]) -> None:
+        """GTO 1 on an active gripper: move to POS at SPE, closing with at most FOR."""
         goal = (values["POS"], values["SPE"], values["FOR"])
-        values["PRE"] = values["POS"]
-        values["OBJ"] = 0
         self._goal = goal
         self._still_periods = 0
         target_m = opening_m(goal[0])
