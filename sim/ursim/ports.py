@@ -125,6 +125,8 @@ class ScriptServer(TcpServer):
     REGISTER_OFFSET = re.compile(r"#\s*int register offset\s*\n\s*(\d+)")
     OUTPUT_INT_WRITE = re.compile(r"write_output_integer_register\(\s*([0-9+\s]+?)\s*,\s*(-?\d+)\s*\)")
     STOP = re.compile(r"^(stopj|stopl)\(\s*([0-9.eE+-]+)")
+    #: What a one-line script must look like to compile: a name, or a call of one with printable arguments.
+    STATEMENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*\s*(\([ -~]*\))?$")
     #: The most a program may be (bytes): ur_rtde's is about 40 kB.
     MAX_PROGRAM_BYTES = 4_000_000
 
@@ -192,18 +194,23 @@ class ScriptServer(TcpServer):
     def _run_line(self, line: str) -> None:
         if not line or line.startswith("#"):
             return
+        if not self.STATEMENT.match(line):
+            # It would not compile: a real controller reports the error and runs nothing, so the
+            # running program goes on.
+            print(f"ursim: script port: syntax error in {line[:60]!r}: ignored", file=sys.stderr)
+            return
         controller = self.controller
         stop = self.STOP.match(line)
 
         def run() -> None:
-            controller.stop_program(f"the script line {line!r} replaced it")
+            controller.stop_program(f"the script line {line[:60]!r} replaced it")
             if stop is not None:
                 from bt_arrange_sim.ursim.motion import Stop
 
                 controller.motion.start(Stop(float(stop.group(2)), controller.period_s))
 
         if stop is None:
-            print(f"ursim: script line {line!r} is not interpreted (the running program stops)", file=sys.stderr)
+            print(f"ursim: script line {line[:60]!r} is not interpreted (the running program stops)", file=sys.stderr)
         controller.call(run)
 
 

@@ -12,6 +12,7 @@ on its own thread (a reader) plus a writer once started.
 
 from __future__ import annotations
 
+import os
 import socket
 import struct
 import sys
@@ -169,6 +170,7 @@ class RtdeConnection:
 
     def serve(self) -> None:
         """Read packages until the client closes; answer each."""
+        _debug(f"rtde {self.id}: connected")
         try:
             while True:
                 header = _read_exactly(self.socket, HEADER.size)
@@ -184,6 +186,7 @@ class RtdeConnection:
         except OSError:
             return
         finally:
+            _debug(f"rtde {self.id}: closed")
             self._closed.set()
             self._started.clear()
             self.server.input_owners.release(self.id)
@@ -193,6 +196,7 @@ class RtdeConnection:
             self.socket.sendall(HEADER.pack(HEADER.size + len(payload), kind) + payload)
 
     def _handle(self, kind: int, payload: bytes) -> None:
+        _debug(f"rtde {self.id}: package {chr(kind)!r} of {len(payload)} bytes" if kind != DATA_PACKAGE else "")
         if kind == REQUEST_PROTOCOL_VERSION:
             (version,) = struct.unpack(">H", payload[:2]) if len(payload) >= 2 else (0,)
             self._send(REQUEST_PROTOCOL_VERSION, struct.pack(">B", 1 if version == PROTOCOL_VERSION else 0))
@@ -281,6 +285,12 @@ class RtdeConnection:
                 self._send(DATA_PACKAGE, layout.pack(1, *flatten(values, types)))
         except OSError:
             return
+
+
+def _debug(message: str) -> None:
+    """A protocol trace on stderr when ``URSIM_DEBUG`` is set."""
+    if message and os.environ.get("URSIM_DEBUG"):
+        print(f"ursim: {message}", file=sys.stderr)
 
 
 def _names(payload: bytes) -> list[str]:
