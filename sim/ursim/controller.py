@@ -162,9 +162,11 @@ class Controller:
 
     def realtime_ratio(self) -> float:
         """World time over wall time since the loop started (1.0: real time)."""
-        if self._wall_start_s is None or self._wall_last_s is None or self._wall_last_s <= self._wall_start_s:
+        if self._wall_start_s is None or self._wall_last_s is None:
             return 0.0
-        return (self.cell.sim_time_s - self._world_start_s) / (self._wall_last_s - self._wall_start_s)
+        # The wall time includes the period under way: the first one is stepped at once, at wall time 0.
+        wall_s = self._wall_last_s - self._wall_start_s + self.period_s / self.realtime_factor
+        return (self.cell.sim_time_s - self._world_start_s) / wall_s
 
     # -- the physics thread ----------------------------------------------------------------------
 

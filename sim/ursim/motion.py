@@ -26,6 +26,8 @@ MOVE_JERK_RAD_S3 = 400.0
 #: to the target (rad), or after ``SETTLE_LIMIT_S`` of settling.
 SETTLED_RAD = 2e-4
 SETTLE_LIMIT_S = 1.0
+#: The UR5's joint speed limit (rad/s): the most a servo target's rate is fed forward.
+MAX_JOINT_SPEED_RAD_S = 3.15
 #: Joints slower than this (rad/s) are at rest (``is_steady``, the end of a stop).
 STEADY_RAD_S = 1e-3
 
@@ -212,7 +214,9 @@ class Servo(Motion):
         """A new target from the client."""
         target = np.array(target_rad, dtype=float)
         elapsed_s = max(1, self._periods_since_update) * self._period_s
-        self._rate = (target - self._target) / elapsed_s
+        # A jump (the first target far from the arm, two targets in one period) is no speed to feed
+        # forward: the rate is held to the UR5's joint speed limit.
+        self._rate = np.clip((target - self._target) / elapsed_s, -MAX_JOINT_SPEED_RAD_S, MAX_JOINT_SPEED_RAD_S)
         self._target = target
         self._periods_since_update = 0
 
