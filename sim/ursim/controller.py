@@ -110,6 +110,7 @@ class Controller:
         self.kinematics = UrKinematics()
         self.registers = RegisterBank()
         self.actual_q = np.asarray(cell.arm.joint_positions(), dtype=float)
+        self.actual_qd = np.zeros(6)
         self.motion = MotionGenerator(self.period_s, self.actual_q)
         self.gripper = RobotiqGripper(cell.gripper, self.period_s)
         self.tcp_offset: list[float] = [0.0] * 6
@@ -213,7 +214,11 @@ class Controller:
         self.cell.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
         self.gripper.tick()
         self.cell.step()
+        previous_q = self.actual_q
         self.actual_q = np.asarray(self.cell.arm.joint_positions(), dtype=float)
+        # The encoders' rate over the period: pybullet's own joint velocity is the last physics step's,
+        # which under position motors fed once a period swings around the mean (half of it at 0.2 rad/s).
+        self.actual_qd = (self.actual_q - previous_q) / self.period_s
         self._history.append(self.actual_q.copy())
         self._publish()
 
@@ -236,7 +241,7 @@ class Controller:
         snapshot = Snapshot(
             time_s=self.cell.sim_time_s,
             actual_q=self.actual_q.tolist(),
-            actual_qd=[float(v) for v in self.cell.arm.joint_velocities()],
+            actual_qd=self.actual_qd.tolist(),
             target_q=setpoint.positions_rad.tolist(),
             target_qd=setpoint.velocities_rad_s.tolist(),
             target_qdd=((setpoint.velocities_rad_s - self.motion.previous_velocities) / self.period_s).tolist(),

@@ -285,7 +285,14 @@ class MotionGenerator:
         self._settle_s = 0.0
 
     def start(self, motion: Motion, on_done: Callable[[], None] | None = None) -> None:
-        """Replace the active motion by ``motion`` (which starts from the last setpoint)."""
+        """Replace the active motion by ``motion`` (which starts from the last setpoint).
+
+        The replaced motion's ``on_done`` is called first: an async move cut short reports itself
+        finished, as the script's ``stop_async_move`` does for the thread it kills.
+        """
+        replaced, self._on_done = self._on_done, None
+        if replaced is not None:
+            replaced()
         self.motion = motion
         self._on_done = on_done
         self._settle_s = 0.0

@@ -192,8 +192,8 @@ class ControlProgram:
         generator = self.controller.motion
         self._servo = self._speed = None
         if asynchronous:
-            self._write_async_progress(0)
             generator.start(motion, self._async_done)  # type: ignore[arg-type]
+            self._write_async_progress(0)  # after the replaced move's "finished"
         else:
             generator.start(motion, self._motion_done)  # type: ignore[arg-type]
             self._block_until_done()
