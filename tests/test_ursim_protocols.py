@@ -160,6 +160,10 @@ def test_a_push_armed_with_on_contact_is_protective_stopped_when_a_finger_touche
         assert control.moveL(pose(beside, 0.03), 0.2, 1.0)
         assert sim.inject("protective_stop on_contact") == "ok"
         assert not control.moveL(pose(beside + 0.05 * along, 0.03), 0.05, 0.5)  # the push is stopped
+        # The receive interface's connection reads the state on its own; a period later at most.
+        deadline = time.monotonic() + 0.5
+        while not receive.isProtectiveStopped() and time.monotonic() < deadline:
+            time.sleep(0.01)
         assert receive.isProtectiveStopped()
         assert not control.isProgramRunning()
     finally:
