@@ -95,7 +95,9 @@ def launch(
     if board:
         command.append("--board")
     command += list(extra_args)
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, preexec_fn=_end_with_parent)
+    # The controller ends with this process (``--parent-pid``): none outlives a test killed mid-way.
+    command += ["--parent-pid", str(os.getpid())]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True)
     try:
         line = _read_line(process, ready_timeout_s)
         if not line.startswith("ready camera="):
@@ -113,15 +115,6 @@ def launch(
         if "sim" in locals():
             sim.returncode = process.returncode
             sim.stdout_after_ready = rest or ""
-
-
-def _end_with_parent() -> None:
-    """In the child: the kernel SIGTERMs it when the parent dies (Linux), so no controller outlives its test."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        set_parent_death_signal = 1  # PR_SET_PDEATHSIG
-        ctypes.CDLL(None, use_errno=True).prctl(set_parent_death_signal, signal.SIGTERM)
 
 
 def _read_line(process: subprocess.Popen, timeout_s: float) -> str:

@@ -47,6 +47,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument(
         "--realtime-factor", type=float, default=1.0, help="world seconds per wall second (default 1: real time)"
     )
+    parser.add_argument("--parent-pid", type=int, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.tree_or_plan is None and not args.board:
         parser.error("a tree or plan is needed (or --board for a calibration cell)")
@@ -82,6 +83,21 @@ def open_scene(args: argparse.Namespace) -> tuple[Any, Any]:
     return run.cell, run
 
 
+def end_with_parent(parent_pid: int) -> None:
+    """SIGTERM this process when ``parent_pid`` dies (Linux's parent-death signal), as if it were stopped.
+
+    Set in the child itself (not between fork and exec, where taking a lock can deadlock a threaded
+    parent); a parent that is already gone ends it at once.
+    """
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        set_parent_death_signal = 1  # PR_SET_PDEATHSIG
+        ctypes.CDLL(None, use_errno=True).prctl(set_parent_death_signal, signal.SIGTERM)
+    if os.getppid() != parent_pid:
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
 def write_truth(path: Path, truth: dict[str, list[float]]) -> None:
     """The truth file, written whole (a temporary file renamed)."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -111,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     controller_box: list[Controller] = []
     signal.signal(signal.SIGTERM, request_stop)
     signal.signal(signal.SIGINT, request_stop)
+    if args.parent_pid is not None:
+        end_with_parent(args.parent_pid)
 
     from bt_arrange.errors import BtArrangeError
 

@@ -51,28 +51,28 @@ HEADER = struct.Struct(">HB")
 _ZEROS6 = [0.0] * 6
 
 
-def output_value(name: str, snapshot: Snapshot) -> Any:
-    """The value of the output field ``name`` in ``snapshot`` (a list for a vector)."""
+def output_getter(name: str) -> Any:
+    """How to read the output field ``name`` (a known one) off a snapshot: a function of the snapshot."""
     getter = _GETTERS.get(name)
     if getter is not None:
-        return getter(snapshot)
-    if name.startswith("output_int_register_"):
-        return snapshot.output_int[int(name.rsplit("_", 1)[1])]
-    if name.startswith("output_double_register_"):
-        return snapshot.output_double[int(name.rsplit("_", 1)[1])]
-    if name.startswith("input_int_register_"):
-        return snapshot.input_int[int(name.rsplit("_", 1)[1])]
-    if name.startswith("input_double_register_"):
-        return snapshot.input_double[int(name.rsplit("_", 1)[1])]
-    if name.startswith("output_bit_register_"):
-        return bool(snapshot.output_bits >> int(name.rsplit("_", 1)[1]) & 1)
-    if name.startswith("input_bit_register_"):
-        return bool(snapshot.input_bits >> int(name.rsplit("_", 1)[1]) & 1)
-    kind = OUTPUT_FIELDS[name]
-    # What this controller has no model of (currents, voltages, I/O): zeros, or a constant a real one reads.
-    return {"VECTOR6D": _ZEROS6, "VECTOR3D": [0.0] * 3, "VECTOR6INT32": [0] * 6, "VECTOR6UINT32": [0] * 6}.get(
-        kind, False if kind == "BOOL" else 0
+        return getter
+    field, _, number = name.rpartition("_")
+    if field in ("output_int_register", "output_double_register", "input_int_register", "input_double_register"):
+        registers, index = field.removesuffix("_register"), int(number)  # the snapshot's list of them
+        return lambda s: getattr(s, registers)[index]
+    if name.startswith(("output_bit_register_", "input_bit_register_")):
+        attribute, bit = ("output_bits" if name.startswith("output") else "input_bits"), int(number)
+        return lambda s: bool(getattr(s, attribute) >> bit & 1)
+    # What this controller has no model of (currents, voltages, I/O): zeros.
+    constant = {"VECTOR6D": _ZEROS6, "VECTOR3D": [0.0] * 3, "VECTOR6INT32": [0] * 6, "VECTOR6UINT32": [0] * 6}.get(
+        OUTPUT_FIELDS[name], False if OUTPUT_FIELDS[name] == "BOOL" else 0
     )
+    return lambda s: constant
+
+
+def output_value(name: str, snapshot: Snapshot) -> Any:
+    """The value of the output field ``name`` in ``snapshot`` (a list for a vector)."""
+    return output_getter(name)(snapshot)
 
 
 _GETTERS: dict[str, Any] = {
@@ -162,7 +162,7 @@ class RtdeConnection:
         self.socket = connection
         self.id = connection_id
         self._send_lock = threading.Lock()
-        self._output: tuple[list[str], list[str], float] | None = None  # names, types, frequency
+        self._output: tuple[list[Any], list[str], float] | None = None  # getters, types, frequency
         self._inputs: dict[int, tuple[list[str], list[str], struct.Struct]] = {}
         self._started = threading.Event()
         self._closed = threading.Event()
@@ -235,7 +235,7 @@ class RtdeConnection:
         types = [OUTPUT_FIELDS.get(n, NOT_FOUND) for n in names]
         ok = bool(names) and NOT_FOUND not in types and frequency > 0
         if ok:
-            self._output = (names, types, min(frequency, CONTROLLER_FREQUENCY_HZ))
+            self._output = ([output_getter(n) for n in names], types, min(frequency, CONTROLLER_FREQUENCY_HZ))
         recipe_id = 1 if ok else 0
         self._send(SETUP_OUTPUTS, struct.pack(">B", recipe_id) + ",".join(types).encode())
 
@@ -274,14 +274,14 @@ class RtdeConnection:
             while not self._closed.is_set() and not self.controller.stopped:
                 if not self._started.wait(timeout=0.1):
                     continue
-                names, types, frequency = self._output
+                getters, types, frequency = self._output
                 periods = max(1, round(CONTROLLER_FREQUENCY_HZ / frequency))
                 layout = recipe_struct(types)
                 snapshot = self.controller.wait_for_period(index + periods - 1)
                 if snapshot.period_index < index + periods:
                     continue  # the physics did not step (stopping): nothing new to send
                 index = snapshot.period_index
-                values = [output_value(n, snapshot) for n in names]
+                values = [getter(snapshot) for getter in getters]
                 self._send(DATA_PACKAGE, layout.pack(1, *flatten(values, types)))
         except OSError:
             return
