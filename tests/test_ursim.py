@@ -12,6 +12,7 @@ import math
 import random
 import socket
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 
@@ -145,6 +146,10 @@ def test_camera_serves_its_intrinsics_and_frames(sim):
     assert depth.shape == (120, 160) and depth.dtype == np.uint16
     # The table lies 0.7 m below the camera.
     assert np.median(depth) * info["depth_unit_m"] == pytest.approx(0.7, abs=0.02)
+    # A window that leaves the image is the client's error, said in one line.
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        urllib.request.urlopen(sim.camera_spec + "color.png?x=1900&w=100", timeout=30)
+    assert refused.value.code == 400 and b"leaves" in refused.value.read()
 
 
 def test_a_protective_stop_stops_the_program_as_the_client_sees_it(control, receive, sim):
