@@ -211,8 +211,10 @@ class Servo(Motion):
         self._periods_since_update = 0
 
     def update(self, target_rad: np.ndarray) -> None:
-        """A new target from the client."""
+        """The client's target (the program reads it every period: only a changed one is news)."""
         target = np.array(target_rad, dtype=float)
+        if np.array_equal(target, self._target):
+            return
         elapsed_s = max(1, self._periods_since_update) * self._period_s
         # A jump (the first target far from the arm, two targets in one period) is no speed to feed
         # forward: the rate is held to the UR5's joint speed limit.
