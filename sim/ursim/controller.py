@@ -210,8 +210,13 @@ class Controller:
         if self.protective_stop_on_contact and self.motion.moving and self._fingers_touch_a_part():
             self.protective_stop_on_contact = False
             self.protective_stop("a finger touched a part while the arm moved (armed by the faults port)")
-        setpoint = self.motion.step(self.actual_q)
-        self.cell.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
+        try:
+            setpoint = self.motion.step(self.actual_q)
+            self.cell.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
+        except Exception as error:  # noqa: BLE001 - a motion that fails stops the program, never the controller
+            self.program_error(f"motion: {type(error).__name__}: {error}")
+            self.motion.halt(self.actual_q)
+            self.cell.arm.command(self.motion.setpoint.positions_rad, self.motion.setpoint.velocities_rad_s)
         self.gripper.tick()
         self.cell.step()
         previous_q = self.actual_q

@@ -75,5 +75,11 @@ class UrKinematics:
         return self._model.inverse(Pose.from_matrix(urdf_tcp), seed_q)
 
     def within_limits(self, q: np.ndarray) -> bool:
-        """True when every joint of ``q`` lies within the description's limits."""
-        return bool(np.all(q >= self.lower_rad - 1e-9) and np.all(q <= self.upper_rad + 1e-9))
+        """True when every joint of ``q`` is a finite number within the description's limits."""
+        q = np.asarray(q, dtype=float)
+        return bool(
+            q.shape == (6,)
+            and np.all(np.isfinite(q))
+            and np.all(q >= self.lower_rad - 1e-9)
+            and np.all(q <= self.upper_rad + 1e-9)
+        )

@@ -162,7 +162,8 @@ class ControlProgram:
         command = self._int(0)
         if command in REALTIME_COMMANDS:
             self._process(command)
-            self._signal(READY)
+            if self.running:  # a runtime error answers nothing: the client sees the program stopped
+                self._signal(READY)
         elif command == NO_CMD:
             self._executing = False
             self._signal(READY)
@@ -171,7 +172,7 @@ class ControlProgram:
             self._process(command)
             if command == STOP_SCRIPT:
                 self.controller.stop_program("the client's stopScript")
-            elif not self._blocked:
+            elif self.running and not self._blocked:
                 self._signal(DONE)
 
     def _block_until_done(self) -> None:
@@ -239,6 +240,8 @@ class ControlProgram:
                     if command == SERVOJ
                     else kinematics.inverse(values, controller.tcp_offset, controller.actual_q)
                 )
+                if not kinematics.within_limits(target):
+                    raise MoveError(f"servoj: target {np.round(target, 4).tolist()} is outside the joint limits")
                 if self._servo is None or controller.motion.motion is not self._servo:
                     self._servo = Servo(controller.motion.setpoint.positions_rad, period_s)
                     self._speed = None
@@ -246,6 +249,8 @@ class ControlProgram:
                 self._servo.update(target)
             elif command == SPEEDJ:
                 values = self._doubles(0, 8)
+                if not np.all(np.isfinite(values)):
+                    raise MoveError(f"speedj: {values} are not finite numbers")
                 if self._speed is None or controller.motion.motion is not self._speed:
                     self._speed = Speed(np.array(values[:6]), values[6], period_s)
                     self._servo = None
