@@ -141,6 +141,21 @@ def test_the_rtde_watchdog_stops_the_program_when_the_client_falls_silent(sim):
         control.disconnect()
 
 
+def test_a_line_without_a_solution_is_a_runtime_error_that_stops_the_program(sim):
+    control = rtde_control.RTDEControlInterface(sim.host)
+    try:
+        assert control.isProgramRunning()
+        assert not control.moveL([2.0, 2.0, 2.0, 0.0, 3.14, 0.0], 0.2, 1.0)  # out of reach
+        assert not control.isProgramRunning()
+        assert control.reuploadScript()
+        deadline = time.monotonic() + 5
+        while not control.isProgramRunning() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert control.isProgramRunning()
+    finally:
+        control.disconnect()
+
+
 def test_a_push_armed_with_on_contact_is_protective_stopped_when_a_finger_touches(sim):
     from bt_arrange.motion import gripper_down_pose
     from bt_arrange_sim.ursim.kinematics import BASE_LINK_TO_BASE, UrKinematics, matrix_to_pose
