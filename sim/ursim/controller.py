@@ -79,7 +79,6 @@ class Snapshot:
     actual_tcp_pose: list[float] = field(default_factory=lambda: [0.0] * 6)
     actual_tcp_speed: list[float] = field(default_factory=lambda: [0.0] * 6)
     target_tcp_pose: list[float] = field(default_factory=lambda: [0.0] * 6)
-    joint_torques: list[float] = field(default_factory=lambda: [0.0] * 6)
     elbow_position: list[float] = field(default_factory=lambda: [0.0] * 3)
     robot_mode: int = ROBOT_MODE_RUNNING
     safety_mode: int = SAFETY_MODE_NORMAL

@@ -86,7 +86,6 @@ _GETTERS: dict[str, Any] = {
     "actual_TCP_speed": lambda s: s.actual_tcp_speed,
     "target_TCP_pose": lambda s: s.target_tcp_pose,
     "target_TCP_speed": lambda s: s.actual_tcp_speed,
-    "target_moment": lambda s: s.joint_torques,
     "joint_temperatures": lambda s: [30.0] * 6,
     "actual_execution_time": lambda s: 0.5,
     "robot_mode": lambda s: s.robot_mode,
