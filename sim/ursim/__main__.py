@@ -60,20 +60,12 @@ def open_scene(args: argparse.Namespace) -> tuple[Any, Any]:
     """The cell and what owns it (closed at exit): the run's scene, or the calibration cell with ``--board``."""
     from bt_arrange import backends, treefile
 
+    # The sim backend, found through its entry point as `bt-arrange run` finds it: its runs build the cell.
     backend: Any = backends.load("sim")
     if args.board:
-        import dataclasses
-
-        from bt_arrange.calibration import CharucoBoard
-        from bt_arrange.calibration.board import TABLE_SHEET
-        from bt_arrange_sim.pybullet.calibration import lay_table_sheet
-        from bt_arrange_sim.pybullet.runs import open_world
-
-        config = dataclasses.replace(backend.cell_config(args.cell, args.seed or 0), board=CharucoBoard())
-        world = open_world(config)
-        lay_table_sheet(world.cell, TABLE_SHEET)
-        world.settle(0.2)
-        return world.cell, world
+        # The calibration procedure's cell (board on the flange, sheet on the table); its tree never ticks.
+        calibration = backend.open_calibration(views=2, cell=args.cell, run_seed=args.seed or 0)
+        return calibration.world.cell, calibration
     module = treefile.load(args.tree_or_plan)
     root = treefile.build_root(module)
     seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))

@@ -18,7 +18,7 @@ class is that loop, one iteration per control period (the script's ``sync()``):
 from __future__ import annotations
 
 import sys
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -32,9 +32,6 @@ from bt_arrange_sim.ursim.motion import (
     Stop,
     line_samples,
 )
-
-if TYPE_CHECKING:
-    from bt_arrange_sim.ursim.controller import Controller
 
 READY = 1
 DONE = 2
@@ -106,9 +103,12 @@ NOT_EMULATED = {
 
 
 class ControlProgram:
-    """One run of the uploaded ``rtde_control`` program (``register_offset`` 0 or 24)."""
+    """One run of the uploaded ``rtde_control`` program (``register_offset`` 0 or 24).
 
-    def __init__(self, controller: Controller, register_offset: int) -> None:
+    ``controller`` is the ``controller.Controller`` that runs it (not imported: it imports this module).
+    """
+
+    def __init__(self, controller: Any, register_offset: int) -> None:
         self.controller = controller
         self.offset = register_offset
         self.running = True
