@@ -224,7 +224,14 @@ class Detect(StagedBehaviour):
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
         """The object, its colour and type, the targets of its kind (BehaviorTree.CPP's ``providedPorts``)."""
-        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, *DETECT_ENTRIES)
+        alone = Port(
+            "alone",
+            BOOL,
+            False,
+            "before a pick: a part found in a blob it shares with touching parts fails (the tree separates them)",
+            optional=True,
+        )
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, alone, *DETECT_ENTRIES)
 
     def __init__(
         self,
@@ -234,8 +241,13 @@ class Detect(StagedBehaviour):
         object_type: ObjectType | None = None,
         kind_targets: Sequence[PlanarPose] = (),
         z_m: float = 0.0,
+        alone: bool = False,
     ) -> None:
         super().__init__(name)
+        #: The look before a pick: a part found only on its free edges, in a blob it shares with touching
+        #: parts, is a FAILURE (its pose is written, for ``Separate``): a neighbour may stand where the
+        #: pads go down (a fresco piece's pads closed on its touching neighbour and stalled).
+        self.alone = bool(alone)
         self.obj = obj
         #: Layers: the height of the part's bottom face (0: the table), its top face's plane above it.
         self.z_m = float(z_m)
@@ -294,6 +306,11 @@ class Detect(StagedBehaviour):
         self.found = detection.pose_world
         self.merged = detection.merged
         self.write(keys.key(self.obj, keys.POSE), detection.pose_world)
+        if self.alone and detection.merged:
+            return (
+                f"{self.colour} found in a blob it shares with touching parts of its colour ({detection.reason}): "
+                "to be separated before it is picked"
+            )
         self.on_found(detection.pose_world)
         return None
 

@@ -23,6 +23,7 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    Separate,
     keys,
 )
 from bt_arrange.checks import positive_number, whole_number
@@ -112,6 +113,7 @@ def transfer(
         target = step.target if isinstance(step, PartStep) else step
         return _transfer(target, *(() if plan is None else (plan,)), *legacy, locate=locate, **legacy_keywords)
     part = step if isinstance(step, PartStep) else PartStep.free(step)
+    colour = part.target.colour
     return _transfer(
         part.target,
         plan.max_regrasps if plan is not None else 3,
@@ -119,6 +121,7 @@ def transfer(
         kind_targets=part.kind_targets,
         release=part.release,
         nearest=part.nearest_grasp,
+        colour_targets=tuple(t.planar for t in plan.targets if t.colour == colour) if plan is not None else (),
     )
 
 
@@ -130,6 +133,7 @@ def _transfer(
     kind_targets: Sequence[PlanarPose] = (),
     release: Release | None = None,
     nearest: bool = False,
+    colour_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
     """Locate, pick and place one object; a part lost on the way is located and picked again.
 
@@ -139,15 +143,58 @@ def _transfer(
     (``bt_arrange.plan.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
     (``Pick(nearest_grasp=...)``, ``Place(nearest_turn=...)``), for a part neighbours are placed
     beside (measured, the half turn and the short way round moved more of them out).
+    ``colour_targets``: the targets of every part of its colour, where ``Separate`` never pushes.
+
+    A part that touches others of its colour where it starts is separated before it is picked: the
+    first look (``Detect(alone=True)``) fails on a blob of several parts, and the part's
+    ``Separate`` pushes one of them aside before it looks again (issue 54, item 3)::
+
+        Selector "find <obj>, else separate it from touching parts"
+        ├── Detect "detect <obj>"                        alone: fails on a blob it shares
+        └── Sequence "separate <obj> from touching parts, then look again"
+            ├── Separate "push a part touching <obj> aside"
+            └── Detect "detect <obj> after separating"
+
+    Where nothing touches, the first Detect succeeds as before and the rest never runs.
     """
     obj = target.obj
     kind = target.object_type
 
-    def find() -> py_trees.behaviour.Behaviour:
+    def find(name: str | None = None) -> py_trees.behaviour.Behaviour:
         finder = (locate or by_camera())(target)
         if kind_targets and isinstance(finder, Detect):
             finder.among(kind_targets)
+        if name is not None:
+            finder.name = name
         return finder
+
+    def find_alone() -> py_trees.behaviour.Behaviour:
+        first = find()
+        if not isinstance(first, Detect) or type(first) is not Detect:
+            return first  # another locator (depth) has no blob to separate
+        first.alone = True
+        again = find(f"detect {obj} after separating")
+        assert isinstance(again, Detect)
+        again.alone = True
+        separate = Separate(
+            f"push a part touching {obj} aside",
+            obj,
+            target.colour,
+            kind,
+            tuple(colour_targets) or tuple(kind_targets) or (target.planar,),
+        )
+        return py_trees.composites.Selector(
+            name=f"find {obj}, else separate it from touching parts",
+            memory=True,
+            children=[
+                first,
+                py_trees.composites.Sequence(
+                    name=f"separate {obj} from touching parts, then look again",
+                    memory=True,
+                    children=[separate, again],
+                ),
+            ],
+        )
 
     look_again: list[py_trees.behaviour.Behaviour] = []
     # Layers: a part going onto others is set down and picked centred first, as among
@@ -170,7 +217,7 @@ def _transfer(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            find(),
+            find_alone(),
             Pick(f"pick {obj}", obj, kind, nearest_grasp=nearest or bool(look_again)),
             *look_again,
             GraspGuard(
