@@ -9,7 +9,7 @@ and the transfer step runs ``Separate`` and looks again (``bt_arrange.trees.step
 
 The push is planned from the blob alone, without knowing where each part is in it:
 
-1. **The blob**: the full frame's blobs of the colour, on the plane of the part's top face; a blob
+1. **The cluster**: the full frame's faces of the colour joined across seams under 3 mm (``touching_clusters``), on the plane of the part's top face; a cluster
    holds several parts when its area is more than a whole face's (``face_area_fraction_range``'s
    upper end of this part's face) or when it holds the pose the Detect before found the part at
    (merged with a neighbour). Blobs at a target of the colour (placed parts) are never pushed.
@@ -43,8 +43,8 @@ from bt_arrange.behaviours.push import Push
 from bt_arrange.geometry import FloatArray, PlanarPose, Pose
 from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.objects import CUBE, ObjectType
-from bt_arrange.perception.outline_face import Face, face_of
 from bt_arrange.perception.pose import pixel_on_plane
+from bt_arrange.perception.touching import Cluster, touching_clusters
 from bt_arrange.ports import Port
 
 #: How far beyond its neighbour's far side (m, across the push) the pushed part ends: a gap the
@@ -102,36 +102,33 @@ class Separate(StagedBehaviour):
         return [looking] if is_parked(context) else [park_stage(), looking]
 
     def _look(self, context: Context) -> str | None:
-        """Find the blob of several parts and plan the push aside (appended to this run's stages)."""
-        detector = context.detector.for_object(self.object_type)
+        """Find the cluster of several parts and plan the push aside (appended to this run's stages)."""
+        detector = context.detector
         frame = context.robot.camera.capture()
-        view = detector._prepare(frame)
         colour = detector.colours[self.colour]
         plane_z_m = detector.config.table_z_m + self.object_type.shape.height_m
         face_m2 = abs(float(cv2.contourArea(np.asarray(self.object_type.shape.outline_m, dtype=np.float32))))
         pose_key = keys.key(self.obj, keys.POSE)
         seen: Pose | None = self.blackboard.get(pose_key) if self.blackboard.exists(pose_key) else None
-        candidates, _ = detector.candidates(view, colour, None)
         several_area = detector.config.face_area_fraction_range[1]
-        best: tuple[float, Face] | None = None
-        for blob, _, _ in candidates:
-            face = face_of(detector, view, colour, blob, plane_z_m)
-            if face is None or self._at_a_target(face):
-                continue
-            faces = face.area_m2 / face_m2
-            holds_seen = seen is not None and _inside(face.contour_m, (seen.x_m, seen.y_m))
-            if faces <= several_area and not holds_seen:
-                continue
-            # The blob that holds the part the Detect saw comes first, then the largest.
+        best: tuple[float, Cluster] | None = None
+        for cluster in touching_clusters(frame, colour, plane_z_m, detector.config.kernel_px):
+            if any(cluster.holds(t.x_m, t.y_m, TARGET_CLEARANCE_M) for t in self.kind_targets):
+                continue  # a placed part (or parts): never pushed
+            faces = cluster.area_m2 / face_m2
+            if faces <= several_area:
+                continue  # one part alone
+            holds_seen = seen is not None and cluster.holds(seen.x_m, seen.y_m)
+            # The cluster that holds the part the Detect saw comes first, then the largest.
             rank = faces + (1000.0 if holds_seen else 0.0)
             if best is None or rank > best[0]:
-                best = (rank, face)
+                best = (rank, cluster)
         if best is None:
-            return f"no {self.colour} blob holds several touching parts: nothing to separate"
-        face = best[1]
-        self.blob_faces = face.area_m2 / face_m2
+            return f"no {self.colour} parts touch each other: nothing to separate"
+        cluster = best[1]
+        self.blob_faces = cluster.area_m2 / face_m2
         camera_xy = _under_camera(context, plane_z_m)
-        plan = plan_separation(face.contour_m, context.settings.gripper.pad_thickness_m, camera_xy)
+        plan = plan_separation(cluster.contour_m, context.settings.gripper.pad_thickness_m, camera_xy)
         point, direction, distance_m, face_offset_m = plan
         s = context.settings
         pad_half_depth_m = s.gripper.pad_width_m / 2
@@ -149,26 +146,12 @@ class Separate(StagedBehaviour):
         )
         return None
 
-    def _at_a_target(self, face: Face) -> bool:
-        """True when the blob holds a target of the colour (a placed part there)."""
-        return any(
-            _inside(face.contour_m, (t.x_m, t.y_m), margin_m=TARGET_CLEARANCE_M) for t in self.kind_targets
-        )
-
     def success_message(self) -> str:
         """What was separated and how far it was pushed."""
         return (
             f"pushed a part of a {self.colour} blob as large as {self.blob_faces:.1f} {self.object_type.name} faces "
             f"aside by {self.pushed_mm:.0f} mm: touching parts of one colour, separated to be picked one by one"
         )
-
-
-def _inside(contour_m: FloatArray, xy_m: tuple[float, float], margin_m: float = 0.0) -> bool:
-    """True when ``xy_m`` lies inside the contour (on the plane, metres) or within ``margin_m`` of it."""
-    scale = 1e4  # a tenth of a millimetre a unit: pointPolygonTest wants float32 coordinates of some size
-    polygon = (np.asarray(contour_m) * scale).astype(np.float32).reshape(-1, 1, 2)
-    distance = cv2.pointPolygonTest(polygon, (float(xy_m[0] * scale), float(xy_m[1] * scale)), True) / scale
-    return bool(distance >= -margin_m)
 
 
 def _under_camera(context: Context, plane_z_m: float) -> FloatArray:

@@ -190,7 +190,9 @@ def starts_overlap(first: Any, second: Any, settings: ManipulationSettings) -> b
 
 def _as_target(start: Any) -> Target:
     """A start as a target at its pose (the footprint's only inputs: where, how turned, which shape)."""
-    return Target(start.colour, start.x_m, start.y_m, start.yaw_rad, name=_start_name(start), object_type=object_type_of(start))
+    return Target(
+        start.colour, start.x_m, start.y_m, start.yaw_rad, name=_start_name(start), object_type=object_type_of(start)
+    )
 
 
 def _view_text(view: CameraView, top_z_m: float) -> str:

@@ -24,7 +24,19 @@ from bt_arrange.trees import Arrangement
 from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.xmltree.registry import register_node
 
-for _node in (Detect, Inspect, Pick, Place, Push, Recheck, Separate, MoveHome, GraspGuard, CheckStanding, RepeatUntilWithin):
+for _node in (
+    Detect,
+    Inspect,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    Separate,
+    MoveHome,
+    GraspGuard,
+    CheckStanding,
+    RepeatUntilWithin,
+):
     register_node(_node)
 register_node(Arrangement)
 # A puzzle: its survey, its solve, and the arrangement its solve decides.

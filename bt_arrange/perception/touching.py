@@ -1,0 +1,126 @@
+"""Parts of one colour that touch: a neighbour beside a found part, and clusters of touching faces.
+
+Two helpers of the look before a pick and of ``Separate`` (issue 54, item 3):
+
+- ``touching_pixels``: how many pixels of the colour lie in a thin ring just outside a found
+  part's outline (``TOUCH_RING_M``). A neighbour of the colour that touches the part, or nearly, fills
+  it even where the image shows the seam between them and the mask cuts the faces apart; a part
+  scattered alone (12 cm from any other) leaves it empty.
+- ``touching_clusters``: the colour's faces joined across seams narrower than ``JOIN_M``, each
+  cluster's outline on the plane of the top faces: one outline for parts in contact, whether the
+  mask merged their faces or the image showed the seam.
+
+Both read one camera frame and know nothing of the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from bt_arrange.geometry import FloatArray
+from bt_arrange.perception.colours import ColourRange
+from bt_arrange.perception.outline_fit import pixels_on_plane
+from bt_arrange.perception.pose import project_world
+from bt_arrange.perception.segmentation import colour_mask
+from bt_arrange.robot import CameraFrame
+
+#: The ring outside a found part's outline that a touching neighbour fills (m from the outline:
+#: inner, outer). Inside 1.5 mm the part's own edge blurs into it (the morphology rounds corners by
+#: a pixel or two); 4 mm is past any seam the mask closes and still well inside the window a part is
+#: measured in (6 mm beyond its face).
+TOUCH_RING_M = (0.0015, 0.004)
+#: Pixels of the colour in that ring that make a touching neighbour: a contact of 3 mm along the
+#: ring's 2.5 mm width at the top camera's 0.5 mm a pixel is 30; a clean ring has none.
+MIN_TOUCHING_PX = 30
+#: Seams narrower than this (m) join two faces into one cluster: a touching pair's seam is under a
+#: pixel; parts the scene scatters lie centimetres apart.
+JOIN_M = 0.003
+
+
+def _px_per_m(frame: CameraFrame, x_m: float, y_m: float, plane_z_m: float) -> float:
+    """Pixels a metre on the plane near ``(x, y)`` (the projection of a centimetre there)."""
+    points = np.array([[x_m, y_m, plane_z_m], [x_m + 0.01, y_m, plane_z_m]])
+    pixels = project_world(frame.intrinsics, frame.camera_pose_world, points)
+    return float(np.hypot(*(pixels[1] - pixels[0]))) / 0.01
+
+
+def touching_pixels(
+    frame: CameraFrame,
+    colour: ColourRange,
+    outline_m: FloatArray,
+    pose_xy_yaw: tuple[float, float, float],
+    plane_z_m: float,
+    kernel_px: int,
+) -> int | None:
+    """Pixels of ``colour`` in the ring ``TOUCH_RING_M`` outside the posed outline; None when the ring leaves the frame.
+
+    ``outline_m`` is the top face in the part's frame, ``pose_xy_yaw`` where it was found.
+    """
+    x_m, y_m, yaw = pose_xy_yaw
+    c, s = math.cos(yaw), math.sin(yaw)
+    outline = np.asarray(outline_m, dtype=float) @ np.array([[c, s], [-s, c]]) + np.array([x_m, y_m])
+    points = np.column_stack([outline, np.full(len(outline), plane_z_m)])
+    pixels = project_world(frame.intrinsics, frame.camera_pose_world, points)
+    px_per_m = _px_per_m(frame, x_m, y_m, plane_z_m)
+    inner_px, outer_px = (max(1, round(r * px_per_m)) for r in TOUCH_RING_M)
+    height, width = frame.rgb.shape[:2]
+    low = np.floor(pixels.min(axis=0)).astype(int) - outer_px - 1
+    high = np.ceil(pixels.max(axis=0)).astype(int) + outer_px + 2
+    if low[0] < 0 or low[1] < 0 or high[0] > width or high[1] > height:
+        return None
+    crop = frame.rgb[low[1] : high[1], low[0] : high[0]]
+    part = np.zeros(crop.shape[:2], np.uint8)
+    cv2.fillPoly(part, [np.round(pixels - low).astype(np.int32)], 255)
+
+    def grown(radius_px: int) -> np.ndarray:
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius_px + 1, 2 * radius_px + 1))
+        return cv2.dilate(part, kernel)
+
+    ring = (grown(outer_px) > 0) & (grown(inner_px) == 0)
+    mask = colour_mask(np.ascontiguousarray(crop), colour, kernel_px)
+    return int(np.count_nonzero(ring & (mask > 0)))
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """Faces of one colour joined across seams narrower than ``JOIN_M``: outline and area on the plane."""
+
+    contour_m: FloatArray
+    area_m2: float
+
+    def holds(self, x_m: float, y_m: float, margin_m: float = 0.0) -> bool:
+        """True when ``(x, y)`` lies inside the outline or within ``margin_m`` of it."""
+        scale = 1e4  # a tenth of a millimetre a unit: pointPolygonTest wants float32 coordinates of some size
+        polygon = (self.contour_m * scale).astype(np.float32).reshape(-1, 1, 2)
+        distance = cv2.pointPolygonTest(polygon, (float(x_m * scale), float(y_m * scale)), True) / scale
+        return bool(distance >= -margin_m)
+
+
+def touching_clusters(frame: CameraFrame, colour: ColourRange, plane_z_m: float, kernel_px: int) -> list[Cluster]:
+    """The clusters of the colour's faces in ``frame`` (see the module), largest first."""
+    mask = colour_mask(frame.rgb, colour, kernel_px)
+    height, width = frame.rgb.shape[:2]
+    centre = pixels_on_plane(frame.intrinsics, frame.camera_pose_world, np.array([[width / 2, height / 2]]), plane_z_m)[
+        0
+    ]
+    join_px = max(1, round(JOIN_M * _px_per_m(frame, float(centre[0]), float(centre[1]), plane_z_m)))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * join_px + 1, 2 * join_px + 1))
+    joined = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
+    contours, _ = cv2.findContours(joined, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    clusters = []
+    for contour in contours:
+        if len(contour) < 8:
+            continue
+        on_plane = pixels_on_plane(
+            frame.intrinsics, frame.camera_pose_world, contour.reshape(-1, 2).astype(float), plane_z_m
+        )
+        if not np.all(np.isfinite(on_plane)):
+            continue
+        area_m2 = abs(float(cv2.contourArea((on_plane * 1e4).astype(np.float32)))) / 1e8
+        clusters.append(Cluster(on_plane, area_m2))
+    clusters.sort(key=lambda c: -c.area_m2)
+    return clusters
