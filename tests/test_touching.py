@@ -85,7 +85,9 @@ def test_the_push_aside_crosses_the_row_at_an_end_part_by_its_width_and_the_marg
     along, across = np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)])
     centre = np.array([0.5, -0.1])
     corners = [centre + sx * 0.05 * along + sy * 0.025 * across for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1))]
-    contour = np.vstack([np.linspace(p, q, 50, endpoint=False) for p, q in zip(corners, corners[1:] + corners[:1])])
+    contour = np.vstack(
+        [np.linspace(p, q, 50, endpoint=False) for p, q in zip(corners, corners[1:] + corners[:1], strict=True)]
+    )
     point, direction, distance_m, face_offset_m = plan_separation(contour, 0.008, np.array([0.5, 0.0]))
     assert abs(float(direction @ along)) < 1e-3  # across the row
     assert abs(abs(float((point - centre) @ along)) - 0.025) < 1e-3  # an end part's middle

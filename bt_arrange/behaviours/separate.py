@@ -7,16 +7,18 @@ that no face of theirs explains, and a part found beside a touching neighbour ma
 neighbour where the pads go down. ``Detect(alone=True)`` (the look before a pick) fails on both,
 and the transfer step runs ``Separate`` and looks again (``bt_arrange.trees.steps``).
 
-The push is planned from the blob alone, without knowing where each part is in it:
+The push is planned from the cluster alone, without knowing where each part is in it:
 
-1. **The cluster**: the full frame's faces of the colour joined across seams under 3 mm (``touching_clusters``), on the plane of the part's top face; a cluster
-   holds several parts when its area is more than a whole face's (``face_area_fraction_range``'s
-   upper end of this part's face) or when it holds the pose the Detect before found the part at
-   (merged with a neighbour). Blobs at a target of the colour (placed parts) are never pushed.
-2. **The push**: the blob's principal axes (its second moments) put the parts in a row along the
-   major axis. The pads, nearly closed, stand a quarter of the blob's length in from one end (the
+1. **The cluster**: the full frame's faces of the colour joined across seams under 3 mm
+   (``bt_arrange.perception.touching.touching_clusters``), on the plane of the part's top face. A
+   cluster holds several parts when its area is more than a whole face's (the upper end of
+   ``face_area_fraction_range``, in this part's faces); the one that holds the pose the Detect
+   before wrote (the part found beside a neighbour) comes first, then the largest. A cluster at a
+   target of the colour (placed parts) is never pushed.
+2. **The push**: the cluster's principal axes (its second moments) put the parts in a row along the
+   major axis. The pads, nearly closed, stand a quarter of the cluster's length in from one end (the
    end part's middle for two parts) on one side of the minor axis, and push across the major axis
-   by the blob's width there plus ``SEPARATION_MARGIN_M``: the end part slides along its
+   by the cluster's width there plus ``SEPARATION_MARGIN_M``: the end part slides along its
    neighbour's side until a gap opens between them. Of the four (end, side) choices the one whose
    pushed part ends nearest the point under the camera is taken (in view, within reach).
 
