@@ -244,7 +244,7 @@ class Detect(StagedBehaviour):
             "alone",
             BOOL,
             False,
-            "before a pick: a part found in a blob it shares with touching parts fails (the tree separates them)",
+            "the look before a pick: fails on touching parts of its colour and says so in /<obj>/touching",
             optional=True,
         )
         return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, alone, *DETECT_ENTRIES)
@@ -260,10 +260,10 @@ class Detect(StagedBehaviour):
         alone: bool = False,
     ) -> None:
         super().__init__(name)
-        #: The look before a pick: a part found only on its free edges, in a blob it shares with touching
-        #: parts, is a FAILURE (its pose is written, for ``Separate``): a neighbour may stand where the
-        #: pads go down (a fresco piece's pads closed on its touching neighbour and stalled).
-        self.alone = bool(alone)
+        #: The look before a pick (``before_pick``): a part found only on its free edges, in a blob it
+        #: shares with touching parts, is a FAILURE (its pose is written, for ``Separate``): a neighbour
+        #: may stand where the pads go down (a fresco piece's pads closed on its touching neighbour and stalled).
+        self.alone = False
         self.obj = obj
         #: Layers: the height of the part's bottom face (0: the table), its top face's plane above it.
         self.z_m = float(z_m)
@@ -276,6 +276,18 @@ class Detect(StagedBehaviour):
         self.found: Pose | None = None
         #: The last look measured the part on its free edges only (``Detection.merged``).
         self.merged = False
+        if alone:
+            self.before_pick()
+
+    def before_pick(self) -> None:
+        """Make this the look before a pick (``alone``): it also writes ``/<obj>/touching`` at each look.
+
+        A part found in a blob it shares with touching parts of its colour, or beside a neighbour of
+        its colour (``touching_pixels``), fails; so does a blob no face explains (AMBIGUOUS): each
+        writes ``"touching parts"``, and the tree pushes one aside (``Separate``) before it looks again.
+        """
+        self.alone = True
+        self.writes(keys.key(self.obj, keys.TOUCHING))
 
     def among(self, kind_targets: Sequence[PlanarPose]) -> None:
         """Make this the Detect of one of several identical parts: the targets of its kind."""
@@ -318,21 +330,28 @@ class Detect(StagedBehaviour):
         chooser = self.choose if self.kind_targets else None
         frames: list[CameraFrame] | None = [] if self.alone else None
         detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser, self.z_m, frames=frames)
+        if self.alone:
+            # Only a blob of several parts of the colour (AMBIGUOUS) may be touching parts; a part not
+            # found, or partly covered, is no business of ``Separate``.
+            touching = detection.status is DetectionStatus.AMBIGUOUS
+            self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS if touching else "no")
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
         self.merged = detection.merged
         self.write(keys.key(self.obj, keys.POSE), detection.pose_world)
         if self.alone and detection.merged:
+            self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS)
             return (
                 f"{self.colour} found in a blob it shares with touching parts of its colour ({detection.reason}): "
                 "to be separated before it is picked"
             )
         if frames:
-            touching = self._touching_px(context, frames, detection.pose_world)
-            if touching >= MIN_TOUCHING_PX:
+            touching_px = self._touching_px(context, frames, detection.pose_world)
+            if touching_px >= MIN_TOUCHING_PX:
+                self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS)
                 return (
-                    f"{self.colour} found alone in its blob but touching a part of its colour ({touching} px of it "
+                    f"{self.colour} found alone in its blob but touching a part of its colour ({touching_px} px of it "
                     f"within {TOUCH_RING_M[1] * 1000:.0f} mm of its outline, where the pads go down): to be separated "
                     "before it is picked"
                 )

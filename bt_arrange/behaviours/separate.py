@@ -14,7 +14,7 @@ The push is planned from the cluster alone, without knowing where each part is i
    cluster holds several parts when its area is more than a whole face's (the upper end of
    ``face_area_fraction_range``, in this part's faces); the one that holds the pose the Detect
    before wrote (the part found beside a neighbour) comes first, then the largest. A cluster at a
-   target of the colour (placed parts) is never pushed.
+   target the tree has set (placed parts) is never pushed.
 2. **The push**: the cluster's principal axes (its second moments) put the parts in a row along the
    major axis. The pads, nearly closed, stand a quarter of the cluster's length in from one end (the
    end part's middle for two parts) on one side of the minor axis, and push across the major axis
@@ -29,15 +29,15 @@ advanced one control period a tick, as every push's is (``Push._motion``).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import cv2
 import numpy as np
+import py_trees
 
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import COLOUR, KIND_TARGETS, OBJ, OBJECT_TYPE_PORT, entries
+from bt_arrange.behaviours.common_ports import COLOUR, OBJ, OBJECT_TYPE_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.looking import is_parked, park_stage
 from bt_arrange.behaviours.moves import heights_m, wrist_yaw_rad
@@ -74,8 +74,8 @@ class Separate(StagedBehaviour):
 
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
-        """The object, its colour and type, the targets of its colour (BehaviorTree.CPP's ``providedPorts``)."""
-        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, *entries((keys.POSE,), ()))
+        """The object, its colour and type (BehaviorTree.CPP's ``providedPorts``)."""
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, *entries((keys.POSE,), ()))
 
     def __init__(
         self,
@@ -83,14 +83,11 @@ class Separate(StagedBehaviour):
         obj: str,
         colour: str | None = None,
         object_type: ObjectType | None = None,
-        kind_targets: Sequence[PlanarPose] = (),
     ) -> None:
         super().__init__(name)
         self.obj = obj
         self.colour = colour or obj
         self.object_type = object_type or CUBE
-        #: Targets of parts of this colour: a blob there is a placed part, never pushed.
-        self.kind_targets: tuple[PlanarPose, ...] = tuple(kind_targets)
         # Where the Detect before found the part (merged with a neighbour), when it did: optional.
         self.reads(keys.key(obj, keys.POSE))
         #: What the last run did, for the feedback: the push (mm) and the blob's area in faces.
@@ -113,9 +110,10 @@ class Separate(StagedBehaviour):
         pose_key = keys.key(self.obj, keys.POSE)
         seen: Pose | None = self.blackboard.get(pose_key) if self.blackboard.exists(pose_key) else None
         several_area = detector.config.face_area_fraction_range[1]
+        targets = set_targets()
         best: tuple[float, Cluster] | None = None
         for cluster in touching_clusters(frame, colour, plane_z_m, detector.config.kernel_px):
-            if any(cluster.holds(t.x_m, t.y_m, TARGET_CLEARANCE_M) for t in self.kind_targets):
+            if any(cluster.holds(t.x_m, t.y_m, TARGET_CLEARANCE_M) for t in targets):
                 continue  # a placed part (or parts): never pushed
             faces = cluster.area_m2 / face_m2
             if faces <= several_area:
@@ -154,6 +152,22 @@ class Separate(StagedBehaviour):
             f"pushed a part of a {self.colour} blob as large as {self.blob_faces:.1f} {self.object_type.name} faces "
             f"aside by {self.pushed_mm:.0f} mm: touching parts of one colour, separated to be picked one by one"
         )
+
+
+def set_targets() -> list[PlanarPose]:
+    """Every part's target the tree has set so far (``/<obj>/target``): where placed parts lie.
+
+    Read from the whole blackboard rather than through declared keys: which parts share a colour with
+    this one, and are placed by now, is the run's business, not the part's subtree's (its XML
+    definition is shared by every part). A part waiting to be picked starts clear of every target
+    (the plan check's start clearance), so a cluster holding one is a placed part.
+    """
+    suffix = "/" + keys.TARGET
+    return [
+        value
+        for name, value in py_trees.blackboard.Blackboard.storage.items()
+        if name.endswith(suffix) and isinstance(value, PlanarPose)
+    ]
 
 
 def _under_camera(context: Context, plane_z_m: float) -> FloatArray:

@@ -113,7 +113,6 @@ def transfer(
         target = step.target if isinstance(step, PartStep) else step
         return _transfer(target, *(() if plan is None else (plan,)), *legacy, locate=locate, **legacy_keywords)
     part = step if isinstance(step, PartStep) else PartStep.free(step)
-    colour = part.target.colour
     return _transfer(
         part.target,
         plan.max_regrasps if plan is not None else 3,
@@ -121,7 +120,6 @@ def transfer(
         kind_targets=part.kind_targets,
         release=part.release,
         nearest=part.nearest_grasp,
-        colour_targets=tuple(t.planar for t in plan.targets if t.colour == colour) if plan is not None else (),
     )
 
 
@@ -133,7 +131,6 @@ def _transfer(
     kind_targets: Sequence[PlanarPose] = (),
     release: Release | None = None,
     nearest: bool = False,
-    colour_targets: Sequence[PlanarPose] = (),
 ) -> py_trees.behaviour.Behaviour:
     """Locate, pick and place one object; a part lost on the way is located and picked again.
 
@@ -143,15 +140,15 @@ def _transfer(
     (``bt_arrange.plan.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
     (``Pick(nearest_grasp=...)``, ``Place(nearest_turn=...)``), for a part neighbours are placed
     beside (measured, the half turn and the short way round moved more of them out).
-    ``colour_targets``: the targets of every part of its colour, where ``Separate`` never pushes.
 
     A part that touches others of its colour where it starts is separated before it is picked: the
-    first look (``Detect(alone=True)``) fails on a blob of several parts, and the part's
+    first look (``Detect(alone=True)``) fails on touching parts of its colour, and the part's
     ``Separate`` pushes one of them aside before it looks again (issue 54, item 3)::
 
         Selector "find <obj>, else separate it from touching parts"
-        ├── Detect "detect <obj>"                        alone: fails on a blob it shares
+        ├── Detect "detect <obj>"                        before_pick(): fails on touching parts
         └── Sequence "separate <obj> from touching parts, then look again"
+            ├── CheckBlackboardVariableValue "<obj> touches parts of its colour"   /<obj>/touching
             ├── Separate "push a part touching <obj> aside"
             └── Detect "detect <obj> after separating"
 
@@ -172,17 +169,11 @@ def _transfer(
         first = find()
         if not isinstance(first, Detect) or type(first) is not Detect:
             return first  # another locator (depth) has no blob to separate
-        first.alone = True
+        first.before_pick()
         again = find(f"detect {obj} after separating")
         assert isinstance(again, Detect)
-        again.alone = True
-        separate = Separate(
-            f"push a part touching {obj} aside",
-            obj,
-            target.colour,
-            kind,
-            tuple(colour_targets) or tuple(kind_targets) or (target.planar,),
-        )
+        again.before_pick()
+        separate = Separate(f"push a part touching {obj} aside", obj, target.colour, kind)
         return py_trees.composites.Selector(
             name=f"find {obj}, else separate it from touching parts",
             memory=True,
@@ -191,7 +182,17 @@ def _transfer(
                 py_trees.composites.Sequence(
                     name=f"separate {obj} from touching parts, then look again",
                     memory=True,
-                    children=[separate, again],
+                    children=[
+                        # Only a look that failed on touching parts goes on: a part not found costs no look more.
+                        py_trees.behaviours.CheckBlackboardVariableValue(
+                            name=f"{obj} touches parts of its colour",
+                            check=py_trees.common.ComparisonExpression(
+                                keys.key(obj, keys.TOUCHING), keys.TOUCHING_PARTS, operator.eq
+                            ),
+                        ),
+                        separate,
+                        again,
+                    ],
                 ),
             ],
         )
