@@ -45,7 +45,7 @@ def run(name: str, folder: Path) -> dict[str, object]:
         "within": sum(o.status == "within" for o in report.objects),
         "parts": len(report.objects),
         "separated_by": separations,
-        "world_s": round(report.world_seconds, 1) if hasattr(report, "world_seconds") else None,
+        "world_s": round(report.sim_seconds, 1),
         "wall_s": round(wall_s, 1),
         "objects": parts,
     }

@@ -149,8 +149,9 @@ class Separate(StagedBehaviour):
     def success_message(self) -> str:
         """What was separated and how far it was pushed."""
         return (
-            f"pushed a part of a {self.colour} blob as large as {self.blob_faces:.1f} {self.object_type.name} faces "
-            f"aside by {self.pushed_mm:.0f} mm: touching parts of one colour, separated to be picked one by one"
+            f"pushed one of the touching {self.colour} parts aside by {self.pushed_mm:.0f} mm (their blob as large as "
+            f"{self.blob_faces:.1f} {self.object_type.name} faces): touching parts of one colour, separated to be "
+            "picked one by one"
         )
 
 
