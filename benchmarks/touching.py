@@ -44,6 +44,7 @@ def run(name: str, folder: Path) -> dict[str, object]:
         "scene": name,
         "within": sum(o.status == "within" for o in report.objects),
         "parts": len(report.objects),
+        "separations": sum(o.separations for o in report.objects),
         "separated_by": separations,
         "world_s": round(report.sim_seconds, 1),
         "wall_s": round(wall_s, 1),
