@@ -352,7 +352,7 @@ class Detect(StagedBehaviour):
                 self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS)
                 return (
                     f"{self.colour} found alone in its blob but touching a part of its colour ({touching_px} px of it "
-                    f"within {TOUCH_RING_M[1] * 1000:.0f} mm of its outline, where the pads go down): to be separated "
+                    f"within {TOUCH_RING_M * 1000:.0f} mm of its outline, where the pads go down): to be separated "
                     "before it is picked"
                 )
         self.on_found(detection.pose_world)

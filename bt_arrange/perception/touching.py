@@ -2,10 +2,10 @@
 
 Two helpers of the look before a pick and of ``Separate`` (issue 54, item 3):
 
-- ``touching_pixels``: how many pixels of the colour lie in a thin ring just outside a found
-  part's outline (``TOUCH_RING_M``). A neighbour of the colour that touches the part, or nearly, fills
-  it even where the image shows the seam between them and the mask cuts the faces apart; a part
-  scattered alone (12 cm from any other) leaves it empty.
+- ``touching_pixels``: how many pixels of the colour's other faces lie within 4 mm of a found
+  part's own face (``TOUCH_RING_M``). A neighbour of the colour that touches the part, or nearly,
+  fills that ring even where the image shows the seam between them and the mask cuts the faces
+  apart; a part scattered alone (12 cm from any other) leaves it empty.
 - ``touching_clusters``: the colour's faces joined across seams narrower than ``JOIN_M``, each
   cluster's outline on the plane of the top faces: one outline for parts in contact, whether the
   mask merged their faces or the image showed the seam.
@@ -28,11 +28,9 @@ from bt_arrange.perception.pose import project_world
 from bt_arrange.perception.segmentation import colour_mask
 from bt_arrange.robot import CameraFrame
 
-#: The ring outside a found part's outline that a touching neighbour fills (m from the outline:
-#: inner, outer). Inside 1.5 mm the part's own edge blurs into it (the morphology rounds corners by
-#: a pixel or two); 4 mm is past any seam the mask closes and still well inside the window a part is
-#: measured in (6 mm beyond its face).
-TOUCH_RING_M = (0.0015, 0.004)
+#: The ring about a found part's face that a touching neighbour fills (m from the face). 4 mm is past
+#: any seam the mask closes and still well inside the window a part is measured in (6 mm beyond its face).
+TOUCH_RING_M = 0.004
 #: Pixels of the colour in that ring that make a touching neighbour: a contact of 3 mm along the
 #: ring's 2.5 mm width at the top camera's 0.5 mm a pixel is 30; a clean ring has none.
 MIN_TOUCHING_PX = 30
@@ -56,9 +54,14 @@ def touching_pixels(
     plane_z_m: float,
     kernel_px: int,
 ) -> int | None:
-    """Pixels of ``colour`` in the ring ``TOUCH_RING_M`` outside the posed outline; None when the ring leaves the frame.
+    """Pixels of other faces of ``colour`` within ``TOUCH_RING_M`` of the part's own face; None off the frame.
 
-    ``outline_m`` is the top face in the part's frame, ``pose_xy_yaw`` where it was found.
+    ``outline_m`` is the top face in the part's frame, ``pose_xy_yaw`` where it was found. The part's
+    own face is the blob of the colour mask that covers most of its outline projected into the frame
+    (a projection that ignores the lens' distortion and the calibration's error lands within pixels
+    of it, which choosing the blob forgives); the ring is that blob grown by ``TOUCH_RING_M``, and
+    only the colour's other blobs are counted in it. A neighbour merged with the face is no other blob:
+    the detector already reports that (AMBIGUOUS, or a fit on free edges).
     """
     x_m, y_m, yaw = pose_xy_yaw
     c, s = math.cos(yaw), math.sin(yaw)
@@ -66,23 +69,28 @@ def touching_pixels(
     points = np.column_stack([outline, np.full(len(outline), plane_z_m)])
     pixels = project_world(frame.intrinsics, frame.camera_pose_world, points)
     px_per_m = _px_per_m(frame, x_m, y_m, plane_z_m)
-    inner_px, outer_px = (max(1, round(r * px_per_m)) for r in TOUCH_RING_M)
+    outer_px = max(1, round(TOUCH_RING_M * px_per_m))
+    slack_px = outer_px + 8  # room for the projection's few pixels of error and the ring beyond the face
     height, width = frame.rgb.shape[:2]
-    low = np.floor(pixels.min(axis=0)).astype(int) - outer_px - 1
-    high = np.ceil(pixels.max(axis=0)).astype(int) + outer_px + 2
+    low = np.floor(pixels.min(axis=0)).astype(int) - slack_px
+    high = np.ceil(pixels.max(axis=0)).astype(int) + slack_px + 1
     if low[0] < 0 or low[1] < 0 or high[0] > width or high[1] > height:
         return None
-    crop = frame.rgb[low[1] : high[1], low[0] : high[0]]
-    part = np.zeros(crop.shape[:2], np.uint8)
-    cv2.fillPoly(part, [np.round(pixels - low).astype(np.int32)], 255)
-
-    def grown(radius_px: int) -> np.ndarray:
-        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius_px + 1, 2 * radius_px + 1))
-        return cv2.dilate(part, kernel)
-
-    ring = (grown(outer_px) > 0) & (grown(inner_px) == 0)
-    mask = colour_mask(np.ascontiguousarray(crop), colour, kernel_px)
-    return int(np.count_nonzero(ring & (mask > 0)))
+    crop = np.ascontiguousarray(frame.rgb[low[1] : high[1], low[0] : high[0]])
+    mask = colour_mask(crop, colour, kernel_px)
+    count, labels = cv2.connectedComponents((mask > 0).astype(np.uint8))
+    if count <= 2:
+        return 0  # the face alone (or nothing) in the colour: no neighbour
+    outline_mask = np.zeros(mask.shape, np.uint8)
+    cv2.fillPoly(outline_mask, [np.round(pixels - low).astype(np.int32)], 1)
+    overlap = np.bincount(labels[outline_mask > 0], minlength=count)
+    overlap[0] = 0
+    own = int(np.argmax(overlap))
+    if overlap[own] == 0:
+        return None  # no face of the colour where the part was found
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * outer_px + 1, 2 * outer_px + 1))
+    ring = cv2.dilate((labels == own).astype(np.uint8), kernel) > 0
+    return int(np.count_nonzero(ring & (labels != own) & (labels != 0)))
 
 
 @dataclass(frozen=True)
