@@ -1,4 +1,4 @@
-"""Parts that touch where they start (issue 54, item 3): each scene of ``tests/touching_scenes.py`` run headless.
+"""Parts that touch where they start: each scene of ``tests/touching_scenes.py`` run headless.
 
     python benchmarks/touching.py [--scenes "two red cubes" ...]
 

@@ -503,7 +503,7 @@ def test_bt_cpp_numbers_the_served_four_cubes_as_we_do():
             theirs_client.close()
         del reference
     # 58, and per cube the 11 nodes that place it again when its pushes stall and the 5 that separate
-    # touching parts before the pick (issue 54, item 3); each cube's SubTree a node too
+    # touching parts before the pick; each cube's SubTree a node too
     assert len(mine) == 122 + 4
     assert [uid for tag, _, uid, _ in mine if tag == "SubTree"] == [2, 33, 64, 95]
     assert served.count('<BehaviorTree ID="arrange_cube" _fullpath="arrange_cube::') == 4

@@ -1,4 +1,4 @@
-"""Parts that touch at the start (issue 54, item 3): the perception and planning side, on synthetic frames.
+"""Parts that touch at the start: the perception and planning side, on synthetic frames.
 
 The look before a pick must notice a neighbour of the part's colour that touches it, even where the
 image shows the seam and the mask cuts the faces apart (``touching_pixels``); ``Separate`` sees

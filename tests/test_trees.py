@@ -171,7 +171,7 @@ def arrange_red(indent: int, threshold: str = "1") -> list[str]:
 
 
 def find_red(indent: int, obj: str = "red") -> list[str]:
-    """The look before the pick, and the push aside of a touching part when it fails (issue 54, item 3)."""
+    """The look before the pick, and the push aside of a touching part when it fails."""
     pad = "  " * indent
     return [
         f"{pad}Selector find {obj}, else separate it from touching parts",
@@ -297,7 +297,7 @@ def test_a_tree_builds_and_renders_without_a_robot() -> None:
     root = arrangement([RED, GREEN, Target("blue", 0.60, 0.0)], correct="after_all")
     text = py_trees.display.unicode_tree(root)
     names = [node.name for node in root.iterate()]
-    # 18 nodes per cube, and 5 more for the look that separates touching parts (issue 54, item 3).
+    # 18 nodes per cube, and 5 more for the look that separates touching parts.
     assert len(names) == 2 + 3 * 23 + 2, "root and its two phases, 23 nodes per cube, park the arm"
     assert all(name in text for name in names)
     assert text.splitlines()[0].endswith("arrangement")

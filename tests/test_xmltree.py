@@ -273,7 +273,7 @@ def test_four_cubes_is_one_part_definition_and_four_subtrees_within_90_elements(
     text = capsys.readouterr().out
     document = elements(text)
     # every element: the trees and the TreeNodesModel (186 before the SubTrees; 80 before the look that
-    # separates touching parts, issue 54 item 3)
+    # separates touching parts)
     assert len(document) <= 90
     trees = [e.get("ID") for e in document if e.tag == "BehaviorTree"]
     assert trees == ["four_cubes", "arrange_cube"]

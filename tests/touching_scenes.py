@@ -1,4 +1,4 @@
-"""Scenes whose parts start touching (issue 54, item 3): plans with their starts set against each other.
+"""Scenes whose parts start touching: plans with their starts set against each other.
 
 Each scene is a plan file's text whose ``[[scene.starts]]`` put parts side by side; ``touching``
 slides a start along the line to another until their footprints are a tenth of a millimetre apart

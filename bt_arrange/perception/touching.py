@@ -1,6 +1,6 @@
 """Parts of one colour that touch: a neighbour beside a found part, and clusters of touching faces.
 
-Two helpers of the look before a pick and of ``Separate`` (issue 54, item 3):
+Two helpers of the look before a pick and of ``Separate``:
 
 - ``touching_pixels``: how many pixels of the colour's other faces lie within 4 mm of a found
   part's own face (``TOUCH_RING_M``). A neighbour of the colour that touches the part, or nearly,

@@ -143,7 +143,7 @@ def _transfer(
 
     A part that touches others of its colour where it starts is separated before it is picked: the
     first look (``Detect(alone=True)``) fails on touching parts of its colour, and the part's
-    ``Separate`` pushes one of them aside before it looks again (issue 54, item 3)::
+    ``Separate`` pushes one of them aside before it looks again::
 
         Selector "find <obj>, else separate it from touching parts"
         ├── Detect "detect <obj>"                        before_pick(): fails on touching parts

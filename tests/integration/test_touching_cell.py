@@ -1,4 +1,4 @@
-"""Parts that touch where they start, in the pybullet cell: each ends within, none left unpicked (issue 54, item 3).
+"""Parts that touch where they start, in the pybullet cell: each ends within,, none left unpicked.
 
 Two identical red cubes side by side (one blob no face explains), two identical ells (one blob)
 and a three-piece fresco with two pieces touching: the look before each pick fails on the blob
