@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import py_trees
 from py_trees.common import Status
 
+from bt_arrange.behaviours.base import STATUSES, debug_logging
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import min_held_width_m
 from bt_arrange.errors import BtArrangeError
@@ -81,6 +84,38 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         )
         gripper.open(gripper.max_width_m)
         return False
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``EternalGuard.tick`` and ``Decorator.tick``, step for step.
+
+        The guard is ticked every control period while its child runs: its debug messages are
+        formatted only when py_trees logs at DEBUG, and the status is checked against a set built
+        once (``STATUSES``) instead of ``list(Status)`` built at every tick.
+        """
+        if debug_logging():
+            self.logger.debug(f"{self.__class__.__name__}.tick()")
+        held = self.condition()
+        if isinstance(held, Status):
+            held = held != Status.FAILURE
+        elif not isinstance(held, bool):
+            raise RuntimeError(f"conditional check must return 'bool' or 'common.Status' [{type(held)}]")
+        if not held:
+            self.stop(Status.FAILURE)
+            yield self
+            return
+        if debug_logging():
+            self.logger.debug(f"{self.__class__.__name__}.tick()")
+        if self.status != Status.RUNNING:
+            self.initialise()
+        yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status not in STATUSES:
+            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
+            new_status = Status.INVALID
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
 
     def terminate(self, new_status: Status) -> None:
         """Forget the grip: the next run judges its own."""
