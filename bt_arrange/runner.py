@@ -105,6 +105,10 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         """A behaviour was ticked; its status is read after the tick (a parent may still stop it)."""
         self._visited.append(behaviour)
 
+    def visit_all(self, behaviours: Iterable[py_trees.behaviour.Behaviour]) -> None:
+        """``run`` each behaviour of a tick as it is yielded (``Runner.tick_tree``'s loop, without a call per node)."""
+        self._visited.extend(behaviours)
+
     def finalise(self) -> None:
         """After a tick: log what changed among the ticked nodes and the nodes stopped below them."""
         self.look(self._visited, self.clock.now() if self.clock is not None else 0.0)
@@ -266,6 +270,14 @@ class Runner:
             tree.tick()
             return
         visitors = tree.visitors
+        if len(visitors) == 1 and visitors[0] is self.log:
+            # The usual case, the log alone: it records the ticked nodes in the order they are yielded.
+            log = self.log
+            log.initialise()
+            log.visit_all(self.root.tick())
+            log.finalise()
+            tree.count += 1
+            return
         for visitor in visitors:
             visitor.initialise()
         # ``node.visit(visitor)`` is ``visitor.run(node)``: the bound methods, looked up once per tick.

@@ -47,6 +47,9 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         self.context: Context | None = None
         #: The fingers' width at this run's first tick (m): the grip the pick left; None between runs.
         self.grip_width_m: float | None = None
+        # ``held_width_m`` for the settings, part and grip it was worked out for: the guard checks it
+        # every tick of its run, and it changes only with them (the grasp is the shape's preferred one).
+        self._held_bound: tuple[object, object, float | None, float] | None = None
 
     def setup(self, **kwargs: object) -> None:
         """Receive the context; without one the guard could never fire, so that is an error."""
@@ -68,6 +71,19 @@ class GraspGuard(py_trees.decorators.EternalGuard):
             return low_m
         return min(low_m, self.grip_width_m - self.context.settings.grasp_width_tolerance_m)
 
+    def _held_width_now_m(self) -> float:
+        """``held_width_m``, worked out anew only when the settings, the part or the grip changed since last tick."""
+        assert self.context is not None
+        settings, bound = self.context.settings, self._held_bound
+        if (
+            bound is None
+            or bound[0] is not settings
+            or bound[1] is not self.object_type
+            or bound[2] != self.grip_width_m
+        ):
+            bound = self._held_bound = (settings, self.object_type, self.grip_width_m, self.held_width_m())
+        return bound[3]
+
     def _holding(self) -> bool:
         if self.context is None:
             return True
@@ -75,7 +91,7 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         width_m = gripper.width()
         if self.grip_width_m is None:
             self.grip_width_m = width_m
-        low_m = self.held_width_m()
+        low_m = self._held_width_now_m()
         if width_m > low_m:
             return True
         self.feedback_message = (
@@ -120,6 +136,7 @@ class GraspGuard(py_trees.decorators.EternalGuard):
     def terminate(self, new_status: Status) -> None:
         """Forget the grip: the next run judges its own."""
         self.grip_width_m = None
+        self._held_bound = None
         super().terminate(new_status)
 
     def update(self) -> Status:
