@@ -105,6 +105,10 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         """A behaviour was ticked; its status is read after the tick (a parent may still stop it)."""
         self._visited.append(behaviour)
 
+    def visit_all(self, behaviours: Iterable[py_trees.behaviour.Behaviour]) -> None:
+        """``run`` each behaviour of a tick as it is yielded (``Runner.tick_tree``'s loop, without a call per node)."""
+        self._visited.extend(behaviours)
+
     def finalise(self) -> None:
         """After a tick: log what changed among the ticked nodes and the nodes stopped below them."""
         self.look(self._visited, self.clock.now() if self.clock is not None else 0.0)
@@ -200,6 +204,89 @@ class TransitionLog(py_trees.visitors.VisitorBase):
             self._file.close()
 
 
+def _passed_on_to(node: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
+    """The child a running node's tick does nothing but tick (and, a decorator, ``update()`` after); else None.
+
+    Read off py_trees' own ``tick`` of each kind, for a node that runs and keeps running:
+
+    - a ``Sequence`` with memory resumes its current child, and runs while it runs;
+    - a ``Selector`` with memory does the same once the children before the current one are
+      INVALID (before that, its tick stops them);
+    - ``FailureIsSuccess`` and ``Retry`` tick their child, and their ``update()`` says RUNNING
+      while the child runs (setting only their feedback).
+
+    Any other node (a subclass with its own ``tick``, a guard checking a condition, a decorator
+    whose ``update()`` may end it) is ticked as py_trees ticks it.
+    """
+    if node.status is not Status.RUNNING:
+        return None
+    kind = type(node)
+    if kind in _PASSING_DECORATORS:
+        child: py_trees.behaviour.Behaviour = node.decorated  # type: ignore[attr-defined]
+        return child
+    if not isinstance(node, py_trees.composites.Composite) or not getattr(node, "memory", False):
+        return None
+    current = node.current_child
+    if kind.tick is py_trees.composites.Sequence.tick:
+        return current
+    if kind.tick is py_trees.composites.Selector.tick:
+        for child in node.children:
+            if child is current:
+                return current
+            if child.status is not Status.INVALID:
+                return None
+    return None
+
+
+#: Decorators whose ``update()`` with a running child returns RUNNING, whatever else it sets (its feedback).
+_PASSING_DECORATORS = (py_trees.decorators.FailureIsSuccess, py_trees.decorators.Retry)
+
+
+def resumed_tick(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
+    """Tick ``root`` once and return the ticked nodes in the order py_trees yields them, ticking only what can change.
+
+    While a behaviour runs (a motion, 125 times a second), the nodes above it that only pass the
+    tick on (``_passed_on_to``) would each re-run py_trees' tick to find the same running child.
+    The tick resumes instead at the highest node that does more (a guard's condition, a
+    behaviour): it is ticked as its parent would tick it. If it still runs, each node above it
+    does what its tick does after a running child, bottom up: a decorator's ``update()``, a
+    composite's RUNNING. If it ended, the nodes above must act on that within this tick (a
+    sequence moves on to the next child): the root is ticked as py_trees ticks it, the resumed
+    node's tick handed back as it happened, not run twice. Either way every node ends the tick
+    as ``root.tick()`` would leave it, and the same nodes are yielded in the same order.
+    """
+    above: list[py_trees.behaviour.Behaviour] = []
+    node = root
+    while True:
+        child = _passed_on_to(node)
+        if child is None or child.status is not Status.RUNNING:
+            break
+        above.append(node)
+        node = child
+    if not above:
+        return list(root.tick())
+    ticked = list(node.tick())
+    if node.status is Status.RUNNING:
+        for parent in reversed(above):
+            if type(parent) in _PASSING_DECORATORS:
+                # Decorator.tick after its child: update(), and stop on a status other than RUNNING.
+                status = parent.update()
+                if status is not Status.RUNNING:
+                    parent.stop(status)
+                parent.status = status
+            else:
+                parent.status = Status.RUNNING
+            ticked.append(parent)
+        return ticked
+    # The resumed node ended: the root's tick reaches it as before (the nodes above it did nothing on
+    # the way down) and is handed its tick as it happened.
+    node.tick = lambda: iter(ticked)  # type: ignore[method-assign]
+    try:
+        return list(root.tick())
+    finally:
+        del node.tick
+
+
 @dataclass
 class RunResult:
     """How a run ended."""
@@ -266,6 +353,15 @@ class Runner:
             tree.tick()
             return
         visitors = tree.visitors
+        if len(visitors) == 1 and visitors[0] is self.log:
+            # The usual case, the log alone: it reads the statuses after the tick (``finalise``), so the
+            # tick may resume below the nodes that only pass it on (``resumed_tick``).
+            log = self.log
+            log.initialise()
+            log.visit_all(resumed_tick(self.root))
+            log.finalise()
+            tree.count += 1
+            return
         for visitor in visitors:
             visitor.initialise()
         # ``node.visit(visitor)`` is ``visitor.run(node)``: the bound methods, looked up once per tick.

@@ -56,6 +56,29 @@ def checked_joint_setpoint(positions_rad: FloatArray, velocities_rad_s: FloatArr
             raise OutOfRangeError(f"arm setpoint {what} {array.tolist()} are not {ARM_JOINT_COUNT} finite numbers")
 
 
+def checked_joint_setpoint_lists(
+    positions_rad: FloatArray, velocities_rad_s: FloatArray | None
+) -> tuple[list[float], list[float] | None]:
+    """``checked_joint_setpoint``, returning the setpoint as lists of floats (what a simulator's call takes).
+
+    The same checks and the same refusal, for a setpoint sent every control period: converted to
+    floats once and checked element by element, instead of through NumPy's reductions on six numbers.
+    """
+    lists: list[list[float] | None] = []
+    for values in (positions_rad, velocities_rad_s):
+        if values is None:
+            lists.append(None)
+            continue
+        array = np.asarray(values, dtype=float)
+        listed = array.tolist()
+        if array.shape != (ARM_JOINT_COUNT,) or not all(map(math.isfinite, listed)):
+            checked_joint_setpoint(positions_rad, velocities_rad_s)  # raises with the words of every engine
+        lists.append(listed)
+    positions, velocities = lists
+    assert positions is not None
+    return positions, velocities
+
+
 def checked_render_offset(dx_m: float, dy_m: float, dyaw_rad: float) -> tuple[float, float, float]:
     """A camera displacement (error injection) of finite numbers, as floats."""
     offset = (float(dx_m), float(dy_m), float(dyaw_rad))

@@ -114,3 +114,48 @@ def test_a_transition_carries_the_facts_its_node_states(tmp_path) -> None:
     # A node that states nothing logs the same line as before facts existed.
     assert "facts" not in lines[("silent", "SUCCESS")] and "facts" not in lines[("both", "SUCCESS")]
     assert isinstance(hash(by_node[("count", "SUCCESS")]), int)  # still a hashable, frozen value
+
+
+class _Scripted(py_trees.behaviour.Behaviour):
+    """A leaf that returns the statuses of its script, one a tick (the last one after that)."""
+
+    def __init__(self, name: str, script: list[Status]) -> None:
+        super().__init__(name)
+        self.script = list(script)
+        self.ticks = 0
+
+    def update(self) -> Status:
+        status = self.script[min(self.ticks, len(self.script) - 1)]
+        self.ticks += 1
+        self.feedback_message = f"{self.name} tick {self.ticks}"
+        return status
+
+
+def _passing_tree() -> py_trees.behaviour.Behaviour:
+    """Memory sequences and selectors, FailureIsSuccess and Retry above leaves that run, fail, succeed."""
+    R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+    first = py_trees.composites.Sequence(
+        "first", True, [_Scripted("a", [R, R, S]), _Scripted("b", [R, R, R, F]), _Scripted("c", [S])]
+    )
+    retried = py_trees.decorators.Retry("retry", first, 2)
+    choice = py_trees.composites.Selector("choice", True, [_Scripted("d", [R, F]), _Scripted("e", [R, R, R, R, S])])
+    guarded = py_trees.decorators.EternalGuard("guard", _Scripted("f", [R, R, S]), condition=lambda: True)
+    body = py_trees.composites.Sequence("body", True, [retried, choice, guarded])
+    return py_trees.composites.Sequence("root", True, [py_trees.decorators.FailureIsSuccess("lenient", body)])
+
+
+def test_a_resumed_tick_leaves_every_node_as_py_trees_tick_does() -> None:
+    """Tick by tick: the same nodes yielded in the same order, every node's status and feedback the same."""
+    from bt_arrange.runner import resumed_tick
+
+    plain, resumed = _passing_tree(), _passing_tree()
+    for _ in range(40):
+        expected = [node.name for node in plain.tick()]
+        got = [node.name for node in resumed_tick(resumed)]
+        assert got == expected
+        assert [(n.name, n.status, n.feedback_message) for n in resumed.iterate()] == [
+            (n.name, n.status, n.feedback_message) for n in plain.iterate()
+        ]
+        if plain.status != Status.RUNNING:
+            break
+    assert plain.status == resumed.status != Status.RUNNING

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import py_trees
 from py_trees.common import Status
 
+from bt_arrange.behaviours.base import STATUSES, debug_logging
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import min_held_width_m
 from bt_arrange.errors import BtArrangeError
@@ -44,6 +47,9 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         self.context: Context | None = None
         #: The fingers' width at this run's first tick (m): the grip the pick left; None between runs.
         self.grip_width_m: float | None = None
+        # ``held_width_m`` for the settings, part and grip it was worked out for: the guard checks it
+        # every tick of its run, and it changes only with them (the grasp is the shape's preferred one).
+        self._held_bound: tuple[object, object, float | None, float] | None = None
 
     def setup(self, **kwargs: object) -> None:
         """Receive the context; without one the guard could never fire, so that is an error."""
@@ -65,6 +71,19 @@ class GraspGuard(py_trees.decorators.EternalGuard):
             return low_m
         return min(low_m, self.grip_width_m - self.context.settings.grasp_width_tolerance_m)
 
+    def _held_width_now_m(self) -> float:
+        """``held_width_m``, worked out anew only when the settings, the part or the grip changed since last tick."""
+        assert self.context is not None
+        settings, bound = self.context.settings, self._held_bound
+        if (
+            bound is None
+            or bound[0] is not settings
+            or bound[1] is not self.object_type
+            or bound[2] != self.grip_width_m
+        ):
+            bound = self._held_bound = (settings, self.object_type, self.grip_width_m, self.held_width_m())
+        return bound[3]
+
     def _holding(self) -> bool:
         if self.context is None:
             return True
@@ -72,7 +91,7 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         width_m = gripper.width()
         if self.grip_width_m is None:
             self.grip_width_m = width_m
-        low_m = self.held_width_m()
+        low_m = self._held_width_now_m()
         if width_m > low_m:
             return True
         self.feedback_message = (
@@ -82,9 +101,42 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         gripper.open(gripper.max_width_m)
         return False
 
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``EternalGuard.tick`` and ``Decorator.tick``, step for step.
+
+        The guard is ticked every control period while its child runs: its debug messages are
+        formatted only when py_trees logs at DEBUG, and the status is checked against a set built
+        once (``STATUSES``) instead of ``list(Status)`` built at every tick.
+        """
+        if debug_logging():
+            self.logger.debug(f"{self.__class__.__name__}.tick()")
+        held = self.condition()
+        if isinstance(held, Status):
+            held = held != Status.FAILURE
+        elif not isinstance(held, bool):
+            raise RuntimeError(f"conditional check must return 'bool' or 'common.Status' [{type(held)}]")
+        if not held:
+            self.stop(Status.FAILURE)
+            yield self
+            return
+        if debug_logging():
+            self.logger.debug(f"{self.__class__.__name__}.tick()")
+        if self.status != Status.RUNNING:
+            self.initialise()
+        yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status not in STATUSES:
+            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
+            new_status = Status.INVALID
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
     def terminate(self, new_status: Status) -> None:
         """Forget the grip: the next run judges its own."""
         self.grip_width_m = None
+        self._held_bound = None
         super().terminate(new_status)
 
     def update(self) -> Status:

@@ -17,12 +17,20 @@ from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
 from bt_arrange_sim.ranges import (
     checked_joint_setpoint,
+    checked_joint_setpoint_lists,
     checked_render_offset,
 )
 
 #: The cell the devices belong to (``cell.WorkCell``, which builds them): named by what they read of it,
 #: so that the devices need not import the module that imports them.
 WorkCell = Any
+
+
+def _pybullet() -> Any:
+    """The pybullet module (imported when a device is built: importing this module needs no pybullet)."""
+    import pybullet
+
+    return pybullet
 
 
 class SimClock(CellClock):
@@ -49,6 +57,10 @@ class SimArm(CellArm):
         # The client's bound call and the fixed arguments, looked up once: the arm is commanded
         # every control period.
         self._set_motors = cell.client.setJointMotorControlArray
+        # ``BulletClient`` builds a fresh partial at every attribute access (an ``inspect`` call and
+        # a ``functools.partial``): the joint states are read several times a period, so bound once.
+        self._joint_states = cell.client.getJointStates
+        self._position_control = _pybullet().POSITION_CONTROL
         physics = cell.config.physics
         self._position_gains = [physics.arm_position_gain] * 6
         self._velocity_gains = [physics.arm_velocity_gain] * 6
@@ -56,36 +68,42 @@ class SimArm(CellArm):
 
     def joint_positions(self) -> FloatArray:
         """Measured joint positions in radians."""
-        measured = np.array([s[0] for s in self._client.getJointStates(self._body, self._indices)])
+        measured = np.array([s[0] for s in self._joint_states(self._body, self._indices)])
         return measured - self._joint_error if self._joint_sigma_rad else measured
 
     def joint_velocities(self) -> FloatArray:
         """Measured joint velocities in radians per second."""
-        return np.array([s[1] for s in self._client.getJointStates(self._body, self._indices)])
+        return np.array([s[1] for s in self._joint_states(self._body, self._indices)])
 
     def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
         """Track ``positions_rad`` (with a velocity feed-forward) until the next command."""
-        import pybullet
-
-        checked_joint_setpoint(positions_rad, velocities_rad_s)
-        positions = np.asarray(positions_rad, dtype=float)
+        # Called every control period: the setpoint is checked and sent as the lists pybullet takes,
+        # converted once (``checked_joint_setpoint_lists``), not as arrays checked then converted again.
         if self._joint_sigma_rad:
+            checked_joint_setpoint(positions_rad, velocities_rad_s)
+            positions = np.asarray(positions_rad, dtype=float)
             velocities = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float)
             resting = not np.any(velocities)
             if resting and (self._rest_q is None or not np.array_equal(positions, self._rest_q)):
                 self._rest_q = positions.copy()
                 self._joint_error = self._joint_rng.normal(0.0, self._joint_sigma_rad, 6)
             positions = positions + self._joint_error
-        self._set_motors(
-            self._body,
-            self._indices,
-            pybullet.POSITION_CONTROL,
-            targetPositions=positions.tolist(),
-            targetVelocities=(
+            target_positions = positions.tolist()
+            target_velocities = (
                 self._zero_velocities
                 if velocities_rad_s is None
                 else np.asarray(velocities_rad_s, dtype=float).tolist()
-            ),
+            )
+        else:
+            target_positions, target_velocities = checked_joint_setpoint_lists(positions_rad, velocities_rad_s)
+            if target_velocities is None:
+                target_velocities = self._zero_velocities
+        self._set_motors(
+            self._body,
+            self._indices,
+            self._position_control,
+            targetPositions=target_positions,
+            targetVelocities=target_velocities,
             forces=self._efforts_n_m,
             positionGains=self._position_gains,
             velocityGains=self._velocity_gains,
@@ -117,6 +135,8 @@ class SimGripper(CellGripper):
         self._client = cell.client
         self._body = cell.robot_id
         self._fingers = list(cell.finger_joint_indices)
+        # Bound once (see ``SimArm``): a guard reads the fingers' width every tick.
+        self._joint_states = cell.client.getJointStates
         #: The world times and finger positions of the last two ``is_moving`` polls of different times.
         self._polls: tuple[tuple[float, list[float]], ...] = ((-1.0, []), (-1.0, []))
         #: Whether the pads' contacts have friction anchors now (the cell sets them as ``pad_contact`` says).
@@ -163,7 +183,7 @@ class SimGripper(CellGripper):
 
     def width(self) -> float:
         """Measured opening between the pads in metres."""
-        return float(sum(s[0] for s in self._client.getJointStates(self._body, self._fingers)))
+        return float(sum(s[0] for s in self._joint_states(self._body, self._fingers)))
 
     def is_moving(self) -> bool:
         """True while either finger moves faster than 1 mm/s.
@@ -174,7 +194,7 @@ class SimGripper(CellGripper):
         finger also has to have travelled 1 mm/s's worth since the last poll (if within ``RING_POLL_S``)
         to count as moving.
         """
-        states = self._client.getJointStates(self._body, self._fingers)
+        states = self._joint_states(self._body, self._fingers)
         now_s, positions = self._cell.sim_time_s, [s[0] for s in states]
         if now_s != self._polls[-1][0]:
             self._polls = (self._polls[-1], (now_s, positions))
