@@ -61,6 +61,7 @@ from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
+from bt_arrange.safety import MotionSafety
 from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
@@ -101,6 +102,10 @@ class Session:
     ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
     campaign's trial, ``experiment --record``): written whole at the end, or a fault.
 
+    ``motion_safety`` (``bt_arrange.safety.MotionSafety``: a speed fraction, the cell's workspace box)
+    applies to every motion the tree plans; a ``SafetyStop`` (the robot stopped, a motion outside the
+    box) ends the run with a FAILURE and its reason in the report (``safety_stop``).
+
     ``plan`` is what the tree carries out (``bt_arrange.plan.compiled.ArrangementPlan``: targets,
     tolerance, settings, colours, puzzles): the plan check, the report and "within" come from it. By
     default the tree's own (``trees.plan_of(root)``, a rendered arrangement's); a tree without a plan
@@ -122,6 +127,7 @@ class Session:
         calibration: CameraCalibration | None = None,
         mcap_path: Path | None = None,
         plan: ArrangementPlan | None = None,
+        motion_safety: MotionSafety | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
@@ -188,7 +194,11 @@ class Session:
         robot = self.world.robot
         if calibration is not None:
             robot = dataclasses.replace(robot, camera=CalibratedCamera(robot.camera, calibration))
-        self.context = Context.create(robot, detector=PartDetector(self.colours), settings=settings)
+        #: The speed fraction and workspace box every motion of the tree is planned under (``bt_arrange.safety``).
+        self.motion_safety = motion_safety if motion_safety is not None else MotionSafety()
+        self.context = Context.create(
+            robot, detector=PartDetector(self.colours), settings=settings, safety=self.motion_safety
+        )
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
@@ -255,7 +265,9 @@ class Session:
             assert self.replay is not None
             self.replay.observe(self.world.clock.now())  # a stop at the time limit comes after the last tick
         report = SessionReport(
-            objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
+            objects=self._outcomes(
+                result.transitions, result.feedback if result.timed_out or result.safety_stop else ""
+            ),
             tree_status=result.status.value,
             threshold_mm=self.plan.tolerance.threshold_mm if self.plan is not None else None,
             yaw_threshold_deg=self.plan.tolerance.yaw_threshold_deg if self.plan is not None else None,
@@ -266,6 +278,7 @@ class Session:
             ground_truth=self.truth is not None,
             camera_margin_mm=self.camera_margin_mm,
             camera_margin_source=self.camera_margin_source,
+            safety_stop=result.safety_stop,
         )
         for report_hook in self.report_hooks:
             report_hook(report)

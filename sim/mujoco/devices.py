@@ -15,7 +15,7 @@ from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics,
 from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
 from bt_arrange_sim.mujoco.model import camera_quat_wxyz
 from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
-from bt_arrange_sim.ranges import (
+from bt_arrange.ranges import (
     checked_joint_setpoint,
     checked_render_offset,
 )

@@ -15,7 +15,7 @@ import numpy as np
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
-from bt_arrange_sim.ranges import (
+from bt_arrange.ranges import (
     checked_joint_setpoint,
     checked_render_offset,
 )
