@@ -156,17 +156,6 @@ class Backend(Protocol):
         """Check the plan and the scene, build the world, and return the run (not started)."""
         ...
 
-    def scatter(
-        self,
-        colours: Sequence[str],
-        seed: int,
-        avoid: Iterable[Any] = (),
-        object_types: Sequence[Any] | None = None,
-        names: Sequence[str | None] | None = None,
-    ) -> list[Any]:
-        """Where parts of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
-        ...
-
     def check(self) -> Iterator[str]:
         """Lines for ``bt-arrange info``: the backend starts (or a ``BtArrangeError`` saying why not)."""
         ...
@@ -198,6 +187,88 @@ class InjectingBackend(Protocol):
     def injectable_errors(self) -> Sequence[str]:
         """The error names ``open_run(inject=...)`` takes."""
         ...
+
+
+@runtime_checkable
+class ScatteringBackend(Protocol):
+    """An optional capability: the backend puts the parts into its world (a simulator), so a run needs a scene.
+
+    ``bt-arrange run`` asks a tree file's ``create_scene(seed)`` (a plan scatters its parts through
+    ``scatter``) only on such a backend. A real cell has none: its parts lie where they lie, and a tree
+    file needs only ``create_root``.
+    """
+
+    name: str
+
+    def scatter(
+        self,
+        colours: Sequence[str],
+        seed: int,
+        avoid: Iterable[Any] = (),
+        object_types: Sequence[Any] | None = None,
+        names: Sequence[str | None] | None = None,
+    ) -> list[Any]:
+        """Where parts of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
+        ...
+
+
+@runtime_checkable
+class PuzzleBackend(Protocol):
+    """An optional capability: the backend breaks a plan's ``[puzzle]`` slab and scatters its pieces (a simulator)."""
+
+    name: str
+
+    def puzzle_scene(
+        self, targets: Sequence[Any], puzzles: Sequence[Any], seed: int, *, starts: Sequence[Any] | None = None
+    ) -> list[Any]:
+        """Each puzzle's slab broken from ``seed``, its pieces scattered (with ``starts`` for the other parts)."""
+        ...
+
+
+@runtime_checkable
+class CalibratingBackend(Protocol):
+    """An optional capability: ``bt-arrange calibrate``, the ChArUco procedure in the backend's cell."""
+
+    name: str
+
+    def open_calibration(self, **options: Any) -> Any:
+        """The calibration run (``views``, ``gui``, ``record_dir``, ``time_limit_s``, the backend's own): not ticked."""
+        ...
+
+
+@runtime_checkable
+class ConnectingBackend(Protocol):
+    """An optional capability: a backend that reaches a real cell (``--robot HOST``, ``--camera SPEC``).
+
+    ``connect_to`` is called before any other method when the command line is given either option;
+    a backend without it refuses them in one line.
+    """
+
+    name: str
+
+    def connect_to(self, robot_host: str | None, camera_spec: str | None) -> None:
+        """Where the robot's controller and the camera are (nothing is opened yet)."""
+        ...
+
+
+@runtime_checkable
+class SafetyBackend(Protocol):
+    """An optional capability: ``run --speed-fraction F`` and ``run --dry-run`` (``bt_arrange.safety``).
+
+    ``open_run(..., speed_fraction=F, dry_run=True)``; a backend without it refuses both in one line.
+    """
+
+    name: str
+
+    #: The speed fraction a run uses without ``--speed-fraction`` (a real cell: a conservative one).
+    default_speed_fraction: float
+
+
+def require(backend: Backend, capability: type, what: str) -> Any:
+    """``backend`` when it declares ``capability``; a one-line ``BackendError`` naming what it cannot do otherwise."""
+    if not isinstance(backend, capability):
+        raise BackendError(f"backend {backend.name!r} cannot {what} (it has no {capability.__name__} capability)")
+    return backend
 
 
 def check_inject(backend: Backend, text: str) -> list[str]:

@@ -223,7 +223,8 @@ class Runner:
     ``cell.step``). A ``SafetyStop`` raised by it (the robot stopped) or by a behaviour's planning (a
     motion outside the workspace box) ends the run at once: every behaviour is stopped, the result is a
     FAILURE with the stop's reason (``safety_stop``), and the world is stepped no more; only a refused
-    motion (``arm_stopped`` False) lets the brake bring the arm to rest first. ``on_transition`` is called with each status change, e.g. to save an image
+    motion (``arm_stopped`` False) lets the brake bring the arm to rest first. ``on_transition`` is
+    called with each status change, e.g. to save an image
     or to inject an error at a given moment.
     """
 

@@ -103,11 +103,6 @@ class WorkspaceBox:
                 )
 
 
-#: The paper's cell (a UR5 on the table, parts in front of it, the camera 70 cm above): the TCP stays
-#: over the table in front of the robot, above the table top (z = 0) and below the camera's mount.
-PAPER_CELL_WORKSPACE = WorkspaceBox(x_m=(0.10, 0.90), y_m=(-0.55, 0.55), z_m=(0.005, 0.65))
-
-
 @dataclass(frozen=True)
 class MotionSafety:
     """What the motion planner applies to every motion: a speed fraction and, where the cell gives one, a box."""
