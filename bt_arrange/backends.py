@@ -1,8 +1,12 @@
 """Backends: what the command line runs a tree on, found by name, never imported by the framework.
 
 ``bt-arrange run``, ``experiment`` and ``info`` reach the world through a ``Backend``: the
-simulated work cell (``sim``, the default, from the ``bt_arrange_sim`` package) or, later, a real
-UR5. A backend is found through the ``bt_arrange.backends`` entry-point group, which a package
+simulated work cell (``sim``, the default, from the ``bt_arrange_sim`` package) or a real UR5 cell
+(``ur``, ``bt_arrange.ur``). What only some backends can do is declared, never probed: a backend is
+a ``ScatteringBackend``, a ``CalibratingBackend``, ... when it provides that protocol's members, and a
+command that needs one says in one line which is missing (``require``).
+
+A backend is found through the ``bt_arrange.backends`` entry-point group, which a package
 declares in its ``pyproject.toml``::
 
     [project.entry-points."bt_arrange.backends"]
@@ -33,8 +37,12 @@ from bt_arrange.suggest import did_you_mean
 ENTRY_POINT_GROUP = "bt_arrange.backends"
 #: The backend the command line uses unless told otherwise: the simulated work cell.
 DEFAULT_BACKEND = "sim"
-#: Where the default backend lives when no installed entry point declares it (stale metadata).
-FALLBACK = {DEFAULT_BACKEND: "bt_arrange_sim.pybullet.backend:SimBackend"}
+#: Where the backends this package ships live when no installed entry point declares them (stale
+#: metadata): the default, and the real cell (``bt_arrange.ur``, which needs the ``ur`` extra to run).
+FALLBACK = {
+    DEFAULT_BACKEND: "bt_arrange_sim.pybullet.backend:SimBackend",
+    "ur": "bt_arrange.ur.backend:UrBackend",
+}
 
 
 class ObjectReport(Protocol):
@@ -237,6 +245,15 @@ class CalibratingBackend(Protocol):
 
 
 @runtime_checkable
+class TrueCameraRun(Protocol):
+    """An optional capability of a calibration run: a simulator's true camera, to grade it (evaluation only)."""
+
+    def true_camera(self) -> tuple[Any, Any]:
+        """The true ``(CameraIntrinsics, Pose)`` of the camera the run calibrated."""
+        ...
+
+
+@runtime_checkable
 class ConnectingBackend(Protocol):
     """An optional capability: a backend that reaches a real cell (``--robot HOST``, ``--camera SPEC``).
 
@@ -253,15 +270,28 @@ class ConnectingBackend(Protocol):
 
 @runtime_checkable
 class SafetyBackend(Protocol):
-    """An optional capability: ``run --speed-fraction F`` and ``run --dry-run`` (``bt_arrange.safety``).
+    """An optional capability: ``run --speed-fraction F`` (``bt_arrange.safety.MotionSafety``).
 
-    ``open_run(..., speed_fraction=F, dry_run=True)``; a backend without it refuses both in one line.
+    ``open_run(..., speed_fraction=F)``; a backend without it refuses the option in one line.
     """
 
     name: str
 
     #: The speed fraction a run uses without ``--speed-fraction`` (a real cell: a conservative one).
     default_speed_fraction: float
+
+
+@runtime_checkable
+class DryRunBackend(Protocol):
+    """An optional capability: ``run --dry-run`` plans every motion of the tree without moving the robot.
+
+    ``open_run(..., dry_run=True)``; the report says what was planned and what could not be (``dry_run``).
+    """
+
+    name: str
+
+    #: What a dry run on this backend cannot plan, for its summary line.
+    dry_run_limits: str
 
 
 def require(backend: Backend, capability: type, what: str) -> Any:

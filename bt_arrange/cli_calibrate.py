@@ -12,17 +12,16 @@ from typing import Any
 import numpy as np
 
 from bt_arrange import backends
-from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK
-from bt_arrange.errors import BackendError, BtArrangeError, RecordError
+from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK, connect_backend
+from bt_arrange.errors import BtArrangeError, RecordError
 
 
 def _calibrate(args: argparse.Namespace) -> int:
     from bt_arrange.calibration import matrix_rpy, write_calibration
 
     backend = backends.load(args.backend)
-    open_calibration = getattr(backend, "open_calibration", None)
-    if open_calibration is None:
-        raise BackendError(f"backend {backend.name!r} cannot calibrate")
+    connect_backend(backend, args)
+    open_calibration = backends.require(backend, backends.CalibratingBackend, "calibrate").open_calibration
     out = Path(args.out)
     if out.parent and not out.parent.is_dir():
         raise BtArrangeError(f"--out {out}: the folder {out.parent} does not exist")
@@ -41,7 +40,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         outcome = run.run()
         if args.live:
             view.close()
-        truth = run.true_camera() if hasattr(run, "true_camera") else None
+        # A simulator knows its true camera (evaluation only): a run that declares it (``TrueCameraRun``).
+        truth = run.true_camera() if isinstance(run, backends.TrueCameraRun) else None
     skipped = f"{outcome.unreachable} unreachable, {outcome.not_seen} with the board not seen"
     calibration = outcome.calibration
     if calibration is None:
