@@ -87,6 +87,8 @@ class SessionReport:
     injected: list[dict] | None = None
     #: The one-line reason of a safety stop that ended the run (``bt_arrange.safety``), or "" when none did.
     safety_stop: str = ""
+    #: A dry run's summary (``run --dry-run``): the motions it planned and what it could not plan; None in a run.
+    dry_run: dict | None = None
 
     def verdict(self) -> str:
         """How many parts are within and, for each that is not, its offset and why (never the tree's status).
@@ -150,6 +152,8 @@ class SessionReport:
             data["injected"] = self.injected
         if self.safety_stop:
             data["safety_stop"] = self.safety_stop
+        if self.dry_run is not None:
+            data["dry_run"] = self.dry_run
         return data
 
 

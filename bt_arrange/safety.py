@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_arrange.errors import OutOfRangeError
+from bt_arrange.geometry import FloatArray
 
 if TYPE_CHECKING:
     from bt_arrange.motion.kinematics import ArmKinematics
@@ -73,7 +74,7 @@ class WorkspaceBox:
             if not (math.isfinite(low) and math.isfinite(high) and low < high):
                 raise OutOfRangeError(f"workspace box {axis} from {low:g} to {high:g} m is not a range")
 
-    def contains(self, point_m: Sequence[float]) -> bool:
+    def contains(self, point_m: Sequence[float] | FloatArray) -> bool:
         """True when ``point_m`` (x, y, z) lies inside the box (its faces included)."""
         x, y, z = (float(v) for v in point_m)
         return bool(

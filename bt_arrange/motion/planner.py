@@ -5,6 +5,7 @@ A behaviour receives a planner and asks it for motions; it never builds ruckig i
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from numpy.typing import ArrayLike
@@ -16,6 +17,7 @@ from bt_arrange.motion.trajectory import (
     DEFAULT_LINE_ORIENTATION_TOLERANCE_RAD,
     JointMotion,
     LinearMotion,
+    Motion,
     check_control_period,
 )
 
@@ -59,11 +61,15 @@ class MotionPlanner:
         self.control_period_s = check_control_period(control_period_s)
         #: The speed fraction and workspace box every motion is planned under.
         self.safety = safety if safety is not None else MotionSafety()
+        #: Called with every motion planned (and what it is, in words), e.g. to count a dry run's motions.
+        self.planned_hooks: list[Callable[[Motion, str], object]] = []
 
     def _checked(self, motion: JointMotion | LinearMotion, what: str) -> None:
         """Refuse ``motion`` (``WorkspaceStop``) when its TCP path leaves the workspace box, if there is one."""
         if self.safety.workspace is not None:
             self.safety.workspace.check_motion(motion, self.kinematics, what)
+        for hook in self.planned_hooks:
+            hook(motion, what)
 
     def move_joints(
         self,
@@ -86,7 +92,7 @@ class MotionPlanner:
             start_velocities_rad_s=start_velocities_rad_s,
             start_accelerations_rad_s2=start_accelerations_rad_s2,
         )
-        if self.safety.workspace is not None:
+        if self.safety.workspace is not None or self.planned_hooks:
             end = self.kinematics.forward(motion.target_positions_rad).position_m
             self._checked(motion, f"the joint move to TCP ({end[0]:.3f}, {end[1]:.3f}, {end[2]:.3f}) m")
         return motion
