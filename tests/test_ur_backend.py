@@ -8,8 +8,8 @@ box, speed fraction, a safety stop ending the run) on the testing kit's fake wor
 from __future__ import annotations
 
 import http.server
-import math
 import json
+import math
 import socket
 import socketserver
 import threading
@@ -242,7 +242,10 @@ def test_speed_fraction_time_scales_every_motion():
     home = DEFAULT_HOME_Q
     target = gripper_down_pose(0.5, 0.1, 0.1, 0.0)
     full, half = _planner(MotionSafety()), _planner(MotionSafety(speed_fraction=0.5))
-    for plan in (lambda p: p.move_to_pose(home, target), lambda p: p.move_line(home, gripper_down_pose(0.25, 0, 0.3, -math.pi / 2))):
+    for plan in (
+        lambda p: p.move_to_pose(home, target),
+        lambda p: p.move_line(home, gripper_down_pose(0.25, 0, 0.3, -math.pi / 2)),
+    ):
         fast, slow = plan(full), plan(half)
         # The same path at half the velocity, a quarter of the acceleration, an eighth of the jerk: twice as long.
         assert slow.duration_s == pytest.approx(2 * fast.duration_s, rel=0.03)
