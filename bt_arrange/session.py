@@ -91,6 +91,9 @@ REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
 class Session:
     """One tree in one world, built by ``open_world()`` once everything a user can get wrong is checked.
 
+    ``starts`` are where the parts start (checked with the plan), or None where nobody knows before the
+    camera looks (a real cell: its parts lie where they lie; the plan is checked without a scene).
+
     ``view`` is the top camera's view for the plan check (known without a world: from the backend's
     configuration or a calibration); without one the view is not checked. ``calibration`` (a
     ``bt_arrange.calibration.CameraCalibration``, e.g. ``read_calibration("camera.toml")``) makes the
@@ -115,7 +118,7 @@ class Session:
     def __init__(
         self,
         root: py_trees.behaviour.Behaviour,
-        starts: Iterable[Any],
+        starts: Iterable[Any] | None,
         open_world: Callable[[], World],
         *,
         view: CameraView | None = None,
@@ -141,7 +144,8 @@ class Session:
         #: The handling settings of the run.
         self.settings = settings
         # Everything a user can get wrong is checked here, before the world is built.
-        scene = list(starts)
+        # None: where the parts start is not known before the camera looks (a real cell): not checked.
+        scene = list(starts) if starts is not None else None
         #: The camera calibration the run uses, or None (the camera as it reports itself).
         self.calibration = calibration
         if calibration is not None:
@@ -163,7 +167,7 @@ class Session:
                         colours=self.colours,
                         settings=settings,
                     )
-                else:  # a puzzle's targets come from its solve: its scene and its whole's place are checked
+                elif scene is not None:  # a puzzle's targets come from its solve: its scene and place are checked
                     check_scene(scene, view=view, colours=self.colours, settings=settings)
                 check_puzzles(checked.puzzles, checked.targets, checked.tolerance.threshold_mm, settings)
                 check_puzzles_in_view(list(checked.puzzles), view)
@@ -173,7 +177,7 @@ class Session:
                 if checked.source is None:
                     raise
                 raise checked.source.locate(error) from error
-        else:
+        elif scene is not None:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
         check_keys(root)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
@@ -183,7 +187,7 @@ class Session:
         #: Every node of the tree by its id (as text): transitions name their node by it.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
         self.world: World = open_world()
-        self.world.place(scene, self.colours)
+        self.world.place(scene or [], self.colours)
         self.world.settle(settle_s)
         #: Ground truth of the world (evaluation only), or None: the report is then camera only.
         self.truth: GroundTruth | None = self.world.truth

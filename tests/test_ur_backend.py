@@ -68,7 +68,9 @@ class FakeUrcap:
                     self.lines.append(line)
                     if line == "DROP":
                         return
-                    stream.write((self._answer(line) + "\n").encode())
+                    answer = self._answer(line)
+                    # As the URCap does: a bare "ack" to a SET, a line to a GET.
+                    stream.write((answer if answer == "ack" else answer + "\n").encode())
                     stream.flush()
 
     def _answer(self, line: str) -> str:
@@ -440,6 +442,6 @@ def test_cli_refuses_robot_options_on_the_simulator_and_an_unreachable_robot_in_
     assert "backend 'sim' cannot reach a real cell (--robot, --camera)" in capsys.readouterr().err
     assert main(["run", "trees/four_cubes.py", "--backend", "ur", "--dry-run"]) == 2
     assert "backend 'ur' needs --robot HOST" in capsys.readouterr().err
-    assert main(["info", "--backend", "ur", "--robot", "127.0.0.1", "--camera", "http://127.0.0.1:1/"]) == 2
+    assert main(["info", "--backend", "ur", "--robot", "127.0.0.9", "--camera", "http://127.0.0.1:1/"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "cannot reach the robot's controller at 127.0.0.1" in err
+    assert err.count("\n") == 1 and "cannot reach the robot's controller at 127.0.0.9" in err

@@ -254,7 +254,7 @@ def ur_session(root: Any, open_world: Callable[[], Any], *, dry_run: bool = Fals
     """A ``bt_arrange.session.Session`` on the real cell; a dry run's adds its summary to the report (``dry_run``)."""
     from bt_arrange.session import Session
 
-    session = Session(root, [], open_world, **options)
+    session = Session(root, None, open_world, **options)
     if dry_run:
         _attach_dry_run(session)
     return session
@@ -272,6 +272,10 @@ def _attach_dry_run(session: Any) -> None:
     def summarise(report: Any) -> None:
         start = ", ".join(f"{math.degrees(v):.1f}" for v in world.start_q)
         refused = 1 if report.safety_stop else 0
+        # Nothing was placed: the offsets are of the parts where they lie, not a verdict on the plan.
+        for outcome in report.objects:
+            outcome.status = "dry run"
+            outcome.reason = "nothing was placed: the looks after placing saw the part where it lay"
         outcome = f"refused: {report.safety_stop}" if refused else f"the tree ended {report.tree_status}"
         report.dry_run = {
             "motions": len(motions),

@@ -57,10 +57,22 @@ class RobotiqSocket:
         self._buffer = b""
 
     def request(self, line: str) -> str:
-        """Send ``line`` and return the answer line (without its newline); a ``GripperLinkError`` if none comes."""
+        """Send ``line`` and return the answer (without its newline); a ``GripperLinkError`` if none comes.
+
+        The URCap answers a ``SET`` with a bare ``ack`` (no newline) and a ``GET`` with a line.
+        """
+        expects_ack = line.startswith("SET ")
         try:
             self._socket.sendall(line.encode("ascii") + b"\n")
-            while b"\n" not in self._buffer:
+            while True:
+                # A newline that trailed an earlier ``ack`` may arrive late: it belongs to no answer.
+                self._buffer = self._buffer.lstrip(b"\r\n")
+                if expects_ack and self._buffer.startswith(b"ack"):
+                    self._buffer = self._buffer[3:]
+                    return "ack"
+                if b"\n" in self._buffer and not (expects_ack and b"ack".startswith(self._buffer[:3])):
+                    answer, _, self._buffer = self._buffer.partition(b"\n")
+                    return answer.decode("ascii", errors="replace").strip()
                 chunk = self._socket.recv(1024)
                 if not chunk:
                     raise GripperLinkError(f"the gripper's socket at {self.address} was closed")
@@ -69,8 +81,6 @@ class RobotiqSocket:
             raise GripperLinkError(
                 f"lost the gripper's socket at {self.address} ({error.strerror or type(error).__name__})"
             ) from error
-        answer, _, self._buffer = self._buffer.partition(b"\n")
-        return answer.decode("ascii", errors="replace").strip()
 
     def set(self, **registers: int) -> None:
         """``SET NAME value ...`` in the order given; the URCap must answer ``ack``."""
