@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from bt_arrange import backends
+from bt_arrange.backends import CalibratingBackend, TrueCameraRun, require
 from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK, connect_backend
 from bt_arrange.errors import BtArrangeError, RecordError
 
@@ -21,7 +22,7 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     backend = backends.load(args.backend)
     connect_backend(backend, args)
-    open_calibration = backends.require(backend, backends.CalibratingBackend, "calibrate").open_calibration
+    open_calibration = require(backend, CalibratingBackend, "calibrate").open_calibration
     out = Path(args.out)
     if out.parent and not out.parent.is_dir():
         raise BtArrangeError(f"--out {out}: the folder {out.parent} does not exist")
@@ -41,7 +42,7 @@ def _calibrate(args: argparse.Namespace) -> int:
         if args.live:
             view.close()
         # A simulator knows its true camera (evaluation only): a run that declares it (``TrueCameraRun``).
-        truth = run.true_camera() if isinstance(run, backends.TrueCameraRun) else None
+        truth = run.true_camera() if isinstance(run, TrueCameraRun) else None
     skipped = f"{outcome.unreachable} unreachable, {outcome.not_seen} with the board not seen"
     calibration = outcome.calibration
     if calibration is None:
