@@ -18,7 +18,9 @@ from typing import TYPE_CHECKING, Any
 
 import py_trees
 
+from bt_arrange import paper_cell
 from bt_arrange.errors import BackendError
+from bt_arrange.safety import REAL_CELL_SPEED_FRACTION, WorkspaceBox
 
 if TYPE_CHECKING:
     from bt_arrange.session import Session
@@ -39,7 +41,10 @@ class UrBackend:
 
     name = "ur"
     #: Without ``--speed-fraction`` a real cell's motions run at half the speed the simulator's do.
-    default_speed_fraction = 0.5
+    default_speed_fraction = REAL_CELL_SPEED_FRACTION
+    #: The box the TCP must stay in, checked for every planned motion: the paper's cell's (a lab's own cell
+    #: subclasses the backend with its box, docs/real-cell.md).
+    workspace: WorkspaceBox = paper_cell.WORKSPACE
     dry_run_limits = DRY_RUN_LIMITS
 
     def __init__(self) -> None:
@@ -88,7 +93,6 @@ class UrBackend:
         intrinsics at the cell's nominal mount. Options of the simulators (``cell``, ``inject``) are
         refused in one line.
         """
-        from bt_arrange import paper_cell
         from bt_arrange.calibration.file import read_calibration_option
         from bt_arrange.plan.camera_view import CameraView
         from bt_arrange.safety import MotionSafety
@@ -99,7 +103,7 @@ class UrBackend:
         camera = self._camera(calibrated)
         safety = MotionSafety(
             speed_fraction=self.default_speed_fraction if speed_fraction is None else speed_fraction,
-            workspace=paper_cell.WORKSPACE,
+            workspace=self.workspace,
         )
         held_width_m = _held_width_m(root)
 
@@ -139,7 +143,6 @@ class UrBackend:
         The poses are planned on the camera's factory intrinsics at the nominal mount, as in the simulator;
         the printed table sheet is looked for first (the procedure goes on without it).
         """
-        from bt_arrange import paper_cell
         from bt_arrange.calibration import BoardMount, CharucoBoard, board_poses
         from bt_arrange.calibration.board import TABLE_SHEET
         from bt_arrange.calibration.procedure import working_plane_poses
@@ -168,7 +171,7 @@ class UrBackend:
             time_limit_s=time_limit_s,
             plane_poses=plane_poses,
             sheet=TABLE_SHEET,
-            motion_safety=MotionSafety(self.default_speed_fraction, paper_cell.WORKSPACE),
+            motion_safety=MotionSafety(self.default_speed_fraction, self.workspace),
         )
 
     def check(self) -> Iterator[str]:

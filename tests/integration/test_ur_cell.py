@@ -1,0 +1,172 @@
+"""The ur backend end to end: the unmodified ur_rtde client against the emulated controller (``bt_arrange_sim.ursim``).
+
+The controller runs the pybullet cell in real time behind the ports a CB3 serves (RTDE, script,
+dashboard, the Robotiq URCap's socket, a network camera) and keeps the truth of where the parts
+are. Each test's controller listens on its own loopback address, so tests (and other runs on the
+machine) do not meet on the fixed ports. Kept few and short: a four-cube run (~15 s of world
+time), one one-cube cell for the safety behaviours, and a calibration cell.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rtde_control")
+ursim = pytest.importorskip("bt_arrange_sim.ursim")
+
+from bt_arrange import backends  # noqa: E402
+from bt_arrange.cli import main  # noqa: E402
+from bt_arrange.safety import WorkspaceBox  # noqa: E402
+from bt_arrange.ur.backend import UrBackend  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+FOUR_CUBES = {"red": (0.45, 0.05), "green": (0.45, -0.05), "blue": (0.55, 0.05), "yellow": (0.55, -0.05)}
+#: A tree file with only create_root (no scene: a real cell's parts lie where they lie), the target of
+#: trees/single_cube.py, whose scene the controller builds.
+ONLY_ROOT = '''from bt_arrange.trees import Target, arrangement
+
+
+def create_root(threshold_mm: float = 1.0):
+    return arrangement([Target("red", x_m=0.50, y_m=0.0)], threshold_mm=threshold_mm)
+'''
+
+
+def _run(*args: str) -> tuple[int, dict]:
+    """``bt-arrange run ARGS --json`` in this process: its exit status and its report."""
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(["run", *args, "--json"])
+    text = out.getvalue().strip()
+    return code, json.loads(text.splitlines()[-1]) if text else {}
+
+
+def _cube_error(truth: dict, name: str) -> tuple[float, float]:
+    """Distance (mm) and yaw error (deg, folded to the cube's quarter turn) of a cube from its target."""
+    x, y, _, yaw = truth[name]
+    tx, ty = FOUR_CUBES[name]
+    folded = math.degrees(yaw) % 90.0
+    return math.hypot(x - tx, y - ty) * 1000, min(folded, 90.0 - folded)
+
+
+def test_four_cubes_through_the_ur_backend_end_within_a_millimetre_by_the_controllers_truth(tmp_path):
+    with ursim.launch(ROOT / "trees/four_cubes.py", seed=0, host="127.0.77.1") as cell:
+        code, report = _run(
+            str(ROOT / "trees/four_cubes.py"),
+            *("--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec, "--speed-fraction", "1.0"),
+        )
+        truth = cell.truth()
+    assert code == 0, report
+    assert report["objects_within"] == 4 and report.get("ground_truth") is False
+    for name in FOUR_CUBES:
+        distance_mm, yaw_deg = _cube_error(truth, name)
+        assert distance_mm < 1.0 and yaw_deg < 1.0, (name, distance_mm, yaw_deg)
+
+
+@pytest.fixture(scope="module")
+def one_cube_cell():
+    with ursim.launch(ROOT / "trees/single_cube.py", seed=0, host="127.0.77.2") as cell:
+        yield cell
+
+
+@pytest.fixture
+def only_root(tmp_path: Path) -> Path:
+    path = tmp_path / "only_root.py"
+    path.write_text(ONLY_ROOT)
+    return path
+
+
+def _cell_args(cell) -> tuple[str, ...]:
+    return ("--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec, "--speed-fraction", "1.0")
+
+
+def _run_with_fault(cell, tree: Path, fault: str, after_s: float, capsys) -> tuple[int, dict, str]:
+    """A run of ``tree`` with ``fault`` sent to the faults port ``after_s`` seconds in; then ``clear``."""
+    timer = threading.Timer(after_s, cell.inject, args=(fault,))
+    timer.start()
+    try:
+        code, report = _run(str(tree), *_cell_args(cell))
+    finally:
+        timer.cancel()
+        cell.inject("clear")
+    return code, report, capsys.readouterr().err
+
+
+class SmallBoxBackend(UrBackend):
+    """The ur backend in a cell whose workspace ends at x = 0.30 m: every part lies beyond it."""
+
+    workspace = WorkspaceBox(x_m=(0.10, 0.30), y_m=(-0.55, 0.55), z_m=(0.005, 0.65))
+
+
+def test_the_safety_behaviours_against_the_controller(one_cube_cell, only_root, capsys):
+    cell = one_cube_cell
+    before = cell.truth()
+
+    # A dry run plans from the robot's joints and moves nothing.
+    code, report = _run(str(only_root), *_cell_args(cell), "--dry-run")
+    assert code == 0 and report["dry_run"]["motions"] > 5 and report["dry_run"]["refused"] == 0
+    assert "nothing was sent to the robot" in capsys.readouterr().err
+    assert cell.truth() == before
+
+    # A motion outside the workspace box is refused before it starts: one line, exit 1, nothing moved.
+    backends.register("ur-small-box", SmallBoxBackend)
+    code, report = _run(str(only_root), *_cell_args(cell)[2:], "--backend", "ur-small-box")
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1
+    assert "bt-arrange: safety stop: the joint move to TCP" in err and "outside the workspace box (x 0.100..0.300" in err
+    assert cell.truth() == before
+
+    # An emergency stop and a dropped RTDE socket mid-run: exit 1, one line naming it.
+    for fault, words in (("emergency_stop", "emergency stop"), ("drop rtde", "lost the")):
+        code, report, err = _run_with_fault(cell, only_root, fault, 2.0, capsys)
+        assert code == 1 and report["tree_status"] == "FAILURE", (fault, report)
+        assert err.count("\n") == 1 and err.startswith("bt-arrange: safety stop: ") and words in err, err
+
+    # A protective stop when a finger touches the part while the arm moves (the lift; in a real cell, a push).
+    code, report, err = _run_with_fault(cell, only_root, "protective_stop on_contact", 0.0, capsys)
+    assert code == 1 and "bt-arrange: safety stop: the robot is in a protective stop" in err
+    assert report["safety_stop"].startswith("the robot is in a protective stop")
+
+
+def test_ctrl_c_stops_the_arm_before_the_process_exits(one_cube_cell, only_root):
+    import rtde_receive
+
+    cell = one_cube_cell
+    environment = dict(os.environ)
+    command = [sys.executable, "-m", "bt_arrange.cli", "run", str(only_root), *_cell_args(cell)]
+    process = subprocess.Popen(command, env=environment, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)  # imports, connection, the first look: the arm is on its way to the cube
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err
+    receive = rtde_receive.RTDEReceiveInterface(cell.host)
+    try:
+        first = receive.getActualQ()
+        time.sleep(0.3)
+        assert max(abs(a - b) for a, b in zip(first, receive.getActualQ(), strict=True)) < 1e-4
+    finally:
+        receive.disconnect()
+
+
+def test_calibrate_on_the_controller_writes_a_camera_file_the_next_run_uses(tmp_path, capsys):
+    out = tmp_path / "camera.toml"
+    with ursim.launch(ROOT / "trees/single_cube.py", seed=0, host="127.0.77.3", board=True) as cell:
+        code = main(["calibrate", "--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec,
+                     "--views", "8", "--out", str(out), "--json"])  # fmt: skip
+        result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+        assert code == 0 and out.is_file() and result["reprojection_error_px"] < 1.0, result
+        code, report = _run(str(ROOT / "trees/single_cube.py"), *_cell_args(cell), "--dry-run", "--calibration", str(out))
+    assert code == 0
+    assert report["camera_margin_mm"] > 0.0  # the calibration's own error: the run read the file
