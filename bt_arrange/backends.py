@@ -294,10 +294,27 @@ class DryRunBackend(Protocol):
     dry_run_limits: str
 
 
-def require(backend: Backend, capability: type, what: str) -> Any:
-    """``backend`` when it declares ``capability``; a one-line ``BackendError`` naming what it cannot do otherwise."""
+@runtime_checkable
+class FoxgloveRun(Protocol):
+    """An optional capability of a run: it streams to a live Foxglove server (``run --foxglove``)."""
+
+    foxglove_live: Any
+
+
+@runtime_checkable
+class OptionedExperiment(Protocol):
+    """An optional capability of an ``Experiment``: options of its own (``--cell``, ``--strategy``), checked first."""
+
+    def check_options(self, **options: Any) -> None:
+        """A one-line ``PlanError`` for an option this backend's campaign cannot take."""
+        ...
+
+
+def require(backend: Any, capability: type, what: str, *, name: str | None = None) -> Any:
+    """``backend`` (or a run of it) when it declares ``capability``; a one-line ``BackendError`` otherwise."""
     if not isinstance(backend, capability):
-        raise BackendError(f"backend {backend.name!r} cannot {what} (it has no {capability.__name__} capability)")
+        shown = name if name is not None else getattr(backend, "name", type(backend).__name__)
+        raise BackendError(f"backend {shown!r} cannot {what} (it has no {capability.__name__} capability)")
     return backend
 
 

@@ -64,8 +64,7 @@ def _run(args: argparse.Namespace) -> int:
             run.transition_hooks.append(groot.on_transition)
             run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
         if foxglove is not None:
-            if not hasattr(run, "foxglove_live"):
-                raise BtArrangeError(f"backend {args.backend!r} cannot stream a run to Foxglove (--foxglove)")
+            backends.require(run, backends.FoxgloveRun, "stream a run to Foxglove (--foxglove)", name=args.backend)
             run.foxglove_live = foxglove
         if args.live:
             from bt_arrange.display import LiveView
