@@ -14,6 +14,7 @@ follow each setpoint within the period, as the simulator's position motors do.
 from __future__ import annotations
 
 import contextlib
+import time
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,8 @@ RTDE_FREQUENCY_HZ = 1.0 / CONTROL_PERIOD_S
 #: servoJ's lookahead (s, ur_rtde allows 0.03 to 0.2) and gain (100 to 2000): the stiffest tracking.
 SERVO_LOOKAHEAD_S = 0.03
 SERVO_GAIN = 2000.0
+#: A program found stopped is looked at this many periods more for the stop that halted it.
+STOP_REPORT_PERIODS = 3
 #: Deceleration of a stop (rad/s^2): servoStop's (ur_rtde's default is 10).
 STOP_DECELERATION_RAD_S2 = 4.0
 
@@ -71,17 +74,32 @@ def fault_reason(host: str, receive: Any, control: Any | None) -> str:
     try:
         if not receive.isConnected():
             return f"lost the RTDE connection to the robot at {host}"
-        if receive.isEmergencyStopped():
-            return "the robot is in an emergency stop"
-        if receive.isProtectiveStopped():
-            return "the robot is in a protective stop (a collision or a safety limit)"
+        stop = _safety_stop(receive)
+        if stop:
+            return stop
         if control is not None:
             if not control.isConnected():
                 return f"lost the control connection to the robot at {host}"
             if not control.isProgramRunning():
+                # A stop halts the program too, and the two interfaces receive their packages on their
+                # own threads: the control's may tell first. The cause is what a person needs to hear.
+                for _ in range(STOP_REPORT_PERIODS):
+                    time.sleep(CONTROL_PERIOD_S)
+                    stop = _safety_stop(receive)
+                    if stop:
+                        return stop
                 return "the robot's control program stopped (it no longer runs ur_rtde's control script)"
     except RuntimeError as error:
         return f"lost the connection to the robot at {host} ({error})"
+    return ""
+
+
+def _safety_stop(receive: Any) -> str:
+    """An emergency or a protective stop, as the receive interface reports it ("" for neither)."""
+    if receive.isEmergencyStopped():
+        return "the robot is in an emergency stop"
+    if receive.isProtectiveStopped():
+        return "the robot is in a protective stop (a collision or a safety limit)"
     return ""
 
 
@@ -99,6 +117,10 @@ class ControllerClock:
     def refresh(self) -> None:
         """Read the controller's timestamp (the world calls it once per period)."""
         self._now_s = float(self._receive.getTimestamp())
+
+    def release(self) -> None:
+        """Drop the receive interface (the world closes it); the clock keeps its last reading."""
+        self._receive = None
 
 
 class UrArm:
@@ -162,6 +184,11 @@ class UrArm:
 
             self._kinematics = ArmKinematics()
         return self._kinematics.forward(self._q)
+
+    def release(self) -> None:
+        """Drop the interfaces (the world closes them): every later command raises the ``SafetyStop``."""
+        self._halted = self._halted or "the robot's interfaces were closed"
+        self._control = self._receive = None
 
     def halt(self, reason: str) -> None:
         """No command goes to the robot from now on; a servo in progress is stopped where the link allows."""

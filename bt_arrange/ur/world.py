@@ -124,12 +124,20 @@ class UrWorld:
 
     def close(self) -> None:
         """Stop the arm (servoStop) and the control script, and let go of every link; safe after any fault."""
+        if self._control is None:
+            return
         stop_servo(self._control)
         with contextlib.suppress(RuntimeError):
             self._control.stopScript()
         for disconnect in (self._control.disconnect, self._receive.disconnect):
             with contextlib.suppress(RuntimeError):
                 disconnect()
+        # The interfaces go now, while nothing else talks to the controller: left to the garbage
+        # collector, ur_rtde's objects were destroyed in the middle of the next run's connection, and
+        # that crashed the process (one run in about ten, several runs in one process).
+        self._control = self._receive = None
+        self.arm.release()
+        self._clock.release()
         with contextlib.suppress(Exception):
             self.gripper.close_link()
         with contextlib.suppress(Exception):
@@ -283,7 +291,10 @@ class DryRunWorld:
 
     def close(self) -> None:
         """Let go of the receive interface and the camera."""
+        if self._receive is None:
+            return
         with contextlib.suppress(RuntimeError):
             self._receive.disconnect()
+        self._receive = None
         with contextlib.suppress(Exception):
             getattr(self.camera, "close", lambda: None)()

@@ -165,6 +165,11 @@ def test_the_safety_behaviours_against_the_controller(one_cube_cell, only_root, 
     # Ctrl-C: the arm is stopped (servoStop) before the process exits.
     _ctrl_c_stops_the_arm(cell, only_root)
 
+    # A tree file with only create_root runs to the end: the cube within 1 mm by the controller's truth.
+    code, report = _run(str(only_root), *_cell_args(cell))
+    x, y, _, _ = cell.truth()["red"]
+    assert code == 0 and math.hypot(x - 0.50, y) * 1000 < 1.0, report
+
     # A protective stop when a finger touches the part while the arm moves (the lift; in a real cell, a push).
     # Last: the cube stays in the pads.
     code, report, err = _run_with_fault(cell, only_root, "protective_stop on_contact", capsys)
