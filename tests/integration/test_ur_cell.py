@@ -23,13 +23,10 @@ import pytest
 pytest.importorskip("rtde_control")
 ursim = pytest.importorskip("bt_arrange_sim.ursim")
 
-from bt_arrange import backends  # noqa: E402
-from bt_arrange.cli import main  # noqa: E402
-from bt_arrange.safety import WorkspaceBox  # noqa: E402
-from bt_arrange.ur.backend import UrBackend  # noqa: E402
-
 ROOT = Path(__file__).resolve().parents[2]
 FOUR_CUBES = {"red": (0.45, 0.05), "green": (0.45, -0.05), "blue": (0.55, 0.05), "yellow": (0.55, -0.05)}
+#: The world time into a run at which a fault is injected: the arm is on its way to the cube.
+FAULT_AT_S = 1.0
 #: A tree file with only create_root (no scene: a real cell's parts lie where they lie), the target of
 #: trees/single_cube.py, whose scene the controller builds.
 ONLY_ROOT = """from bt_arrange.trees import Target, arrangement
@@ -40,16 +37,18 @@ def create_root(threshold_mm: float = 1.0):
 """
 
 
-def _run(*args: str) -> tuple[int, dict]:
-    """``bt-arrange run ARGS --json`` in this process: its exit status and its report."""
-    import contextlib
-    import io
+def _cli(*args: str, env: dict[str, str] | None = None) -> tuple[int, str, str]:
+    """``bt-arrange ARGS`` in a fresh process (``ur_cli.py``): its exit status, stdout and stderr."""
+    command = [sys.executable, str(Path(__file__).with_name("ur_cli.py")), *args]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300, env={**os.environ, **(env or {})})
+    return done.returncode, done.stdout, done.stderr
 
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main(["run", *args, "--json"])
-    text = out.getvalue().strip()
-    return code, json.loads(text.splitlines()[-1]) if text else {}
+
+def _run(*args: str, env: dict[str, str] | None = None) -> tuple[int, dict, str]:
+    """``bt-arrange run ARGS --json``: its exit status, its report and its stderr."""
+    code, out, err = _cli("run", *args, "--json", env=env)
+    lines = out.strip().splitlines()
+    return code, json.loads(lines[-1]) if lines else {}, err
 
 
 def _cube_error(truth: dict, name: str) -> tuple[float, float]:
@@ -67,7 +66,7 @@ def _moved_mm(before: dict, after: dict) -> float:
 
 def test_four_cubes_through_the_ur_backend_end_within_a_millimetre_by_the_controllers_truth(tmp_path):
     with ursim.launch(ROOT / "trees/four_cubes.py", seed=0, host="127.0.77.1") as cell:
-        code, report = _run(
+        code, report, _ = _run(
             str(ROOT / "trees/four_cubes.py"),
             *("--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec, "--speed-fraction", "1.0"),
         )
@@ -96,60 +95,28 @@ def _cell_args(cell) -> tuple[str, ...]:
     return ("--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec, "--speed-fraction", "1.0")
 
 
-class FaultBackend(UrBackend):
-    """The ur backend with a fault sent to the controller's faults port at a moment of the run's world time.
-
-    Deterministic where a wall-clock timer is not: ``AT_S`` after the tree starts the arm is on its way
-    to the cube and nothing has been touched, so the cell is as it was for the next run.
-    """
-
-    cell = None
-    fault = ""
-    AT_S = 1.0
-
-    def open_run(self, root, starts=(), **options):
-        session = super().open_run(root, starts, **options)
-        sent: list[str] = []
-
-        def inject(tree_root) -> None:
-            if not sent and session.elapsed_s() >= self.AT_S:
-                sent.append(self.cell.inject(self.fault))
-
-        session.tick_hooks.append(inject)
-        return session
-
-
-def _run_with_fault(cell, tree: Path, fault: str, capsys) -> tuple[int, dict, str]:
-    """A run of ``tree`` with ``fault`` injected mid-motion (``FaultBackend``); then the faults are cleared."""
-    FaultBackend.cell, FaultBackend.fault = cell, fault
-    backends.register("ur-fault", FaultBackend)
+def _run_with_fault(cell, tree: Path, fault: str) -> tuple[int, dict, str]:
+    """A run of ``tree`` with ``fault`` injected mid-motion (``ur_cli.FaultBackend``); then the faults are cleared."""
+    faults = f"{cell.host}:{cell.faults_port}"
+    env = {"BT_UR_FAULT": fault, "BT_UR_FAULTS": faults, "BT_UR_FAULT_AT_S": str(FAULT_AT_S)}
     try:
-        code, report = _run(str(tree), *_cell_args(cell)[2:], "--backend", "ur-fault")
+        return _run(str(tree), *_cell_args(cell)[2:], "--backend", "ur-fault", env=env)
     finally:
         cell.inject("clear")
-    return code, report, capsys.readouterr().err
 
 
-class SmallBoxBackend(UrBackend):
-    """The ur backend in a cell whose workspace ends at x = 0.30 m: every part lies beyond it."""
-
-    workspace = WorkspaceBox(x_m=(0.10, 0.30), y_m=(-0.55, 0.55), z_m=(0.005, 0.65))
-
-
-def test_the_safety_behaviours_against_the_controller(one_cube_cell, only_root, capsys):
+def test_the_safety_behaviours_against_the_controller(one_cube_cell, only_root):
     cell = one_cube_cell
     before = cell.truth()
 
     # A dry run plans from the robot's joints and moves nothing.
-    code, report = _run(str(only_root), *_cell_args(cell), "--dry-run")
+    code, report, err = _run(str(only_root), *_cell_args(cell), "--dry-run")
     assert code == 0 and report["dry_run"]["motions"] > 5 and report["dry_run"]["refused"] == 0
-    assert "nothing was sent to the robot" in capsys.readouterr().err
+    assert "nothing was sent to the robot" in err
     assert _moved_mm(before, cell.truth()) < 0.01
 
     # A motion outside the workspace box is refused before it starts: one line, exit 1, nothing moved.
-    backends.register("ur-small-box", SmallBoxBackend)
-    code, report = _run(str(only_root), *_cell_args(cell)[2:], "--backend", "ur-small-box")
-    err = capsys.readouterr().err
+    code, report, err = _run(str(only_root), *_cell_args(cell)[2:], "--backend", "ur-small-box")
     assert code == 1 and err.count("\n") == 1
     assert "bt-arrange: safety stop: the joint move to TCP" in err
     assert "outside the workspace box (x 0.100..0.300" in err
@@ -157,22 +124,22 @@ def test_the_safety_behaviours_against_the_controller(one_cube_cell, only_root, 
 
     # An emergency stop and a dropped RTDE socket mid-motion: exit 1, one line naming it, nothing moves afterwards.
     for fault, words in (("emergency_stop", "emergency stop"), ("drop rtde", "lost the RTDE connection")):
-        code, report, err = _run_with_fault(cell, only_root, fault, capsys)
+        code, report, err = _run_with_fault(cell, only_root, fault)
         assert code == 1 and report["tree_status"] == "FAILURE", (fault, report, err)
         assert err.count("\n") == 1 and err.startswith("bt-arrange: safety stop: ") and words in err, err
-        assert report["sim_seconds"] < FaultBackend.AT_S + 0.5  # the tree ended at the fault
+        assert report["sim_seconds"] < FAULT_AT_S + 0.5  # the tree ended at the fault
 
     # Ctrl-C: the arm is stopped (servoStop) before the process exits.
     _ctrl_c_stops_the_arm(cell, only_root)
 
     # A tree file with only create_root runs to the end: the cube within 1 mm by the controller's truth.
-    code, report = _run(str(only_root), *_cell_args(cell))
+    code, report, _ = _run(str(only_root), *_cell_args(cell))
     x, y, _, _ = cell.truth()["red"]
     assert code == 0 and math.hypot(x - 0.50, y) * 1000 < 1.0, report
 
     # A protective stop when a finger touches the part while the arm moves (the lift; in a real cell, a push).
     # Last: the cube stays in the pads.
-    code, report, err = _run_with_fault(cell, only_root, "protective_stop on_contact", capsys)
+    code, report, err = _run_with_fault(cell, only_root, "protective_stop on_contact")
     assert code == 1 and "bt-arrange: safety stop: the robot is in a protective stop" in err
     assert report["safety_stop"].startswith("the robot is in a protective stop")
 
@@ -200,14 +167,14 @@ def _ctrl_c_stops_the_arm(cell, only_root: Path) -> None:
         receive.disconnect()
 
 
-def test_calibrate_on_the_controller_writes_a_camera_file_the_next_run_uses(tmp_path, capsys):
+def test_calibrate_on_the_controller_writes_a_camera_file_the_next_run_uses(tmp_path):
     out = tmp_path / "camera.toml"
     with ursim.launch(ROOT / "trees/single_cube.py", seed=0, host="127.0.77.3", board=True) as cell:
-        code = main(["calibrate", "--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec,
-                     "--views", "8", "--out", str(out), "--json"])  # fmt: skip
-        result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+        code, stdout, err = _cli("calibrate", "--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec,
+                                 "--views", "8", "--out", str(out), "--json")  # fmt: skip
+        result = json.loads(stdout.strip().splitlines()[-1])
         assert code == 0 and out.is_file() and result["reprojection_error_px"] < 1.0, result
         tree = str(ROOT / "trees/single_cube.py")
-        code, report = _run(tree, *_cell_args(cell), "--dry-run", "--calibration", str(out))
+        code, report, _ = _run(tree, *_cell_args(cell), "--dry-run", "--calibration", str(out))
     assert code == 0
     assert report["camera_margin_mm"] > 0.0  # the calibration's own error: the run read the file
