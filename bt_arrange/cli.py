@@ -43,6 +43,7 @@ from bt_arrange.cli_common import (
     EXIT_BROKEN_PIPE,
     EXIT_CODES_HELP,
     EXIT_INTERRUPTED,
+    EXIT_NOT_WITHIN,
     EXIT_OK,
     EXIT_RECORD,
     EXIT_TERMINATED,
@@ -65,6 +66,7 @@ from bt_arrange.cli_run import _run
 from bt_arrange.errors import BtArrangeError, RecordError, TrialsErroredError
 from bt_arrange.foxglove.streams import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_arrange.foxglove.streams import port_argument as foxglove_port
+from bt_arrange.safety import SafetyStop
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -440,6 +442,10 @@ def main(argv: list[str] | None = None) -> int:
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE
+    except SafetyStop as stop:
+        # A stop outside a tree's ticks (a camera lost while a record's image is taken): the same one line.
+        print(f"bt-arrange: safety stop: {stop.reason}", file=sys.stderr)
+        return EXIT_NOT_WITHIN
     except KeyboardInterrupt:
         print("bt-arrange: interrupted; what was logged so far is kept", file=sys.stderr)
         return EXIT_INTERRUPTED

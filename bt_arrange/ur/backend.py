@@ -20,7 +20,7 @@ import py_trees
 
 from bt_arrange import paper_cell
 from bt_arrange.errors import BackendError
-from bt_arrange.safety import REAL_CELL_SPEED_FRACTION, WorkspaceBox
+from bt_arrange.safety import REAL_CELL_SPEED_FRACTION, SafetyStop, WorkspaceBox
 
 if TYPE_CHECKING:
     from bt_arrange.session import Session
@@ -197,7 +197,10 @@ class UrBackend:
             link.close()
         camera = self._camera()
         k = camera.intrinsics
-        frame = camera.capture()
+        try:
+            frame = camera.capture()
+        except SafetyStop as stop:
+            raise BackendError(stop.reason) from None
         yield (
             f"camera {self.camera_spec or 'default'}: {camera.model}, {k.width_px}x{k.height_px} px, "
             f"fx {k.fx_px:.1f} px; one frame {frame.rgb.shape[1]}x{frame.rgb.shape[0]} px"

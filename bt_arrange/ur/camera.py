@@ -32,6 +32,7 @@ import numpy as np
 from bt_arrange.errors import BackendError
 from bt_arrange.geometry import Pose
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange.safety import SafetyStop
 
 #: How long one HTTP request to the camera may take (s): a 1920x1080 PNG over a lab network.
 HTTP_TIMEOUT_S = 10.0
@@ -97,7 +98,17 @@ class NetworkCamera:
         self._clock = clock
 
     def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
-        """One frame taken now; only ``window`` (read out by the camera at its binning) when given."""
+        """One frame taken now; only ``window`` (read out by the camera at its binning) when given.
+
+        A camera lost mid-run ends the run (``SafetyStop``: the arm is braked by the framework): a
+        tree that cannot look must not go on moving parts it cannot see.
+        """
+        try:
+            return self._capture(with_depth, window)
+        except CameraLinkError as error:
+            raise SafetyStop(str(error), arm_stopped=False) from error
+
+    def _capture(self, with_depth: bool, window: PixelWindow | None) -> CameraFrame:
         import cv2
 
         query = ""
