@@ -226,6 +226,17 @@ def test_network_camera_reads_intrinsics_frames_windows_and_depth(camera_url):
     assert windowed.depth_m is not None and float(windowed.depth_m[0, 0]) == pytest.approx(0.7)
 
 
+def test_a_camera_lost_mid_run_is_a_safety_stop_with_the_arm_braked():
+    server = socketserver.ThreadingTCPServer(("127.0.0.1", 0), CameraHandler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    camera = open_camera(f"http://127.0.0.1:{server.server_address[1]}/", paper_cell.camera_pose_world())
+    server.shutdown()
+    server.server_close()
+    with pytest.raises(SafetyStop, match="cannot reach the camera at http://127.0.0.1:") as stopped:
+        camera.capture()
+    assert not stopped.value.arm_stopped
+
+
 def test_camera_errors_are_one_line():
     with pytest.raises(BackendError, match="cannot reach the camera at http://127.0.0.1:1/"):
         open_camera("http://127.0.0.1:1/", paper_cell.camera_pose_world())
