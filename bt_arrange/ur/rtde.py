@@ -82,16 +82,29 @@ def fault_reason(host: str, receive: Any, control: Any | None) -> str:
                 return f"lost the control connection to the robot at {host}"
             if not control.isProgramRunning():
                 # A stop halts the program too, and the two interfaces receive their packages on their
-                # own threads: the control's may tell first. The cause is what a person needs to hear.
-                for _ in range(STOP_REPORT_PERIODS):
-                    time.sleep(CONTROL_PERIOD_S)
-                    stop = _safety_stop(receive)
-                    if stop:
-                        return stop
+                # own threads: the control's may tell first (``explained`` waits for the cause).
                 return "the robot's control program stopped (it no longer runs ur_rtde's control script)"
     except RuntimeError as error:
         return f"lost the connection to the robot at {host} ({error})"
     return ""
+
+
+def explained(reason: str, receive: Any) -> str:
+    """``reason``, or the emergency or protective stop behind it if the receive interface reports one soon.
+
+    A person needs to hear the cause: a stop halts the program and makes the gripper read ``?`` too,
+    and those may be seen a period or two before the receive interface's package says why.
+    """
+    for attempt in range(STOP_REPORT_PERIODS + 1):
+        try:
+            stop = _safety_stop(receive) if receive is not None and receive.isConnected() else ""
+        except RuntimeError:
+            return reason
+        if stop:
+            return stop
+        if attempt < STOP_REPORT_PERIODS:
+            time.sleep(CONTROL_PERIOD_S)
+    return reason
 
 
 def _safety_stop(receive: Any) -> str:

@@ -31,6 +31,7 @@ from bt_arrange.ur.rtde import (
     ControllerClock,
     RobotLinkError,
     UrArm,
+    explained,
     fault_reason,
     stop_servo,
 )
@@ -113,7 +114,13 @@ class UrWorld:
             self._stop(f"{error}")
 
     def _stop(self, reason: str) -> None:
-        """Latch the stop, stop the servo where the link allows, and end the tree."""
+        """Latch the stop, stop the servo where the link allows, and end the tree.
+
+        The gripper's socket (its values read ``?``) or the control script may tell of a stop before
+        the receive interface's next package does: a few periods more are given to it, so the line
+        names the cause (an emergency or a protective stop), not its echo.
+        """
+        reason = explained(reason, self._receive)
         self._stopped = reason
         self.arm.halt(reason)
         raise SafetyStop(reason)
@@ -126,9 +133,11 @@ class UrWorld:
         """Stop the arm (servoStop) and the control script, and let go of every link; safe after any fault."""
         if self._control is None:
             return
-        stop_servo(self._control)
+        # Only a running program is told to stop (ur_rtde complains on stderr to a stopped one).
         with contextlib.suppress(RuntimeError):
-            self._control.stopScript()
+            if self._control.isConnected() and self._control.isProgramRunning():
+                stop_servo(self._control)
+                self._control.stopScript()
         for disconnect in (self._control.disconnect, self._receive.disconnect):
             with contextlib.suppress(RuntimeError):
                 disconnect()
