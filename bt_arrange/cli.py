@@ -298,6 +298,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_backend(calibrate)
     add_cell_options(calibrate)
+    calibrate.add_argument(
+        "--speed-fraction",
+        type=_speed_fraction,
+        default=None,
+        metavar="F",
+        help="every motion at F of its planned speed (0 < F <= 1); default the backend's (ur: 0.5)",
+    )
     calibrate.add_argument("--cell", default="ideal", help=CELL_HELP)
     calibrate.set_defaults(handler=_calibrate)
 

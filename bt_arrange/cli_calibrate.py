@@ -32,6 +32,7 @@ def _calibrate(args: argparse.Namespace) -> int:
         record_dir=args.record,
         time_limit_s=args.time_limit_s,
         **({"cell": args.cell, "run_seed": args.seed} if args.cell != "ideal" else {}),
+        **_speed_option(backend, args.speed_fraction),
     ) as run:
         if args.live:
             from bt_arrange.display import LiveView
@@ -112,3 +113,11 @@ def _calibrate(args: argparse.Namespace) -> int:
         raise fault
     print(f"wrote {out}")
     return EXIT_OK
+
+
+def _speed_option(backend: Any, speed_fraction: float | None) -> dict[str, Any]:
+    """``speed_fraction`` for ``open_calibration`` when given; refused by a backend without the capability."""
+    if speed_fraction is None:
+        return {}
+    require(backend, backends.SafetyBackend, "calibrate at a speed fraction (--speed-fraction)")
+    return {"speed_fraction": speed_fraction}

@@ -136,6 +136,7 @@ class UrBackend:
         gui: bool = False,
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        speed_fraction: float | None = None,
         **options: Any,
     ) -> Any:
         """The ChArUco procedure on the real cell: the board bolted to the flange (``BoardMount``), not yet ticked.
@@ -171,7 +172,9 @@ class UrBackend:
             time_limit_s=time_limit_s,
             plane_poses=plane_poses,
             sheet=TABLE_SHEET,
-            motion_safety=MotionSafety(self.default_speed_fraction, self.workspace),
+            motion_safety=MotionSafety(
+                self.default_speed_fraction if speed_fraction is None else speed_fraction, self.workspace
+            ),
         )
 
     def check(self) -> Iterator[str]:

@@ -197,7 +197,7 @@ def test_calibrate_on_the_controller_writes_a_camera_file_the_next_run_uses(tmp_
     out = tmp_path / "camera.toml"
     with ursim.launch(ROOT / "trees/single_cube.py", seed=0, host="127.0.77.3", board=True) as cell:
         code, stdout, err = _cli("calibrate", "--backend", "ur", "--robot", cell.host, "--camera", cell.camera_spec,
-                                 "--views", "6", "--out", str(out), "--json")  # fmt: skip
+                                 "--views", "6", "--speed-fraction", "1.0", "--out", str(out), "--json")  # fmt: skip
         result = json.loads(stdout.strip().splitlines()[-1])
         assert code == 0 and out.is_file() and result["reprojection_error_px"] < 1.0, result
         tree = str(ROOT / "trees/single_cube.py")
