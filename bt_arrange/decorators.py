@@ -117,6 +117,10 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         if self.yaw_key is not None:
             self.blackboard.register_key(self.yaw_key, access=Access.READ)
         self.blackboard.register_key(CAMERA_MARGIN_KEY, access=Access.READ)
+        #: What the last look measured the part on (``keys.MEASURED_ON``): free edges cannot confirm "within".
+        self.measured_on_key = keys.key(self.obj, keys.MEASURED_ON) if self.obj else None
+        if self.measured_on_key is not None:
+            self.blackboard.register_key(self.measured_on_key, access=Access.READ)
         if corrections_key is not None:
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
         if self.stalled_key is not None:
@@ -186,6 +190,14 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         yaw_text = "" if yaw is None or self.yaw_threshold_deg is None else f", yaw error {fixed(yaw, sign=True)} deg"
         margin = self._margin_mm()
         margin_text = f" + camera {margin:.2f} mm" if margin > 0 else ""
+        if self.tolerance.within(offset, yaw, margin) and self._measured_on_free_edges():
+            # The camera's margin covers a whole face, not a face merged with a neighbour's: pushing
+            # further cannot make this measurement better, so the part is left unconfirmed, never within.
+            self.feedback_message = (
+                f"unconfirmed: offset {offset:.2f} mm{yaw_text} measured on its free edges only (its face merged "
+                f"with a neighbour's of its colour), which cannot confirm it within {self.threshold_mm:.2f} mm"
+            )
+            return Status.FAILURE
         if self.tolerance.within(offset, yaw, margin):
             under = (
                 f"offset {offset:.2f} mm"  # no offset threshold: the yaw alone decides (a regrasp)
@@ -227,6 +239,11 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self._best = (min(self._best[0], now[0]), min(self._best[1], now[1]))
         self._stalls = 0 if improved else self._stalls + 1
         return self._stalls >= self.stall_after
+
+    def _measured_on_free_edges(self) -> bool:
+        """True when the last look measured the part on its free edges only (``keys.FREE_EDGES``)."""
+        key = self.measured_on_key
+        return key is not None and self.blackboard.exists(key) and self.blackboard.get(key) == keys.FREE_EDGES
 
     def _margin_mm(self) -> float:
         """The camera's own error (mm) the session wrote, 0 without one."""

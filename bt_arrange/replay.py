@@ -72,6 +72,39 @@ def format_value(value: Any) -> str:
     return str(value)
 
 
+#: A table cell's text longer than this is summarised (``4 values``, a type's name).
+CELL_CHARS = 40
+
+
+def _cell(value: Any) -> str:
+    text = format_value(value)
+    if len(text) <= CELL_CHARS:
+        return text
+    name = getattr(value, "name", None)
+    if isinstance(name, str):
+        return name
+    if isinstance(value, (tuple, list)) or hasattr(value, "__len__"):
+        return f"{len(value)} values"
+    return type(value).__name__
+
+
+def table_of(value: Any) -> dict[str, Any] | None:
+    """A sequence of records of one type (a puzzle's pieces, its solved targets) as a table, else None.
+
+    ``{"columns": [field names], "rows": [[cell texts]]}``; a long field is summarised (``CELL_CHARS``).
+    """
+    if not isinstance(value, (tuple, list)) or not value:
+        return None
+    first = value[0]
+    if not dataclasses.is_dataclass(first) or isinstance(first, type):
+        return None
+    if any(type(item) is not type(first) for item in value):
+        return None
+    columns = [f.name for f in dataclasses.fields(first)]
+    rows = [[_cell(getattr(item, column)) for column in columns] for item in value]
+    return {"columns": columns, "rows": rows}
+
+
 @dataclass
 class ReplayRecorder:
     """Collects what the replay page shows while a tree runs; ``observe(time_s)`` after every tick."""
@@ -83,19 +116,41 @@ class ReplayRecorder:
     images: list[dict[str, Any]] = field(init=False, default_factory=list)
 
     def __post_init__(self) -> None:
-        order = list(_preorder(self.root))
-        self._behaviours = [node for node, _, _ in order]
-        self.nodes = [
-            {"name": node.name, "kind": type_label(node), "depth": depth, "parent": parent}
-            for node, depth, parent in order
-        ]
-        self._status = [Status.INVALID] * len(order)
-        self._feedback = [""] * len(order)
+        self._behaviours: list[py_trees.behaviour.Behaviour] = []
+        self._index_of: dict[Any, int] = {}
+        self._child_counts: list[int] = []
+        self.nodes = []
+        self._status: list[Status] = []
+        self._feedback: list[str] = []
         self._values: dict[str, tuple[Any, str]] = {}
+        self._grow(0.0)
+
+    def _grow(self, time_s: float) -> None:
+        """Take in the nodes built since the last look (a solved puzzle's pieces), born at ``time_s``.
+
+        A node keeps its index for the whole run (the events refer to it); ``write`` puts them in
+        the tree's order at the end.
+        """
+        order = list(_preorder(self.root))
+        for node, depth, parent in order:
+            if node.id in self._index_of:
+                self._child_counts[self._index_of[node.id]] = len(node.children)
+                continue
+            parent_index = -1 if parent < 0 else self._index_of[order[parent][0].id]
+            self._index_of[node.id] = len(self._behaviours)
+            self._behaviours.append(node)
+            self._child_counts.append(len(node.children))
+            self.nodes.append(
+                {"name": node.name, "kind": type_label(node), "depth": depth, "parent": parent_index, "born": time_s}
+            )
+            self._status.append(Status.INVALID)
+            self._feedback.append("")
 
     def observe(self, time_s: float) -> None:
         """Note every status, feedback message and blackboard value that changed since the last look."""
         time_s = round(time_s, 4)
+        if any(len(node.children) != count for node, count in zip(self._behaviours, self._child_counts, strict=True)):
+            self._grow(time_s)
         for index, node in enumerate(self._behaviours):
             if node.status != self._status[index] or node.feedback_message != self._feedback[index]:
                 self._status[index] = node.status
@@ -109,7 +164,11 @@ class ReplayRecorder:
                 continue
             text = format_value(value)
             if last is None or last[1] != text:
-                self.blackboard.append({"t": time_s, "key": key, "value": text})
+                entry: dict[str, Any] = {"t": time_s, "key": key, "value": text}
+                rows = table_of(value)
+                if rows is not None:
+                    entry["table"] = rows
+                self.blackboard.append(entry)
             self._values[key] = (value, text)
 
     def add_image(self, time_s: float, label: str, path: Path | str, data: bytes | None = None) -> None:
@@ -135,11 +194,19 @@ class ReplayRecorder:
             png = image.get("data")
             data = base64.b64encode(png if png is not None else Path(image["path"]).read_bytes()).decode("ascii")
             images.append({"t": image["t"], "label": image["label"], "src": f"data:image/png;base64,{data}"})
+        # The nodes in the tree's order at the end (those built while it ran under their parent),
+        # the events renumbered to match.
+        order = [self._index_of[node.id] for node, _, _ in _preorder(self.root) if node.id in self._index_of]
+        shown = set(order)
+        order += [index for index in range(len(self.nodes)) if index not in shown]
+        position = {old: new for new, old in enumerate(order)}
+        nodes = [{**self.nodes[old], "parent": position.get(self.nodes[old]["parent"], -1)} for old in order]
+        events = [{**event, "node": position[event["node"]]} for event in self.events]
         payload = {
             "title": title,
             "summary": summary or {},
-            "nodes": self.nodes,
-            "events": self.events,
+            "nodes": nodes,
+            "events": events,
             "blackboard": self.blackboard,
             "images": images,
             "moments": self.moments(),
@@ -223,6 +290,8 @@ _PAGE = r"""<!DOCTYPE html>
 <title>__TITLE__ - bt-arrange replay</title>
 <style>
   body { font: 14px/1.35 system-ui, sans-serif; margin: 0; color: #222; background: #fafafa; }
+  table.records { border-collapse: collapse; font-size: 12px; }
+  table.records th, table.records td { border: 1px solid #ddd; padding: 1px 4px; }
   header { position: sticky; top: 0; background: #fff; border-bottom: 1px solid #ddd; padding: 8px 14px; z-index: 1; }
   header h1 { font-size: 17px; margin: 0 0 4px 0; }
   #controls { display: flex; gap: 10px; align-items: center; }
@@ -372,6 +441,19 @@ _PAGE = r"""<!DOCTYPE html>
     return lo;
   }
 
+  function recordTable(table) {
+    var box = el("table", "records");
+    var head = el("tr");
+    table.columns.forEach(function (c) { head.appendChild(el("th", "", c)); });
+    box.appendChild(head);
+    table.rows.forEach(function (cells) {
+      var tr = el("tr");
+      cells.forEach(function (c) { tr.appendChild(el("td", "", c)); });
+      box.appendChild(tr);
+    });
+    return box;
+  }
+
   function render(index) {
     var t = moments[index];
     var status = data.nodes.map(function () { return "INVALID"; });
@@ -386,16 +468,18 @@ _PAGE = r"""<!DOCTYPE html>
       log.push(e);
     });
     rows.forEach(function (row, i) {
+      row.hidden = (data.nodes[i].born || 0) > t + 1e-9;  // built later in the run (a solved puzzle's pieces)
       row.dataset.status = status[i];
       row.children[0].textContent = status[i];
       row.children[3].textContent = feedback[i];
       row.classList.toggle("changed", !!changed[i]);
     });
 
-    var values = {}, since = {};
+    var values = {}, since = {}, tables = {};
     data.blackboard.forEach(function (b) {
       if (b.t > t + 1e-9) return;
       values[b.key] = b.value;
+      tables[b.key] = b.table || null;
       since[b.key] = b.t;
     });
     var body = document.getElementById("blackboard");
@@ -404,7 +488,9 @@ _PAGE = r"""<!DOCTYPE html>
       var tr = el("tr", since[key] === t ? "changed" : "");
       tr.dataset.key = key;
       tr.appendChild(el("td", "key", key));
-      tr.appendChild(el("td", "value", values[key]));
+      var cell = el("td", "value", tables[key] ? "" : values[key]);
+      if (tables[key]) cell.appendChild(recordTable(tables[key]));
+      tr.appendChild(cell);
       tr.appendChild(el("td", "since", since[key].toFixed(2)));
       body.appendChild(tr);
     });

@@ -459,7 +459,7 @@ class Session:
             placed_yaw = first.yaw_error_deg if first else _get(report, keys.key(target.obj, keys.PLACED_YAW_ERROR_DEG))
             final = _get(report, keys.key(target.obj, keys.OFFSET_MM))
             final_yaw = _get(report, keys.key(target.obj, keys.YAW_ERROR_DEG))
-            status = self._status(final, final_yaw)
+            status = self._status(final, final_yaw, _get(report, keys.key(target.obj, keys.MEASURED_ON)))
             outcomes.append(
                 ObjectOutcome(
                     name=target.obj,
@@ -536,11 +536,20 @@ class Session:
         earlier = [t for t in ended if t.new == Status.FAILURE.value]
         return earlier[-1].feedback if earlier else ""
 
-    def _status(self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None) -> str:
-        """Within only when the offset with the camera's margin, and the yaw error, are under their thresholds."""
+    def _status(
+        self, final_offset_mm: float | None, final_yaw_error_deg: float | None = None, measured_on: Any = None
+    ) -> str:
+        """Within only when the offset with the camera's margin, and the yaw error, are under their thresholds.
+
+        ``unconfirmed`` when they are but the last look measured the part on its free edges only
+        (``keys.FREE_EDGES``: a measurement the camera's margin does not cover), or did not find it
+        (``keys.NOT_MEASURED``: the offset is from an earlier look).
+        """
         if final_offset_mm is None or self.plan is None:
             return "failed"
         within = self.plan.tolerance.within(final_offset_mm, final_yaw_error_deg, self.camera_margin_mm)
+        if within and measured_on in (keys.FREE_EDGES, keys.NOT_MEASURED):
+            return "unconfirmed"
         return "within" if within else "outside"
 
     def _truth_offset_mm(self, target: Target) -> float | None:

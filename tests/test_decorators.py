@@ -208,3 +208,20 @@ def test_an_invalid_threshold_or_attempt_count_is_a_plan_error(threshold_mm, max
 def test_a_threshold_given_as_text_is_a_plan_error() -> None:
     with pytest.raises(PlanError, match="threshold '1' mm"):
         RetryUntilThreshold("correct", StatusQueue("push", [Status.SUCCESS], None), OFFSET, "1", 3)
+
+
+@pytest.mark.parametrize(("measured_on", "within"), [("whole face", True), ("free edges", False), (None, True)])
+def test_only_a_whole_face_confirms_a_part_within(measured_on: str | None, within: bool) -> None:
+    """A look on the free edges of a face merged with a neighbour's steers pushes but never confirms "within"."""
+    write_offset(0.2)
+    if measured_on is not None:
+        client = py_trees.blackboard.Client(name="inspect")
+        client.register_key("/red/measured_on", access=Access.WRITE)
+        client.set("/red/measured_on", measured_on, overwrite=True)
+    push = StatusQueue("push", [Status.SUCCESS], None)
+    decorator = RetryUntilThreshold("correct red", push, OFFSET, 1.0, 3)
+    decorator.tick_once()
+    assert decorator.status == (Status.SUCCESS if within else Status.FAILURE)
+    assert push.status == Status.INVALID, "pushing further cannot make the measurement better"
+    if not within:
+        assert decorator.feedback_message.startswith("unconfirmed: offset 0.20 mm measured on its free edges only")

@@ -53,7 +53,7 @@ def test_each_of_two_merged_pieces_is_measured_on_its_free_edges_within_a_tenth(
         for around in ((piece.x_m, piece.y_m), None):
             detection = look_for(frame, piece, around)
             assert detection.found, detection.reason
-            assert "free edges" in detection.reason
+            assert "free edges" in detection.reason and detection.merged
             if around is None:
                 assert "one of a blob as large as" in detection.reason
             pose = detection.pose_world
@@ -67,7 +67,7 @@ def test_a_gap_the_image_shows_cuts_the_faces_apart(seed, slab_yaw_deg, gap_mm) 
     for piece, (x, y) in pieces:
         detection = look_for(frame, piece, None)
         assert detection.found, detection.reason
-        assert "free edges" not in detection.reason  # a whole face of its own
+        assert "free edges" not in detection.reason and not detection.merged  # a whole face of its own
         assert len(detection.candidates_xy_m) == 2  # two blobs
         assert 1000 * math.hypot(detection.pose_world.x_m - x, detection.pose_world.y_m - y) < 0.1
 

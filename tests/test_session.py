@@ -252,3 +252,19 @@ def test_plans_and_xml_trees_run_on_the_chosen_backend_without_a_simulator() -> 
     header = next(line for line in lines if line.startswith("object"))
     assert "truth" not in header and "pushed" in header
     assert "single_cube.xml: 1 of 1 objects within 1 mm" in table
+
+
+@pytest.mark.parametrize("last_look", ["not measured", "free edges"])
+def test_a_part_whose_last_look_cannot_confirm_it_is_unconfirmed_not_within(last_look: str) -> None:
+    """Within by an earlier offset, but the last look lost the part or saw only its free edges: unconfirmed."""
+    from bt_arrange.trees import plan_of
+
+    arranged = arrangement([RED])
+    lost = py_trees.behaviours.SetBlackboardVariable("the last look", "/red/measured_on", last_look, overwrite=True)
+    root = py_trees.composites.Sequence("root", memory=True, children=[arranged, lost])
+    with session(root, [RED_START], Opener(), plan=plan_of(arranged)) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert red.final_offset_mm is not None and red.final_offset_mm < 1.0
+    assert red.status == "unconfirmed" and not report.all_within_threshold
+    assert report.within_text().startswith("0 of 1 objects within")

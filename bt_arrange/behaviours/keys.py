@@ -15,6 +15,9 @@ field constant).
   Inspect, each time it finds the part; read by Push.
 - ``/<obj>/yaw_error_deg``, ``float``: measured minus target yaw, folded to the part's symmetry. Written by Inspect,
   each time it finds the part; read by RepeatUntilWithin, Push.
+- ``/<obj>/measured_on``, ``"whole face"``, ``"free edges"`` when the part's face merged with a neighbour's of its
+  colour, or ``"not measured"`` when the last look did not find it. Written by Inspect, at each look; read by
+  RepeatUntilWithin, the report (only a whole face confirms "within": else the part is reported unconfirmed).
 - ``/<obj>/placed_offset_mm``, ``float``: the offset at the first look after placing. Written by
   ``Inspect(after_placing=True)``, once after Place; read by the report, and the trees (its existence says the part
   was placed).
@@ -64,6 +67,14 @@ PUSHES_STALLED = "pushes_stalled"
 STALLED = "stalled"
 PUSH_AXIS = "push_axis"
 YAW_ERROR_DEG = "yaw_error_deg"
+#: What the last look measured the part on: ``WHOLE_FACE``, or ``FREE_EDGES`` when its face merged
+#: with a neighbour's of its colour (``Detection.merged``): such a look steers a push but cannot
+#: confirm "within" (the part is then reported ``unconfirmed``).
+MEASURED_ON = "measured_on"
+WHOLE_FACE = "whole face"
+FREE_EDGES = "free edges"
+#: The last look did not find the part: its last offset is stale.
+NOT_MEASURED = "not measured"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
 BLOCKED_TOWARDS = "blocked_towards"
 MOVED_MM = "moved_mm"
@@ -117,6 +128,11 @@ def offset_xy_mm(obj: str) -> str:
 def yaw_error_deg(obj: str) -> str:
     """``/<obj>/yaw_error_deg``: measured minus target yaw, folded to the part's symmetry (Inspect)."""
     return key(obj, YAW_ERROR_DEG)
+
+
+def measured_on(obj: str) -> str:
+    """``/<obj>/measured_on``: what the last look measured the part on, ``"whole face"`` or ``"free edges"``."""
+    return key(obj, MEASURED_ON)
 
 
 def placed_offset_mm(obj: str) -> str:

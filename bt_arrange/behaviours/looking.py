@@ -246,6 +246,8 @@ class Detect(StagedBehaviour):
         if self.kind_targets:
             self.reads(keys.key(obj, keys.TARGET))
         self.found: Pose | None = None
+        #: The last look measured the part on its free edges only (``Detection.merged``).
+        self.merged = False
 
     def among(self, kind_targets: Sequence[PlanarPose]) -> None:
         """Make this the Detect of one of several identical parts: the targets of its kind."""
@@ -290,6 +292,7 @@ class Detect(StagedBehaviour):
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
+        self.merged = detection.merged
         self.write(keys.key(self.obj, keys.POSE), detection.pose_world)
         self.on_found(detection.pose_world)
         return None
@@ -343,7 +346,12 @@ class Inspect(Detect):
         super().__init__(name, obj, colour, object_type, kind_targets, z_m)
         self.after_placing = after_placing
         self.reads(keys.key(obj, keys.TARGET), written_by=keys.TARGET_SETTER)
-        self.writes(keys.key(obj, keys.OFFSET_MM), keys.key(obj, keys.OFFSET_XY_MM), keys.key(obj, keys.YAW_ERROR_DEG))
+        self.writes(
+            keys.key(obj, keys.OFFSET_MM),
+            keys.key(obj, keys.OFFSET_XY_MM),
+            keys.key(obj, keys.YAW_ERROR_DEG),
+            keys.key(obj, keys.MEASURED_ON),
+        )
         if after_placing:
             self.writes(keys.key(obj, keys.PLACED_OFFSET_MM), keys.key(obj, keys.PLACED_YAW_ERROR_DEG))
         self.offset_mm: float | None = None
@@ -368,9 +376,18 @@ class Inspect(Detect):
         self.write(keys.key(self.obj, keys.OFFSET_MM), self.offset_mm)
         self.write(keys.key(self.obj, keys.OFFSET_XY_MM), (dx_mm, dy_mm))
         self.write(keys.key(self.obj, keys.YAW_ERROR_DEG), self.yaw_error_deg)
+        self.write(keys.key(self.obj, keys.MEASURED_ON), keys.FREE_EDGES if self.merged else keys.WHOLE_FACE)
         if self.after_placing:
             self.write(keys.key(self.obj, keys.PLACED_OFFSET_MM), self.offset_mm)
             self.write(keys.key(self.obj, keys.PLACED_YAW_ERROR_DEG), self.yaw_error_deg)
+
+    def _look(self, context: Context) -> str | None:
+        failure = super()._look(context)
+        if failure is not None:
+            # The part's last offset is from before whatever made it unmeasurable now: it no longer
+            # confirms the part within (the report says unconfirmed).
+            self.write(keys.key(self.obj, keys.MEASURED_ON), keys.NOT_MEASURED)
+        return failure
 
     def success_message(self) -> str:
         """Feedback with the offset."""

@@ -150,12 +150,8 @@ class RunObserver:
         self.image, self.calibration, self.tf = channels.image, channels.calibration, channels.tf
         self.robot_description, self.parts, self.tree = channels.robot_description, channels.parts, channels.tree
         self.log, self.report, self.offsets = channels.log, channels.report, channels.offsets
-        self.nodes = preorder(session.root)
-        self._node_rows = [
-            {"uid": uid, "type": tag_of(node), "name": node.name, "status": node.status.value}
-            for uid, node in enumerate(self.nodes, 1)
-        ]
-        self._row_of = {str(node.id): row for node, row in zip(self.nodes, self._node_rows, strict=True)}
+        self._row_of: dict[str, dict[str, Any]] = {}
+        self._read_tree()
         self._tree_changed = False
         self._last_tf_s = -math.inf
         #: The camera perception uses (set before the first tick), and how many targets the scene drew.
@@ -207,6 +203,9 @@ class RunObserver:
     def on_transition(self, transition: Any) -> None:
         """A status change: the node's row for ``/tree``, its feedback on ``/log``."""
         row = self._row_of.get(transition.node_id)
+        if row is None:  # a node built while the tree runs (a solved puzzle's pieces): the tree has grown
+            self._read_tree()
+            row = self._row_of.get(transition.node_id)
         if row is not None:
             row["status"] = transition.new
             self._tree_changed = True
@@ -288,6 +287,17 @@ class RunObserver:
         self._count("/report")
 
     # -- messages --------------------------------------------------------------------------
+
+    def _read_tree(self) -> None:
+        """The tree's nodes and their ``/tree`` rows, top-down; a node seen before keeps its row (and status)."""
+        self.nodes = preorder(self.session.root)
+        rows = []
+        for uid, node in enumerate(self.nodes, 1):
+            known = self._row_of.get(str(node.id))
+            row = known or {"type": tag_of(node), "name": node.name, "status": node.status.value}
+            rows.append({"uid": uid, **{k: v for k, v in row.items() if k != "uid"}})
+        self._node_rows = rows
+        self._row_of = {str(node.id): row for node, row in zip(self.nodes, rows, strict=True)}
 
     def _publish_tree(self, time_ns: int) -> None:
         self._tree_changed = False

@@ -221,6 +221,8 @@ class _Verdict:
     expected_area_px: float | None = None
     #: Found on its free edges in a blob it shares with other parts: the blob is not this part's alone.
     shared: bool = False
+    #: Measured on its free edges only (its face merged with another of its colour).
+    merged: bool = False
 
 
 def _judge(
@@ -268,6 +270,7 @@ def _judge(
                     "deg, on its free edges (its face merged with another of its colour)",
                     face.area_px,
                     expected_px,
+                    merged=True,
                 )
                 continue
         if prior_xy_m is None and not face.touches_border and ratio > config.ambiguous_area_fraction:
@@ -429,6 +432,7 @@ def _detection(colour: str, verdict: _Verdict, xy: tuple[tuple[float, float], ..
         area_px=verdict.area_px,
         expected_area_px=verdict.expected_area_px,
         candidates_xy_m=xy,
+        merged=verdict.merged or verdict.shared,
     )
 
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.perception.colours import ColourRange
-from bt_arrange.perception.corners import _local_side_points, _median, _side_edge_points, chroma
+from bt_arrange.perception.corners import INITIAL_OUTSIDE_PX, _local_side_points, _median, _side_edge_points, chroma
 from bt_arrange.perception.outline_fit import (
     MIN_EDGE_POINTS,
     EdgeSegments,
@@ -182,9 +182,12 @@ def edge_points(
         distances[:, k] = np.inf
         clear = distances.min(axis=1) >= half_width_px + 2.0
         points, spread = points[clear], spread[clear]
-        # And those whose band ends outside the face's colour: a neighbour of the colour a pixel or two
-        # across the edge (a sub-millimetre gap) puts its own face in the band, and the fit off it.
-        beyond = _outward_pixels(view.rgb, points, p, q, inside_px[k], half_width_px + 1.0)
+        # And those whose outside, where the sampler reads it (``near_outside_px`` beyond the edge, then
+        # a pixel), is not the face's colour: a neighbour of the colour a pixel or two across the edge
+        # (a sub-millimetre gap) puts its own face there, and the fit off it. A neighbour farther
+        # (2 mm is 4 px) lies beyond what the sampler reads: its edges are measured as a free part's.
+        reach_px = (INITIAL_OUTSIDE_PX if near_outside_px is None else near_outside_px) + 1.0
+        beyond = _outward_pixels(view.rgb, points, p, q, inside_px[k], min(reach_px, half_width_px + 1.0))
         free = face_share(face, beyond) <= OUTSIDE_MAX_COVERAGE
         points, spread = points[free], spread[free]
         if len(points) < MIN_EDGE_POINTS:

@@ -169,6 +169,10 @@ class Detection:
     edge_m: float | None = None
     pnp_pose_world: Pose | None = None
     candidates_xy_m: tuple[tuple[float, float], ...] = field(default_factory=tuple)
+    #: The face merged with another of its colour and was measured on its free edges only: a
+    #: measurement the camera's margin does not cover (a neighbour's edge can pass for its own),
+    #: so it can steer a push but not confirm "within" (``keys.MEASURED_ON``).
+    merged: bool = False
 
     @property
     def found(self) -> bool:

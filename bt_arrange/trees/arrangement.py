@@ -100,7 +100,19 @@ def render_part(part: PartStep, plan: ArrangementPlan, locate: Locate | None = N
         ),
         correction(part, plan),
     ]
-    children += [_look_again(neighbour, obj, plan) for neighbour in part.neighbours]
+    if part.neighbours:
+        # The neighbours are looked at again whatever became of this part: a part placed and then
+        # failed (not found again, pushes that stalled) may have moved them, and a neighbour's last
+        # look from before that would report it where it no longer lies.
+        own = py_trees.composites.Sequence(name=f"place and correct {obj}", memory=True, children=children)
+        children = [
+            py_trees.decorators.FailureIsSuccess(name=f"then look again at {obj}'s neighbours", child=own),
+            # A neighbour it cannot measure (merged with this part's face) leaves the others to be looked at.
+            *(
+                py_trees.decorators.FailureIsSuccess(name=f"then the next look after {obj}", child=look)
+                for look in (_look_again(neighbour, obj, plan) for neighbour in part.neighbours)
+            ),
+        ]
     subtree = py_trees.composites.Sequence(name=f"arrange {obj}", memory=True, children=children)
     #: The part this subtree arranges: the XML writer writes it as a SubTree of the part's ports.
     subtree.part = target  # type: ignore[attr-defined]

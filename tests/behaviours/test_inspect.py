@@ -38,6 +38,7 @@ def test_inspect_writes_target_minus_pose_in_the_target_frame(clock, target_yaw_
     assert read("/red/offset_mm") == pytest.approx(math.sqrt(5.0), abs=0.3)
     assert isinstance(read("/red/pose"), Pose)
     assert run.feedback.endswith(f"; {read('/red/offset_mm'):.2f} mm from the target")
+    assert read("/red/measured_on") == "whole face"
     assert not exists("/red/placed_offset_mm"), "only an inspection after placing records it"
 
 
@@ -59,6 +60,7 @@ def test_inspect_of_a_cube_it_cannot_see_fails_and_leaves_the_offsets_alone(cloc
     assert run.feedback.startswith("red not_found: ")
     assert read("/red/offset_mm") == 4.0
     assert not exists("/red/placed_offset_mm")
+    assert read("/red/measured_on") == "not measured", "the offset left is stale: it no longer confirms the part"
 
 
 def test_inspect_looks_through_a_window_around_the_target_only(clock) -> None:

@@ -75,5 +75,6 @@ def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
         "/red/offset_xy_mm",
         "/red/placed_offset_mm",
         "/red/yaw_error_deg",
+        "/red/measured_on",
         "/red/placed_yaw_error_deg",
     }

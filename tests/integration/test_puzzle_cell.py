@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import py_trees
 import pytest
@@ -87,3 +88,16 @@ def test_a_puzzle_at_the_default_gap_and_threshold_is_solved_and_placed(tmp_path
     assert {e.id for e in scenes[-1].entities} >= {f"part/{name}" for name in pieces}
     offsets = [value for _, channel, _, value in decoded if channel.topic == "/offsets"]
     assert {part["name"] for part in offsets[-1]["parts"]} == pieces
+    # The tree grows as it runs: /tree names each piece's steps once they are built ...
+    trees = [value for _, channel, _, value in decoded if channel.topic == "/tree"]
+    last_names = {row["name"] for row in trees[-1]["nodes"]}
+    assert len(trees[-1]["nodes"]) > len(trees[0]["nodes"])
+    assert {f"transfer {name}" for name in pieces} <= last_names
+    # ... and so does the replay page, where the pieces are a table on the blackboard.
+    page = (record / "replay.html").read_text()
+    data = json.loads(re.search(r'<script id="replay-data" type="application/json">(.*?)</script>', page, re.S)[1])
+    names = [node["name"] for node in data["nodes"]]
+    assert {"survey slab", "solve slab", "transfer slab 1", "arrange slab 6"} <= set(names)
+    assert {names[event["node"]] for event in data["events"]} >= {"transfer slab 1", "transfer slab 6"}
+    (solved,) = {json.dumps(b["table"]) for b in data["blackboard"] if b["key"] == "/slab/solved" and "table" in b}
+    assert [row[4] for row in json.loads(solved)["rows"]] == [f"slab {k}" for k in range(1, 7)]
