@@ -94,14 +94,26 @@ class WorkspaceBox:
         A line is straight in the world and the box convex: its two ends decide. A joint motion's TCP
         path curves: it is sampled every ``WORKSPACE_SAMPLE_PERIOD_S`` of the motion, both ends included.
         """
-        for q in motion.path_samples(WORKSPACE_SAMPLE_PERIOD_S):
-            point = kinematics.forward(q).position_m
+        for point in tcp_path_samples(motion, kinematics):
             if not self.contains(point):
                 x, y, z = (float(v) for v in point)
                 raise WorkspaceStop(
                     f"{what} would take the TCP to ({x:.3f}, {y:.3f}, {z:.3f}) m, outside the workspace box "
                     f"({self.describe()}): refused before it started"
                 )
+
+
+def tcp_path_samples(motion: Motion, kinematics: ArmKinematics) -> list[FloatArray]:
+    """TCP positions along a planned motion: a line's two ends, a joint motion's every 20 ms of it."""
+    from bt_arrange.motion.trajectory import JointMotion, LinearMotion
+
+    if isinstance(motion, LinearMotion):
+        return [motion.start_pose.position_m, motion.end_pose.position_m]
+    if not isinstance(motion, JointMotion):
+        raise TypeError(f"no path to sample of a {type(motion).__name__}")
+    duration_s = motion.duration_s
+    times = np.linspace(0.0, duration_s, max(1, math.ceil(duration_s / WORKSPACE_SAMPLE_PERIOD_S)) + 1)
+    return [kinematics.forward(np.array(motion.trajectory.at_time(float(t))[0])).position_m for t in times]
 
 
 @dataclass(frozen=True)

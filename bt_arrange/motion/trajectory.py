@@ -140,14 +140,6 @@ class Motion(ABC):
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The last setpoint's positions, velocities and accelerations."""
 
-    @abstractmethod
-    def path_samples(self, period_s: float) -> list[FloatArray]:
-        """Joint vectors along the planned path, for a check of where it goes (``bt_arrange.safety``).
-
-        A joint motion: one every ``period_s`` of the motion, both ends included; a line: its two
-        ends (its TCP path is straight, so they bound it).
-        """
-
     def stop(self) -> None:
         """Bring the motion to rest as fast as the limits allow (jerk-limited); idempotent.
 
@@ -223,7 +215,8 @@ class JointMotion(Motion):
         if result not in _RUCKIG_OK:
             raise MotionError(f"joint motion to {np.round(target, 4)} rad could not be planned: ruckig {result}")
         self._duration_s = float(trajectory.duration)
-        self._trajectory = trajectory
+        #: The planned trajectory (ruckig's), e.g. to check where it goes before it starts (``bt_arrange.safety``).
+        self.trajectory = trajectory
         # A start that already moves can overshoot on its way to the target: check the whole path.
         for name, bound, lower, upper in zip(
             ARM_JOINT_NAMES, trajectory.position_extrema, limits.lower_rad, limits.upper_rad, strict=True
@@ -243,12 +236,6 @@ class JointMotion(Motion):
     def target_positions_rad(self) -> FloatArray:
         """The target joint vector."""
         return self._target.copy()
-
-    def path_samples(self, period_s: float) -> list[FloatArray]:
-        """Joint vectors every ``period_s`` of the planned trajectory, its start and its end included."""
-        count = max(1, math.ceil(self._duration_s / period_s))
-        times = np.linspace(0.0, self._duration_s, count + 1)
-        return [np.array(self._trajectory.at_time(float(t))[0], dtype=float) for t in times]
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The ruckig input's current state: after ``pass_to_input`` that is the last setpoint."""
@@ -543,10 +530,6 @@ class LinearMotion(Motion):
     def remaining_m(self) -> float:
         """Path length still ahead of the last setpoint (m); the whole line before the first step."""
         return self._length_m - float(self._s[self._index]) if self._stop_otg is None else 0.0
-
-    def path_samples(self, period_s: float) -> list[FloatArray]:
-        """The line's two ends (its TCP path between them is straight)."""
-        return [self._knot_q[0].copy(), self._knot_q[-1].copy()]
 
     def _state(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The last planned sample: joints, ``dq/ds * ds/dt``, and the samples' second difference."""
