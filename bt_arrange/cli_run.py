@@ -192,6 +192,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "set down",
             "placed again",
             "regrasps",
+            "separated",
             "status",
         )
     ]
@@ -211,6 +212,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
                 str(getattr(o, "set_downs", 0)),
                 str(getattr(o, "placed_again", 0)),
                 str(getattr(o, "regrasps_after_placing", 0)),
+                str(getattr(o, "separations", 0)),
                 status,
             )
         )
@@ -230,7 +232,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "offsets in mm: placed and pushed measured by the camera after placing (the first time) and after "
             "pushing; "
             "set down: set down where picked, to look again and pick centred; placed again: placed at the "
-            "target again after the first placing; regrasps: picked up again after placing; "
+            "target again after the first placing; regrasps: picked up again after placing; separated: touching "
+            "parts of its colour pushed apart before its pick; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
         source = getattr(report, "camera_margin_source", "")

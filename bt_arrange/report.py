@@ -54,6 +54,9 @@ class ObjectOutcome:
     truth_home_mm: tuple[float, float, float] | None = None
     #: Times the part was set down where it was picked, to be looked at and picked again centred.
     set_downs: int = 0
+    #: Times touching parts of its colour were pushed apart before its pick (``Separate``: it started
+    #: touching another part).
+    separations: int = 0
     #: Times the part was placed at its target again after its first placing (a regrasp's placing).
     placed_again: int = 0
 

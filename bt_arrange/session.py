@@ -42,6 +42,7 @@ from bt_arrange.behaviours import (
     Place,
     Push,
     Recheck,
+    Separate,
     keys,
 )
 from bt_arrange.behaviours.puzzle import SolvePuzzle, SurveyPieces
@@ -226,6 +227,8 @@ class Session:
         self.camera_margin_mm, self.camera_margin_source = camera_margin_mm(calibration, self.world)
         #: Per part, its set-downs (to look again and pick centred) and its placings at the target.
         self._set_downs: dict[str, int] = {}
+        #: Pushes aside of touching parts before each part's pick (``Separate``), by part.
+        self._separations: dict[str, int] = {}
         self._placings: dict[str, int] = {}
         #: The subtree that places every part before any is corrected (the paper's Fig. 5), or None.
         self._place_all = getattr(root, "place_all", None)
@@ -384,6 +387,8 @@ class Session:
         if isinstance(node, Place) and node.obj is not None:
             counts = self._set_downs if node.where == "pick" else self._placings
             counts[node.obj] = counts.get(node.obj, 0) + 1
+        if isinstance(node, Separate):
+            self._separations[node.obj] = self._separations.get(node.obj, 0) + 1
         if isinstance(node, SurveyPieces):
             self.puzzle_truth.surveyed(node.spec, node.pieces)
         if self._rechecks and isinstance(node, Inspect):
@@ -484,6 +489,7 @@ class Session:
                     placed_again_yaw_error_deg=_rounded(again.yaw_error_deg),
                     truth_home_mm=self._truth_home_mm(target),
                     set_downs=self._set_downs.get(target.obj, 0),
+                    separations=self._separations.get(target.obj, 0),
                     placed_again=max(0, self._placings.get(target.obj, 0) - 1),
                 )
             )

@@ -117,8 +117,9 @@ def test_text_names_the_behaviours_of_two_cubes_in_order() -> None:
     names = tree_lines(text)
     positions = [names.index(name) for name in TWO_CUBES_IN_ORDER]
     assert positions == sorted(positions)
-    # 25 per cube (14, and the 11 that place it again when its pushes stall), the root, the arm parked at the end
-    assert len(names) == 52
+    # 30 per cube (14, the 11 that place it again when its pushes stall and the 5 that separate touching
+    # parts before the pick), the root, the arm parked at the end
+    assert len(names) == 62
     assert "[" not in text and "\x1b" not in text  # a fresh tree: no statuses, no escapes
     assert "Blackboard keys" not in text and "Blackboard:" not in text
 
@@ -137,6 +138,7 @@ def test_text_with_blackboard_lists_who_writes_and_who_reads_each_key() -> None:
     assert writers.split(", ")[0] == "detect red"
     assert "inspect red" in writers.split(", ")
     assert readers.split(", ") == [
+        "push a part touching red aside",
         "pick red",
         "push red",
         "pick red to place it again",
@@ -158,6 +160,7 @@ def test_blackboard_access_covers_only_the_given_tree() -> None:
     assert "/green/pose" not in access
     assert access["/red/pose"].writers == [
         "detect red",
+        "detect red after separating",
         "inspect red after placing",
         "inspect red",
         "inspect red after placing it again",
@@ -192,7 +195,8 @@ def test_dot_is_graphviz_source_naming_the_behaviours(tmp_path: Path) -> None:
     nodes = {node.get_name().strip('"') for node in graphs[0].get_nodes()}
     assert set(TWO_CUBES_IN_ORDER) <= nodes
     edges = {(e.get_source().strip('"'), e.get_destination().strip('"')) for e in graphs[0].get_edges()}
-    assert ("transfer red", "detect red") in edges
+    assert ("transfer red", "find red, else separate it from touching parts") in edges
+    assert ("find red, else separate it from touching parts", "detect red") in edges
     assert not any(node.startswith("/") for node in nodes)
 
 

@@ -502,9 +502,10 @@ def test_bt_cpp_numbers_the_served_four_cubes_as_we_do():
             ours_client.close()
             theirs_client.close()
         del reference
-    # 58, and per cube the 11 nodes that place it again when its pushes stall; each cube's SubTree a node too
-    assert len(mine) == 102 + 4
-    assert [uid for tag, _, uid, _ in mine if tag == "SubTree"] == [2, 28, 54, 80]
+    # 58, and per cube the 11 nodes that place it again when its pushes stall and the 5 that separate
+    # touching parts before the pick; each cube's SubTree a node too
+    assert len(mine) == 122 + 4
+    assert [uid for tag, _, uid, _ in mine if tag == "SubTree"] == [2, 33, 64, 95]
     assert served.count('<BehaviorTree ID="arrange_cube" _fullpath="arrange_cube::') == 4
     # the same UIDs and names (BT.CPP's with each SubTree's obj put in); the tags too, but for the
     # Arrangement BT.CPP reads as a Sequence here

@@ -74,6 +74,7 @@ def test_the_project_registers_its_nodes_by_their_classes():
         "Push",
         "Recheck",
         "RepeatUntilWithin",
+        "Separate",
         "SolvePuzzle",
         "SurveyPieces",
     ]

@@ -8,7 +8,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, StagedBehaviour
+from bt_arrange.behaviours import Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Separate, StagedBehaviour
 from bt_arrange.decorators import RetryUntilThreshold
 from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import PlanarPose
@@ -161,12 +161,25 @@ def arrange_red(indent: int, threshold: str = "1") -> list[str]:
         f"{pad}  SetBlackboardVariable red target",
         f"{pad}  Retry pick and place red",
         f"{pad}    Sequence transfer red",
-        f"{pad}      Detect detect red",
+        *find_red(indent + 3),
         f"{pad}      Pick pick red",
         f"{pad}      GraspGuard while holding red",
         f"{pad}        Place place red",
         f"{pad}  Inspect inspect red after placing",
         *correct_red(indent + 1, threshold),
+    ]
+
+
+def find_red(indent: int, obj: str = "red") -> list[str]:
+    """The look before the pick, and the push aside of a touching part when it fails."""
+    pad = "  " * indent
+    return [
+        f"{pad}Selector find {obj}, else separate it from touching parts",
+        f"{pad}  Detect detect {obj}",
+        f"{pad}  Sequence separate {obj} from touching parts, then look again",
+        f"{pad}    CheckBlackboardVariableValue {obj} touches parts of its colour",
+        f"{pad}    Separate push a part touching {obj} aside",
+        f"{pad}    Detect detect {obj} after separating",
     ]
 
 
@@ -224,7 +237,7 @@ def test_correct_after_all_places_every_object_before_correcting_any() -> None:
         "        SetBlackboardVariable red target",
         "        Retry pick and place red",
         "          Sequence transfer red",
-        "            Detect detect red",
+        *find_red(6),
         "            Pick pick red",
         "            GraspGuard while holding red",
         "              Place place red",
@@ -234,7 +247,7 @@ def test_correct_after_all_places_every_object_before_correcting_any() -> None:
         "        SetBlackboardVariable green target",
         "        Retry pick and place green",
         "          Sequence transfer green",
-        "            Detect detect green",
+        *find_red(6, "green"),
         "            Pick pick green",
         "            GraspGuard while holding green",
         "              Place place green",
@@ -284,7 +297,8 @@ def test_a_tree_builds_and_renders_without_a_robot() -> None:
     root = arrangement([RED, GREEN, Target("blue", 0.60, 0.0)], correct="after_all")
     text = py_trees.display.unicode_tree(root)
     names = [node.name for node in root.iterate()]
-    assert len(names) == 2 + 3 * 18 + 2, "root and its two phases, 18 nodes per cube, park the arm"
+    # 18 nodes per cube, and 5 more for the look that separates touching parts.
+    assert len(names) == 2 + 3 * 23 + 2, "root and its two phases, 23 nodes per cube, park the arm"
     assert all(name in text for name in names)
     assert text.splitlines()[0].endswith("arrangement")
     assert all(node.context is None for node in root.iterate() if isinstance(node, StagedBehaviour))
@@ -294,7 +308,7 @@ def test_setting_up_a_tree_hands_the_context_to_every_behaviour(context) -> None
     tree = py_trees.trees.BehaviourTree(arrangement([RED, GREEN]))
     tree.setup(context=context)
     users = [n for n in tree.root.iterate() if isinstance(n, (StagedBehaviour, GraspGuard))]
-    assert {type(n) for n in users} == {Detect, Pick, GraspGuard, Place, Inspect, Push, MoveHome}
+    assert {type(n) for n in users} == {Detect, Pick, GraspGuard, Place, Inspect, Push, Separate, MoveHome}
     assert all(n.context is context for n in users)
 
 

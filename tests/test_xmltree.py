@@ -268,11 +268,13 @@ def elements(text: str) -> list:
     return list(ET.fromstring(text).iter())
 
 
-def test_four_cubes_is_one_part_definition_and_four_subtrees_within_80_elements(capsys):
+def test_four_cubes_is_one_part_definition_and_four_subtrees_within_90_elements(capsys):
     assert cli.main(["show", str(TREES / "four_cubes.py"), "--format", "xml"]) == 0
     text = capsys.readouterr().out
     document = elements(text)
-    assert len(document) <= 80  # every element: the trees and the TreeNodesModel (186 before the SubTrees)
+    # every element: the trees and the TreeNodesModel (186 before the SubTrees; 80 before the look that
+    # separates touching parts)
+    assert len(document) <= 90
     trees = [e.get("ID") for e in document if e.tag == "BehaviorTree"]
     assert trees == ["four_cubes", "arrange_cube"]
     instances = [e for e in document if e.tag == "SubTree" and e.get("obj")]

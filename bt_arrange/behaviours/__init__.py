@@ -1,4 +1,4 @@
-"""The py_trees behaviours of an arrangement: Detect, Pick, Place, Inspect, Push.
+"""The py_trees behaviours of an arrangement: Detect, Pick, Place, Inspect, Push, Separate.
 
 Their blackboard keys are named in ``keys``, their stages (the feedback while they run) in ``stages``.
 
@@ -17,6 +17,7 @@ from bt_arrange.behaviours.moves import holding
 from bt_arrange.behaviours.pick import Pick
 from bt_arrange.behaviours.place import Place
 from bt_arrange.behaviours.push import Push
+from bt_arrange.behaviours.separate import Separate
 from bt_arrange.behaviours.standing import CheckStanding
 
 __all__ = [
@@ -35,6 +36,7 @@ __all__ = [
     "Place",
     "Push",
     "Recheck",
+    "Separate",
     "Stage",
     "StagedBehaviour",
     "holding",

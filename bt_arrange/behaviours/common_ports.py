@@ -30,6 +30,7 @@ _ENTRY_MEANINGS = {
     keys.GRASP_HALF_TURN: "the gripper holds it half a turn round",
     keys.PUSH_AXIS: "the axis of the next push",
     keys.BLOCKED_TOWARDS: "a push a neighbour blocks",
+    keys.TOUCHING: "the look before the pick failed on touching parts of the colour",
     keys.PUSH_BIAS_MM: "where pushes land beyond their aim [mm]",
     keys.LAST_PUSH: "the last push's axis and aimed landing",
     keys.MOVED_MM: "how far it moved since it was last looked at [mm]",

@@ -39,6 +39,9 @@ field constant).
   when it finds the part again; read by the report.
 - ``/<obj>/max_moved_mm``, ``float``: the most later steps moved it. Written by Recheck, when it finds the part
   again; read by the report.
+- ``/<obj>/touching``, ``"touching parts"`` when the look before the pick failed on parts of the colour that touch
+  (a blob no face explains, the part in a blob it shares, a neighbour beside it), else ``"no"``. Written by
+  ``Detect(alone=True)``, at each look; read by the tree (``Separate`` runs only then).
 - ``/<obj>/grasp_half_turn``, ``bool``: the gripper holds the part half a turn round. Written by Pick, as it starts
   (when it chooses the grasp); read by Place.
 - ``/<obj>/top_height_error_mm``, ``float``: a raised part's top face (depth) minus its planned height (mm). Written
@@ -77,6 +80,10 @@ FREE_EDGES = "free edges"
 NOT_MEASURED = "not measured"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
 BLOCKED_TOWARDS = "blocked_towards"
+#: ``TOUCHING_PARTS`` when the look before the pick failed on touching parts of the colour, else ``"no"``:
+#: a text, as XML trees compare them.
+TOUCHING = "touching"
+TOUCHING_PARTS = "touching parts"
 MOVED_MM = "moved_mm"
 MAX_MOVED_MM = "max_moved_mm"
 PUSH_BIAS_MM = "push_bias_mm"
@@ -163,6 +170,11 @@ def push_axis(obj: str) -> str:
 def blocked_towards(obj: str) -> str:
     """``/<obj>/blocked_towards``: the push needed (``"+x"`` ...) that a neighbour blocks, written as Push fails."""
     return key(obj, BLOCKED_TOWARDS)
+
+
+def touching(obj: str) -> str:
+    """``/<obj>/touching``: ``"touching parts"`` when the look before the pick failed on touching parts, or ``"no"``."""
+    return key(obj, TOUCHING)
 
 
 def push_bias_mm(obj: str) -> str:

@@ -27,8 +27,9 @@ from bt_arrange.geometry import PlanarPose, Pose, rotation_z
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception import Detection, DetectionStatus, PartDetector, WorldRegion
+from bt_arrange.perception.touching import MIN_TOUCHING_PX, TOUCH_RING_M, touching_pixels
 from bt_arrange.ports import BOOL, STRING, Port
-from bt_arrange.robot import PixelWindow
+from bt_arrange.robot import CameraFrame, PixelWindow
 from bt_arrange.shapes import yaw_error_rad
 
 #: A part counts as "at a target" (placed already) when its centre lies within this fraction of
@@ -78,10 +79,12 @@ def _measure_in_window(
     y_m: float,
     margin_m: float,
     roi_half_m: float | None = None,
+    frames: list[CameraFrame] | None = None,
 ) -> Detection | None:
     """Render only the window around ``(x, y)`` at full resolution and measure the part there.
 
-    ``roi_half_m`` (default the window's half size) bounds where a face's centre may lie.
+    ``roi_half_m`` (default the window's half size) bounds where a face's centre may lie; the frame
+    rendered is appended to ``frames`` when given.
     """
     camera = context.robot.camera
     x_size, y_size, _ = detector.config.size_m
@@ -90,6 +93,8 @@ def _measure_in_window(
     if window is None:
         return None
     frame = camera.capture(window=window)
+    if frames is not None:
+        frames.append(frame)
     return detector.detect(frame, colour, roi=WorldRegion.around(x_m, y_m, roi_half_m or half_m))
 
 
@@ -110,6 +115,7 @@ def look(
     object_type: ObjectType | None = None,
     choose: Chooser | None = None,
     z_m: float = 0.0,
+    frames: list[CameraFrame] | None = None,
 ) -> Detection:
     """Find the part of ``colour``, rendering (or reading out) only the pixels a detection needs.
 
@@ -126,6 +132,14 @@ def look(
     pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
     camera = context.robot.camera
+
+    def capture(window: PixelWindow | None = None) -> CameraFrame:
+        # Every frame looked at is kept in ``frames`` (the last is the one the outcome was measured in).
+        frame = camera.capture(window=window) if window is not None else camera.capture()
+        if frames is not None:
+            frames.append(frame)
+        return frame
+
     kind = object_type or CUBE
     detector = context.detector.for_object(kind)
     if z_m:
@@ -133,7 +147,7 @@ def look(
     # Among identical parts a window also shows the neighbours: only a face centred near the spot counts.
     roi_half_m = identical_roi_half_m(kind) if choose is not None else None
     if expected_xy_m is not None:
-        detection = _measure_in_window(context, detector, colour, *expected_xy_m, EXPECTED_MARGIN_M, roi_half_m)
+        detection = _measure_in_window(context, detector, colour, *expected_xy_m, EXPECTED_MARGIN_M, roi_half_m, frames)
         if detection is not None and detection.found:
             return detection
     binning = detector.search_binning(camera.intrinsics, camera.pose_world)
@@ -143,7 +157,7 @@ def look(
         # whose large blobs the detector splits at full resolution.
         binned = binning > 1 and choose is None
         window = PixelWindow.full(camera.intrinsics, binning) if binned else None
-        search = camera.capture(window=window) if window is not None else camera.capture()
+        search = capture(window)
         located = detector.locate(search, colour)
         if len(located) > 1 and choose is not None:
             chosen, reason = choose(located)
@@ -153,7 +167,9 @@ def look(
             # Parts of one colour told apart by outline: each blob measured at full resolution, where
             # only this part's outline registers (another outline is WRONG_OUTLINE there).
             spot_m = identical_roi_half_m(kind)
-            measured = [_measure_in_window(context, detector, colour, *xy, LOCATED_MARGIN_M, spot_m) for xy in located]
+            measured = [
+                _measure_in_window(context, detector, colour, *xy, LOCATED_MARGIN_M, spot_m, frames) for xy in located
+            ]
             found = [d for d in measured if d is not None and d.found]
             if len(found) == 1:
                 return found[0]
@@ -162,14 +178,14 @@ def look(
             return detector.detect(search, colour)
         else:
             chosen = located[0]
-        detection = _measure_in_window(context, detector, colour, *chosen, LOCATED_MARGIN_M, roi_half_m)
+        detection = _measure_in_window(context, detector, colour, *chosen, LOCATED_MARGIN_M, roi_half_m, frames)
         if detection is not None and detection.found:
             return detection
         if len(located) > 1:
             # The chosen part is not whole in its window: the full frame, around it only.
             half_m = roi_half_m or 0.5 * math.hypot(*detector.config.size_m[:2]) + LOCATED_MARGIN_M
-            return detector.detect(camera.capture(), colour, roi=WorldRegion.around(*chosen, half_m))
-    return detector.detect(camera.capture(), colour)
+            return detector.detect(capture(), colour, roi=WorldRegion.around(*chosen, half_m))
+    return detector.detect(capture(), colour)
 
 
 def raised_detector(detector: PartDetector, z_m: float) -> PartDetector:
@@ -224,7 +240,14 @@ class Detect(StagedBehaviour):
     @classmethod
     def provided_ports(cls) -> tuple[Port, ...]:
         """The object, its colour and type, the targets of its kind (BehaviorTree.CPP's ``providedPorts``)."""
-        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, *DETECT_ENTRIES)
+        alone = Port(
+            "alone",
+            BOOL,
+            False,
+            "the look before a pick: fails on touching parts of its colour and says so in /<obj>/touching",
+            optional=True,
+        )
+        return (OBJ, COLOUR, OBJECT_TYPE_PORT, KIND_TARGETS, Z_PORT, alone, *DETECT_ENTRIES)
 
     def __init__(
         self,
@@ -234,8 +257,13 @@ class Detect(StagedBehaviour):
         object_type: ObjectType | None = None,
         kind_targets: Sequence[PlanarPose] = (),
         z_m: float = 0.0,
+        alone: bool = False,
     ) -> None:
         super().__init__(name)
+        #: The look before a pick (``before_pick``): a part found only on its free edges, in a blob it
+        #: shares with touching parts, is a FAILURE (its pose is written, for ``Separate``): a neighbour
+        #: may stand where the pads go down (a fresco piece's pads closed on its touching neighbour and stalled).
+        self.alone = False
         self.obj = obj
         #: Layers: the height of the part's bottom face (0: the table), its top face's plane above it.
         self.z_m = float(z_m)
@@ -248,6 +276,18 @@ class Detect(StagedBehaviour):
         self.found: Pose | None = None
         #: The last look measured the part on its free edges only (``Detection.merged``).
         self.merged = False
+        if alone:
+            self.before_pick()
+
+    def before_pick(self) -> None:
+        """Make this the look before a pick (``alone``): it also writes ``/<obj>/touching`` at each look.
+
+        A part found in a blob it shares with touching parts of its colour, or beside a neighbour of
+        its colour (``touching_pixels``), fails; so does a blob no face explains (AMBIGUOUS): each
+        writes ``"touching parts"``, and the tree pushes one aside (``Separate``) before it looks again.
+        """
+        self.alone = True
+        self.writes(keys.key(self.obj, keys.TOUCHING))
 
     def among(self, kind_targets: Sequence[PlanarPose]) -> None:
         """Make this the Detect of one of several identical parts: the targets of its kind."""
@@ -288,14 +328,54 @@ class Detect(StagedBehaviour):
 
     def _look(self, context: Context) -> str | None:
         chooser = self.choose if self.kind_targets else None
-        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser, self.z_m)
+        frames: list[CameraFrame] | None = [] if self.alone else None
+        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser, self.z_m, frames=frames)
+        if self.alone:
+            # Only a blob of several parts of the colour (AMBIGUOUS) may be touching parts; a part not
+            # found, or partly covered, is no business of ``Separate``.
+            touching = detection.status is DetectionStatus.AMBIGUOUS
+            self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS if touching else "no")
         if not detection.found or detection.pose_world is None:
             return f"{self.colour} {detection.status.value}: {detection.reason}"
         self.found = detection.pose_world
         self.merged = detection.merged
         self.write(keys.key(self.obj, keys.POSE), detection.pose_world)
+        if self.alone and detection.merged:
+            self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS)
+            return (
+                f"{self.colour} found in a blob it shares with touching parts of its colour ({detection.reason}): "
+                "to be separated before it is picked"
+            )
+        if frames:
+            touching_px = self._touching_px(context, frames, detection.pose_world)
+            if touching_px >= MIN_TOUCHING_PX:
+                self.write(keys.key(self.obj, keys.TOUCHING), keys.TOUCHING_PARTS)
+                return (
+                    f"{self.colour} found alone in its blob but touching a part of its colour ({touching_px} px of it "
+                    f"within {TOUCH_RING_M * 1000:.0f} mm of its outline, where the pads go down): to be separated "
+                    "before it is picked"
+                )
         self.on_found(detection.pose_world)
         return None
+
+    def _touching_px(self, context: Context, frames: list[CameraFrame], pose: Pose) -> int:
+        """Pixels of the colour just outside the found outline, in the last frame that holds its ring (0: none)."""
+        colour = context.detector.colours[self.colour]
+        config = context.detector.config
+        plane_z_m = config.table_z_m + self.z_m + self.object_type.shape.height_m
+        planar = pose.planar()
+        for frame in reversed(frames):
+            count = touching_pixels(
+                frame,
+                colour,
+                self.object_type.shape.outline_m,
+                (planar.x_m, planar.y_m, planar.yaw_rad),
+                plane_z_m,
+                config.kernel_px,
+            )
+            if count is not None:
+                return count
+        return 0
 
     def on_found(self, pose: Pose) -> None:
         """Hook for subclasses: called with the measured pose."""

@@ -54,6 +54,10 @@ BACK_OFF = "back off"
 LIFT_FINGERS = "lift the fingers"
 CHOOSE_PUSH_SIDE = "choose a free side to push from"
 
+# Separate (the push aside runs the push's stages above around it)
+LOOK_FOR_TOUCHING = "look for touching parts"
+PUSH_ASIDE = "push a touching part aside"
+
 # Detect, Inspect, EstimateGraspFromDepth, MoveHome
 PARK = "move out of the camera's view"
 MOVE_HOME = "move home"

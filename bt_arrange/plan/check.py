@@ -159,7 +159,10 @@ def check_scene(
             distance_m = math.hypot(start.x_m - other.x_m, start.y_m - other.y_m)
             other_shape = object_type_of(other).shape
             least_m = min_centre_distance_m(kind.shape, other_shape)
-            if distance_m < least_m:
+            # Closer than their sweep radii, two parts may still lie side by side: only footprints that
+            # overlap (beyond the contact's tolerance) are refused. Parts that touch at the start are
+            # a real table's, and the tree separates them before it picks them (``Separate``).
+            if distance_m < least_m and starts_overlap(start, other, settings):
                 both_cubes = kind.shape == other_shape and other_shape.is_cube
                 what = "a cube's diagonal" if both_cubes else "their half diagonals"
                 raise PlanError(
@@ -169,6 +172,27 @@ def check_scene(
                     parts=(("start", _start_name(start)), ("start", _start_name(other))),
                 )
     return scene
+
+
+#: Two starts' footprints may interpenetrate this much (m) and still count as touching, not overlapping:
+#: a scene written in millimetres that sets two faces against each other rounds to a tenth or so.
+TOUCHING_TOLERANCE_M = 0.0002
+
+
+def starts_overlap(first: Any, second: Any, settings: ManipulationSettings) -> bool:
+    """True when two starts' footprints overlap by more than ``TOUCHING_TOLERANCE_M`` (touching is no overlap)."""
+    return overlap(
+        stacking.footprint_of(_as_target(first), settings),
+        stacking.footprint_of(_as_target(second), settings),
+        -TOUCHING_TOLERANCE_M,
+    )
+
+
+def _as_target(start: Any) -> Target:
+    """A start as a target at its pose (the footprint's only inputs: where, how turned, which shape)."""
+    return Target(
+        start.colour, start.x_m, start.y_m, start.yaw_rad, name=_start_name(start), object_type=object_type_of(start)
+    )
 
 
 def _view_text(view: CameraView, top_z_m: float) -> str:

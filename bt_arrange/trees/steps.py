@@ -23,6 +23,7 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    Separate,
     keys,
 )
 from bt_arrange.checks import positive_number, whole_number
@@ -139,15 +140,62 @@ def _transfer(
     (``bt_arrange.plan.layout``; default: anywhere). ``nearest``: the wrist's nearest grasp and turn
     (``Pick(nearest_grasp=...)``, ``Place(nearest_turn=...)``), for a part neighbours are placed
     beside (measured, the half turn and the short way round moved more of them out).
+
+    A part that touches others of its colour where it starts is separated before it is picked: the
+    first look (``Detect(alone=True)``) fails on touching parts of its colour, and the part's
+    ``Separate`` pushes one of them aside before it looks again::
+
+        Selector "find <obj>, else separate it from touching parts"
+        ├── Detect "detect <obj>"                        before_pick(): fails on touching parts
+        └── Sequence "separate <obj> from touching parts, then look again"
+            ├── CheckBlackboardVariableValue "<obj> touches parts of its colour"   /<obj>/touching
+            ├── Separate "push a part touching <obj> aside"
+            └── Detect "detect <obj> after separating"
+
+    Where nothing touches, the first Detect succeeds as before and the rest never runs.
     """
     obj = target.obj
     kind = target.object_type
 
-    def find() -> py_trees.behaviour.Behaviour:
+    def find(name: str | None = None) -> py_trees.behaviour.Behaviour:
         finder = (locate or by_camera())(target)
         if kind_targets and isinstance(finder, Detect):
             finder.among(kind_targets)
+        if name is not None:
+            finder.name = name
         return finder
+
+    def find_alone() -> py_trees.behaviour.Behaviour:
+        first = find()
+        if not isinstance(first, Detect) or type(first) is not Detect:
+            return first  # another locator (depth) has no blob to separate
+        first.before_pick()
+        again = find(f"detect {obj} after separating")
+        assert isinstance(again, Detect)
+        again.before_pick()
+        separate = Separate(f"push a part touching {obj} aside", obj, target.colour, kind)
+        return py_trees.composites.Selector(
+            name=f"find {obj}, else separate it from touching parts",
+            memory=True,
+            children=[
+                first,
+                py_trees.composites.Sequence(
+                    name=f"separate {obj} from touching parts, then look again",
+                    memory=True,
+                    children=[
+                        # Only a look that failed on touching parts goes on: a part not found costs no look more.
+                        py_trees.behaviours.CheckBlackboardVariableValue(
+                            name=f"{obj} touches parts of its colour",
+                            check=py_trees.common.ComparisonExpression(
+                                keys.key(obj, keys.TOUCHING), keys.TOUCHING_PARTS, operator.eq
+                            ),
+                        ),
+                        separate,
+                        again,
+                    ],
+                ),
+            ],
+        )
 
     look_again: list[py_trees.behaviour.Behaviour] = []
     # Layers: a part going onto others is set down and picked centred first, as among
@@ -170,7 +218,7 @@ def _transfer(
         name=f"transfer {obj}",
         memory=True,
         children=[
-            find(),
+            find_alone(),
             Pick(f"pick {obj}", obj, kind, nearest_grasp=nearest or bool(look_again)),
             *look_again,
             GraspGuard(

@@ -6,14 +6,37 @@ here. The tag is the class name, except where a file format already fixed anothe
 
 from __future__ import annotations
 
-from bt_arrange.behaviours import CheckStanding, Detect, GraspGuard, Inspect, MoveHome, Pick, Place, Push, Recheck
+from bt_arrange.behaviours import (
+    CheckStanding,
+    Detect,
+    GraspGuard,
+    Inspect,
+    MoveHome,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    Separate,
+)
 from bt_arrange.behaviours.puzzle import SolvePuzzle, SurveyPieces
 from bt_arrange.decorators import RepeatUntilWithin
 from bt_arrange.trees import Arrangement
 from bt_arrange.trees.puzzle import ArrangeSolved
 from bt_arrange.xmltree.registry import register_node
 
-for _node in (Detect, Inspect, Pick, Place, Push, Recheck, MoveHome, GraspGuard, CheckStanding, RepeatUntilWithin):
+for _node in (
+    Detect,
+    Inspect,
+    Pick,
+    Place,
+    Push,
+    Recheck,
+    Separate,
+    MoveHome,
+    GraspGuard,
+    CheckStanding,
+    RepeatUntilWithin,
+):
     register_node(_node)
 register_node(Arrangement)
 # A puzzle: its survey, its solve, and the arrangement its solve decides.
