@@ -1,8 +1,12 @@
 """Backends: what the command line runs a tree on, found by name, never imported by the framework.
 
 ``bt-arrange run``, ``experiment`` and ``info`` reach the world through a ``Backend``: the
-simulated work cell (``sim``, the default, from the ``bt_arrange_sim`` package) or, later, a real
-UR5. A backend is found through the ``bt_arrange.backends`` entry-point group, which a package
+simulated work cell (``sim``, the default, from the ``bt_arrange_sim`` package) or a real UR5 cell
+(``ur``, ``bt_arrange.ur``). What only some backends can do is declared, never probed: a backend is
+a ``ScatteringBackend``, a ``CalibratingBackend``, ... when it provides that protocol's members, and a
+command that needs one says in one line which is missing (``require``).
+
+A backend is found through the ``bt_arrange.backends`` entry-point group, which a package
 declares in its ``pyproject.toml``::
 
     [project.entry-points."bt_arrange.backends"]
@@ -33,8 +37,12 @@ from bt_arrange.suggest import did_you_mean
 ENTRY_POINT_GROUP = "bt_arrange.backends"
 #: The backend the command line uses unless told otherwise: the simulated work cell.
 DEFAULT_BACKEND = "sim"
-#: Where the default backend lives when no installed entry point declares it (stale metadata).
-FALLBACK = {DEFAULT_BACKEND: "bt_arrange_sim.pybullet.backend:SimBackend"}
+#: Where the backends this package ships live when no installed entry point declares them (stale
+#: metadata): the default, and the real cell (``bt_arrange.ur``, which needs the ``ur`` extra to run).
+FALLBACK = {
+    DEFAULT_BACKEND: "bt_arrange_sim.pybullet.backend:SimBackend",
+    "ur": "bt_arrange.ur.backend:UrBackend",
+}
 
 
 class ObjectReport(Protocol):
@@ -156,17 +164,6 @@ class Backend(Protocol):
         """Check the plan and the scene, build the world, and return the run (not started)."""
         ...
 
-    def scatter(
-        self,
-        colours: Sequence[str],
-        seed: int,
-        avoid: Iterable[Any] = (),
-        object_types: Sequence[Any] | None = None,
-        names: Sequence[str | None] | None = None,
-    ) -> list[Any]:
-        """Where parts of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
-        ...
-
     def check(self) -> Iterator[str]:
         """Lines for ``bt-arrange info``: the backend starts (or a ``BtArrangeError`` saying why not)."""
         ...
@@ -198,6 +195,127 @@ class InjectingBackend(Protocol):
     def injectable_errors(self) -> Sequence[str]:
         """The error names ``open_run(inject=...)`` takes."""
         ...
+
+
+@runtime_checkable
+class ScatteringBackend(Protocol):
+    """An optional capability: the backend puts the parts into its world (a simulator), so a run needs a scene.
+
+    ``bt-arrange run`` asks a tree file's ``create_scene(seed)`` (a plan scatters its parts through
+    ``scatter``) only on such a backend. A real cell has none: its parts lie where they lie, and a tree
+    file needs only ``create_root``.
+    """
+
+    name: str
+
+    def scatter(
+        self,
+        colours: Sequence[str],
+        seed: int,
+        avoid: Iterable[Any] = (),
+        object_types: Sequence[Any] | None = None,
+        names: Sequence[str | None] | None = None,
+    ) -> list[Any]:
+        """Where parts of ``colours`` start for scene ``seed``, clear of ``avoid`` (targets)."""
+        ...
+
+
+@runtime_checkable
+class PuzzleBackend(Protocol):
+    """An optional capability: the backend breaks a plan's ``[puzzle]`` slab and scatters its pieces (a simulator)."""
+
+    name: str
+
+    def puzzle_scene(
+        self, targets: Sequence[Any], puzzles: Sequence[Any], seed: int, *, starts: Sequence[Any] | None = None
+    ) -> list[Any]:
+        """Each puzzle's slab broken from ``seed``, its pieces scattered (with ``starts`` for the other parts)."""
+        ...
+
+
+@runtime_checkable
+class CalibratingBackend(Protocol):
+    """An optional capability: ``bt-arrange calibrate``, the ChArUco procedure in the backend's cell."""
+
+    name: str
+
+    def open_calibration(self, **options: Any) -> Any:
+        """The calibration run (``views``, ``gui``, ``record_dir``, ``time_limit_s``, the backend's own): not ticked."""
+        ...
+
+
+@runtime_checkable
+class TrueCameraRun(Protocol):
+    """An optional capability of a calibration run: a simulator's true camera, to grade it (evaluation only)."""
+
+    def true_camera(self) -> tuple[Any, Any]:
+        """The true ``(CameraIntrinsics, Pose)`` of the camera the run calibrated."""
+        ...
+
+
+@runtime_checkable
+class ConnectingBackend(Protocol):
+    """An optional capability: a backend that reaches a real cell (``--robot HOST``, ``--camera SPEC``).
+
+    ``connect_to`` is called before any other method when the command line is given either option;
+    a backend without it refuses them in one line.
+    """
+
+    name: str
+
+    def connect_to(self, robot_host: str | None, camera_spec: str | None) -> None:
+        """Where the robot's controller and the camera are (nothing is opened yet)."""
+        ...
+
+
+@runtime_checkable
+class SafetyBackend(Protocol):
+    """An optional capability: ``run --speed-fraction F`` (``bt_arrange.safety.MotionSafety``).
+
+    ``open_run(..., speed_fraction=F)``; a backend without it refuses the option in one line.
+    """
+
+    name: str
+
+    #: The speed fraction a run uses without ``--speed-fraction`` (a real cell: a conservative one).
+    default_speed_fraction: float
+
+
+@runtime_checkable
+class DryRunBackend(Protocol):
+    """An optional capability: ``run --dry-run`` plans every motion of the tree without moving the robot.
+
+    ``open_run(..., dry_run=True)``; the report says what was planned and what could not be (``dry_run``).
+    """
+
+    name: str
+
+    #: What a dry run on this backend cannot plan, for its summary line.
+    dry_run_limits: str
+
+
+@runtime_checkable
+class FoxgloveRun(Protocol):
+    """An optional capability of a run: it streams to a live Foxglove server (``run --foxglove``)."""
+
+    foxglove_live: Any
+
+
+@runtime_checkable
+class OptionedExperiment(Protocol):
+    """An optional capability of an ``Experiment``: options of its own (``--cell``, ``--strategy``), checked first."""
+
+    def check_options(self, **options: Any) -> None:
+        """A one-line ``PlanError`` for an option this backend's campaign cannot take."""
+        ...
+
+
+def require(backend: Any, capability: type, what: str, *, name: str | None = None) -> Any:
+    """``backend`` (or a run of it) when it declares ``capability``; a one-line ``BackendError`` otherwise."""
+    if not isinstance(backend, capability):
+        shown = name if name is not None else getattr(backend, "name", type(backend).__name__)
+        raise BackendError(f"backend {shown!r} cannot {what} (it has no {capability.__name__} capability)")
+    return backend
 
 
 def check_inject(backend: Backend, text: str) -> list[str]:

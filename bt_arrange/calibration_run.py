@@ -20,6 +20,7 @@ from bt_arrange.calibration.file import CameraCalibration
 from bt_arrange.calibration.procedure import calibration_tree
 from bt_arrange.geometry import Pose
 from bt_arrange.plan.camera_view import CameraView
+from bt_arrange.safety import MotionSafety
 from bt_arrange.session import Session, SessionReport, World
 
 
@@ -52,6 +53,7 @@ class CalibrationRun:
         time_limit_s: float = 1800.0,
         plane_poses: list[Pose] | None = None,
         sheet: CharucoBoard | None = None,
+        motion_safety: MotionSafety | None = None,
     ) -> None:
         self.board = board or CharucoBoard()
         self.sheet = sheet
@@ -59,7 +61,14 @@ class CalibrationRun:
         self.root = calibration_tree(poses, self.board, cell=cell, plane_poses=plane_poses, sheet=sheet)
         self.poses = len(poses) + len(plane_poses)
         self.session = Session(
-            self.root, [], open_world, view=view, record_dir=record_dir, time_limit_s=time_limit_s, title="calibrate"
+            self.root,
+            [],
+            open_world,
+            view=view,
+            record_dir=record_dir,
+            time_limit_s=time_limit_s,
+            title="calibrate",
+            motion_safety=motion_safety,
         )
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], Any]] = self.session.tick_hooks
 

@@ -1,6 +1,7 @@
 """The ``bt-arrange`` command line.
 
-    bt-arrange run TREE_FILE [--backend NAME] [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
+    bt-arrange run TREE_FILE [--backend NAME] [--robot HOST] [--camera SPEC] [--speed-fraction F] [--dry-run]
+                   [--seed N] [--threshold-mm X] [--cell ideal|real|FILE.toml]
                    [--calibration FILE] [--inject ERROR[,ERROR...]] [--gui] [--live] [--record DIR] [--json]
                    [--groot [PORT]] [--groot-wait-s S] [--groot-bind ADDR] [--pace F]
                    [--foxglove [PORT]] [--foxglove-bind ADDR]
@@ -10,10 +11,10 @@
                           [--object cube|bar[,...]]
                           [--executor local|dask] [--workers N] [--scheduler tcp://HOST:PORT] [--out DIR]
                           [--record DIR] [--resume]
-    bt-arrange calibrate [--backend NAME] [--cell ideal|real|FILE.toml] [--views 20] [--out camera.toml]
-                         [--seed N] [--gui] [--live] [--record DIR] [--json]
+    bt-arrange calibrate [--backend NAME] [--robot HOST] [--camera SPEC] [--cell ideal|real|FILE.toml]
+                         [--views 20] [--out camera.toml] [--seed N] [--gui] [--live] [--record DIR] [--json]
     bt-arrange examples
-    bt-arrange info
+    bt-arrange info [--backend NAME] [--robot HOST] [--camera SPEC]
 
 Exit status (``cli_common.EXIT_CODES``, the table every command's ``--help`` ends with): 0 when
 every object ends within the threshold, 1 when one does not (or too few views to calibrate), 2 for
@@ -42,6 +43,7 @@ from bt_arrange.cli_common import (
     EXIT_BROKEN_PIPE,
     EXIT_CODES_HELP,
     EXIT_INTERRUPTED,
+    EXIT_NOT_WITHIN,
     EXIT_OK,
     EXIT_RECORD,
     EXIT_TERMINATED,
@@ -54,13 +56,17 @@ from bt_arrange.cli_common import (
     _Parser,
     _positive_seconds,
     _seconds_or_zero,
+    _speed_fraction,
     _whole,
+    add_cell_options,
+    connect_backend,
 )
 from bt_arrange.cli_experiment import _experiment
 from bt_arrange.cli_run import _run
 from bt_arrange.errors import BtArrangeError, RecordError, TrialsErroredError
 from bt_arrange.foxglove.streams import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_arrange.foxglove.streams import port_argument as foxglove_port
+from bt_arrange.safety import SafetyStop
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -70,7 +76,9 @@ def _info(args: argparse.Namespace) -> int:
             print(f"  {package} {metadata.version(package)}")
         except metadata.PackageNotFoundError:
             print(f"  {package} missing (pip install -e . installs it)")
-    for line in backends.load(args.backend).check():
+    backend = backends.load(args.backend)
+    connect_backend(backend, args)
+    for line in backend.check():
         print(f"  {line}")
     return EXIT_OK
 
@@ -200,6 +208,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="a camera.toml from bt-arrange calibrate: the detector uses its intrinsics, distortion and pose "
         "(default: the cell's nominal camera)",
     )
+    add_cell_options(run)
+    run.add_argument(
+        "--speed-fraction",
+        type=_speed_fraction,
+        default=None,
+        metavar="F",
+        help="scale every motion's velocity, acceleration and jerk limits to F of the planned ones (0 < F <= 1; "
+        "time-scaled: the same paths, 1/F times slower); default the backend's (ur: 0.5, the simulators: 1)",
+    )
+    run.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="plan every motion of the tree from the robot's measured joints without moving it (--backend ur): a "
+        "kinematic shadow of the arm and gripper, the real camera for looks; says what it could not plan",
+    )
     run.add_argument(
         "--inject",
         metavar="ERROR[,ERROR...]",
@@ -274,6 +297,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--time-limit-s", type=_positive_seconds, default=1800.0, help="stop after this much world time"
     )
     add_backend(calibrate)
+    add_cell_options(calibrate)
+    calibrate.add_argument(
+        "--speed-fraction",
+        type=_speed_fraction,
+        default=None,
+        metavar="F",
+        help="every motion at F of its planned speed (0 < F <= 1); default the backend's (ur: 0.5)",
+    )
     calibrate.add_argument("--cell", default="ideal", help=CELL_HELP)
     calibrate.set_defaults(handler=_calibrate)
 
@@ -370,6 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     info = add_command("info", "library versions, and a check that a headless cell starts")
     add_backend(info)
+    add_cell_options(info)
     info.set_defaults(handler=_info)
     return parser
 
@@ -417,6 +449,10 @@ def main(argv: list[str] | None = None) -> int:
     except BtArrangeError as error:
         print(f"bt-arrange: error: {error}", file=sys.stderr)
         return EXIT_USAGE
+    except SafetyStop as stop:
+        # A stop outside a tree's ticks (a camera lost while a record's image is taken): the same one line.
+        print(f"bt-arrange: safety stop: {stop.reason}", file=sys.stderr)
+        return EXIT_NOT_WITHIN
     except KeyboardInterrupt:
         print("bt-arrange: interrupted; what was logged so far is kept", file=sys.stderr)
         return EXIT_INTERRUPTED

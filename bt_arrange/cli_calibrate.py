@@ -12,17 +12,17 @@ from typing import Any
 import numpy as np
 
 from bt_arrange import backends
-from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK
-from bt_arrange.errors import BackendError, BtArrangeError, RecordError
+from bt_arrange.backends import CalibratingBackend, TrueCameraRun, require
+from bt_arrange.cli_common import EXIT_NOT_WITHIN, EXIT_OK, connect_backend
+from bt_arrange.errors import BtArrangeError, RecordError
 
 
 def _calibrate(args: argparse.Namespace) -> int:
     from bt_arrange.calibration import matrix_rpy, write_calibration
 
     backend = backends.load(args.backend)
-    open_calibration = getattr(backend, "open_calibration", None)
-    if open_calibration is None:
-        raise BackendError(f"backend {backend.name!r} cannot calibrate")
+    connect_backend(backend, args)
+    open_calibration = require(backend, CalibratingBackend, "calibrate").open_calibration
     out = Path(args.out)
     if out.parent and not out.parent.is_dir():
         raise BtArrangeError(f"--out {out}: the folder {out.parent} does not exist")
@@ -32,6 +32,7 @@ def _calibrate(args: argparse.Namespace) -> int:
         record_dir=args.record,
         time_limit_s=args.time_limit_s,
         **({"cell": args.cell, "run_seed": args.seed} if args.cell != "ideal" else {}),
+        **_speed_option(backend, args.speed_fraction),
     ) as run:
         if args.live:
             from bt_arrange.display import LiveView
@@ -41,7 +42,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         outcome = run.run()
         if args.live:
             view.close()
-        truth = run.true_camera() if hasattr(run, "true_camera") else None
+        # A simulator knows its true camera (evaluation only): a run that declares it (``TrueCameraRun``).
+        truth = run.true_camera() if isinstance(run, TrueCameraRun) else None
     skipped = f"{outcome.unreachable} unreachable, {outcome.not_seen} with the board not seen"
     calibration = outcome.calibration
     if calibration is None:
@@ -111,3 +113,11 @@ def _calibrate(args: argparse.Namespace) -> int:
         raise fault
     print(f"wrote {out}")
     return EXIT_OK
+
+
+def _speed_option(backend: Any, speed_fraction: float | None) -> dict[str, Any]:
+    """``speed_fraction`` for ``open_calibration`` when given; refused by a backend without the capability."""
+    if speed_fraction is None:
+        return {}
+    require(backend, backends.SafetyBackend, "calibrate at a speed fraction (--speed-fraction)")
+    return {"speed_fraction": speed_fraction}

@@ -166,3 +166,46 @@ def _note_uncalibrated(cells: str, calibration: Path | None) -> None:
             "bt-arrange calibrate --cell real --out camera.toml, then --calibration camera.toml",
             file=sys.stderr,
         )
+
+
+def connect_backend(backend: Any, args: argparse.Namespace) -> None:
+    """Hand ``--robot HOST`` and ``--camera SPEC`` to a backend that reaches a real cell; refuse them otherwise."""
+    from bt_arrange import backends
+
+    robot, camera = getattr(args, "robot", None), getattr(args, "camera", None)
+    if robot is None and camera is None:
+        return
+    backends.require(backend, backends.ConnectingBackend, "reach a real cell (--robot, --camera)")
+    backend.connect_to(robot, camera)
+
+
+def _speed_fraction(text: str) -> float:
+    """An argparse type: a fraction of the full speed, 0 < f <= 1."""
+    from bt_arrange.safety import check_speed_fraction
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (1 is the full speed)") from None
+    try:
+        return check_speed_fraction(value)
+    except BtArrangeError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def add_cell_options(command: argparse.ArgumentParser) -> None:
+    """``--robot HOST`` and ``--camera SPEC``: where a real cell is (``--backend ur``; docs/real-cell.md)."""
+    command.add_argument(
+        "--robot",
+        metavar="HOST",
+        default=None,
+        help="the robot controller's address (--backend ur: RTDE 30004, script 30003, dashboard 29999, the "
+        "Robotiq URCap's socket 63352); docs/real-cell.md",
+    )
+    command.add_argument(
+        "--camera",
+        metavar="SPEC",
+        default=None,
+        help="the top camera (--backend ur): a network camera's snapshot URL ending in / (http://HOST:PORT/), "
+        "a V4L2 device (/dev/video0 or 0) or a stream URL; default: the camera at http://ROBOT:8081/",
+    )

@@ -49,7 +49,7 @@ def _experiment_options(
     ``--object``, the check also gets the rows (a row may not know every type).
     """
     options = {key: getattr(args, key) for key, default in EXPERIMENT_OPTIONS if getattr(args, key) != default}
-    check = getattr(experiment, "check_options", None)
+    check = experiment.check_options if isinstance(experiment, backends.OptionedExperiment) else None
     if options and check is None:
         raise BackendError(f"backend {backend.name!r} has no {', '.join('--' + key for key in options)}")
     if check is not None:

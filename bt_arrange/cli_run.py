@@ -16,6 +16,7 @@ from bt_arrange.cli_common import (
     EXIT_NOT_WITHIN,
     EXIT_OK,
     _check_threshold_option,
+    connect_backend,
 )
 from bt_arrange.errors import BtArrangeError, RecordError
 
@@ -34,7 +35,9 @@ def _run(args: argparse.Namespace) -> int:
     # A plan file names its own seed ([scene] seed); --seed overrides it.
     seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
     backend = backends.load(args.backend)
+    connect_backend(backend, args)
     inject = backends.check_inject(backend, args.inject) if args.inject is not None else []
+    safety = _safety_options(backend, args)
     # Plans and XML trees scatter their parts through the chosen backend, never the default one behind its back.
     starts = treefile.scene(module, seed, backend=backend)
     # The Groot2 ports are taken before the world is built: a port in use is one line before anything moves.
@@ -53,14 +56,15 @@ def _run(args: argparse.Namespace) -> int:
             **({"calibration": args.calibration} if args.calibration is not None else {}),
             # The errors are drawn from the run's seed, as the scene is (a backend without them refused them above).
             **({"inject": inject, "inject_seed": seed} if inject else {}),
+            # A speed fraction and a dry run only where asked for (a backend without them refused them above).
+            **safety,
         ) as run,
     ):
         if groot is not None:
             run.transition_hooks.append(groot.on_transition)
             run.runner_hooks.append(lambda runner: _wait_for_groot(groot, args.groot_wait_s))
         if foxglove is not None:
-            if not hasattr(run, "foxglove_live"):
-                raise BtArrangeError(f"backend {args.backend!r} cannot stream a run to Foxglove (--foxglove)")
+            backends.require(run, backends.FoxgloveRun, "stream a run to Foxglove (--foxglove)", name=args.backend)
             run.foxglove_live = foxglove
         if args.live:
             from bt_arrange.display import LiveView
@@ -83,9 +87,34 @@ def _run(args: argparse.Namespace) -> int:
         print(json.dumps(report.to_dict()))
     else:
         _print_report(report, args, recorded=fault is None)
+    dry_run = getattr(report, "dry_run", None)
+    if dry_run is not None:
+        # What a dry run could plan and what it could not: on stderr, so --json stays one object.
+        print(f"bt-arrange: dry run: {dry_run['summary']}", file=sys.stderr if args.json else sys.stdout)
+    safety_stop = getattr(report, "safety_stop", "")
+    if safety_stop:
+        # The one line a lab reads first: what stopped the run. Nothing moved after it.
+        print(f"bt-arrange: safety stop: {safety_stop}", file=sys.stderr)
+        if fault is not None:
+            raise fault
+        return EXIT_NOT_WITHIN
     if fault is not None:
         raise fault
+    if dry_run is not None:
+        return EXIT_OK if dry_run["refused"] == 0 else EXIT_NOT_WITHIN
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _safety_options(backend: backends.Backend, args: argparse.Namespace) -> dict[str, Any]:
+    """``speed_fraction`` and ``dry_run`` for ``open_run``, only when given; refused by a backend without them."""
+    options: dict[str, Any] = {}
+    if args.speed_fraction is not None:
+        backends.require(backend, backends.SafetyBackend, "run at a speed fraction (--speed-fraction)")
+        options["speed_fraction"] = args.speed_fraction
+    if args.dry_run:
+        backends.require(backend, backends.DryRunBackend, "plan a run without moving (--dry-run)")
+        options["dry_run"] = True
+    return options
 
 
 def _check_calibrated(cell: str, calibration: Path | None) -> None:

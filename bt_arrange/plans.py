@@ -195,6 +195,8 @@ class Plan:
         """
         if self.starts is not None and not self.puzzles:
             return list(self.starts)
+        from bt_arrange.backends import PuzzleBackend, ScatteringBackend, require
+
         chosen = self.seed if seed is None else seed
         if backend is None:
             from bt_arrange import backends
@@ -203,12 +205,11 @@ class Plan:
         try:
             if self.puzzles:
                 # The slab is broken and its pieces scattered by the backend alone: the tree never learns how.
-                breaking = getattr(backend, "puzzle_scene", None)
-                if breaking is None:
-                    raise PlanError(f"backend {getattr(backend, 'name', backend)!r} cannot break a [puzzle] slab")
-                return list(breaking(self.targets, self.puzzles, chosen, starts=self.starts))
+                puzzles = require(backend, PuzzleBackend, "break a [puzzle] slab")
+                return list(puzzles.puzzle_scene(self.targets, self.puzzles, chosen, starts=self.starts))
+            scattering = require(backend, ScatteringBackend, "scatter a plan's parts")
             return list(
-                backend.scatter(
+                scattering.scatter(
                     [t.colour for t in self.targets],
                     chosen,
                     avoid=self.targets,

@@ -88,6 +88,10 @@ class SessionReport:
     #: The errors injected into the run (``run --inject``): one JSON-able record per error and part,
     #: ``{"error", "part", "injector", <its magnitude>, "fired", <what it did>}``; None when none were asked for.
     injected: list[dict] | None = None
+    #: The one-line reason of a safety stop that ended the run (``bt_arrange.safety``), or "" when none did.
+    safety_stop: str = ""
+    #: A dry run's summary (``run --dry-run``): the motions it planned and what it could not plan; None in a run.
+    dry_run: dict | None = None
 
     def verdict(self) -> str:
         """How many parts are within and, for each that is not, its offset and why (never the tree's status).
@@ -101,6 +105,8 @@ class SessionReport:
     def within_text(self) -> str:
         """``3 of 4 objects within 1 mm and 1 deg`` (``; stopped at the time limit`` when it stopped there)."""
         stopped = "stopped at the time limit" if self.timed_out else ""
+        if self.safety_stop:
+            stopped = f"safety stop: {self.safety_stop}"
         if not self.objects:
             return stopped or f"tree {self.tree_status}"
         within = sum(o.status == "within" for o in self.objects)
@@ -147,6 +153,10 @@ class SessionReport:
             data["ground_truth"] = False
         if self.injected is not None:
             data["injected"] = self.injected
+        if self.safety_stop:
+            data["safety_stop"] = self.safety_stop
+        if self.dry_run is not None:
+            data["dry_run"] = self.dry_run
         return data
 
 

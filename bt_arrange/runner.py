@@ -22,6 +22,7 @@ from py_trees.common import Status
 from bt_arrange.behaviours import Context
 from bt_arrange.files import LineLog
 from bt_arrange.robot import Clock
+from bt_arrange.safety import SafetyStop
 
 
 @dataclass(frozen=True)
@@ -298,13 +299,19 @@ class RunResult:
     wall_seconds: float
     feedback: str = ""
     transitions: list[Transition] = field(default_factory=list)
+    #: The one-line reason of a safety stop that ended the run (``bt_arrange.safety.SafetyStop``), else "".
+    safety_stop: str = ""
 
 
 class Runner:
     """Runs one tree against one world.
 
     ``step_world()`` advances the world by one control period (for the pybullet cell,
-    ``cell.step``). ``on_transition`` is called with each status change, e.g. to save an image
+    ``cell.step``). A ``SafetyStop`` raised by it (the robot stopped) or by a behaviour's planning (a
+    motion outside the workspace box) ends the run at once: every behaviour is stopped, the result is a
+    FAILURE with the stop's reason (``safety_stop``), and the world is stepped no more; only a refused
+    motion (``arm_stopped`` False) lets the brake bring the arm to rest first. ``on_transition`` is
+    called with each status change, e.g. to save an image
     or to inject an error at a given moment.
     """
 
@@ -331,6 +338,8 @@ class Runner:
             self.log.clock = context.robot.clock
         self.tree.add_visitor(self.log)
         self._is_set_up = False
+        self._ticks = 0
+        self._timed_out = False
 
     def node(self, transition: Transition) -> py_trees.behaviour.Behaviour | None:
         """The behaviour a transition is about, by its id."""
@@ -374,49 +383,82 @@ class Runner:
         tree.count += 1
 
     def run(self) -> RunResult:
-        """Tick until the root succeeds or fails, or the world-time limit passes."""
+        """Tick until the root succeeds or fails, the world-time limit passes, or a safety stop ends it."""
         if not self._is_set_up:
             self.setup()
         clock = self.context.robot.clock
         start_s = clock.now()
         wall_start = time.perf_counter()
-        ticks = 0
-        timed_out = False
+        self._ticks = 0
+        self._timed_out = False
+        stop: SafetyStop | None = None
         try:
-            while True:
-                self.tick_tree()
-                ticks += 1
-                for transition in self.log.take():
-                    if self.on_transition is not None:
-                        self.on_transition(transition)
-                if self.on_tick is not None:
-                    self.on_tick(self.root)
-                self.context.brake.step()
-                if self.root.status in (Status.SUCCESS, Status.FAILURE):
-                    # A motion handed on at speed by the last behaviour runs to its end (the arm
-                    # arrives where it was going) before the run ends: the world time includes it.
-                    while self.context.brake.busy and clock.now() - start_s < self.time_limit_s:
-                        self.step_world()
-                        self.context.brake.step()
-                    break
-                if clock.now() - start_s >= self.time_limit_s:
-                    timed_out = True
-                    self.root.stop(Status.INVALID)
-                    self.log.look([self.root], clock.now())
-                    self.log.take()
-                    break
-                self.step_world()
+            try:
+                while self._tick_and_step(clock, start_s):
+                    pass
+            except SafetyStop as raised:
+                stop = raised
+                self._end_on_stop(stop, clock, start_s)
         finally:
             self.log.close()
         feedback = self.root.feedback_message
-        if timed_out:
+        if self._timed_out:
             feedback = f"stopped after {self.time_limit_s:g} s of world time"
+        if stop is not None:
+            feedback = stop.reason
         return RunResult(
-            status=self.root.status,
-            timed_out=timed_out,
-            ticks=ticks,
+            status=Status.FAILURE if stop is not None else self.root.status,
+            timed_out=self._timed_out,
+            ticks=self._ticks,
             sim_seconds=clock.now() - start_s,
             wall_seconds=time.perf_counter() - wall_start,
             feedback=feedback,
             transitions=list(self.log.transitions),
+            safety_stop=stop.reason if stop is not None else "",
         )
+
+    def _tick_and_step(self, clock: Clock, start_s: float) -> bool:
+        """One tick, the brake's setpoint, and one step of the world; False once the run is over."""
+        self.tick_tree()
+        self._ticks += 1
+        for transition in self.log.take():
+            if self.on_transition is not None:
+                self.on_transition(transition)
+        if self.on_tick is not None:
+            self.on_tick(self.root)
+        self.context.brake.step()
+        if self.root.status in (Status.SUCCESS, Status.FAILURE):
+            # A motion handed on at speed by the last behaviour runs to its end (the arm
+            # arrives where it was going) before the run ends: the world time includes it.
+            while self.context.brake.busy and clock.now() - start_s < self.time_limit_s:
+                self.step_world()
+                self.context.brake.step()
+            return False
+        if clock.now() - start_s >= self.time_limit_s:
+            self._timed_out = True
+            self.root.stop(Status.INVALID)
+            self.log.look([self.root], clock.now())
+            self.log.take()
+            return False
+        self.step_world()
+        return True
+
+    def _end_on_stop(self, stop: SafetyStop, clock: Clock, start_s: float) -> None:
+        """A safety stop: stop every behaviour; a refused motion's arm is braked to rest, a stopped robot left alone."""
+        self.root.stop(Status.INVALID)
+        self.log.look([self.root], clock.now())
+        for transition in self.log.take():
+            if self.on_transition is not None:
+                self.on_transition(transition)
+        if stop.arm_stopped:
+            return
+        # The framework refused a motion: the arm may still carry a motion handed on at speed, which
+        # the brake stops (jerk-limited) as it would for any interruption, before the run ends.
+        brake = self.context.brake
+        brake.brake_carried()
+        try:
+            while brake.busy and clock.now() - start_s < self.time_limit_s:
+                self.step_world()
+                brake.step()
+        except SafetyStop:
+            return  # the robot stopped while braking: nothing more is sent

@@ -62,6 +62,7 @@ from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
+from bt_arrange.safety import MotionSafety
 from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
@@ -91,6 +92,9 @@ REASON_TYPES: tuple[type[py_trees.behaviour.Behaviour], ...] = (
 class Session:
     """One tree in one world, built by ``open_world()`` once everything a user can get wrong is checked.
 
+    ``starts`` are where the parts start (checked with the plan), or None where nobody knows before the
+    camera looks (a real cell: its parts lie where they lie; the plan is checked without a scene).
+
     ``view`` is the top camera's view for the plan check (known without a world: from the backend's
     configuration or a calibration); without one the view is not checked. ``calibration`` (a
     ``bt_arrange.calibration.CameraCalibration``, e.g. ``read_calibration("camera.toml")``) makes the
@@ -102,6 +106,10 @@ class Session:
     ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
     campaign's trial, ``experiment --record``): written whole at the end, or a fault.
 
+    ``motion_safety`` (``bt_arrange.safety.MotionSafety``: a speed fraction, the cell's workspace box)
+    applies to every motion the tree plans; a ``SafetyStop`` (the robot stopped, a motion outside the
+    box) ends the run with a FAILURE and its reason in the report (``safety_stop``).
+
     ``plan`` is what the tree carries out (``bt_arrange.plan.compiled.ArrangementPlan``: targets,
     tolerance, settings, colours, puzzles): the plan check, the report and "within" come from it. By
     default the tree's own (``trees.plan_of(root)``, a rendered arrangement's); a tree without a plan
@@ -111,7 +119,7 @@ class Session:
     def __init__(
         self,
         root: py_trees.behaviour.Behaviour,
-        starts: Iterable[Any],
+        starts: Iterable[Any] | None,
         open_world: Callable[[], World],
         *,
         view: CameraView | None = None,
@@ -123,6 +131,7 @@ class Session:
         calibration: CameraCalibration | None = None,
         mcap_path: Path | None = None,
         plan: ArrangementPlan | None = None,
+        motion_safety: MotionSafety | None = None,
     ) -> None:
         if not isinstance(root, py_trees.behaviour.Behaviour):
             raise PlanError(f"the root must be a py_trees behaviour, got {type(root).__name__}")
@@ -136,7 +145,8 @@ class Session:
         #: The handling settings of the run.
         self.settings = settings
         # Everything a user can get wrong is checked here, before the world is built.
-        scene = list(starts)
+        # None: where the parts start is not known before the camera looks (a real cell): not checked.
+        scene = list(starts) if starts is not None else None
         #: The camera calibration the run uses, or None (the camera as it reports itself).
         self.calibration = calibration
         if calibration is not None:
@@ -158,7 +168,7 @@ class Session:
                         colours=self.colours,
                         settings=settings,
                     )
-                else:  # a puzzle's targets come from its solve: its scene and its whole's place are checked
+                elif scene is not None:  # a puzzle's targets come from its solve: its scene and place are checked
                     check_scene(scene, view=view, colours=self.colours, settings=settings)
                 check_puzzles(checked.puzzles, checked.targets, checked.tolerance.threshold_mm, settings)
                 check_puzzles_in_view(list(checked.puzzles), view)
@@ -168,7 +178,7 @@ class Session:
                 if checked.source is None:
                     raise
                 raise checked.source.locate(error) from error
-        else:
+        elif scene is not None:
             check_scene(scene, view=view, colours=self.colours, settings=settings)
         check_keys(root)
         self.record_dir = prepare_record_dir(record_dir) if record_dir is not None else None
@@ -178,7 +188,7 @@ class Session:
         #: Every node of the tree by its id (as text): transitions name their node by it.
         self.nodes: dict[str, py_trees.behaviour.Behaviour] = {str(node.id): node for node in root.iterate()}
         self.world: World = open_world()
-        self.world.place(scene, self.colours)
+        self.world.place(scene or [], self.colours)
         self.world.settle(settle_s)
         #: Ground truth of the world (evaluation only), or None: the report is then camera only.
         self.truth: GroundTruth | None = self.world.truth
@@ -189,7 +199,11 @@ class Session:
         robot = self.world.robot
         if calibration is not None:
             robot = dataclasses.replace(robot, camera=CalibratedCamera(robot.camera, calibration))
-        self.context = Context.create(robot, detector=PartDetector(self.colours), settings=settings)
+        #: The speed fraction and workspace box every motion of the tree is planned under (``bt_arrange.safety``).
+        self.motion_safety = motion_safety if motion_safety is not None else MotionSafety()
+        self.context = Context.create(
+            robot, detector=PartDetector(self.colours), settings=settings, safety=self.motion_safety
+        )
         self.time_limit_s = time_limit_s
         self.transition_hooks: list[Callable[[Transition], None]] = []
         self.tick_hooks: list[Callable[[py_trees.behaviour.Behaviour], None]] = []
@@ -258,7 +272,9 @@ class Session:
             assert self.replay is not None
             self.replay.observe(self.world.clock.now())  # a stop at the time limit comes after the last tick
         report = SessionReport(
-            objects=self._outcomes(result.transitions, result.feedback if result.timed_out else ""),
+            objects=self._outcomes(
+                result.transitions, result.feedback if result.timed_out or result.safety_stop else ""
+            ),
             tree_status=result.status.value,
             threshold_mm=self.plan.tolerance.threshold_mm if self.plan is not None else None,
             yaw_threshold_deg=self.plan.tolerance.yaw_threshold_deg if self.plan is not None else None,
@@ -269,6 +285,7 @@ class Session:
             ground_truth=self.truth is not None,
             camera_margin_mm=self.camera_margin_mm,
             camera_margin_source=self.camera_margin_source,
+            safety_stop=result.safety_stop,
         )
         for report_hook in self.report_hooks:
             report_hook(report)

@@ -1,8 +1,8 @@
 """Load a tree file (``trees/*.py``) by path and build its root, with one-line errors.
 
-A tree file exposes ``create_root(...)`` returning a py_trees behaviour, and, to run in the
-simulator, ``create_scene(seed)`` returning where the parts start. Its own folder is on
-``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
+A tree file exposes ``create_root(...)`` returning a py_trees behaviour, and, to run in a
+simulator, ``create_scene(seed)`` returning where the parts start (a real cell needs none). Its
+own folder is on ``sys.path`` while it loads, as when Python runs a script, so tree files can share a module.
 
 A ``.xml`` file is a BehaviorTree.CPP tree, read as data by ``bt_arrange.xmltree`` (no code of
 the file runs) into a module with the same two functions; a ``.toml`` file is a plan
@@ -130,8 +130,15 @@ def scene(module: ModuleType, seed: int, backend: Backend | None = None) -> list
     """The file's ``create_scene(seed)``: where the parts start in the simulator.
 
     A ``create_scene`` that takes a ``backend`` (plan and XML files: they scatter their parts
-    through it) is handed the run's; without one, such a file asks the default backend.
+    through it) is handed the run's; without one, such a file asks the default backend. A backend
+    that does not put parts into its world (a real cell: not a ``ScatteringBackend``) needs no scene:
+    its parts lie where they lie, the file's ``create_scene`` is not called (a file need not have one),
+    and the scene is empty.
     """
+    from bt_arrange.backends import ScatteringBackend
+
+    if backend is not None and not isinstance(backend, ScatteringBackend):
+        return []
     create_scene = getattr(module, "create_scene", None)
     where = getattr(module, "__file__", module.__name__)
     if not callable(create_scene):

@@ -14,10 +14,9 @@ import math
 import os
 from dataclasses import dataclass, field
 
-import numpy as np
-
+from bt_arrange import paper_cell
 from bt_arrange.calibration import BoardMount, CharucoBoard
-from bt_arrange.geometry import Pose, rotation_z
+from bt_arrange.geometry import Pose
 from bt_arrange.motion import DEFAULT_HOME_Q
 from bt_arrange.plan.camera_view import CameraView
 from bt_arrange.robot import CameraIntrinsics
@@ -120,14 +119,16 @@ class PhysicsConfig:
 class CameraConfig:
     """The top camera: L515-like RGB intrinsics, 70 cm above the table, looking straight down.
 
+    The nominal figures are the paper's cell's (``bt_arrange.paper_cell``), which a real cell starts from too.
+
     The long image axis runs along world y; image "down" points to world -x, towards the robot;
     the camera is turned ``roll_deg`` about its optical axis.
     """
 
-    width_px: int = 1920
-    height_px: int = 1080
-    horizontal_fov_deg: float = 70.0
-    position_m: tuple[float, float, float] = (0.5, 0.0, 0.70)
+    width_px: int = paper_cell.CAMERA_WIDTH_PX
+    height_px: int = paper_cell.CAMERA_HEIGHT_PX
+    horizontal_fov_deg: float = paper_cell.CAMERA_HORIZONTAL_FOV_DEG
+    position_m: tuple[float, float, float] = paper_cell.CAMERA_POSITION_M
     near_m: float = 0.1
     far_m: float = 2.0
     light_direction: tuple[float, float, float] = (0.3, 0.2, 1.0)
@@ -135,7 +136,7 @@ class CameraConfig:
     #: table; with 0, a cube square to the table (as every push leaves it) has its edges on whole
     #: pixels of the aliased render, and its position is only known to about half a pixel
     #: (0.25 mm); a few degrees give every edge a staircase to measure below a pixel.
-    roll_deg: float = 3.0
+    roll_deg: float = paper_cell.CAMERA_ROLL_DEG
 
     def calibrated_intrinsics(self) -> CameraIntrinsics:
         """The intrinsics of the rendered image, as a calibration would find them.
@@ -153,8 +154,7 @@ class CameraConfig:
 
     def pose_world(self) -> Pose:
         """``T_W_C`` in the OpenCV optical frame: x right (about world -y), y down (about world -x), z forward."""
-        square = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-        return Pose.from_rotation(self.position_m, square @ rotation_z(math.radians(self.roll_deg)))
+        return paper_cell.camera_pose_world(self.position_m, self.roll_deg)
 
 
 @dataclass(frozen=True)

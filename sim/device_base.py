@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.geometry import Pose
+from bt_arrange.ranges import checked_grip_force_n, checked_gripper_speed_m_s, checked_gripper_width_m
 from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics
-from bt_arrange_sim.ranges import checked_grip_force_n, checked_gripper_speed_m_s, checked_gripper_width_m
 
 
 class CellClock:

@@ -23,6 +23,8 @@ class CellBackend:
     """A ``bt_arrange.backends.Backend`` that runs trees in a fresh simulated cell (one engine's)."""
 
     name = ""
+    #: The speed fraction of a run without ``--speed-fraction``: the simulators run the motions as planned.
+    default_speed_fraction = 1.0
     #: Why a cell other than ``ideal`` is refused (the end of a one-line ``PlanError``), or None: every cell.
     ideal_cell_only: str | None = None
 
@@ -40,6 +42,7 @@ class CellBackend:
         calibration: str | Path | None = None,
         inject: Sequence[str] = (),
         inject_seed: int = 0,
+        speed_fraction: float | None = None,
     ) -> Any:
         """A run (a ``world.CellRun``): the plan and scene checked, the cell built, not yet ticked.
 
@@ -48,6 +51,7 @@ class CellBackend:
         ``calibration`` is a ``camera.toml`` (``bt-arrange calibrate``) whose camera the detector uses.
         ``inject`` names errors of ``injectable_errors`` (``run --inject``), put into every part the tree
         picks and drawn from ``inject_seed`` (``injection.named``); the report lists them (``injected``).
+        ``speed_fraction`` (``run --speed-fraction``) slows every motion (``bt_arrange.safety.MotionSafety``).
         """
         if inject:
             from bt_arrange_sim.injection.named import check_named, parse_errors
@@ -65,6 +69,7 @@ class CellBackend:
             time_limit_s=time_limit_s,
             title=title,
             calibration=read_calibration_option(calibration, config.camera),
+            **({"motion_safety": _motion_safety(speed_fraction)} if speed_fraction is not None else {}),
         )
         if inject:
             try:
@@ -164,6 +169,12 @@ class CellBackend:
         from bt_arrange_sim.experiment.engine_experiment import EngineExperiment
 
         return EngineExperiment(self)
+
+
+def _motion_safety(speed_fraction: float) -> Any:
+    from bt_arrange.safety import MotionSafety
+
+    return MotionSafety(speed_fraction=speed_fraction)
 
 
 def attach_errors(run: Any, errors: Sequence[str], seed: int) -> None:

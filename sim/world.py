@@ -113,7 +113,7 @@ class CellRun(Session):
     """
 
     world: CellWorld
-    SESSION_OPTIONS = ("record_dir", "time_limit_s", "title", "calibration", "mcap_path")
+    SESSION_OPTIONS = ("record_dir", "time_limit_s", "title", "calibration", "mcap_path", "motion_safety")
 
     def __init__(
         self,

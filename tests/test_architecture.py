@@ -149,7 +149,9 @@ def test_every_engine_is_found_through_the_backends_entry_points() -> None:
 
     pyproject = tomllib.loads((SIM.parent / "pyproject.toml").read_text(encoding="utf-8"))
     declared = pyproject["project"]["entry-points"]["bt_arrange.backends"].values()
-    assert {_engine_of(value.partition(":")[0]) for value in declared} == set(ENGINES)
+    # The real cell's backend (bt_arrange.ur) is declared there too, and is no simulated engine.
+    engines = {_engine_of(value.partition(":")[0]) for value in declared if not value.startswith("bt_arrange.ur.")}
+    assert engines == set(ENGINES)
 
 
 def test_every_module_of_sim_stays_under_600_lines() -> None:

@@ -14,6 +14,7 @@ from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, CartesianLimits, JointLimits, Motion, MotionPlanner
 from bt_arrange.perception import PartDetector
 from bt_arrange.robot import Arm, Robot
+from bt_arrange.safety import MotionSafety
 from bt_arrange.settings import ManipulationSettings
 
 
@@ -130,13 +131,18 @@ class Context:
         cartesian_limits: CartesianLimits | None = None,
         detector: PartDetector | None = None,
         settings: ManipulationSettings | None = None,
+        safety: MotionSafety | None = None,
     ) -> Context:
-        """A context with the bundled UR5 kinematics and default limits at the arm's control period."""
+        """A context with the bundled UR5 kinematics and default limits at the arm's control period.
+
+        ``safety`` (a speed fraction, a workspace box: ``bt_arrange.safety``) applies to every motion.
+        """
         planner = MotionPlanner(
             ArmKinematics(),
             joint_limits or JointLimits(),
             cartesian_limits or CartesianLimits(),
             robot.arm.control_period_s,
+            safety=safety,
         )
         return cls(
             robot=robot,

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import py_trees
 
-from bt_arrange.errors import PlanError, XmlTreeError
+from bt_arrange.errors import XmlTreeError
 from bt_arrange.filelimits import read_limited
 from bt_arrange.trees import Arrangement
 from bt_arrange.xmltree.reader import from_xml, load_xml
@@ -51,19 +51,20 @@ def load_module(path: str | Path) -> ModuleType:
                 f"{path}: the simulator places cubes from the plan of an <Arrangement> root; "
                 f"this tree's root is <{model_of(text_root).tag}>"
             )
+        from bt_arrange.backends import PuzzleBackend, ScatteringBackend, require
+
         if backend is None:
             from bt_arrange import backends  # the default backend, loaded only to run
 
             backend = backends.load()
         targets = text_root.targets
         if text_root.puzzles:  # each slab broken from the seed by the backend (its pieces' outlines stay there)
-            puzzle_scene = getattr(backend, "puzzle_scene", None)
-            if puzzle_scene is None:  # an optional part of a backend: only a simulator can break a slab
-                raise PlanError(f"backend {getattr(backend, 'name', backend)!r} cannot break a [puzzle] slab")
-            return list(puzzle_scene(targets, text_root.puzzles, seed, starts=text_root.starts))
+            # A declared capability of a backend: only a simulator can break a slab.
+            puzzles = require(backend, PuzzleBackend, "break a [puzzle] slab")
+            return list(puzzles.puzzle_scene(targets, text_root.puzzles, seed, starts=text_root.starts))
         if text_root.starts is not None:
             return list(text_root.starts)
-        return backend.scatter(
+        return require(backend, ScatteringBackend, "scatter a tree's parts").scatter(
             [t.colour for t in targets],
             seed,
             avoid=targets,

@@ -11,14 +11,14 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.ranges import (
+    checked_joint_setpoint,
+    checked_render_offset,
+)
 from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
 from bt_arrange_sim.mujoco.model import camera_quat_wxyz
 from bt_arrange_sim.mujoco.rendering import OffscreenRenderer
-from bt_arrange_sim.ranges import (
-    checked_joint_setpoint,
-    checked_render_offset,
-)
 
 #: The cell the devices belong to (``cell.MujocoCell``, which builds them): named by what they read of it,
 #: so that the devices need not import the module that imports them.

@@ -38,17 +38,19 @@ class SimBackend(CellBackend):
         gui: bool = False,
         record_dir: Path | None = None,
         time_limit_s: float = 1800.0,
+        speed_fraction: float | None = None,
     ) -> Any:
         """A ``SimCalibrationRun``: the ChArUco procedure in a cell with the board on the flange, not yet ticked.
 
         ``views`` poses (``bt_arrange.calibration.board_poses`` over the camera's nominal view);
-        ``cell`` as for ``open_run``.
+        ``cell`` as for ``open_run``; ``speed_fraction`` (``calibrate --speed-fraction``) slows every motion.
         """
         import dataclasses
 
         from bt_arrange.calibration import CharucoBoard, board_poses
         from bt_arrange.calibration.board import TABLE_SHEET
         from bt_arrange.calibration.procedure import working_plane_poses
+        from bt_arrange.safety import MotionSafety
         from bt_arrange_sim.pybullet.calibration import SimCalibrationRun
         from bt_arrange_sim.pybullet.runs import SimWorld, open_world
 
@@ -72,6 +74,7 @@ class SimBackend(CellBackend):
             time_limit_s=time_limit_s,
             plane_poses=plane_poses,
             sheet=TABLE_SHEET,
+            **({"motion_safety": MotionSafety(speed_fraction)} if speed_fraction is not None else {}),
         )
 
     def check(self) -> Iterator[str]:

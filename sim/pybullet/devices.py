@@ -13,13 +13,13 @@ from typing import Any
 import numpy as np
 
 from bt_arrange.geometry import FloatArray, Pose
-from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
-from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
-from bt_arrange_sim.ranges import (
+from bt_arrange.ranges import (
     checked_joint_setpoint,
     checked_joint_setpoint_lists,
     checked_render_offset,
 )
+from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
+from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
 
 #: The cell the devices belong to (``cell.WorkCell``, which builds them): named by what they read of it,
 #: so that the devices need not import the module that imports them.
