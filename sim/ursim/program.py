@@ -120,6 +120,10 @@ class ControlProgram:
         self._warned: set[int] = set()
         self._servo: Servo | None = None
         self._speed: Speed | None = None
+        #: The command register as the client last wrote it before this program started: a command
+        #: left there by a program that died (a runtime error) is not this program's to run, and a
+        #: loaded machine may start the program before the client's clear arrives.
+        self._command_writes_at_start: int | None = controller.registers.int_write_count(register_offset)
         self._write_async_progress(-1)
         self._signal(READY)
 
@@ -160,6 +164,11 @@ class ControlProgram:
         if not self.running or self._blocked:
             return
         command = self._int(0)
+        if self._command_writes_at_start is not None:
+            if self.controller.registers.int_write_count(self.offset) == self._command_writes_at_start:
+                command = NO_CMD  # nothing written since the program started
+            else:
+                self._command_writes_at_start = None
         if command in REALTIME_COMMANDS:
             self._process(command)
             if self.running:  # a runtime error answers nothing: the client sees the program stopped
