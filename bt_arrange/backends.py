@@ -270,7 +270,7 @@ class ConnectingBackend(Protocol):
 
 @runtime_checkable
 class SafetyBackend(Protocol):
-    """An optional capability: ``run --speed-fraction F`` (``bt_arrange.safety.MotionSafety``).
+    """An optional capability: ``run --speed-fraction F`` (``bt_arrange.motion.safety.MotionSafety``).
 
     ``open_run(..., speed_fraction=F)``; a backend without it refuses the option in one line.
     """

@@ -19,8 +19,8 @@ from bt_arrange.calibration.board import CharucoBoard
 from bt_arrange.calibration.file import CameraCalibration
 from bt_arrange.calibration.procedure import calibration_tree
 from bt_arrange.geometry import Pose
+from bt_arrange.motion.safety import MotionSafety
 from bt_arrange.plan.camera_view import CameraView
-from bt_arrange.safety import MotionSafety
 from bt_arrange.session import Session, SessionReport, World
 
 

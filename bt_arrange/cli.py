@@ -66,7 +66,7 @@ from bt_arrange.cli_run import _run
 from bt_arrange.errors import BtArrangeError, RecordError, TrialsErroredError
 from bt_arrange.foxglove.streams import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_arrange.foxglove.streams import port_argument as foxglove_port
-from bt_arrange.safety import SafetyStop
+from bt_arrange.motion.safety import SafetyStop
 
 
 def _info(args: argparse.Namespace) -> int:

@@ -181,7 +181,7 @@ def connect_backend(backend: Any, args: argparse.Namespace) -> None:
 
 def _speed_fraction(text: str) -> float:
     """An argparse type: a fraction of the full speed, 0 < f <= 1."""
-    from bt_arrange.safety import check_speed_fraction
+    from bt_arrange.motion.safety import check_speed_fraction
 
     try:
         value = float(text)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from bt_arrange.geometry import Pose, rotation_z
-from bt_arrange.safety import WorkspaceBox
+from bt_arrange.motion.safety import WorkspaceBox
 
 #: The top camera (an Intel RealSense L515's RGB stream): image size and horizontal field of view.
 CAMERA_WIDTH_PX = 1920

@@ -88,7 +88,7 @@ class SessionReport:
     #: The errors injected into the run (``run --inject``): one JSON-able record per error and part,
     #: ``{"error", "part", "injector", <its magnitude>, "fired", <what it did>}``; None when none were asked for.
     injected: list[dict] | None = None
-    #: The one-line reason of a safety stop that ended the run (``bt_arrange.safety``), or "" when none did.
+    #: The one-line reason of a safety stop that ended the run (``bt_arrange.motion.safety``), or "" when none did.
     safety_stop: str = ""
     #: A dry run's summary (``run --dry-run``): the motions it planned and what it could not plan; None in a run.
     dry_run: dict | None = None

@@ -21,8 +21,8 @@ from py_trees.common import Status
 
 from bt_arrange.behaviours import Context
 from bt_arrange.files import LineLog
+from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.robot import Clock
-from bt_arrange.safety import SafetyStop
 
 
 @dataclass(frozen=True)
@@ -299,7 +299,7 @@ class RunResult:
     wall_seconds: float
     feedback: str = ""
     transitions: list[Transition] = field(default_factory=list)
-    #: The one-line reason of a safety stop that ended the run (``bt_arrange.safety.SafetyStop``), else "".
+    #: The one-line reason of a safety stop that ended the run (``bt_arrange.motion.safety.SafetyStop``), else "".
     safety_stop: str = ""
 
 

@@ -54,6 +54,7 @@ from bt_arrange.errors import PlanError, RecordError
 from bt_arrange.foxglove import streams as foxglove_streams
 from bt_arrange.geometry import PlanarPose
 from bt_arrange.keycheck import check_keys
+from bt_arrange.motion.safety import MotionSafety
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable, PartDetector
 from bt_arrange.plan.check import CameraView, check_plan, check_puzzles, check_scene
 from bt_arrange.plan.compiled import ArrangementPlan
@@ -62,7 +63,6 @@ from bt_arrange.puzzle.evaluation import PuzzleTruth
 from bt_arrange.replay import ReplayRecorder
 from bt_arrange.report import ObjectOutcome, Placement, PlacementLog, SessionReport
 from bt_arrange.runner import Runner, Transition, TransitionLog, object_of
-from bt_arrange.safety import MotionSafety
 from bt_arrange.session_checks import check_colours_apart, check_puzzles_in_view, prepare_record_dir
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import yaw_error_rad
@@ -106,7 +106,7 @@ class Session:
     ``mcap_path`` records the Foxglove streams to that file alone, without a record folder (a
     campaign's trial, ``experiment --record``): written whole at the end, or a fault.
 
-    ``motion_safety`` (``bt_arrange.safety.MotionSafety``: a speed fraction, the cell's workspace box)
+    ``motion_safety`` (``bt_arrange.motion.safety.MotionSafety``: a speed fraction, the cell's workspace box)
     applies to every motion the tree plans; a ``SafetyStop`` (the robot stopped, a motion outside the
     box) ends the run with a FAILURE and its reason in the report (``safety_stop``).
 
@@ -199,7 +199,7 @@ class Session:
         robot = self.world.robot
         if calibration is not None:
             robot = dataclasses.replace(robot, camera=CalibratedCamera(robot.camera, calibration))
-        #: The speed fraction and workspace box every motion of the tree is planned under (``bt_arrange.safety``).
+        #: The speed fraction and workspace box every motion of the tree is planned under (``motion.safety``).
         self.motion_safety = motion_safety if motion_safety is not None else MotionSafety()
         self.context = Context.create(
             robot, detector=PartDetector(self.colours), settings=settings, safety=self.motion_safety

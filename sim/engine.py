@@ -51,7 +51,7 @@ class CellBackend:
         ``calibration`` is a ``camera.toml`` (``bt-arrange calibrate``) whose camera the detector uses.
         ``inject`` names errors of ``injectable_errors`` (``run --inject``), put into every part the tree
         picks and drawn from ``inject_seed`` (``injection.named``); the report lists them (``injected``).
-        ``speed_fraction`` (``run --speed-fraction``) slows every motion (``bt_arrange.safety.MotionSafety``).
+        ``speed_fraction`` (``run --speed-fraction``) slows every motion (``bt_arrange.motion.safety.MotionSafety``).
         """
         if inject:
             from bt_arrange_sim.injection.named import check_named, parse_errors
@@ -172,7 +172,7 @@ class CellBackend:
 
 
 def _motion_safety(speed_fraction: float) -> Any:
-    from bt_arrange.safety import MotionSafety
+    from bt_arrange.motion.safety import MotionSafety
 
     return MotionSafety(speed_fraction=speed_fraction)
 

@@ -26,8 +26,8 @@ from bt_arrange import backends, paper_cell, treefile
 from bt_arrange.errors import BackendError
 from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, CartesianLimits, JointLimits, MotionPlanner
 from bt_arrange.motion.kinematics import gripper_down_pose
+from bt_arrange.motion.safety import MotionSafety, SafetyStop, WorkspaceBox, WorkspaceStop
 from bt_arrange.robot import PixelWindow
-from bt_arrange.safety import MotionSafety, SafetyStop, WorkspaceBox, WorkspaceStop
 from bt_arrange.ur.backend import UrBackend
 from bt_arrange.ur.camera import NetworkCamera, open_camera
 from bt_arrange.ur.robotiq import (

@@ -12,9 +12,9 @@ import numpy as np
 
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import DEFAULT_HOME_Q, ArmKinematics, CartesianLimits, JointLimits, Motion, MotionPlanner
+from bt_arrange.motion.safety import MotionSafety
 from bt_arrange.perception import PartDetector
 from bt_arrange.robot import Arm, Robot
-from bt_arrange.safety import MotionSafety
 from bt_arrange.settings import ManipulationSettings
 
 
@@ -135,7 +135,7 @@ class Context:
     ) -> Context:
         """A context with the bundled UR5 kinematics and default limits at the arm's control period.
 
-        ``safety`` (a speed fraction, a workspace box: ``bt_arrange.safety``) applies to every motion.
+        ``safety`` (a speed fraction, a workspace box: ``bt_arrange.motion.safety``) applies to every motion.
         """
         planner = MotionPlanner(
             ArmKinematics(),

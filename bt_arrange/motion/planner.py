@@ -22,7 +22,7 @@ from bt_arrange.motion.trajectory import (
 )
 
 if TYPE_CHECKING:
-    from bt_arrange.safety import MotionSafety
+    from bt_arrange.motion.safety import MotionSafety
 
 
 class MotionPlanner:
@@ -38,7 +38,7 @@ class MotionPlanner:
     ``start_q`` is the measured joint vector; the start is taken to be at rest unless
     ``start_velocities_rad_s`` is given to ``move_joints``.
 
-    ``safety`` (``bt_arrange.safety.MotionSafety``) applies to every motion: its speed fraction scales
+    ``safety`` (``bt_arrange.motion.safety.MotionSafety``) applies to every motion: its speed fraction scales
     the limits each motion plans with (the planner's own and those a call passes), and its workspace
     box, when the cell gives one, is checked against each planned motion before it is returned (a
     ``WorkspaceStop`` naming the motion and the box; nothing of it was sent).
@@ -53,7 +53,7 @@ class MotionPlanner:
         safety: MotionSafety | None = None,
     ) -> None:
         """Hold the kinematics, the limits of both kinds of motion, the arm's control period and the safety."""
-        from bt_arrange.safety import MotionSafety
+        from bt_arrange.motion.safety import MotionSafety
 
         self.kinematics = kinematics
         self.joint_limits = joint_limits

@@ -215,7 +215,7 @@ class JointMotion(Motion):
         if result not in _RUCKIG_OK:
             raise MotionError(f"joint motion to {np.round(target, 4)} rad could not be planned: ruckig {result}")
         self._duration_s = float(trajectory.duration)
-        #: The planned trajectory (ruckig's), e.g. to check where it goes before it starts (``bt_arrange.safety``).
+        #: The planned trajectory (ruckig's), e.g. to check where it goes before it starts (``motion.safety``).
         self.trajectory = trajectory
         # A start that already moves can overshoot on its way to the target: check the whole path.
         for name, bound, lower, upper in zip(

@@ -20,7 +20,7 @@ import py_trees
 
 from bt_arrange import paper_cell
 from bt_arrange.errors import BackendError
-from bt_arrange.safety import REAL_CELL_SPEED_FRACTION, SafetyStop, WorkspaceBox
+from bt_arrange.motion.safety import REAL_CELL_SPEED_FRACTION, SafetyStop, WorkspaceBox
 
 if TYPE_CHECKING:
     from bt_arrange.session import Session
@@ -94,8 +94,8 @@ class UrBackend:
         refused in one line.
         """
         from bt_arrange.calibration.file import read_calibration_option
+        from bt_arrange.motion.safety import MotionSafety
         from bt_arrange.plan.camera_view import CameraView
-        from bt_arrange.safety import MotionSafety
 
         self._refuse(options, gui)
         host = self._host()
@@ -148,8 +148,8 @@ class UrBackend:
         from bt_arrange.calibration.board import TABLE_SHEET
         from bt_arrange.calibration.procedure import working_plane_poses
         from bt_arrange.calibration_run import CalibrationRun
+        from bt_arrange.motion.safety import MotionSafety
         from bt_arrange.plan.camera_view import CameraView
-        from bt_arrange.safety import MotionSafety
 
         self._refuse(options, gui)
         host = self._host()

@@ -31,8 +31,8 @@ import numpy as np
 
 from bt_arrange.errors import BackendError
 from bt_arrange.geometry import Pose
+from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
-from bt_arrange.safety import SafetyStop
 
 #: How long one HTTP request to the camera may take (s): a 1920x1080 PNG over a lab network.
 HTTP_TIMEOUT_S = 10.0

@@ -22,8 +22,8 @@ import numpy as np
 from bt_arrange.errors import BackendError
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.motion import ARM_JOINT_NAMES
+from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.ranges import checked_joint_setpoint
-from bt_arrange.safety import SafetyStop
 
 #: The control period (s): the CB3's RTDE rate, 125 Hz (an e-Series runs its servo loop at it too).
 CONTROL_PERIOD_S = 0.008

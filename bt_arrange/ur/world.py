@@ -22,10 +22,10 @@ import numpy as np
 
 from bt_arrange.geometry import FloatArray, Pose
 from bt_arrange.motion import ARM_JOINT_NAMES
+from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.perception import ColourTable
 from bt_arrange.ranges import checked_grip_force_n, checked_gripper_speed_m_s, checked_gripper_width_m
 from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, Robot
-from bt_arrange.safety import SafetyStop
 from bt_arrange.ur.rtde import (
     CONTROL_PERIOD_S,
     ControllerClock,

@@ -50,7 +50,7 @@ class SimBackend(CellBackend):
         from bt_arrange.calibration import CharucoBoard, board_poses
         from bt_arrange.calibration.board import TABLE_SHEET
         from bt_arrange.calibration.procedure import working_plane_poses
-        from bt_arrange.safety import MotionSafety
+        from bt_arrange.motion.safety import MotionSafety
         from bt_arrange_sim.pybullet.calibration import SimCalibrationRun
         from bt_arrange_sim.pybullet.runs import SimWorld, open_world
 

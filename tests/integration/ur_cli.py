@@ -19,7 +19,7 @@ import sys
 
 from bt_arrange import backends
 from bt_arrange.cli import main
-from bt_arrange.safety import WorkspaceBox
+from bt_arrange.motion.safety import WorkspaceBox
 from bt_arrange.ur.backend import UrBackend
 
 
