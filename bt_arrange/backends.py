@@ -15,7 +15,8 @@ declares in its ``pyproject.toml``::
 or registered at run time with ``register(name, factory)``. The framework names no backend
 module in its code: ``load("sim")`` imports whatever the entry point says, only when a command
 needs it. (When the installed metadata predates the entry point, e.g. an editable install not
-reinstalled since, the default is still found through ``FALLBACK``, a string, not an import.)
+reinstalled since, the backends this package ships, ``sim`` and ``ur``, are still found through
+``FALLBACK``: strings, not imports.)
 
 The protocols below say what the CLI uses of a backend, its runs and their reports.
 """
