@@ -424,3 +424,18 @@ def one_part(target, threshold_mm=1.0, yaw_threshold_deg=1.0):  # noqa: ANN001, 
     from bt_arrange.trees import render_part
 
     return render_part(PartStep.free(target), ArrangementPlan.of([target], Tolerance(threshold_mm, yaw_threshold_deg)))
+
+
+@pytest.mark.parametrize("keep_going", [True, False])
+def test_a_part_s_neighbours_are_looked_at_again_whatever_became_of_it_unless_the_plan_stops_there(
+    keep_going: bool,
+) -> None:
+    """Going on past a failed part, its neighbours are rechecked anyway; a plan that stops at a failure stops."""
+    from bt_arrange.plan import Target as PlanTarget
+    from bt_arrange.plan import Tolerance, compile_plan
+    from bt_arrange.trees import render
+
+    targets = [PlanTarget("red", x_m=0.5, y_m=0.0), PlanTarget("blue", x_m=0.5, y_m=0.053)]
+    root = render(compile_plan(targets, Tolerance(1.0), keep_going=keep_going))
+    wrapped = [node.name for node in root.iterate() if node.name.startswith("then look again at")]
+    assert wrapped == (["then look again at blue's neighbours"] if keep_going else [])

@@ -58,6 +58,16 @@ def debug_logging() -> bool:
     return py_trees.logging.level < py_trees.logging.Level.INFO
 
 
+def end_tick(node: py_trees.behaviour.Behaviour, new_status: Status) -> None:
+    """The end of py_trees' ``Behaviour.tick`` after ``update()``: an invalid status logged, a stop, the status set."""
+    if new_status not in STATUSES:
+        node.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{node.name}]")
+        new_status = Status.INVALID
+    if new_status != Status.RUNNING:
+        node.stop(new_status)
+    node.status = new_status
+
+
 #: Decides, after each setpoint, whether a motion may be handed on at speed to the next stage.
 HandOn = Callable[[Context, Motion], bool]
 
@@ -389,12 +399,7 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
             self.initialise()
         # Not self.status yet: terminate() may need to check what the current state is first.
         new_status = self.update()
-        if new_status not in STATUSES:
-            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
-            new_status = Status.INVALID
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+        end_tick(self, new_status)
         yield self
 
     def update(self) -> Status:

@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.behaviours.base import STATUSES, debug_logging
+from bt_arrange.behaviours.base import debug_logging, end_tick
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import min_held_width_m
 from bt_arrange.errors import BtArrangeError
@@ -125,12 +125,7 @@ class GraspGuard(py_trees.decorators.EternalGuard):
             self.initialise()
         yield from self.decorated.tick()
         new_status = self.update()
-        if new_status not in STATUSES:
-            self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
-            new_status = Status.INVALID
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+        end_tick(self, new_status)
         yield self
 
     def terminate(self, new_status: Status) -> None:

@@ -100,10 +100,11 @@ def render_part(part: PartStep, plan: ArrangementPlan, locate: Locate | None = N
         ),
         correction(part, plan),
     ]
-    if part.neighbours:
+    if part.neighbours and plan.keep_going:
         # The neighbours are looked at again whatever became of this part: a part placed and then
         # failed (not found again, pushes that stalled) may have moved them, and a neighbour's last
-        # look from before that would report it where it no longer lies.
+        # look from before that would report it where it no longer lies. (A plan that stops at the
+        # first failure, ``keep_going=False``, stops here as it always did.)
         own = py_trees.composites.Sequence(name=f"place and correct {obj}", memory=True, children=children)
         children = [
             py_trees.decorators.FailureIsSuccess(name=f"then look again at {obj}'s neighbours", child=own),

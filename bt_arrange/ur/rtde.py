@@ -136,7 +136,46 @@ class ControllerClock:
         self._receive = None
 
 
-class UrArm:
+class UrJointState:
+    """What every UR5 ``Arm`` of this backend shares: its joints, its period, and the joint state it holds.
+
+    The state is ``_q`` (rad) and ``_qd`` (rad/s), measured or a dry run's setpoint; its TCP comes from
+    the framework's kinematics.
+    """
+
+    def __init__(self, q_rad: FloatArray, qd_rad_s: FloatArray) -> None:
+        self._q = np.asarray(q_rad, dtype=float).copy()
+        self._qd = np.asarray(qd_rad_s, dtype=float).copy()
+        self._kinematics: Any = None
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The UR5's joints, base to wrist 3."""
+        return ARM_JOINT_NAMES
+
+    @property
+    def control_period_s(self) -> float:
+        """One RTDE period (a dry run's shadow plans as the real arm would)."""
+        return CONTROL_PERIOD_S
+
+    def joint_positions(self) -> FloatArray:
+        """The joint positions held (rad): measured at the period's start, or a shadow's last setpoint."""
+        return self._q.copy()
+
+    def joint_velocities(self) -> FloatArray:
+        """The joint speeds held (rad/s)."""
+        return self._qd.copy()
+
+    def tcp_pose(self) -> Pose:
+        """The TCP (between the fingertips) of the joints held, by the framework's kinematics."""
+        if self._kinematics is None:
+            from bt_arrange.motion import ArmKinematics
+
+            self._kinematics = ArmKinematics()
+        return self._kinematics.forward(self._q)
+
+
+class UrArm(UrJointState):
     """The UR5 servoed through ``RTDEControlInterface.servoJ``, measured through ``RTDEReceiveInterface``.
 
     Readings are cached per control period (``refresh``): a tick sees one consistent state. Once the
@@ -147,34 +186,14 @@ class UrArm:
         self._host = host
         self._receive = receive
         self._control = control
-        self._kinematics: Any = None
-        self._q = np.zeros(len(ARM_JOINT_NAMES))
-        self._qd = np.zeros(len(ARM_JOINT_NAMES))
+        super().__init__(np.zeros(len(ARM_JOINT_NAMES)), np.zeros(len(ARM_JOINT_NAMES)))
         self._halted: str = ""
         self.refresh()
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The UR5's joints, base to wrist 3."""
-        return ARM_JOINT_NAMES
-
-    @property
-    def control_period_s(self) -> float:
-        """One RTDE period."""
-        return CONTROL_PERIOD_S
 
     def refresh(self) -> None:
         """Read the measured joints and their speeds (once per period)."""
         self._q = np.array(self._receive.getActualQ(), dtype=float)
         self._qd = np.array(self._receive.getActualQd(), dtype=float)
-
-    def joint_positions(self) -> FloatArray:
-        """Measured joint positions (rad) at the period's start."""
-        return self._q.copy()
-
-    def joint_velocities(self) -> FloatArray:
-        """Measured joint speeds (rad/s) at the period's start."""
-        return self._qd.copy()
 
     def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
         """Servo to ``positions_rad`` within this period (``servoJ``); the velocities are the plan's, not sent."""
@@ -189,14 +208,6 @@ class UrArm:
         if accepted is False:
             reason = fault_reason(self._host, self._receive, self._control)
             raise SafetyStop(reason or f"the robot at {self._host} refused servoJ")
-
-    def tcp_pose(self) -> Pose:
-        """The TCP (between the fingertips) of the measured joints, by the framework's kinematics."""
-        if self._kinematics is None:
-            from bt_arrange.motion import ArmKinematics
-
-            self._kinematics = ArmKinematics()
-        return self._kinematics.forward(self._q)
 
     def release(self) -> None:
         """Drop the interfaces (the world closes them): every later command raises the ``SafetyStop``."""

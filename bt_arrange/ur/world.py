@@ -20,17 +20,23 @@ from typing import Any
 
 import numpy as np
 
-from bt_arrange.geometry import FloatArray, Pose
+from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import ARM_JOINT_NAMES
 from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.perception import ColourTable
-from bt_arrange.ranges import checked_grip_force_n, checked_gripper_speed_m_s, checked_gripper_width_m
+from bt_arrange.ranges import (
+    checked_grip_force_n,
+    checked_gripper_speed_m_s,
+    checked_gripper_width_m,
+    checked_joint_setpoint,
+)
 from bt_arrange.robot import GRIPPER_MAX_WIDTH_M, CameraFrame, Robot
 from bt_arrange.ur.rtde import (
     CONTROL_PERIOD_S,
     ControllerClock,
     RobotLinkError,
     UrArm,
+    UrJointState,
     explained,
     fault_reason,
     stop_servo,
@@ -153,47 +159,18 @@ class UrWorld:
             getattr(self.camera, "close", lambda: None)()
 
 
-class ShadowArm:
+class ShadowArm(UrJointState):
     """A kinematic arm for a dry run: it is where it was last commanded, starting at the robot's measured joints."""
 
     def __init__(self, start_q: FloatArray) -> None:
-        self._q = np.asarray(start_q, dtype=float).copy()
-        self._qd = np.zeros(len(ARM_JOINT_NAMES))
-        self._kinematics: Any = None
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The UR5's joints."""
-        return ARM_JOINT_NAMES
-
-    @property
-    def control_period_s(self) -> float:
-        """The real arm's period: the motions plan as they would for it."""
-        return CONTROL_PERIOD_S
-
-    def joint_positions(self) -> FloatArray:
-        """The last setpoint (the robot's measured joints before any)."""
-        return self._q.copy()
-
-    def joint_velocities(self) -> FloatArray:
-        """The last setpoint's velocities."""
-        return self._qd.copy()
+        super().__init__(start_q, np.zeros(len(ARM_JOINT_NAMES)))
 
     def command(self, positions_rad: FloatArray, velocities_rad_s: FloatArray | None = None) -> None:
         """Be at the setpoint (range-checked as the real arm's are); nothing is sent anywhere."""
-        from bt_arrange.ranges import checked_joint_setpoint
-
         checked_joint_setpoint(positions_rad, velocities_rad_s)
         self._q = np.asarray(positions_rad, dtype=float).copy()
-        self._qd = np.zeros(6) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float).copy()
-
-    def tcp_pose(self) -> Pose:
-        """The TCP of the shadow's joints."""
-        if self._kinematics is None:
-            from bt_arrange.motion import ArmKinematics
-
-            self._kinematics = ArmKinematics()
-        return self._kinematics.forward(self._q)
+        zero = np.zeros(len(ARM_JOINT_NAMES))
+        self._qd = zero if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float).copy()
 
 
 class ShadowGripper:
