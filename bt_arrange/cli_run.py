@@ -32,6 +32,7 @@ def _run(args: argparse.Namespace) -> int:
     _check_calibrated(args.cell, args.calibration)
     module = treefile.load(args.tree_file)
     root = treefile.build_root(module, threshold_mm=args.threshold_mm)
+    _warn_tight_sides(root)
     # A plan file names its own seed ([scene] seed); --seed overrides it.
     seed = args.seed if args.seed is not None else int(getattr(module, "default_seed", 0))
     backend = backends.load(args.backend)
@@ -103,6 +104,15 @@ def _run(args: argparse.Namespace) -> int:
     if dry_run is not None:
         return EXIT_OK if dry_run["refused"] == 0 else EXIT_NOT_WITHIN
     return EXIT_OK if report.all_within_threshold else EXIT_NOT_WITHIN
+
+
+def _warn_tight_sides(root: Any) -> None:
+    """Before anything moves: each side a neighbour leaves the pads no room to push from, on stderr."""
+    from bt_arrange.plan.push_room import warnings
+    from bt_arrange.trees import plan_of
+
+    for line in warnings(plan_of(root)):
+        print(f"bt-arrange: warning: {line}", file=sys.stderr)
 
 
 def _safety_options(backend: backends.Backend, args: argparse.Namespace) -> dict[str, Any]:

@@ -66,6 +66,13 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             Port("stall_after", INT, 0, "fail once this many corrections in a row closed nothing (0: off)"),
             Port("accumulate", BOOL, False, "count on from what the corrections key holds (a second loop)"),
             Port("margins", INT, 1, "the camera's error counted this many times (2: a later recheck reads it again)"),
+            Port(
+                "release_again",
+                BOOL,
+                False,
+                "the child may release the part again past its place for a blocked push: allowed only with a "
+                "correction left to push it back, and while doing so brings it closer",
+            ),
         )
 
     def __init__(
@@ -82,6 +89,7 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         stall_after: int = 0,
         accumulate: bool = False,
         margins: int = 1,
+        release_again: bool = False,
     ) -> None:
         #: The thresholds and the one "within" rule the loop asks (the report asks the plan's too).
         self.tolerance = Tolerance(threshold_mm, yaw_threshold_deg)
@@ -125,6 +133,31 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             self.blackboard.register_key(corrections_key, access=Access.WRITE)
         if self.stalled_key is not None:
             self.blackboard.register_key(self.stalled_key, access=Access.WRITE)
+        #: The child may release the part again past its place (a restaging, for a push a neighbour
+        #: blocks): the loop says before each correction whether it may (``keys.RELEASE_AGAIN``), and
+        #: ends when releasing it again did not bring it closer than its best before, where it would cycle.
+        self.release_again = bool(release_again) and self.obj is not None
+        self.blocked_key = keys.key(self.obj, keys.BLOCKED_TOWARDS) if self.release_again and self.obj else None
+        self.release_again_key = keys.key(self.obj, keys.RELEASE_AGAIN) if self.release_again and self.obj else None
+        #: The last push a neighbour blocked in this loop, and that neighbour: its last word names them.
+        self.blocked_by_key = keys.key(self.obj, keys.BLOCKED_BY) if self.obj else None
+        self.any_blocked_key = keys.key(self.obj, keys.BLOCKED_TOWARDS) if self.obj else None
+        if self.blocked_by_key is not None and self.any_blocked_key is not None:
+            self.blackboard.register_key(self.blocked_by_key, access=Access.READ)
+            self.blackboard.register_key(self.any_blocked_key, access=Access.READ)
+        self.last_blocked: tuple[str, str] | None = None
+        self.offset_xy_key = keys.key(self.obj, keys.OFFSET_XY_MM) if self.release_again and self.obj else None
+        if self.blocked_key is not None and self.release_again_key is not None and self.offset_xy_key is not None:
+            self.blackboard.register_key(self.blocked_key, access=Access.READ)
+            self.blackboard.register_key(self.offset_xy_key, access=Access.READ)
+            self.blackboard.register_key(self.release_again_key, access=Access.WRITE)
+        #: The smallest offset measured (mm) and the first one (as placed), for the last word.
+        self.best_offset_mm: float | None = None
+        self.first_offset_mm: float | None = None
+        #: Per direction the part was released again for, how far it had to go that way then (mm).
+        self._released_for: dict[str, float] = {}
+        #: The offset (target frame, mm) before the correction running now.
+        self._offset_xy_before: tuple[float, float] | None = None
 
     @property
     def threshold_mm(self) -> float:
@@ -142,6 +175,11 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         self._best = None
         self._stalls = 0
         self._counted_before = 0
+        self.best_offset_mm = None
+        self.first_offset_mm = None
+        self._released_for = {}
+        self._offset_xy_before = None
+        self.last_blocked = None
         if self.accumulate and self.corrections_key is not None and self.blackboard.exists(self.corrections_key):
             self._counted_before = int(self.blackboard.get(self.corrections_key) or 0)
         if self.stalled_key is not None:
@@ -169,11 +207,14 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         """After a tick of the child: count a finished correction, pass on a failure."""
         child = self.decorated
         if child.status == Status.FAILURE:
-            self.feedback_message = f"correction failed: {child.feedback_message}"
+            self._note_blocked()
+            self.feedback_message = f"correction failed: {child.feedback_message or self._not_released_text()}"
             return Status.FAILURE
         if child.status == Status.SUCCESS:
             self.attempts += 1
             self._record()
+            self._note_release_again()
+            self._note_blocked()
             self.feedback_message = f"{self.attempts} correction(s), offset {self._offset_text()}"
             return Status.RUNNING  # the next tick checks the new offset before anything else
         self.feedback_message = f"correcting ({self.attempts} done), offset {self._offset_text()}"
@@ -206,12 +247,13 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             )
             self.feedback_message = f"{under}{yaw_text} after {self.attempts} correction(s)"
             return Status.SUCCESS
+        self._remember(offset)
         if self._stalled(offset, yaw):
             if self.stalled_key is not None:
                 self.blackboard.set(self.stalled_key, keys.STALLED, overwrite=True)
             self.feedback_message = (
                 f"pushes stopped converging: offset {offset:.2f} mm{yaw_text} after {self.attempts} correction(s), "
-                f"{self._stalls} in a row closing less than {STALL_FRACTION:.0%}"
+                f"{self._stalls} in a row closing less than {STALL_FRACTION:.0%}{self._blocked_text()}"
             )
             return Status.FAILURE
         if self.attempts >= self.max_attempts:
@@ -219,9 +261,92 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
             what = f"offset still {offset:.2f} mm" + (f"{margin_text} >= {self.threshold_mm:.2f} mm" if outside else "")
             if not yaw_within:
                 what += f"{yaw_text} (>= {self.yaw_threshold_deg:.2f} deg)"
-            self.feedback_message = f"{what} after {self.attempts} correction(s)"
+            self.feedback_message = (
+                f"{what} after {self.attempts} correction(s){self._best_text(offset)}{self._blocked_text()}"
+            )
             return Status.FAILURE
+        self._allow_release_again()
         return None
+
+    def _note_release_again(self) -> None:
+        """After a correction that released the part again for a blocked push: remember how far it had to go."""
+        if self.blocked_key is None or self._offset_xy_before is None:
+            return
+        towards = self.blackboard.get(self.blocked_key) if self.blackboard.exists(self.blocked_key) else None
+        if towards in (None, keys.NOT_BLOCKED):
+            return
+        needed = _along(self._offset_xy_before, str(towards))
+        if needed is not None:
+            self._released_for[str(towards)] = needed
+
+    def _allow_release_again(self) -> None:
+        """Before a correction: say whether the child may release the part again (``keys.RELEASE_AGAIN``).
+
+        Not with less than two corrections left (the push back would be missing), and not for a push
+        whose way is no shorter than when the part was last released for it: released, pushed back
+        and left as far short, it would only cycle. Free pushes go on either way.
+        """
+        if self.release_again_key is None or self.offset_xy_key is None:
+            return
+        offset_xy = self.blackboard.get(self.offset_xy_key) if self.blackboard.exists(self.offset_xy_key) else None
+        self._offset_xy_before = (float(offset_xy[0]), float(offset_xy[1])) if offset_xy is not None else None
+        allowed = keys.ALLOWED
+        if self.max_attempts - self.attempts < 2:
+            allowed = "no correction would be left to push it back"
+        elif self._offset_xy_before is not None:
+            for towards, before_mm in self._released_for.items():
+                now_mm = _along(self._offset_xy_before, towards)
+                if now_mm is not None and now_mm > 0.0 and now_mm >= before_mm * (1.0 - STALL_FRACTION):
+                    allowed = (
+                        f"released past its place for a push of {before_mm:.2f} mm towards {towards}, it came back "
+                        f"{now_mm:.2f} mm short: released again, it would only cycle"
+                    )
+        self.blackboard.set(self.release_again_key, allowed, overwrite=True)
+
+    def _note_blocked(self) -> None:
+        """After a correction: remember a push a neighbour blocked (``/<obj>/blocked_towards``, ``blocked_by``)."""
+        if self.any_blocked_key is None or self.blocked_by_key is None:
+            return
+        if not (self.blackboard.exists(self.any_blocked_key) and self.blackboard.exists(self.blocked_by_key)):
+            return
+        towards, by = self.blackboard.get(self.any_blocked_key), self.blackboard.get(self.blocked_by_key)
+        if towards != keys.NOT_BLOCKED and by != keys.NOT_BLOCKED:
+            self.last_blocked = (str(towards), str(by))
+
+    def _blocked_text(self) -> str:
+        """``"; its push towards +y was blocked on its -y side by blue"`` when a neighbour blocked one, else ``""``."""
+        if self.last_blocked is None:
+            return ""
+        towards, by = self.last_blocked
+        if len(towards) == 2 and towards[0] in "+-":
+            side = ("-" if towards[0] == "+" else "+") + towards[1]
+            return f"; its push towards {towards} was blocked on its {side} side by {by}"
+        return f"; its push squarely towards {towards.lstrip('@')} deg was blocked by {by}"
+
+    def _not_released_text(self) -> str:
+        """Why a correction whose push was blocked ended: the push, and why the part was not released again."""
+        if self.blocked_key is None or self.release_again_key is None or not self.blackboard.exists(self.blocked_key):
+            return ""
+        towards = self.blackboard.get(self.blocked_key)
+        allowed = self.blackboard.get(self.release_again_key) if self.blackboard.exists(self.release_again_key) else ""
+        if towards == keys.NOT_BLOCKED or allowed == keys.ALLOWED:
+            return ""
+        offset = self._offset()
+        at = "" if offset is None else f" at {offset:.2f} mm{self._best_text(offset)}"
+        return f"its push towards {towards} is blocked{at}, and it was not released again: {allowed}"
+
+    def _remember(self, offset: float) -> None:
+        """Keep the first offset (as placed) and the smallest, for the last word."""
+        if self.first_offset_mm is None:
+            self.first_offset_mm = offset
+        self.best_offset_mm = offset if self.best_offset_mm is None else min(self.best_offset_mm, offset)
+
+    def _best_text(self, offset: float) -> str:
+        """``" (best 0.35 mm, placed 1.19 mm)"`` when the loop measured better than where it ends, else ``""``."""
+        best, first = self.best_offset_mm, self.first_offset_mm
+        if best is None or first is None or best >= offset - 0.005:
+            return ""
+        return f" (best {best:.2f} mm, placed {first:.2f} mm)"
 
     def _stalled(self, offset: float, yaw: float | None) -> bool:
         """Count a correction that closed less than ``STALL_FRACTION`` of the best offset and yaw error so far."""
@@ -271,6 +396,14 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
     def _record(self) -> None:
         if self.corrections_key is not None:
             self.blackboard.set(self.corrections_key, self._counted_before + self.attempts, overwrite=True)
+
+
+def _along(offset_xy_mm: tuple[float, float], towards: str) -> float | None:
+    """How far (mm) the part must still go ``towards`` (``"+y"``: the offset's y, target frame); None: a square push."""
+    if len(towards) != 2 or towards[0] not in "+-" or towards[1] not in "xy":
+        return None
+    value = offset_xy_mm[0] if towards[1] == "x" else offset_xy_mm[1]
+    return value if towards[0] == "+" else -value
 
 
 #: The former name of ``RepeatUntilWithin`` (it repeats on success, like py_trees' ``Repeat``).

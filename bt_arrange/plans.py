@@ -8,6 +8,7 @@
     yaw_threshold_deg = 1.0     # optional, default 1.0
     correct = "each"            # optional: "each" (Algorithm 1) or "after_all"
     max_pushes = 10             # optional, default 10
+    strategy = "paper"          # optional: how pushes are chosen, "paper", "learned" or "diagonal"
 
     [objects.bar]               # a user's type; "cube" (50 x 50 x 50 mm) is built in
     size_mm = [80, 40, 40]      # mass_kg, friction: optional simulator settings
@@ -64,6 +65,7 @@ from bt_arrange.filelimits import (
 )
 from bt_arrange.objects import CUBE, ObjectStart, ObjectType
 from bt_arrange.perception.colours import ColourTable
+from bt_arrange.plan.choices import PushStrategy
 from bt_arrange.plan.targets import Target
 from bt_arrange.plan.validate import LOOKS_LIKE_MILLIMETRES_M
 from bt_arrange.plan_colours import COLOUR_KEYS as COLOUR_KEYS  # the plan format's names, kept here
@@ -88,6 +90,7 @@ TOP_KEYS = (
     "yaw_threshold_deg",
     "correct",
     "max_pushes",
+    "strategy",
     "objects",
     "colours",
     "targets",
@@ -123,6 +126,8 @@ class Plan:
     yaw_threshold_deg: float = 1.0
     correct: str = "each"
     max_pushes: int = 10
+    #: How pushes are chosen (``bt_arrange.plan.choices.PushStrategy``): paper, learned or diagonal.
+    strategy: str = "paper"
     seed: int = 0
     starts: list[ObjectStart] | None = None
     raw: dict[str, Any] = field(default_factory=dict, repr=False)
@@ -146,6 +151,7 @@ class Plan:
                 max_pushes=self.max_pushes if max_pushes is None else max_pushes,
                 correct=self.correct if correct is None else correct,
                 yaw_threshold_deg=self.yaw_threshold_deg if yaw_threshold_deg is None else yaw_threshold_deg,
+                strategy=self.strategy,
                 colours=self.colours,
                 puzzles=self.puzzles,
             )
@@ -297,6 +303,14 @@ class _Reader:
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                 raise self.fail("the top level", f"max_pushes = {_shown(value)} is not a whole number, 0 or more")
             options["max_pushes"] = value
+        if "strategy" in data:
+            choices = [strategy.value for strategy in PushStrategy]
+            if data["strategy"] not in choices:
+                raise self.fail(
+                    "the top level",
+                    f"strategy = {_shown(data['strategy'])}: choose " + ", ".join(f'"{c}"' for c in choices),
+                )
+            options["strategy"] = data["strategy"]
         types = self.object_types(data.get("objects", {}))
         colours = self.colour_table(data.get("colours", {}))
         if "targets" not in data and "fresco" not in data and "puzzle" not in data:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from typing import Any
@@ -288,6 +288,24 @@ def _format_directions(directions: tuple[str, ...]) -> str:
     return ",".join(directions)
 
 
+def _parse_blockers(text: str) -> dict[str, str]:
+    """Per push a neighbour blocks, that neighbour: ``+y=red;@61.5=tile 2`` (``""``: none)."""
+    blockers: dict[str, str] = {}
+    for entry in (part.strip() for part in text.split(";")):
+        if not entry:
+            continue
+        towards, sep, name = (piece.strip() for piece in entry.partition("="))
+        if not sep or not name:
+            raise ValueError(f"blocker {entry!r} is not DIRECTION=NEIGHBOUR (+y=red)")
+        _parse_directions(towards)
+        blockers[towards] = name
+    return blockers
+
+
+def _format_blockers(blockers: Mapping[str, str]) -> str:
+    return ";".join(f"{towards}={name}" for towards, name in blockers.items())
+
+
 def _parse_limit(text: str) -> float:
     """A number, or ``inf``: a bound that never binds (a loop that only the yaw ends)."""
     if text.strip().lower() in ("inf", "+inf", "infinity"):
@@ -473,3 +491,4 @@ POSES = PortType("PlanarPoses", _parse_poses, _format_poses)
 COLOURS = PortType("Colours", _parse_colours, _format_colours)
 RELEASE = PortType("Release", _parse_release, _format_release)
 DIRECTIONS_TYPE = PortType("Directions", _parse_directions, _format_directions)
+BLOCKERS = PortType("Blockers", _parse_blockers, _format_blockers)

@@ -17,7 +17,17 @@ FIELDS = {
     for name, value in vars(keys).items()
     if name.isupper()
     and isinstance(value, str)
-    and name not in ("STALLED", "WHOLE_FACE", "FREE_EDGES", "NOT_MEASURED", "TOUCHING_PARTS", "TARGET_SETTER")
+    and name
+    not in (
+        "STALLED",
+        "WHOLE_FACE",
+        "FREE_EDGES",
+        "NOT_MEASURED",
+        "TOUCHING_PARTS",
+        "NOT_BLOCKED",
+        "ALLOWED",
+        "TARGET_SETTER",
+    )
 }
 
 

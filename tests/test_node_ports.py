@@ -27,6 +27,7 @@ SAMPLE_TEXT = {
     "PlanarPoses": "0.5,0.1,0.0;0.4,0.1,0.0",
     "Release": "y;0.058;0.0;0.01",
     "Directions": "+x,-y",
+    "Blockers": "+x=blue;-y=tile 2",
     "Targets": "red,0.5,0.0,0.0;blue,0.5,0.1,0.0",
     "Colours": "teal:rgb:0.0,0.5,0.5",
     "Puzzle": "slab;0.16,0.12,0.02;6;0.002;red;0.5,0,0",

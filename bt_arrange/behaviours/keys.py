@@ -29,8 +29,14 @@ field constant).
   ``RepeatUntilWithin(stall_after=N)``, as it starts and as it gives up; read by the tree (a regrasp).
 - ``/<obj>/push_axis``, ``"x"`` or ``"y"``: the axis of the *next* push, not of the last one. Written by Push, as it
   starts a push along the other axis; read by Push (the axes alternate).
-- ``/<obj>/blocked_towards``, ``"+x"`` ...: the push needed, which a neighbour blocks. Written by Push, as it fails
-  for that reason; read by the tree's restaging.
+- ``/<obj>/blocked_towards``, ``"+x"`` ...: the push needed, which a neighbour blocks, or ``"none"`` when the last
+  push was free. Written by Push, as it chooses its push; read by the tree's restaging and by
+  ``RepeatUntilWithin(release_again=True)`` (a correction that released the part again).
+- ``/<obj>/blocked_by``, the neighbour that blocks that push (``"red"``), or ``"none"``. Written by Push, as it
+  chooses its push; read by RepeatUntilWithin (its last word names the neighbour).
+- ``/<obj>/release_again``, ``"allowed"``, or why the part may not be released again past its place for a blocked
+  push (no correction left to push it back; the last time did not bring it closer). Written by
+  ``RepeatUntilWithin(release_again=True)``, before each correction; read by the tree's restaging.
 - ``/<obj>/push_bias_mm``, ``(float, float)``: where pushes land beyond their aim. Written by Push with strategy
   learned or diagonal, as it starts a push; read by Push.
 - ``/<obj>/last_push``, ``(axis, aim_mm)``: that push's axis and aimed landing. Written by Push with strategy
@@ -80,6 +86,12 @@ FREE_EDGES = "free edges"
 NOT_MEASURED = "not measured"
 PLACED_YAW_ERROR_DEG = "placed_yaw_error_deg"
 BLOCKED_TOWARDS = "blocked_towards"
+#: ``/<obj>/blocked_towards`` (and ``/<obj>/blocked_by``) after a free push.
+NOT_BLOCKED = "none"
+BLOCKED_BY = "blocked_by"
+#: ``ALLOWED``, or why the part may not be released again past its place (a text, as XML trees compare them).
+RELEASE_AGAIN = "release_again"
+ALLOWED = "allowed"
 #: ``TOUCHING_PARTS`` when the look before the pick failed on touching parts of the colour, else ``"no"``:
 #: a text, as XML trees compare them.
 TOUCHING = "touching"
@@ -170,6 +182,16 @@ def push_axis(obj: str) -> str:
 def blocked_towards(obj: str) -> str:
     """``/<obj>/blocked_towards``: the push needed (``"+x"`` ...) that a neighbour blocks, written as Push fails."""
     return key(obj, BLOCKED_TOWARDS)
+
+
+def blocked_by(obj: str) -> str:
+    """``/<obj>/blocked_by``: the neighbour that blocks the push needed (``"red"``), or ``"none"``, written by Push."""
+    return key(obj, BLOCKED_BY)
+
+
+def release_again(obj: str) -> str:
+    """``/<obj>/release_again``: ``"allowed"``, or why the part may not be released again past its place."""
+    return key(obj, RELEASE_AGAIN)
 
 
 def touching(obj: str) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.plan.choices import PushStrategy
 from bt_arrange.plan.layout import DIRECTIONS
-from bt_arrange.ports import DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
+from bt_arrange.ports import BLOCKERS, DIRECTIONS_TYPE, OFF_DOUBLE, STRING, Port
 from bt_arrange.settings import ManipulationSettings
 from bt_arrange.shapes import ROBOTIQ_2F85, SquarePush
 
@@ -114,6 +115,13 @@ class Push(StagedBehaviour):
             Port("strategy", STRING, "paper", "how pushes are chosen: paper, learned or diagonal", optional=True),
             Z_PORT,
             Port(
+                "blockers",
+                BLOCKERS,
+                {},
+                "per push a neighbour blocks, that neighbour, for the reason it fails with: +y=red;@61.5=tile 2",
+                optional=True,
+            ),
+            Port(
                 "threshold_mm",
                 OFF_DOUBLE,
                 None,
@@ -123,7 +131,7 @@ class Push(StagedBehaviour):
             ),
             *entries(
                 (keys.POSE, keys.OFFSET_XY_MM, keys.TARGET, keys.YAW_ERROR_DEG),
-                (keys.BLOCKED_TOWARDS,),
+                (keys.BLOCKED_TOWARDS, keys.BLOCKED_BY),
                 (keys.PUSH_AXIS, keys.PUSH_BIAS_MM, keys.LAST_PUSH),
             ),
         )
@@ -140,8 +148,12 @@ class Push(StagedBehaviour):
         opening_m: float | None = None,
         z_m: float = 0.0,
         threshold_mm: float | None = None,
+        blockers: Mapping[str, str] | None = None,
     ) -> None:
         super().__init__(name)
+        #: Per push a neighbour blocks (a direction or a square push's name), that neighbour: the
+        #: reason Push fails with names it (the plan's ``PartStep.blocked_by``).
+        self.blockers: dict[str, str] = dict(blockers or {})
         #: The correction's threshold (mm; None: unknown): a square push among neighbours stops short
         #: of the place (``plan_square_push``) only by what leaves the part ``STOP_SHORT_FACTOR`` of it away.
         self.threshold_mm = threshold_mm
@@ -172,7 +184,7 @@ class Push(StagedBehaviour):
             self.reads(keys.key(obj, keys.YAW_ERROR_DEG))
         # Push reads the axis it alternates from and writes the next one.
         self.reads(keys.key(obj, keys.PUSH_AXIS))
-        self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS))
+        self.writes(keys.key(obj, keys.PUSH_AXIS), keys.key(obj, keys.BLOCKED_TOWARDS), keys.key(obj, keys.BLOCKED_BY))
         if strategy in ("learned", "diagonal"):
             for field in (keys.PUSH_BIAS_MM, keys.LAST_PUSH):
                 self.reads(keys.key(obj, field))
@@ -187,6 +199,9 @@ class Push(StagedBehaviour):
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Inspect of {self.obj}")
         target: PlanarPose = self.read(keys.key(self.obj, keys.TARGET), "the tree's target setter")
         offset_xy_mm = self.read(keys.key(self.obj, keys.OFFSET_XY_MM), f"Inspect of {self.obj}")
+        # Fresh for every push: the loop above tells a push that was blocked (and a restaging) from a free one.
+        self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), keys.NOT_BLOCKED)
+        self.write(keys.key(self.obj, keys.BLOCKED_BY), keys.NOT_BLOCKED)
         if self.square_pushes:
             planned = self._square_push_stages(context, pose, target, offset_xy_mm)
             if planned is not None:
@@ -225,12 +240,10 @@ class Push(StagedBehaviour):
             if not isinstance(choice, Blocked):
                 distance_m = (offset_xy_mm[0] if choice == "x" else offset_xy_mm[1]) / 1000
         if isinstance(choice, Blocked):
-            self.pushed = None
-            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
-            blocked = choice
-            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+            return self._blocked(choice)
         axis = choice
         self.write(axis_key, "y" if axis == "x" else "x")
+        distance_m = self._short_of_a_blocked_side(axis, distance_m, towards)
         self.pushed = (axis, distance_m)
         self.squaring = False
         if abs(distance_m) < s.min_push_m:
@@ -339,10 +352,7 @@ class Push(StagedBehaviour):
                 best = max(self.square_pushes, key=lambda n: self._along(offset_xy_mm, n))
                 choice = Blocked(best, math.hypot(*offset_xy_mm), across_every_push=every_push_free)
         if isinstance(choice, Blocked):
-            self.pushed = None
-            self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), choice.towards)
-            blocked = choice
-            return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj))]
+            return self._blocked(choice)
         if choice is None:
             self.pushed = ("x", 0.0)
             self.squaring = False
@@ -424,6 +434,30 @@ class Push(StagedBehaviour):
             half_span_m = opening_m / 2 + gripper.pad_thickness_m
             reach_m = shape.back_within_m(heading_rad, object_yaw_rad, half_span_m) + gripper.pad_width_m / 2
         return opening_m, reach_m
+
+    def _short_of_a_blocked_side(self, axis: str, distance_m: float, towards: tuple[str, ...]) -> float:
+        """Among neighbours, a long push whose overshoot only a blocked push could undo stops short (m, signed).
+
+        A box released past its place for a blocked push comes home by a long push; pushed all the
+        way, it landed past its place by 0.4 mm in the real-cell model (a 4 mm push), where only the
+        blocked push reaches, and was released again. Stopped ``APPROACH_RESERVE_MM`` short, it lies on
+        the free side, and a short push closes the rest.
+        """
+        if self.opening_m is None or self.square_pushes or abs(distance_m) * 1000 < LONG_PUSH_MM:
+            return distance_m
+        overshoot_towards = ("-" if distance_m > 0 else "+") + axis
+        if overshoot_towards in towards:
+            return distance_m
+        return math.copysign(abs(distance_m) - APPROACH_RESERVE_MM / 1000, distance_m)
+
+    def _blocked(self, blocked: Blocked) -> list[Stage]:
+        """No push: name the blocked side and the neighbour (``/<obj>/blocked_towards``, ``blocked_by``)."""
+        self.pushed = None
+        neighbour = None if blocked.across_every_push else self.blockers.get(blocked.towards)
+        self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), blocked.towards)
+        by = keys.NOT_BLOCKED if blocked.across_every_push else neighbour or "a neighbour"
+        self.write(keys.key(self.obj, keys.BLOCKED_BY), by)
+        return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj, neighbour))]
 
     def _turned(self) -> bool:
         """True when the measured yaw error is at or above ``yaw_threshold_deg``."""

@@ -266,23 +266,23 @@ class Blocked:
     #: Nothing blocks it: the offset lies across every square push, and no two take it between them.
     across_every_push: bool = False
 
-    def reason(self, obj: str) -> str:
-        """The feedback: which side, and what happens next."""
+    def reason(self, obj: str, neighbour: str | None = None) -> str:
+        """The feedback: which side, and which neighbour (None: "a neighbour") leaves the pads no room."""
         if self.across_every_push:
             return (
                 f"{obj} needs a push of {abs(self.offset_mm):.2f} mm across every square push it has, and no "
                 "two take it between them: among neighbours no other push is made"
             )
+        who = neighbour or "a neighbour"
         if self.towards.startswith("@"):
             return (
                 f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "
-                "frame), where a neighbour leaves the pads no room, and no free push closes it"
+                f"frame), where {who} leaves the pads no room, and no free push closes it"
             )
         side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
         return (
             f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
-            "where a neighbour leaves the pads no room: pick it up and release it again "
-            "on the side it can be pushed from"
+            f"where {who} leaves the pads no room"
         )
 
 

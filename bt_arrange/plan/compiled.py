@@ -25,7 +25,7 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.plan import stacking
 from bt_arrange.plan.choices import CorrectMode, PushStrategy
-from bt_arrange.plan.layout import Pads, Release, Step, free_push_directions, restage_releases
+from bt_arrange.plan.layout import Pads, Release, Step, free_push_directions, push_blockers, restage_releases
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold, kinds, parts_of
 from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.plan.validate import plan_steps, validate_targets
@@ -45,6 +45,8 @@ class NeighbourCheck:
     restage: Mapping[str, Release]
     kind_targets: tuple[PlanarPose, ...]
     push_opening_m: float
+    #: Per push a neighbour blocks, that neighbour (the reason a blocked correction ends names it).
+    blocked_by: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,8 @@ class PartStep:
     rechecked: bool = False
     neighbours: tuple[NeighbourCheck, ...] = ()
     nearest_grasp: bool = False
+    #: Per push a neighbour blocks (not in ``push_towards``), that neighbour.
+    blocked_by: Mapping[str, str] = field(default_factory=dict)
 
     @classmethod
     def free(cls, target: Target, kind_targets: Iterable[PlanarPose] = ()) -> PartStep:
@@ -259,6 +263,7 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
                 restage_releases(layout_by_obj[name].part, placed, pads),
                 siblings.get(name, ()),
                 pads.neighbour_push_opening_m(parts_of([by_obj[name]], settings)[0], "x"),
+                push_blockers(layout_by_obj[name].part, placed, pads),
             )
             for name in step.neighbours
         ]
@@ -276,6 +281,7 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
                     restage_releases(own.part, in_layer, pads),
                     siblings.get(part.obj, ()),
                     pads.neighbour_push_opening_m(parts_of([part], settings)[0], "x"),
+                    push_blockers(own.part, in_layer, pads),
                 )
             )
         dense = is_among_neighbours(step)
@@ -293,6 +299,7 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
                 rechecked=target.obj in rechecked,
                 neighbours=tuple(neighbours),
                 nearest_grasp=dense or target.obj in rechecked,
+                blocked_by=push_blockers(step.part, placed, pads) if dense else {},
             )
         )
     return tuple(steps)
@@ -316,6 +323,7 @@ def _steps_after_all(plan: list[Target], layout: list[Step], pads: Pads) -> tupl
                 restage=restage_releases(step.part, everything, pads),
                 push_opening_m=None,
                 kind_targets=siblings.get(step.part.name, ()),
+                blocked_by=push_blockers(step.part, everything, pads),
             )
         )
     return tuple(steps)

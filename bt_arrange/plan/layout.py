@@ -166,6 +166,18 @@ def free_push_directions(part: Part, placed: Sequence[tuple[str, Footprint]], pa
     return tuple(free)
 
 
+def push_blockers(part: Part, placed: Sequence[tuple[str, Footprint]], pads: Pads) -> dict[str, str]:
+    """Per direction ``part`` (at its target) cannot be pushed towards, the nearest of ``placed`` in the pads' way."""
+    others = [(n, r) for n, r in placed if n != part.name]
+    footprints = dict(others)
+    out: dict[str, str] = {}
+    for towards in part.push_directions:
+        names = blockers([push_pads(part, part.footprint, towards, 0.0, pads)], others, pads.pad_clearance_m)
+        if names:
+            out[towards] = min(names, key=lambda name: gap_m(part.footprint, footprints[name]))
+    return out
+
+
 @dataclass(frozen=True)
 class Release:
     """Where and how a part is let go.

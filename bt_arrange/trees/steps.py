@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import py_trees
@@ -365,23 +365,25 @@ def correction(
     restage: dict[str, Release] | None
     opening_m: float | None
     if isinstance(step, NeighbourCheck):
-        target, towards, restage, opening_m, kind_targets, margins = (
+        target, towards, restage, opening_m, kind_targets, margins, blocked_by = (
             step.target,
             step.push_towards,
             dict(step.restage),
             step.push_opening_m,
             step.kind_targets,
             1,
+            step.blocked_by,
         )
     else:
         part = step if isinstance(step, PartStep) else PartStep.free(step)
-        target, towards, restage, opening_m, kind_targets, margins = (
+        target, towards, restage, opening_m, kind_targets, margins, blocked_by = (
             part.target,
             part.push_towards,
             dict(part.restage) if part.restage is not None else None,
             part.push_opening_m,
             part.kind_targets,
             part.margins,
+            part.blocked_by,
         )
     return _correction(
         target,
@@ -397,6 +399,7 @@ def correction(
         label=label,
         settings=plan.settings,
         margins=margins,
+        blocked_by=blocked_by,
     )
 
 
@@ -415,6 +418,7 @@ def _correction(
     label: str = "",
     settings: ManipulationSettings | None = None,
     margins: int = 1,
+    blocked_by: Mapping[str, str] | None = None,
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
@@ -427,6 +431,7 @@ def _correction(
     ``yaw_threshold_deg=None`` corrects the position only. ``settings`` are the run's (the
     threshold's floor). ``margins``: how many times the camera's error is added to the offset
     (``RepeatUntilWithin.margins``: 2 for a part a later neighbour's recheck reads again).
+    ``blocked_by``: per blocked push, the neighbour in the way, which a blocked correction names.
     """
     check_threshold(threshold_mm, settings)
     strategy = check_strategy(strategy)
@@ -445,6 +450,7 @@ def _correction(
         # Among neighbours a part pushed squarely onto its edges may be stopped short of its place,
         # as far as the threshold allows (``Push.plan_square_push``); a box is pushed as Table 1's.
         threshold_mm=None if towards is None or target.object_type.shape.rectangular else threshold_mm,
+        blockers=blocked_by,
     )
     if restage:
         push = py_trees.composites.Selector(
@@ -473,6 +479,7 @@ def _correction(
         yaw_threshold_deg=yaw_threshold_deg,
         stall_after=STALL_AFTER_PUSHES if free else 0,
         margins=margins,
+        release_again=bool(restage),
     )
     if not free:
         return loop
@@ -535,6 +542,13 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
             py_trees.behaviours.CheckBlackboardVariableValue(
                 name=f"{obj} needs a push {towards}{label}",
                 check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
+            ),
+            # The loop allows it while a correction is left to push the part back and doing so brought it closer.
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj} may be released again{label}",
+                check=py_trees.common.ComparisonExpression(
+                    keys.key(obj, keys.RELEASE_AGAIN), keys.ALLOWED, operator.eq
+                ),
             ),
             Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release, z_m=target.z_m),
             GraspGuard(

@@ -41,9 +41,26 @@ def test_a_push_a_neighbour_blocks_fails_saying_so_and_writes_the_direction(cont
     assert "red needs a push of 1.50 mm towards +x, from its -x side, where a neighbour leaves the pads no room" in (
         run.feedback
     )
-    assert "release it again on the side it can be pushed from" in run.feedback
     assert read("/red/blocked_towards") == "+x"
+    assert read("/red/blocked_by") == "a neighbour"
     assert fake_arm(context).commands == [], "never pushes through the neighbour"
+
+
+def test_a_blocked_push_names_the_neighbour_the_plan_says_stands_there(context: Context) -> None:
+    write({"/red/pose": cube_pose(0.5, 0.0), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (1.5, 0.0)})
+    push = set_up(Push("push red", "red", towards=("-x", "+y", "-y"), blockers={"+x": "blue"}), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.FAILURE
+    assert "towards +x, from its -x side, where blue leaves the pads no room" in run.feedback
+    assert read("/red/blocked_by") == "blue"
+
+
+def test_a_free_push_says_nothing_blocked_it(context: Context) -> None:
+    write({"/red/pose": cube_pose(0.5, 0.0), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (0.0, 2.0)})
+    push = set_up(Push("push red", "red", towards=("-x", "+y", "-y"), blockers={"+x": "blue"}), context)
+    tick_until_done(push, context)
+    assert read("/red/blocked_towards") == "none"
+    assert read("/red/blocked_by") == "none"
 
 
 def test_a_push_among_neighbours_opens_only_to_keep_the_fingers_within_the_face(context: Context) -> None:
@@ -53,6 +70,32 @@ def test_a_push_among_neighbours_opens_only_to_keep_the_fingers_within_the_face(
     assert run.status == Status.SUCCESS, run.feedback
     assert run.feedback == "pushed +2.00 mm along y"
     assert [(c.kind, c.value) for c in fake_gripper(context).commands] == [("open", 0.024)]
+
+
+@pytest.mark.parametrize(
+    ("offset_y_mm", "towards", "pushed"),
+    [
+        (-4.0, ("-x", "+x", "-y"), "pushed -3.00 mm along y"),  # home after a release again: stops 1 mm short
+        (-4.0, ("-x", "+x", "-y", "+y"), "pushed -4.00 mm along y"),  # an overshoot is free to undo
+        (-2.0, ("-x", "+x", "-y"), "pushed -2.00 mm along y"),  # short: all the way
+    ],
+    ids=["long, overshoot blocked", "long, overshoot free", "short"],
+)
+def test_a_long_push_among_neighbours_stops_short_where_only_a_blocked_push_could_undo_an_overshoot(
+    context: Context, offset_y_mm: float, towards: tuple[str, ...], pushed: str
+) -> None:
+    write(
+        {
+            "/red/pose": cube_pose(0.5, 0.0),
+            "/red/target": PlanarPose(0.0, 0.0, 0.0),
+            "/red/offset_xy_mm": (0.0, offset_y_mm),
+            "/red/push_axis": "y",
+        }
+    )
+    push = set_up(Push("push red", "red", towards=towards, opening_m=0.024), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    assert run.feedback == pushed
 
 
 # -- a squaring push among neighbours ----------------------------

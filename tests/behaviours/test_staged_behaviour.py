@@ -67,7 +67,7 @@ def test_the_base_class_owns_the_client_and_the_declared_keys() -> None:
     push = Push("push red", "red")
     assert isinstance(push.blackboard, py_trees.blackboard.Client)
     assert set(push.blackboard.read) >= {"/red/pose", "/red/target", "/red/offset_xy_mm", "/red/push_axis"}
-    assert set(push.blackboard.write) == {"/red/push_axis", "/red/blocked_towards"}
+    assert set(push.blackboard.write) == {"/red/push_axis", "/red/blocked_towards", "/red/blocked_by"}
     inspect = Inspect("inspect red", "red", after_placing=True)
     assert set(inspect.blackboard.write) == {
         "/red/pose",
