@@ -448,7 +448,14 @@ class Push(StagedBehaviour):
         overshoot_towards = ("-" if distance_m > 0 else "+") + axis
         if overshoot_towards in towards:
             return distance_m
-        return math.copysign(abs(distance_m) - APPROACH_RESERVE_MM / 1000, distance_m)
+        reserve_mm = math.copysign(APPROACH_RESERVE_MM, distance_m)
+        last_key = keys.key(self.obj, keys.LAST_PUSH)
+        if self.strategy in ("learned", "diagonal") and self.blackboard.exists(last_key):
+            # The learned strategy's aim moves back by the reserve: stopping short is no landing error to learn.
+            last_axis, aim_mm = self.blackboard.get(last_key)
+            if aim_mm is not None:
+                self.write(last_key, (last_axis, aim_mm - reserve_mm))
+        return distance_m - reserve_mm / 1000
 
     def _blocked(self, blocked: Blocked) -> list[Stage]:
         """No push: name the blocked side and the neighbour (``/<obj>/blocked_towards``, ``blocked_by``)."""
@@ -457,6 +464,10 @@ class Push(StagedBehaviour):
         self.write(keys.key(self.obj, keys.BLOCKED_TOWARDS), blocked.towards)
         by = keys.NOT_BLOCKED if blocked.across_every_push else neighbour or "a neighbour"
         self.write(keys.key(self.obj, keys.BLOCKED_BY), by)
+        if self.strategy in ("learned", "diagonal"):
+            # No push was made: the next one must not learn a landing from it (a release past the place
+            # in between read as a push landing 4 mm beyond its aim, and sent the part 5 mm the wrong way).
+            self.write(keys.key(self.obj, keys.LAST_PUSH), ("x", None))
         return [InstantStage(stage.CHOOSE_PUSH_SIDE, lambda c: blocked.reason(self.obj, neighbour))]
 
     def _turned(self) -> bool:

@@ -132,3 +132,13 @@ def test_a_squaring_push_with_both_sides_of_its_axis_blocked_is_not_made(context
     run = tick_until_done(push, context)
     assert run.status == Status.SUCCESS, run.feedback
     assert fake_arm(context).commands == [], "never pushes from a side a neighbour blocks"
+
+
+def test_a_blocked_learned_push_leaves_nothing_to_learn_from(context: Context) -> None:
+    # The part is released past its place before the next push: that move is no push's landing.
+    write({"/red/pose": cube_pose(0.5, 0.0), "/red/target": PlanarPose(0.0, 0.0, 0.0), "/red/offset_xy_mm": (0.1, 2.0)})
+    push = set_up(Push("push red", "red", "diagonal", towards=("-x", "+x", "-y"), blockers={"+y": "blue"}), context)
+    run = tick_until_done(push, context)
+    assert run.status == Status.FAILURE
+    assert "where blue leaves the pads no room" in run.feedback
+    assert read("/red/last_push") == ("x", None)
