@@ -437,6 +437,13 @@ class SimCamera(CellCamera):
         self, width: int, height: int, projection: list[float], light: list[float]
     ) -> tuple[np.ndarray, np.ndarray]:
         """TinyRenderer's colour (rows, columns, 3) and z-buffer of everything in the world."""
+        rgba, z = self._rgba(width, height, projection, light)
+        return rgba[:, :, :3].copy(), z
+
+    def _rgba(
+        self, width: int, height: int, projection: list[float], light: list[float]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """TinyRenderer's RGBA (rows, columns, 4) and z-buffer of everything in the world."""
         import pybullet
 
         _, _, rgba, zbuffer, _ = self._cell.client.getCameraImage(
@@ -449,8 +456,8 @@ class SimCamera(CellCamera):
             lightDirection=light,
             flags=pybullet.ER_NO_SEGMENTATION_MASK,
         )
-        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
-        return rgb, np.asarray(zbuffer, dtype=np.float32).reshape(height, width)
+        rgba = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
+        return rgba, np.asarray(zbuffer, dtype=np.float32).reshape(height, width)
 
     def _over_table(
         self, width: int, height: int, projection: list[float], light: list[float]
@@ -481,23 +488,24 @@ class SimCamera(CellCamera):
         table_rgba = list(client.getVisualShapeData(table)[0][7])
         client.changeVisualShape(table, -1, rgbaColor=[*table_rgba[:3], 0.0])
         try:
-            rgb, z = self._image(width, height, projection, light)
+            rgba, z = self._rgba(width, height, projection, light)
         finally:
             client.changeVisualShape(table, -1, rgbaColor=table_rgba)
-        top = self._table_top(frustum, rgb.shape[1], rgb.shape[0], z, light, table_rgba)
+        top = self._table_top(frustum, width, height, z, light, table_rgba)
         if top is None:
             return None
         colour, top_z = top
         # TinyRenderer's depth test runs on its own depths, which its z-buffer output rounds: a
         # fragment within a few of the output's steps of the top's (a part's edge where it meets
         # the table) may have been drawn or not. Such a frame is rendered as it is.
-        near_tie = np.abs(z - top_z) <= _TIE_STEPS * np.spacing(top_z)
-        if bool(np.any(near_tie)):
+        steps = _TIE_STEPS * np.spacing(top_z)
+        shown = z > top_z + steps
+        if np.count_nonzero(shown) + np.count_nonzero(z < top_z - steps) != z.size:
             return None
-        shown = z > top_z
-        rgb[shown] = colour
-        z[shown] = top_z
-        return rgb, z
+        # The four bytes of a pixel as one 32-bit word: one pass over the pixels, not one per channel.
+        np.copyto(rgba.view(np.uint32), colour.view(np.uint32), where=shown[:, :, np.newaxis])
+        np.copyto(z, top_z, where=shown)
+        return rgba[:, :, :3].copy(), z
 
     def _straight_down(self) -> bool:
         """True when the rendering camera's optical axis is the world's vertical (the table's top at one depth)."""
@@ -530,7 +538,7 @@ class SimCamera(CellCamera):
         light: list[float],
         table_rgba: list[float],
     ) -> tuple[np.ndarray, np.float32] | None:
-        """The table top's colour and z-buffer value for this view and light: one pixel rendered where nothing was."""
+        """The table top's RGBA and z-buffer value for this view and light: one pixel rendered where nothing was."""
         key = (tuple(self._render_view_matrix), tuple(light), tuple(table_rgba))
         if key in self._table_tops:
             return self._table_tops[key]
@@ -546,13 +554,13 @@ class SimCamera(CellCamera):
         du, dv = (right - left) / width, (top - bottom) / height
         near, far = self._cell.config.camera.near_m, self._cell.config.camera.far_m
         pixel = _frustum(left + column * du, left + (column + 1) * du, top - (row + 1) * dv, top - row * dv, near, far)
-        rgb, pixel_z = self._image(1, 1, pixel, light)
+        rgba, pixel_z = self._rgba(1, 1, pixel, light)
         view = np.asarray(self._render_view_matrix, dtype=float).reshape(4, 4, order="F")
         distance_m = np.linalg.inv(view)[2, 3]
         expected_z = far * (distance_m - near) / ((far - near) * distance_m)
         if abs(float(pixel_z[0, 0]) - expected_z) > 1e-5:
             return None  # something other than the table's top there
-        found = (rgb[0, 0].copy(), np.float32(pixel_z[0, 0]))
+        found = (rgba[0, 0].copy(), np.float32(pixel_z[0, 0]))
         if len(self._table_tops) >= 16:  # a jittering light gives each frame its own
             self._table_tops.pop(next(iter(self._table_tops)))
         self._table_tops[key] = found
