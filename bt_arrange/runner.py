@@ -122,24 +122,22 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         changes: list[Transition] = []
         last = self._last
         seen: set[py_trees.behaviour.Behaviour] = set()
-        # Breadth first (a list read from the front): the changes come in the order of the tick.
+        # Breadth first (a list read from the front, growing as it is read): the changes come in the order of the tick.
         queue = list(nodes)
         invalid = Status.INVALID
-        index = 0
-        while index < len(queue):
-            node = queue[index]
-            index += 1
+        get, add = last.get, seen.add
+        for node in queue:
             if node in seen:
                 continue
-            seen.add(node)
-            before = last.get(node, invalid)
+            add(node)
+            before = get(node, invalid)
             if node.status is not before:
                 changes.append(self._transition(node, before, time_s))
                 last[node] = node.status
             # A child changes without a tick only when a parent stops it (to INVALID): so only below a node
             # ticked or stopped now, and only a child whose status differs from the last look.
             for child in node.children:
-                if last.get(child, invalid) is not child.status:
+                if get(child, invalid) is not child.status:
                     queue.append(child)
         if changes:
             self.pending.extend(changes)
@@ -217,20 +215,22 @@ def _passed_on_to(node: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Beha
       while the child runs (setting only their feedback).
 
     Any other node (a subclass with its own ``tick``, a guard checking a condition, a decorator
-    whose ``update()`` may end it) is ticked as py_trees ticks it.
+    whose ``update()`` may end it) is ticked as py_trees ticks it. Which of these a node is
+    depends only on its class and its memory, fixed when it is built: it is worked out at its
+    first look (``_pass_kind``) and kept on the node, not worked out again every tick.
     """
     if node.status is not Status.RUNNING:
         return None
-    kind = type(node)
-    if kind in _PASSING_DECORATORS:
-        child: py_trees.behaviour.Behaviour = node.decorated  # type: ignore[attr-defined]
-        return child
-    if not isinstance(node, py_trees.composites.Composite) or not getattr(node, "memory", False):
-        return None
-    current = node.current_child
-    if kind.tick is py_trees.composites.Sequence.tick:
-        return current
-    if kind.tick is py_trees.composites.Selector.tick:
+    kind = getattr(node, _PASS_KIND, None)
+    if kind is None:
+        kind = _pass_kind(node)
+        setattr(node, _PASS_KIND, kind)
+    if kind is _SEQUENCE:
+        return node.current_child  # type: ignore[attr-defined]
+    if kind is _DECORATOR:
+        return node.decorated  # type: ignore[attr-defined]
+    if kind is _SELECTOR:
+        current = node.current_child  # type: ignore[attr-defined]
         for child in node.children:
             if child is current:
                 return current
@@ -241,6 +241,23 @@ def _passed_on_to(node: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Beha
 
 #: Decorators whose ``update()`` with a running child returns RUNNING, whatever else it sets (its feedback).
 _PASSING_DECORATORS = (py_trees.decorators.FailureIsSuccess, py_trees.decorators.Retry)
+#: The attribute a node's kind is kept in (``_passed_on_to``), and the kinds.
+_PASS_KIND = "_bt_arrange_pass_kind"
+_SEQUENCE, _SELECTOR, _DECORATOR, _OTHER = "sequence", "selector", "decorator", "other"
+
+
+def _pass_kind(node: py_trees.behaviour.Behaviour) -> str:
+    """How a node's tick treats a running child: passes it on as a sequence, a selector, a decorator, or otherwise."""
+    kind = type(node)
+    if kind in _PASSING_DECORATORS:
+        return _DECORATOR
+    if not isinstance(node, py_trees.composites.Composite) or not getattr(node, "memory", False):
+        return _OTHER
+    if kind.tick is py_trees.composites.Sequence.tick:
+        return _SEQUENCE
+    if kind.tick is py_trees.composites.Selector.tick:
+        return _SELECTOR
+    return _OTHER
 
 
 def resumed_tick(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
@@ -256,27 +273,29 @@ def resumed_tick(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     node's tick handed back as it happened, not run twice. Either way every node ends the tick
     as ``root.tick()`` would leave it, and the same nodes are yielded in the same order.
     """
+    running = Status.RUNNING
     above: list[py_trees.behaviour.Behaviour] = []
     node = root
     while True:
         child = _passed_on_to(node)
-        if child is None or child.status is not Status.RUNNING:
+        if child is None or child.status is not running:
             break
         above.append(node)
         node = child
     if not above:
         return list(root.tick())
     ticked = list(node.tick())
-    if node.status is Status.RUNNING:
+    if node.status is running:
         for parent in reversed(above):
-            if type(parent) in _PASSING_DECORATORS:
+            # Every node above was looked at on the way down (``_passed_on_to``), which kept its kind.
+            if getattr(parent, _PASS_KIND) is _DECORATOR:
                 # Decorator.tick after its child: update(), and stop on a status other than RUNNING.
                 status = parent.update()
-                if status is not Status.RUNNING:
+                if status is not running:
                     parent.stop(status)
                 parent.status = status
             else:
-                parent.status = Status.RUNNING
+                parent.status = running
             ticked.append(parent)
         return ticked
     # The resumed node ended: the root's tick reaches it as before (the nodes above it did nothing on
@@ -358,11 +377,9 @@ class Runner:
         ``BehaviourTree.tick`` makes for full visitors even when there are none.
         """
         tree = self.tree
-        if tree.pre_tick_handlers or tree.post_tick_handlers or any(v.full for v in tree.visitors):
-            tree.tick()
-            return
         visitors = tree.visitors
-        if len(visitors) == 1 and visitors[0] is self.log:
+        handlers = tree.pre_tick_handlers or tree.post_tick_handlers
+        if not handlers and len(visitors) == 1 and visitors[0] is self.log:
             # The usual case, the log alone: it reads the statuses after the tick (``finalise``), so the
             # tick may resume below the nodes that only pass it on (``resumed_tick``).
             log = self.log
@@ -370,6 +387,9 @@ class Runner:
             log.visit_all(resumed_tick(self.root))
             log.finalise()
             tree.count += 1
+            return
+        if handlers or any(v.full for v in visitors):
+            tree.tick()
             return
         for visitor in visitors:
             visitor.initialise()

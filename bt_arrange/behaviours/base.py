@@ -49,21 +49,21 @@ class Stage(ABC):
         return None
 
 
-#: The statuses a behaviour may return: py_trees' ``Behaviour.tick`` builds this list afresh at every tick.
-STATUSES = frozenset(Status)
-
-
 def debug_logging() -> bool:
     """Whether py_trees logs at DEBUG (its ``logger.debug`` prints only then): the per-tick message is built only so."""
-    return py_trees.logging.level < py_trees.logging.Level.INFO
+    # ``level < Level.INFO``: the usual INFO and DEBUG told by identity, not through IntEnum's comparison.
+    level = py_trees.logging.level
+    return level is py_trees.logging.Level.DEBUG or (level is not py_trees.logging.Level.INFO and level < 1)
 
 
 def end_tick(node: py_trees.behaviour.Behaviour, new_status: Status) -> None:
     """The end of py_trees' ``Behaviour.tick`` after ``update()``: an invalid status logged, a stop, the status set."""
-    if new_status not in STATUSES:
+    # A status a behaviour may return is a member of ``Status``: checked by its type (py_trees builds
+    # ``list(Status)`` at every tick; a set of them would hash each member in Python).
+    if type(new_status) is not Status:
         node.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{node.name}]")
         new_status = Status.INVALID
-    if new_status != Status.RUNNING:
+    if new_status is not Status.RUNNING:
         node.stop(new_status)
     node.status = new_status
 
@@ -390,8 +390,8 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         """py_trees' ``Behaviour.tick``, step for step, without what it recomputes for nothing each tick.
 
         A behaviour is ticked every control period (125 Hz) while it runs: its debug message is
-        formatted only when py_trees logs at DEBUG, and a status is checked against a set built once
-        (``STATUSES``) instead of ``list(Status)`` built at every tick.
+        formatted only when py_trees logs at DEBUG, and a status is checked by its type (``end_tick``)
+        instead of against ``list(Status)`` built at every tick.
         """
         if debug_logging():
             self.logger.debug(f"{self.__class__.__name__}.tick()")

@@ -105,8 +105,8 @@ class GraspGuard(py_trees.decorators.EternalGuard):
         """py_trees' ``EternalGuard.tick`` and ``Decorator.tick``, step for step.
 
         The guard is ticked every control period while its child runs: its debug messages are
-        formatted only when py_trees logs at DEBUG, and the status is checked against a set built
-        once (``STATUSES``) instead of ``list(Status)`` built at every tick.
+        formatted only when py_trees logs at DEBUG, and the status is checked by its type
+        (``end_tick``) instead of against ``list(Status)`` built at every tick.
         """
         if debug_logging():
             self.logger.debug(f"{self.__class__.__name__}.tick()")

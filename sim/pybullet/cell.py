@@ -102,6 +102,8 @@ class WorkCell(CellBase):
         from pybullet_utils.bullet_client import BulletClient
 
         self.config = config or CellConfig()
+        #: True with the pybullet window open.
+        self.gui = gui
         physics = self.config.physics
         self._substeps = physics.substeps
         with _silenced(1):
