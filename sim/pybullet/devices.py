@@ -20,6 +20,7 @@ from bt_arrange.ranges import (
 )
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange_sim.device_base import CellArm, CellCamera, CellClock, CellGripper
+from bt_arrange_sim.pybullet.table_top import TableTopFill, frustum, straight_down
 
 #: The cell the devices belong to (``cell.WorkCell``, which builds them): named by what they read of it,
 #: so that the devices need not import the module that imports them.
@@ -271,7 +272,7 @@ class SimCamera(CellCamera):
         self._light_rng = errors.rng("imaging", per_run=True)
         self._warp_maps: dict[tuple, tuple[tuple[float, float], PixelWindow, np.ndarray, np.ndarray]] = {}
         #: The table top's colour and z-buffer value by view, light and table colour (``_table_top``).
-        self._table_tops: dict[tuple, tuple[np.ndarray, np.float32]] = {}
+        self._table_fill = TableTopFill(cell, self._rgba)
         # Uncalibrated pinhole: windows shift it by the renderer's half pixel in their own pixels.
         self._nominal = CameraIntrinsics.from_fov(config.width_px, config.height_px, config.horizontal_fov_deg)
         self._true_pose_world = self._pose_world
@@ -349,7 +350,7 @@ class SimCamera(CellCamera):
         right = half_w * (2.0 * (window.x_px + window.width_px) / width - 1.0)
         top = half_h * (1.0 - 2.0 * window.y_px / height)
         bottom = half_h * (1.0 - 2.0 * (window.y_px + window.height_px) / height)
-        return _frustum(left, right, bottom, top, near, config.far_m)
+        return frustum(left, right, bottom, top, near, config.far_m)
 
     def _warp(self, window: PixelWindow) -> tuple[tuple[float, float], PixelWindow, np.ndarray, np.ndarray]:
         """The true pinhole's pixels to render for ``window`` and the maps that warp them by the lens.
@@ -394,7 +395,7 @@ class SimCamera(CellCamera):
         right = near * (e0[0] + region.width_px - (k.cx_px + 0.5)) / k.fx_px
         top = near * ((k.cy_px + 0.5) - e0[1]) / k.fy_px
         bottom = near * ((k.cy_px + 0.5) - (e0[1] + region.height_px)) / k.fy_px
-        return _frustum(left, right, bottom, top, near, config.far_m)
+        return frustum(left, right, bottom, top, near, config.far_m)
 
     def _light_direction(self) -> list[float]:
         """The light's direction, turned by up to ``light_jitter_deg`` per frame in a real cell."""
@@ -462,109 +463,12 @@ class SimCamera(CellCamera):
     def _over_table(
         self, width: int, height: int, projection: list[float], light: list[float]
     ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The same image, the table's top filled in instead of shaded pixel by pixel; None where that cannot be.
-
-        TinyRenderer shades every pixel of the table's top (most of a frame) at about 150 ns each:
-        six of the seven milliseconds of a 185 x 185 px window. Seen straight down, the top is one
-        flat face of one colour, at one depth (its normal, the light and the view are the same at
-        every pixel: measured one colour over every window). So the world is rendered without the
-        table (hidden for the render: its alpha 0, which TinyRenderer skips), and every pixel that
-        rendered nothing, or something farther than the table's top (a part's bottom sunk a
-        fraction of a millimetre into it), takes the top's colour and depth, as TinyRenderer would
-        have drawn them: its depth test keeps the nearer fragment. The top's colour and depth come
-        from a one-pixel render of the table through a pixel that showed nothing, kept per view and
-        light. Not done (None: the plain render) in the pybullet window, for a camera not looking
-        straight down (a real cell's tilted camera: the top's depth varies), for a view reaching past
-        the table's top, or where a fragment lies exactly at the top's depth (a tie the draw order
-        decides). ``tests/integration/test_camera_cell.py`` holds it to the plain render's pixels.
-        """
-        cell = self._cell
-        if cell.gui or not self._straight_down():
-            return None
-        frustum = _frustum_planes(projection, cell.config.camera.near_m)
-        if not self._within_table_top(frustum):
-            return None
-        client, table = cell.client, cell.table_id
-        table_rgba = list(client.getVisualShapeData(table)[0][7])
-        client.changeVisualShape(table, -1, rgbaColor=[*table_rgba[:3], 0.0])
-        try:
-            rgba, z = self._rgba(width, height, projection, light)
-        finally:
-            client.changeVisualShape(table, -1, rgbaColor=table_rgba)
-        top = self._table_top(frustum, width, height, z, light, table_rgba)
-        if top is None:
-            return None
-        colour, top_z = top
-        # TinyRenderer's depth test runs on its own depths, which its z-buffer output rounds: a
-        # fragment within a few of the output's steps of the top's (a part's edge where it meets
-        # the table) may have been drawn or not. Such a frame is rendered as it is.
-        steps = _TIE_STEPS * np.spacing(top_z)
-        shown = z > top_z + steps
-        if np.count_nonzero(shown) + np.count_nonzero(z < top_z - steps) != z.size:
-            return None
-        # The four bytes of a pixel as one 32-bit word: one pass over the pixels, not one per channel.
-        np.copyto(rgba.view(np.uint32), colour.view(np.uint32), where=shown[:, :, np.newaxis])
-        np.copyto(z, top_z, where=shown)
-        return rgba[:, :, :3].copy(), z
+        """The same image, the table's top filled in instead of shaded pixel by pixel (``table_top``); None: cannot."""
+        return self._table_fill.render(self._render_view_matrix, width, height, projection, light)
 
     def _straight_down(self) -> bool:
         """True when the rendering camera's optical axis is the world's vertical (the table's top at one depth)."""
-        view = np.asarray(self._render_view_matrix, dtype=float).reshape(4, 4, order="F")
-        return abs(view[2, 0]) < 1e-12 and abs(view[2, 1]) < 1e-12
-
-    def _within_table_top(self, frustum: tuple[float, float, float, float]) -> bool:
-        """True when all of the frustum's view of the table's plane lies on its top (1 mm inside its edges)."""
-        cell = self._cell
-        view = np.asarray(self._render_view_matrix, dtype=float).reshape(4, 4, order="F")
-        eye_to_world = np.linalg.inv(view)
-        height_m = eye_to_world[2, 3]
-        if height_m <= cell.config.camera.near_m:
-            return False
-        left, right, bottom, top = frustum
-        near = cell.config.camera.near_m
-        corners = np.array([[x, y, -near, 0.0] for x in (left, right) for y in (bottom, top)]) * (height_m / near)
-        points = eye_to_world[:3, 3] + (eye_to_world[:3, :3] @ corners[:, :3].T).T
-        (length, width), (cx, cy) = cell.config.table_size_m, cell.config.table_centre_xy_m
-        inside_x = np.abs(points[:, 0] - cx) < length / 2 - 0.001
-        inside_y = np.abs(points[:, 1] - cy) < width / 2 - 0.001
-        return bool(np.all(inside_x & inside_y))
-
-    def _table_top(
-        self,
-        frustum: tuple[float, float, float, float],
-        width: int,
-        height: int,
-        z: np.ndarray,
-        light: list[float],
-        table_rgba: list[float],
-    ) -> tuple[np.ndarray, np.float32] | None:
-        """The table top's RGBA and z-buffer value for this view and light: one pixel rendered where nothing was."""
-        key = (tuple(self._render_view_matrix), tuple(light), tuple(table_rgba))
-        if key in self._table_tops:
-            return self._table_tops[key]
-        empty = z >= _NOTHING_Z
-        # A pixel whose neighbours showed nothing either: the one-pixel render samples near its corner.
-        inner = empty[:-2, :-2] & empty[:-2, 1:-1] & empty[:-2, 2:] & empty[1:-1, :-2] & empty[1:-1, 1:-1]
-        inner = inner & empty[1:-1, 2:] & empty[2:, :-2] & empty[2:, 1:-1] & empty[2:, 2:]
-        rows, columns = np.nonzero(inner)
-        if len(rows) == 0:
-            return None
-        row, column = int(rows[0]) + 1, int(columns[0]) + 1
-        left, right, bottom, top = frustum
-        du, dv = (right - left) / width, (top - bottom) / height
-        near, far = self._cell.config.camera.near_m, self._cell.config.camera.far_m
-        pixel = _frustum(left + column * du, left + (column + 1) * du, top - (row + 1) * dv, top - row * dv, near, far)
-        rgba, pixel_z = self._rgba(1, 1, pixel, light)
-        view = np.asarray(self._render_view_matrix, dtype=float).reshape(4, 4, order="F")
-        distance_m = np.linalg.inv(view)[2, 3]
-        expected_z = far * (distance_m - near) / ((far - near) * distance_m)
-        if abs(float(pixel_z[0, 0]) - expected_z) > 1e-5:
-            return None  # something other than the table's top there
-        found = (rgba[0, 0].copy(), np.float32(pixel_z[0, 0]))
-        if len(self._table_tops) >= 16:  # a jittering light gives each frame its own
-            self._table_tops.pop(next(iter(self._table_tops)))
-        self._table_tops[key] = found
-        return found
+        return straight_down(self._render_view_matrix)
 
     def capture(self, with_depth: bool = False, window: PixelWindow | None = None) -> CameraFrame:
         """Render one frame of the world as it is now: the full image, or only ``window``."""
@@ -595,33 +499,6 @@ class SimCamera(CellCamera):
                 width, height = window.out_width_px, window.out_height_px
             rgb, depth = self._render(width, height, projection, with_depth)
         return self._frame(rgb, depth, intrinsics)
-
-
-#: The z-buffer of a pixel TinyRenderer drew nothing in (its clear value, the largest float32 below 1).
-_NOTHING_Z = np.float32(0.9999999)
-#: Steps of the z-buffer's float32 around the table top's value within which a fragment may be in front or behind.
-_TIE_STEPS = 4
-
-
-def _frustum_planes(projection: list[float], near: float) -> tuple[float, float, float, float]:
-    """(left, right, bottom, top) on the near plane of a ``glFrustum`` matrix (column-major, as pybullet takes it)."""
-    p00, p11, p02, p12 = projection[0], projection[5], projection[8], projection[9]
-    width, height = 2.0 * near / p00, 2.0 * near / p11
-    centre_x, centre_y = p02 * width / 2.0, p12 * height / 2.0
-    return centre_x - width / 2.0, centre_x + width / 2.0, centre_y - height / 2.0, centre_y + height / 2.0
-
-
-def _frustum(left: float, right: float, bottom: float, top: float, near: float, far: float) -> list[float]:
-    """``glFrustum``'s matrix, column-major as pybullet takes it."""
-    matrix = np.array(
-        [
-            [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
-            [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
-            [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
-            [0.0, 0.0, -1.0, 0.0],
-        ]
-    )
-    return [float(v) for v in matrix.flatten(order="F")]
 
 
 def _small_rotation(rx_rad: float, ry_rad: float, rz_rad: float) -> np.ndarray:
