@@ -491,6 +491,7 @@ class Session:
                     set_downs=self._set_downs.get(target.obj, 0),
                     separations=self._separations.get(target.obj, 0),
                     placed_again=max(0, self._placings.get(target.obj, 0) - 1),
+                    held_look=str(_get(report, keys.key(target.obj, keys.HELD_LOOK)) or ""),
                 )
             )
         return outcomes + self._unsolved_pieces(transitions, stopped)
