@@ -48,14 +48,17 @@ def inverse(a: PlanarPose) -> PlanarPose:
     return relative(a, PlanarPose(0.0, 0.0, 0.0))
 
 
-def look_pose(camera_xy: tuple[float, float], pick: PlanarPose, wrist_rad: float) -> tuple[float, float, float]:
+def look_pose(
+    camera_xy: tuple[float, float], pick: PlanarPose, wrist_rad: float, quarter_turn: bool = False
+) -> tuple[float, float, float]:
     """The TCP's (x, y, yaw) for the look: beside the camera on the pick's side, the wrist turned least.
 
     On the +y side the pads close along x, on the -y side along y (the UR5's wrist stands clear of
     the part so, measured in the cell's images); of the two ways round, the one nearer the wrist's yaw.
+    ``quarter_turn``: the pads a quarter turn from that (a second look, where the first saw too little).
     """
     side = 1.0 if pick.y_m >= camera_xy[1] else -1.0
-    base = 0.0 if side > 0 else math.pi / 2
+    base = (0.0 if side > 0 else math.pi / 2) + (math.pi / 2 if quarter_turn else 0.0)
     yaw = min((base, base + math.pi), key=lambda y: abs(fold_yaw(y - wrist_rad, 2 * math.pi)))
     yaw = wrist_rad + fold_yaw(yaw - wrist_rad, 2 * math.pi)
     return camera_xy[0], camera_xy[1] + side * LOOK_OFFSET_M, yaw
@@ -85,8 +88,17 @@ class LookAtHeld(StagedBehaviour):
             *entries((keys.POSE, keys.GRASP_HALF_TURN), (keys.HELD_CORRECTION, keys.HELD_LOOK)),
         )
 
-    def __init__(self, name: str, obj: str, colour: str | None = None, object_type: ObjectType | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        obj: str,
+        colour: str | None = None,
+        object_type: ObjectType | None = None,
+        quarter_turn: bool = False,
+    ) -> None:
         super().__init__(name)
+        #: True: the pads a quarter turn from the first look's (``look_pose``).
+        self.quarter_turn = bool(quarter_turn)
         self.obj = obj
         self.colour = colour or obj
         self.object_type = object_type or CUBE
@@ -110,7 +122,7 @@ class LookAtHeld(StagedBehaviour):
         # Where the pick put the part in the pads, had the camera and the grasp been exact.
         self._expected_in_tcp = relative(PlanarPose(gx, gy, gyaw), picked)
         camera = context.robot.camera.pose_world.position_m
-        x, y, yaw = look_pose((float(camera[0]), float(camera[1])), picked, wrist)
+        x, y, yaw = look_pose((float(camera[0]), float(camera[1])), picked, wrist, self.quarter_turn)
         return [
             MoveStage(stage.MOVE_TO_HELD_LOOK, to_pose(x, y, LOOK_TCP_Z_M, yaw, carrying=True)),
             InstantStage(stage.MEASURE_HELD, self._measure),

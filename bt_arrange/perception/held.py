@@ -89,8 +89,8 @@ class HeldLimits:
 
     min_points: int = 60
     max_rms_mm: float = 0.5
-    max_sigma_mm: float = 0.25
-    max_sigma_deg: float = 0.4
+    max_sigma_mm: float = 0.8
+    max_sigma_deg: float = 1.0
     max_missing: float = 0.1
     min_seen: float = 0.2
     max_shift_mm: float = 30.0

@@ -254,6 +254,8 @@ def held_look(target: Target, set_down: Sequence[py_trees.behaviour.Behaviour]) 
         Selector "look at <obj> in the fingers, else set it down"
         ├── GraspGuard "while looking at <obj> in the fingers"
         │   └── LookAtHeld "look at <obj> in the fingers"      /<obj>/held_correction, held_look = "held look"
+        ├── GraspGuard "while looking at <obj> in the fingers again"
+        │   └── LookAtHeld "look at <obj> in the fingers, turned"   the pads a quarter turn round
         └── Sequence "set <obj> down, look at it and pick it centred"
             ├── SetBlackboardVariable "<obj> set down"           /<obj>/held_look = "set down"
             └── the set-down: Place where="pick", the look, Pick "pick <obj> centred"
@@ -268,6 +270,13 @@ def held_look(target: Target, set_down: Sequence[py_trees.behaviour.Behaviour]) 
             GraspGuard(
                 f"while looking at {obj} in the fingers",
                 LookAtHeld(f"look at {obj} in the fingers", obj, target.colour, target.object_type),
+            ),
+            # Where the first look saw too little, the pads a quarter turn round show other edges.
+            GraspGuard(
+                f"while looking at {obj} in the fingers again",
+                LookAtHeld(
+                    f"look at {obj} in the fingers, turned", obj, target.colour, target.object_type, quarter_turn=True
+                ),
             ),
             py_trees.composites.Sequence(
                 name=f"set {obj} down, look at it and pick it centred",
