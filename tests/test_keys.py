@@ -11,13 +11,23 @@ from bt_arrange.behaviours import keys
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The field constants (``keys.POSE`` ...); ``STALLED``, ``WHOLE_FACE``, ``FREE_EDGES``, ``NOT_MEASURED`` and
-#: ``TOUCHING_PARTS`` are values of a key, ``TARGET_SETTER`` a writer's name.
+#: ``TOUCHING_PARTS``, ``LOOKED_IN_FINGERS`` and ``SET_DOWN`` are values of a key, ``TARGET_SETTER`` a writer's name.
 FIELDS = {
     name: value
     for name, value in vars(keys).items()
     if name.isupper()
     and isinstance(value, str)
-    and name not in ("STALLED", "WHOLE_FACE", "FREE_EDGES", "NOT_MEASURED", "TOUCHING_PARTS", "TARGET_SETTER")
+    and name
+    not in (
+        "STALLED",
+        "WHOLE_FACE",
+        "FREE_EDGES",
+        "NOT_MEASURED",
+        "TOUCHING_PARTS",
+        "LOOKED_IN_FINGERS",
+        "SET_DOWN",
+        "TARGET_SETTER",
+    )
 }
 
 

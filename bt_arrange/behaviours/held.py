@@ -9,7 +9,7 @@ import numpy as np
 from bt_arrange.behaviours import keys
 from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import InstantStage, MoveStage, Stage, StagedBehaviour
-from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, entries
+from bt_arrange.behaviours.common_ports import COLOUR, OBJ, OBJECT_TYPE_PORT, entries
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import free_grasp_pose, heights_m, to_pose, wrist_yaw_rad
 from bt_arrange.geometry import PlanarPose, Pose, fold_yaw
@@ -17,7 +17,7 @@ from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.perception.held import HeldMeasurement, measure_held
 from bt_arrange.perception.outline_fit import OutlineModel
 from bt_arrange.perception.pose import project_world
-from bt_arrange.ports import STRING, Port
+from bt_arrange.ports import BOOL, Port
 from bt_arrange.robot import PixelWindow
 
 #: Where the held part is looked at: this far (m) beside the camera's axis, on the side of the pick
@@ -84,7 +84,8 @@ class LookAtHeld(StagedBehaviour):
         return (
             OBJ,
             OBJECT_TYPE_PORT,
-            Port("colour", STRING, None, "the part's colour", optional=True),
+            COLOUR,
+            Port("quarter_turn", BOOL, False, "the pads a quarter turn from the first look's", optional=True),
             *entries((keys.POSE, keys.GRASP_HALF_TURN), (keys.HELD_CORRECTION, keys.HELD_LOOK)),
         )
 
@@ -111,7 +112,9 @@ class LookAtHeld(StagedBehaviour):
     def stages(self, context: Context) -> list[Stage]:
         """Move into the camera's view, then capture and measure."""
         pose: Pose = self.read(keys.key(self.obj, keys.POSE), f"Detect of {self.obj}")
+        # Until a trusted measurement: the tree's fallback sets the part down.
         self.write(keys.key(self.obj, keys.HELD_CORRECTION), None)
+        self.write(keys.key(self.obj, keys.HELD_LOOK), keys.SET_DOWN)
         self.measurement = None
         s = context.settings
         half_key = keys.key(self.obj, keys.GRASP_HALF_TURN)

@@ -44,6 +44,12 @@ field constant).
   ``Detect(alone=True)``, at each look; read by the tree (``Separate`` runs only then).
 - ``/<obj>/grasp_half_turn``, ``bool``: the gripper holds the part half a turn round. Written by Pick, as it starts
   (when it chooses the grasp); read by Place.
+- ``/<obj>/held_look``, ``"held look"`` (among neighbours, an irregular part measured in the fingers) or
+  ``"set down"`` (set down where it was picked and picked again centred). Written by LookAtHeld, each time it
+  starts (``"set down"``) and when its measurement is trusted; read by the report.
+- ``/<obj>/held_correction``, ``PlanarPose`` or None: the placing's TCP correction (TCP frame) from the part
+  measured in the fingers. Written by LookAtHeld, each time it starts (None) and when it measures; read by
+  ``Place(held=True)``.
 - ``/<obj>/top_height_error_mm``, ``float``: a raised part's top face (depth) minus its planned height (mm). Written
   by CheckStanding, when it measures; read by the report.
 - ``/<obj>/tilt_deg``, ``float``: the tilt of a raised part's top face (depth). Written by CheckStanding, when it

@@ -256,8 +256,7 @@ def held_look(target: Target, set_down: Sequence[py_trees.behaviour.Behaviour]) 
         │   └── LookAtHeld "look at <obj> in the fingers"      /<obj>/held_correction, held_look = "held look"
         ├── GraspGuard "while looking at <obj> in the fingers again"
         │   └── LookAtHeld "look at <obj> in the fingers, turned"   the pads a quarter turn round
-        └── Sequence "set <obj> down, look at it and pick it centred"
-            ├── SetBlackboardVariable "<obj> set down"           /<obj>/held_look = "set down"
+        └── Sequence "set <obj> down, look at it and pick it centred"     (held_look stays "set down")
             └── the set-down: Place where="pick", the look, Pick "pick <obj> centred"
 
     The placing after it (``Place(held=True)``) corrects its TCP pose by what was measured.
@@ -279,17 +278,7 @@ def held_look(target: Target, set_down: Sequence[py_trees.behaviour.Behaviour]) 
                 ),
             ),
             py_trees.composites.Sequence(
-                name=f"set {obj} down, look at it and pick it centred",
-                memory=True,
-                children=[
-                    py_trees.behaviours.SetBlackboardVariable(
-                        name=f"{obj} set down",
-                        variable_name=keys.key(obj, keys.HELD_LOOK),
-                        variable_value=keys.SET_DOWN,
-                        overwrite=True,
-                    ),
-                    *set_down,
-                ],
+                name=f"set {obj} down, look at it and pick it centred", memory=True, children=list(set_down)
             ),
         ],
     )
