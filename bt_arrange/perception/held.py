@@ -87,7 +87,7 @@ class HeldMeasurement:
 class HeldLimits:
     """When a held part's measurement is trusted (see the module's docstring)."""
 
-    min_points: int = 60
+    min_points: int = 80
     max_rms_mm: float = 0.5
     max_sigma_mm: float = 0.8
     max_sigma_deg: float = 1.0
