@@ -60,8 +60,8 @@ class ObjectOutcome:
     #: Times the part was placed at its target again after its first placing (a regrasp's placing).
     placed_again: int = 0
     #: Among neighbours, how its place in the pads was known before its (last) placing: ``"held look"``
-    #: (measured in the fingers, ``LookAtHeld``) or ``"set down"`` (set down and picked again centred);
-    #: empty for a part placed free.
+    #: (measured in the fingers, ``LookAtHeld``) or ``"set down"`` (set down and picked again centred,
+    #: also a box among neighbours, which is never looked at in the fingers); empty for a part placed free.
     held_look: str = ""
 
     def verdict(self) -> str:

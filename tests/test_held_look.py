@@ -148,3 +148,19 @@ def test_among_neighbours_an_irregular_part_is_looked_at_in_the_fingers_a_box_is
     free = _transfer(Target("red", 0.5, 0.0, 0.0, name="piece", object_type=PIECE))
     assert not any(isinstance(n, LookAtHeld) for n in free.iterate())
     assert keys.held_look("piece") == "/piece/held_look"
+
+
+def test_edges_that_leave_a_direction_unfixed_give_an_infinite_spread_not_a_failure() -> None:
+    from bt_arrange.perception.held import fit_sigmas
+
+    along_x = np.column_stack([np.zeros(50), np.ones(50), np.linspace(-0.02, 0.02, 50)])  # one edge, normal y
+    assert fit_sigmas(along_x) == (math.inf, math.inf)
+    assert fit_sigmas(np.zeros((10, 3))) == (math.inf, math.inf)
+    square = np.vstack(
+        [
+            np.column_stack([np.ones(40), np.zeros(40), np.linspace(-0.02, 0.02, 40)]),
+            np.column_stack([np.zeros(40), np.ones(40), np.linspace(0.02, -0.02, 40)]),
+        ]
+    )
+    sigma_m, sigma_rad = fit_sigmas(square)
+    assert 0.0 < sigma_m < 0.001 and 0.0 < sigma_rad < 0.1

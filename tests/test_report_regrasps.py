@@ -123,6 +123,7 @@ def test_the_report_counts_set_downs_and_placings_again() -> None:
     (red,) = report.objects
     assert (red.set_downs, red.placed_again) == (1, 0)
     assert report.to_dict()["objects"][0]["set_downs"] == 1
+    assert red.held_look == "set down"  # no look in the fingers in this tree: the set-down says so
 
 
 def test_the_report_says_how_a_part_among_neighbours_was_known_in_the_pads() -> None:

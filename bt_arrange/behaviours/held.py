@@ -155,8 +155,15 @@ class LookAtHeld(StagedBehaviour):
         if window is None:
             return f"{self.obj} held outside the camera's view"
         frame = camera.capture(with_depth=True, window=window)
-        colour = context.detector.colours[self.colour]
-        self.measurement = measured = measure_held(frame, colour, OutlineModel.of(kind), plane_z_m, expected)
+        colour = context.detector.colours.get(self.colour)
+        if colour is None or frame.depth_m is None:
+            missing = f"no colour {self.colour!r} in the plan's colour table" if colour is None else "no depth"
+            return f"{self.obj} not measured in the fingers: {missing}"
+        try:
+            measured = measure_held(frame, colour, OutlineModel.of(kind), plane_z_m, expected)
+        except (ValueError, np.linalg.LinAlgError) as error:  # a degenerate frame or fit: set it down instead
+            return f"{self.obj} not measured in the fingers: {error}"
+        self.measurement = measured
         if not measured.trusted or measured.pose is None:
             return f"{self.obj} not measured in the fingers: {measured.reason}"
         in_tcp = relative(tcp, measured.pose)

@@ -145,6 +145,22 @@ def _fit(points: FloatArray, model: OutlineModel, start: tuple[float, float, flo
     return pose
 
 
+def fit_sigmas(jacobian: FloatArray) -> tuple[float, float]:
+    """The fit's standard deviations (m in x or y, the larger; rad) from its point-to-line Jacobian (N x 3).
+
+    Each point ``POINT_SIGMA_M`` about its line. Edges that leave a direction unfixed (one straight
+    edge, parallel edges) give infinity, never a failure.
+    """
+    normal = jacobian.T @ jacobian
+    eigenvalues = np.linalg.eigvalsh(normal)
+    if not np.all(np.isfinite(eigenvalues)) or eigenvalues[0] <= 1e-9 * max(float(eigenvalues[-1]), 1e-300):
+        return math.inf, math.inf
+    variances = np.diag(np.linalg.inv(normal)) * POINT_SIGMA_M**2
+    if not np.all(np.isfinite(variances)) or np.any(variances <= 0.0):
+        return math.inf, math.inf
+    return math.sqrt(max(float(variances[0]), float(variances[1]))), math.sqrt(float(variances[2]))
+
+
 def _score(points: FloatArray, model: OutlineModel, pose: tuple[float, float, float]) -> float:
     return float(np.mean(np.minimum(nearest_segment_distances(_to_model(points, *pose), model), 0.004) ** 2))
 
@@ -205,16 +221,7 @@ def _judge(
     normals = model.normals[edge[on]]
     nx, ny = c * normals[:, 0] - s * normals[:, 1], s * normals[:, 0] + c * normals[:, 1]
     rx, ry = points[on, 0] - x, points[on, 1] - y
-    jacobian = np.column_stack([nx, ny, -rx * ny + ry * nx])
-    normal = jacobian.T @ jacobian
-    try:
-        covariance = np.linalg.inv(normal) * POINT_SIGMA_M**2
-        sigma_m = math.sqrt(max(covariance[0, 0], covariance[1, 1]))
-        sigma_rad = math.sqrt(covariance[2, 2])
-    except np.linalg.LinAlgError:
-        sigma_m = sigma_rad = math.inf
-    if not (math.isfinite(sigma_m) and math.isfinite(sigma_rad)):
-        sigma_m = sigma_rad = math.inf
+    sigma_m, sigma_rad = fit_sigmas(np.column_stack([nx, ny, -rx * ny + ry * nx]))
     # The outline where the camera should see it (in the frame, not under the gripper): was an edge seen there?
     outline = model.posed(x, y, yaw)
     closed = np.vstack([outline, outline[:1]])
