@@ -59,6 +59,10 @@ class ObjectOutcome:
     separations: int = 0
     #: Times the part was placed at its target again after its first placing (a regrasp's placing).
     placed_again: int = 0
+    #: Among neighbours, how its place in the pads was known before its (last) placing: ``"held look"``
+    #: (measured in the fingers, ``LookAtHeld``) or ``"set down"`` (set down and picked again centred,
+    #: also a box among neighbours, which is never looked at in the fingers); empty for a part placed free.
+    held_look: str = ""
 
     def verdict(self) -> str:
         """The part, how far off and why, when it is not within: ``red outside at 1.23 mm (the reason)``."""

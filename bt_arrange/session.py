@@ -491,6 +491,9 @@ class Session:
                     set_downs=self._set_downs.get(target.obj, 0),
                     separations=self._separations.get(target.obj, 0),
                     placed_again=max(0, self._placings.get(target.obj, 0) - 1),
+                    # A part that keeps the set-down (a box among neighbours, a part on others) has no look to say so.
+                    held_look=str(_get(report, keys.key(target.obj, keys.HELD_LOOK)) or "")
+                    or (keys.SET_DOWN if self._set_downs.get(target.obj, 0) else ""),
                 )
             )
         return outcomes + self._unsolved_pieces(transitions, stopped)

@@ -11,7 +11,8 @@ from bt_arrange.behaviours import keys
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The field constants (``keys.POSE`` ...); ``STALLED``, ``WHOLE_FACE``, ``FREE_EDGES``, ``NOT_MEASURED`` and
-#: ``TOUCHING_PARTS`` are values of a key, ``TARGET_SETTER`` a writer's name.
+#: ``TOUCHING_PARTS``, ``LOOKED_IN_FINGERS``, ``SET_DOWN``, ``NOT_BLOCKED`` and ``ALLOWED`` are values of a key,
+#: ``TARGET_SETTER`` a writer's name.
 FIELDS = {
     name: value
     for name, value in vars(keys).items()
@@ -26,6 +27,8 @@ FIELDS = {
         "TOUCHING_PARTS",
         "NOT_BLOCKED",
         "ALLOWED",
+        "LOOKED_IN_FINGERS",
+        "SET_DOWN",
         "TARGET_SETTER",
     )
 }

@@ -69,6 +69,7 @@ def test_the_project_registers_its_nodes_by_their_classes():
         "Detect",
         "GraspGuard",
         "Inspect",
+        "LookAtHeld",
         "MoveHome",
         "Pick",
         "Place",

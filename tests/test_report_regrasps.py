@@ -123,3 +123,31 @@ def test_the_report_counts_set_downs_and_placings_again() -> None:
     (red,) = report.objects
     assert (red.set_downs, red.placed_again) == (1, 0)
     assert report.to_dict()["objects"][0]["set_downs"] == 1
+    assert red.held_look == "set down"  # no look in the fingers in this tree: the set-down says so
+
+
+def test_the_report_says_how_a_part_among_neighbours_was_known_in_the_pads() -> None:
+    # LookAtHeld writes /<obj>/held_look; here a hand-set value stands for it.
+    children = [
+        set_target(RED),
+        Detect("detect red", "red"),
+        Pick("pick red", "red"),
+        py_trees.behaviours.SetBlackboardVariable(
+            name="red looked at in the fingers",
+            variable_name="/red/held_look",
+            variable_value="held look",
+            overwrite=True,
+        ),
+        Place("place red", "red"),
+        Inspect("inspect red after placing", "red", after_placing=True),
+    ]
+    root = Arrangement("held look", children, [RED], 1.0)
+    world = FakeWorld(truth=True)
+    with Session(root, [RED_START], lambda: world, view=camera_view()) as run:
+        report = run.run()
+    (red,) = report.objects
+    assert red.held_look == "held look"
+    assert report.to_dict()["objects"][0]["held_look"] == "held look"
+    with Session(arrangement([RED]), [RED_START], lambda: FakeWorld(truth=True), view=camera_view()) as run:
+        (free,) = run.run().objects
+    assert free.held_look == ""  # placed free: no look in the fingers, no set-down

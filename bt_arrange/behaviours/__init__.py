@@ -12,6 +12,7 @@ from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, St
 from bt_arrange.behaviours.context import ArmBrake, Context
 from bt_arrange.behaviours.grasp_estimation import EstimateGraspFromDepth
 from bt_arrange.behaviours.guards import GraspGuard
+from bt_arrange.behaviours.held import LookAtHeld
 from bt_arrange.behaviours.looking import Detect, Inspect, MoveHome, Recheck, offset_in_target_frame_mm
 from bt_arrange.behaviours.moves import holding
 from bt_arrange.behaviours.pick import Pick
@@ -30,6 +31,7 @@ __all__ = [
     "GripperStage",
     "Inspect",
     "InstantStage",
+    "LookAtHeld",
     "MoveHome",
     "MoveStage",
     "Pick",

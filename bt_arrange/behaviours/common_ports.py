@@ -38,6 +38,8 @@ _ENTRY_MEANINGS = {
     keys.MAX_MOVED_MM: "the most later steps moved it [mm]",
     keys.TOP_HEIGHT_ERROR_MM: "raised top face minus planned height [mm]",
     keys.TILT_DEG: "the tilt of a raised part's top face [deg]",
+    keys.HELD_CORRECTION: "the placing's TCP correction from the part measured in the fingers (TCP frame)",
+    keys.HELD_LOOK: "held look (measured in the fingers) or set down, before its placing",
 }
 
 

@@ -50,6 +50,12 @@ field constant).
   ``Detect(alone=True)``, at each look; read by the tree (``Separate`` runs only then).
 - ``/<obj>/grasp_half_turn``, ``bool``: the gripper holds the part half a turn round. Written by Pick, as it starts
   (when it chooses the grasp); read by Place.
+- ``/<obj>/held_look``, ``"held look"`` (among neighbours, an irregular part measured in the fingers) or
+  ``"set down"`` (set down where it was picked and picked again centred). Written by LookAtHeld, each time it
+  starts (``"set down"``) and when its measurement is trusted; read by the report.
+- ``/<obj>/held_correction``, ``PlanarPose`` or None: the placing's TCP correction (TCP frame) from the part
+  measured in the fingers. Written by LookAtHeld, each time it starts (None) and when it measures; read by
+  ``Place(held=True)``.
 - ``/<obj>/top_height_error_mm``, ``float``: a raised part's top face (depth) minus its planned height (mm). Written
   by CheckStanding, when it measures; read by the report.
 - ``/<obj>/tilt_deg``, ``float``: the tilt of a raised part's top face (depth). Written by CheckStanding, when it
@@ -103,6 +109,14 @@ LAST_PUSH = "last_push"
 #: Pick takes a part without half-turn symmetry with the gripper turned half a turn when that
 #: turns the last wrist joint less over the pick, the carry and the look after it.
 GRASP_HALF_TURN = "grasp_half_turn"
+#: Among neighbours, how the part's place in the pads was known before its placing: ``HELD_LOOK`` (measured
+#: in the fingers by ``LookAtHeld``) or ``SET_DOWN`` (set down where it was picked and picked again centred).
+HELD_LOOK = "held_look"
+LOOKED_IN_FINGERS = "held look"
+SET_DOWN = "set down"
+#: ``LookAtHeld``'s correction for Place: the planned TCP pose to the TCP pose that puts the part where the
+#: plan expects it (a ``PlanarPose`` in the TCP's frame), or None when the part was not measured in the fingers.
+HELD_CORRECTION = "held_correction"
 #: A raised part's top face, measured by ``CheckStanding``.
 TOP_HEIGHT_ERROR_MM = "top_height_error_mm"
 TILT_DEG = "tilt_deg"
@@ -222,6 +236,16 @@ def max_moved_mm(obj: str) -> str:
 def grasp_half_turn(obj: str) -> str:
     """``/<obj>/grasp_half_turn``: the gripper holds the part half a turn round (Pick, for Place)."""
     return key(obj, GRASP_HALF_TURN)
+
+
+def held_look(obj: str) -> str:
+    """``/<obj>/held_look``: ``"held look"`` (measured in the fingers) or ``"set down"`` before its placing."""
+    return key(obj, HELD_LOOK)
+
+
+def held_correction(obj: str) -> str:
+    """``/<obj>/held_correction``: LookAtHeld's correction of the placing's TCP pose (TCP frame), or None."""
+    return key(obj, HELD_CORRECTION)
 
 
 def top_height_error_mm(obj: str) -> str:

@@ -68,6 +68,13 @@ class Place(StagedBehaviour):
             "placed free is carried the way round that, with the park after it, turns the wrist least)",
             optional=True,
         )
+        held = Port(
+            "held",
+            BOOL,
+            False,
+            "correct the placing by the part's place in the pads measured in the fingers (LookAtHeld), when measured",
+            optional=True,
+        )
         return (
             OBJ,
             OBJECT_TYPE_PORT,
@@ -75,7 +82,8 @@ class Place(StagedBehaviour):
             where,
             Z_PORT,
             nearest_turn,
-            *entries((keys.TARGET, keys.POSE, keys.GRASP_HALF_TURN)),
+            held,
+            *entries((keys.TARGET, keys.POSE, keys.GRASP_HALF_TURN, keys.HELD_CORRECTION)),
         )
 
     def __init__(
@@ -87,8 +95,11 @@ class Place(StagedBehaviour):
         where: str = "target",
         z_m: float = 0.0,
         nearest_turn: bool = False,
+        held: bool = False,
     ) -> None:
         super().__init__(name)
+        #: True: the TCP's pose is corrected by ``/<obj>/held_correction`` (LookAtHeld's), when one was measured.
+        self.held = bool(held)
         #: True keeps the carry to the wrist's nearest way round (``toward_home_q`` otherwise).
         self.nearest_turn = bool(nearest_turn)
         #: Layers: the height of the support it is released on (0: the table); the lowering
@@ -104,6 +115,10 @@ class Place(StagedBehaviour):
         if where == "pick":
             self.reads(keys.key(obj, keys.POSE), written_by=f"Detect of {obj}")
         self.reads(keys.key(obj, keys.GRASP_HALF_TURN))  # optional: False (the wrist's nearest grasp) without it
+        if self.held:
+            self.reads(keys.key(obj, keys.HELD_CORRECTION))  # optional: None or absent, no correction
+        #: The correction applied to the last placing's TCP pose (TCP frame), or None.
+        self.corrected_by: PlanarPose | None = None
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -134,6 +149,16 @@ class Place(StagedBehaviour):
             symmetry_rad = max(GRIPPER_SYMMETRY_RAD, kind.shape.symmetry_rad)
             yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), symmetry_rad)
             opening_m = self.release.opening_m
+        self.corrected_by = None
+        correction_key = keys.key(self.obj, keys.HELD_CORRECTION)
+        if self.held and self.where == "target" and self.blackboard.exists(correction_key):
+            correction = self.blackboard.get(correction_key)
+            if isinstance(correction, PlanarPose):
+                # The part sits in the pads where LookAtHeld measured it: the TCP goes where it puts it at its place.
+                c, s_ = math.cos(yaw), math.sin(yaw)
+                x, y = x + c * correction.x_m - s_ * correction.y_m, y + s_ * correction.x_m + c * correction.y_m
+                yaw += correction.yaw_rad
+                self.corrected_by = correction
         return [
             # At the UR5's joint speeds, whether the grasp holds the part through its centre of mass
             # or off it (an irregular part's): measured, the inertia did not turn a part in the pads.

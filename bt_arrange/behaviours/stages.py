@@ -43,6 +43,9 @@ CARRY_ABOVE_TARGET = "carry above the target"
 LOWER_PART = "lower the part to the table"
 RELEASE_PART = "release the part"
 RETREAT = "retreat"
+#: LookAtHeld: the held part moved where the top camera sees it beside the gripper, then measured.
+MOVE_TO_HELD_LOOK = "move the held part into the camera's view"
+MEASURE_HELD = "measure the part in the fingers"
 
 # Push (the push itself names its distance and axis: see ``push``)
 SET_PUSH_OPENING = "set the push opening"

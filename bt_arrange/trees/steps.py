@@ -20,6 +20,7 @@ from bt_arrange.behaviours import (
     EstimateGraspFromDepth,
     GraspGuard,
     Inspect,
+    LookAtHeld,
     Pick,
     Place,
     Push,
@@ -198,13 +199,13 @@ def _transfer(
         )
 
     look_again: list[py_trees.behaviour.Behaviour] = []
+    held = release is not None and target.z_m == 0.0 and not kind.shape.rectangular
     # Layers: a part going onto others is set down and picked centred first, as among
     # neighbours: an offset in the pads would put its centre of mass off its support.
     if release is not None or target.z_m > 0.0:
-        # Among neighbours the part's offset in the pads (unknown while held: a pick 2 cm off
-        # places it 2 cm off) would carry into a neighbour: set it down where it was picked, look
-        # at it again, and pick it centred.
-        look_again = [
+        # Among neighbours the part's offset in the pads (a pick 2 cm off places it 2 cm off) would
+        # carry into a neighbour: set it down where it was picked, look at it again, and pick it centred.
+        set_down: list[py_trees.behaviour.Behaviour] = [
             GraspGuard(
                 f"while setting {obj} down",
                 Place(f"set {obj} down to look again", obj, kind, where="pick"),
@@ -214,6 +215,11 @@ def _transfer(
             # turn was not measured to help there (the tight-gap fresco benchmark, docs/motion.md).
             Pick(f"pick {obj} centred", obj, kind, nearest_grasp=True),
         ]
+        look_again = set_down
+        if held:
+            # An irregular part sticks out beside the pads, where the top camera sees it (a box the
+            # pads hold centred is hidden under the gripper, and keeps the set-down).
+            look_again = [held_look(target, set_down)]
     carry = py_trees.composites.Sequence(
         name=f"transfer {obj}",
         memory=True,
@@ -223,13 +229,59 @@ def _transfer(
             *look_again,
             GraspGuard(
                 f"while holding {obj}",
-                Place(f"place {obj}", obj, kind, release=release, z_m=target.z_m, nearest_turn=nearest),
+                Place(
+                    f"place {obj}",
+                    obj,
+                    kind,
+                    release=release,
+                    z_m=target.z_m,
+                    nearest_turn=nearest,
+                    held=held,
+                ),
             ),
         ],
     )
     whole_number("max_regrasps", max_regrasps)
     # py_trees' Retry counts every attempt: the first one plus max_regrasps more.
     return py_trees.decorators.Retry(name=f"pick and place {obj}", child=carry, num_failures=max_regrasps + 1)
+
+
+def held_look(target: Target, set_down: Sequence[py_trees.behaviour.Behaviour]) -> py_trees.behaviour.Behaviour:
+    """Measure the held part in the fingers; set it down and pick it centred only when that cannot be trusted.
+
+    Among neighbours, after the pick::
+
+        Selector "look at <obj> in the fingers, else set it down"
+        ├── GraspGuard "while looking at <obj> in the fingers"
+        │   └── LookAtHeld "look at <obj> in the fingers"      /<obj>/held_correction, held_look = "held look"
+        ├── GraspGuard "while looking at <obj> in the fingers again"
+        │   └── LookAtHeld "look at <obj> in the fingers, turned"   the pads a quarter turn round
+        └── Sequence "set <obj> down, look at it and pick it centred"     (held_look stays "set down")
+            └── the set-down: Place where="pick", the look, Pick "pick <obj> centred"
+
+    The placing after it (``Place(held=True)``) corrects its TCP pose by what was measured.
+    """
+    obj = target.obj
+    return py_trees.composites.Selector(
+        name=f"look at {obj} in the fingers, else set it down",
+        memory=True,
+        children=[
+            GraspGuard(
+                f"while looking at {obj} in the fingers",
+                LookAtHeld(f"look at {obj} in the fingers", obj, target.colour, target.object_type),
+            ),
+            # Where the first look saw too little, the pads a quarter turn round show other edges.
+            GraspGuard(
+                f"while looking at {obj} in the fingers again",
+                LookAtHeld(
+                    f"look at {obj} in the fingers, turned", obj, target.colour, target.object_type, quarter_turn=True
+                ),
+            ),
+            py_trees.composites.Sequence(
+                name=f"set {obj} down, look at it and pick it centred", memory=True, children=list(set_down)
+            ),
+        ],
+    )
 
 
 #: A part placed turned this far or more from its target's yaw (deg, measured by the camera) is picked

@@ -11,6 +11,7 @@ from bt_arrange.behaviours import (
     Detect,
     GraspGuard,
     Inspect,
+    LookAtHeld,
     MoveHome,
     Pick,
     Place,
@@ -36,6 +37,7 @@ for _node in (
     GraspGuard,
     CheckStanding,
     RepeatUntilWithin,
+    LookAtHeld,
 ):
     register_node(_node)
 register_node(Arrangement)
