@@ -203,6 +203,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "placed again",
             "regrasps",
             "separated",
+            "moved aside",
             "status",
         )
     ]
@@ -223,6 +224,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
                 str(getattr(o, "placed_again", 0)),
                 str(getattr(o, "regrasps_after_placing", 0)),
                 str(getattr(o, "separations", 0)),
+                ", ".join(getattr(o, "moved_aside", [])) or "-",
                 status,
             )
         )
@@ -243,7 +245,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "pushing; "
             "set down: set down where picked, to look again and pick centred; placed again: placed at the "
             "target again after the first placing; regrasps: picked up again after placing; separated: touching "
-            "parts of its colour pushed apart before its pick; "
+            "parts of its colour pushed apart before its pick; moved aside: neighbours pushed aside for a "
+            "push they blocked, and put back; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
         source = getattr(report, "camera_margin_source", "")

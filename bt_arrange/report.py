@@ -59,6 +59,8 @@ class ObjectOutcome:
     separations: int = 0
     #: Times the part was placed at its target again after its first placing (a regrasp's placing).
     placed_again: int = 0
+    #: The neighbours pushed aside (``PushAside``) so that a blocked push of this part could be made, in order.
+    moved_aside: list[str] = field(default_factory=list)
 
     def verdict(self) -> str:
         """The part, how far off and why, when it is not within: ``red outside at 1.23 mm (the reason)``."""

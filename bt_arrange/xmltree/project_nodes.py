@@ -15,6 +15,8 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    PushAside,
+    PutBack,
     Recheck,
     Separate,
 )
@@ -30,6 +32,8 @@ for _node in (
     Pick,
     Place,
     Push,
+    PushAside,
+    PutBack,
     Recheck,
     Separate,
     MoveHome,
