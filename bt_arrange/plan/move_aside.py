@@ -6,7 +6,9 @@ way. When only one neighbour is, ``move_aside`` plans what a person would do: pu
 away along one of its own free square pushes, far enough that the pads' sweep
 (``push_pads``) no longer meets it, with nothing of the placed parts on its way there; then,
 the part corrected, push it back by a push from the side it went to, and correct it as before.
-Planar geometry at the targets only, as the rest of the layout.
+Planar geometry at the targets only, as the rest of the layout: the parts not placed yet lie where
+the camera found them, unknown to the plan, and the way aside is checked against the placed parts
+only.
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ from bt_arrange.plan.layout_part import Part
 
 #: How far (m) past what clears the pads' sweep the neighbour is pushed: the pushes' own error.
 ASIDE_MARGIN_M = 0.003
-#: The longest push aside (m): a neighbour pushed further would leave the camera's ground near the arrangement.
+#: The longest push aside (m). In the five-piece fresco the blocked pushes a lone neighbour leaves no
+#: room for took it 64 and 74.5 mm (the first piece, out of the slab along its free border): the pads'
+#: sweep starts 10 mm behind the edge and is as wide as the opening, so a neighbour goes its whole width.
 MAX_ASIDE_M = 0.075
 #: The steps (m) the way aside is checked at.
 ASIDE_STEP_M = 0.0005

@@ -405,7 +405,7 @@ def correction(
         margins=margins,
         blocked_by=blocked_by,
         move_aside=tuple(
-            _move_aside(target, aside, plan, towards or (), opening_m, label, blocked_by) for aside in asides
+            _move_aside(target, aside, plan, towards or (), opening_m, label, blocked_by, margins) for aside in asides
         ),
     )
 
@@ -581,6 +581,7 @@ def _move_aside(
     opening_m: float | None,
     label: str,
     blocked_by: Mapping[str, str],
+    margins: int = 1,
 ) -> py_trees.behaviour.Behaviour:
     """When Push needed ``aside.move.towards`` and the neighbour in its way is one the layout can move aside.
 
@@ -601,7 +602,8 @@ def _move_aside(
         └── RepeatUntilWithin "<obj> within with <neighbour> back"         its last look: no push
 
     The neighbour is put back whatever became of the part; the branch succeeds only when the part's
-    last look found it within, so a correction that failed with the neighbour aside fails here.
+    last look found it within (``margins`` as its own loop's), so a correction that failed with the
+    neighbour aside fails here rather than moving the neighbour again.
     """
     obj, move = target.obj, aside.move
     back = aside.neighbour
@@ -623,6 +625,8 @@ def _move_aside(
             obj=obj,
             yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
             yaw_threshold_deg=yaw_threshold_deg,
+            # As the part's own loop counts the camera's error: within for one is within for the other.
+            margins=margins,
         )
 
     with_aside = loop(
