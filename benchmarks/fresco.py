@@ -109,6 +109,7 @@ def run_once(
         "placed_offset_mm": {o["name"]: o["placed_offset_mm"] for o in objects},
         "pushes": {o["name"]: o["pushes"] for o in objects},
         "held_look": {o["name"]: o.get("held_look", "") for o in objects},
+        "moved_aside": {o["name"]: o["moved_aside"] for o in objects if o.get("moved_aside")},
         "moved_by_later_truth_mm": {o["name"]: o["moved_by_later_truth_mm"] for o in objects},
         "reasons": {o["name"]: o["reason"] for o in objects if o["reason"]},
         "min_gap_truth_mm": round(min(gaps) * 1000, 3),

@@ -204,6 +204,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "regrasps",
             "separated",
             "held look",
+            "moved aside",
             "status",
         )
     ]
@@ -225,6 +226,7 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
                 str(getattr(o, "regrasps_after_placing", 0)),
                 str(getattr(o, "separations", 0)),
                 getattr(o, "held_look", "") or "-",
+                ", ".join(getattr(o, "moved_aside", [])) or "-",
                 status,
             )
         )
@@ -246,7 +248,8 @@ def _print_report(report: RunReport, args: argparse.Namespace, *, recorded: bool
             "set down: set down where picked, to look again and pick centred; placed again: placed at the "
             "target again after the first placing; regrasps: picked up again after placing; separated: touching "
             "parts of its colour pushed apart before its pick; held look: among neighbours, measured in the "
-            "fingers (held look) or set down to look again (set down); "
+            "fingers (held look) or set down to look again (set down); moved aside: neighbours pushed aside for a "
+            "push they blocked, and put back; "
             f"yaw errors in deg (after pushing); {truth_text}; threshold {report.threshold_mm:g} mm{yaw_text}"
         )
         source = getattr(report, "camera_margin_source", "")

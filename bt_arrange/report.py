@@ -63,6 +63,8 @@ class ObjectOutcome:
     #: (measured in the fingers, ``LookAtHeld``) or ``"set down"`` (set down and picked again centred,
     #: also a box among neighbours, which is never looked at in the fingers); empty for a part placed free.
     held_look: str = ""
+    #: The neighbours pushed aside (``PushAside``) so that a blocked push of this part could be made, in order.
+    moved_aside: list[str] = field(default_factory=list)
 
     def verdict(self) -> str:
         """The part, how far off and why, when it is not within: ``red outside at 1.23 mm (the reason)``."""

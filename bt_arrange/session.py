@@ -41,6 +41,7 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    PushAside,
     Recheck,
     Separate,
     keys,
@@ -229,6 +230,7 @@ class Session:
         self._set_downs: dict[str, int] = {}
         #: Pushes aside of touching parts before each part's pick (``Separate``), by part.
         self._separations: dict[str, int] = {}
+        self._moved_aside: dict[str, list[str]] = {}
         self._placings: dict[str, int] = {}
         #: The subtree that places every part before any is corrected (the paper's Fig. 5), or None.
         self._place_all = getattr(root, "place_all", None)
@@ -389,6 +391,8 @@ class Session:
             counts[node.obj] = counts.get(node.obj, 0) + 1
         if isinstance(node, Separate):
             self._separations[node.obj] = self._separations.get(node.obj, 0) + 1
+        if isinstance(node, PushAside) and node.for_obj:
+            self._moved_aside.setdefault(node.for_obj, []).append(node.obj)
         if isinstance(node, SurveyPieces):
             self.puzzle_truth.surveyed(node.spec, node.pieces)
         if self._rechecks and isinstance(node, Inspect):
@@ -490,6 +494,7 @@ class Session:
                     truth_home_mm=self._truth_home_mm(target),
                     set_downs=self._set_downs.get(target.obj, 0),
                     separations=self._separations.get(target.obj, 0),
+                    moved_aside=list(self._moved_aside.get(target.obj, [])),
                     placed_again=max(0, self._placings.get(target.obj, 0) - 1),
                     # A part that keeps the set-down (a box among neighbours, a part on others) has no look to say so.
                     held_look=str(_get(report, keys.key(target.obj, keys.HELD_LOOK)) or "")

@@ -74,6 +74,8 @@ def test_the_project_registers_its_nodes_by_their_classes():
         "Pick",
         "Place",
         "Push",
+        "PushAside",
+        "PutBack",
         "Recheck",
         "RepeatUntilWithin",
         "Separate",

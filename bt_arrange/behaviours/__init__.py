@@ -18,6 +18,7 @@ from bt_arrange.behaviours.moves import holding
 from bt_arrange.behaviours.pick import Pick
 from bt_arrange.behaviours.place import Place
 from bt_arrange.behaviours.push import Push
+from bt_arrange.behaviours.push_aside import PushAside, PutBack
 from bt_arrange.behaviours.separate import Separate
 from bt_arrange.behaviours.standing import CheckStanding
 
@@ -38,6 +39,8 @@ __all__ = [
     "Place",
     "Push",
     "Recheck",
+    "PushAside",
+    "PutBack",
     "Separate",
     "Stage",
     "StagedBehaviour",

@@ -33,7 +33,8 @@ field constant).
   push was free. Written by Push, as it chooses its push; read by the tree's restaging and by
   ``RepeatUntilWithin(release_again=True)`` (a correction that released the part again).
 - ``/<obj>/blocked_by``, the neighbour that blocks that push (``"red"``), or ``"none"``. Written by Push, as it
-  chooses its push; read by RepeatUntilWithin (its last word names the neighbour).
+  chooses its push; read by RepeatUntilWithin (its last word names the neighbour), and by the tree, which moves
+  that neighbour aside when the layout found it alone in the way.
 - ``/<obj>/release_again``, ``"allowed"``, or why the part may not be released again past its place for a blocked
   push (no correction left to push it back; the last time did not bring it closer). Written by
   ``RepeatUntilWithin(release_again=True)``, before each correction; read by the tree's restaging.

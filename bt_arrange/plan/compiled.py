@@ -25,7 +25,9 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.perception import DEFAULT_COLOUR_TABLE, ColourTable
 from bt_arrange.plan import stacking
 from bt_arrange.plan.choices import CorrectMode, PushStrategy
-from bt_arrange.plan.layout import Pads, Release, Step, free_push_directions, push_blockers, restage_releases
+from bt_arrange.plan.footprints import Footprint
+from bt_arrange.plan.layout import Pads, Part, Release, Step, free_push_directions, push_blockers, restage_releases
+from bt_arrange.plan.move_aside import MoveAside, move_aside
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold, kinds, parts_of
 from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.plan.validate import plan_steps, validate_targets
@@ -47,6 +49,21 @@ class NeighbourCheck:
     push_opening_m: float
     #: Per push a neighbour blocks, that neighbour (the reason a blocked correction ends names it).
     blocked_by: Mapping[str, str] = field(default_factory=dict)
+    #: Neighbours moved aside for a blocked push, and put back (``Aside``).
+    move_aside: tuple[Aside, ...] = ()
+
+
+@dataclass(frozen=True)
+class Aside:
+    """A neighbour moved aside so that a blocked push of a part is free, then put back and corrected.
+
+    ``move`` is the layout's plan (``bt_arrange.plan.move_aside.MoveAside``: the part's blocked push,
+    the neighbour's push aside, how far, its push back); ``neighbour`` the neighbour's correction
+    once back, among the parts placed by then (it moves nothing aside itself: one level).
+    """
+
+    move: MoveAside
+    neighbour: NeighbourCheck
 
 
 @dataclass(frozen=True)
@@ -76,6 +93,8 @@ class PartStep:
     nearest_grasp: bool = False
     #: Per push a neighbour blocks (not in ``push_towards``), that neighbour.
     blocked_by: Mapping[str, str] = field(default_factory=dict)
+    #: Neighbours moved aside for a blocked push of this part, and put back (``Aside``).
+    move_aside: tuple[Aside, ...] = ()
 
     @classmethod
     def free(cls, target: Target, kind_targets: Iterable[PlanarPose] = ()) -> PartStep:
@@ -256,17 +275,30 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
             if stacking.same_layer(by_obj[st.part.name], target)
         ]
         below = stacking.watched_below(target, [by_obj[st.part.name] for st in layout[:index]], settings)
-        neighbours = [
-            NeighbourCheck(
+        placed_parts = [layout_by_obj[name].part for name, _ in placed]
+
+        def check(
+            name: str,
+            aside: bool = True,
+            placed: list[tuple[str, Footprint]] = placed,
+            placed_parts: list[Part] = placed_parts,
+        ) -> NeighbourCheck:
+            """The correction of ``name`` among the parts placed: free pushes, restaging, neighbours moved aside."""
+            part = layout_by_obj[name].part
+            return NeighbourCheck(
                 by_obj[name],
-                free_push_directions(layout_by_obj[name].part, placed, pads),
-                restage_releases(layout_by_obj[name].part, placed, pads),
+                free_push_directions(part, placed, pads),
+                restage_releases(part, placed, pads),
                 siblings.get(name, ()),
                 pads.neighbour_push_opening_m(parts_of([by_obj[name]], settings)[0], "x"),
-                push_blockers(layout_by_obj[name].part, placed, pads),
+                push_blockers(part, placed, pads),
+                tuple(
+                    Aside(m, check(m.neighbour, False, placed, placed_parts))
+                    for m in _moves(part, placed_parts, pads, aside)
+                ),
             )
-            for name in step.neighbours
-        ]
+
+        neighbours = [check(name) for name in step.neighbours]
         for part in below:
             own = layout_by_obj[part.obj]
             in_layer = [
@@ -300,9 +332,20 @@ def _steps_each(plan: list[Target], layout: list[Step], settings: ManipulationSe
                 neighbours=tuple(neighbours),
                 nearest_grasp=dense or target.obj in rechecked,
                 blocked_by=push_blockers(step.part, placed, pads) if dense else {},
+                move_aside=check(target.obj).move_aside if dense else (),
             )
         )
     return tuple(steps)
+
+
+def _moves(part: Part, placed: Sequence[Part], pads: Pads, aside: bool) -> tuple[MoveAside, ...]:
+    """The neighbours moved aside for ``part``'s blocked pushes (``move_aside``), when ``aside``.
+
+    Only for a part pushed squarely onto its edges (a box is released again on the other side
+    instead, ``restage_releases``), and one level deep: the neighbour's own correction once it is
+    back moves nothing aside.
+    """
+    return move_aside(part, placed, pads) if aside and part.by_outline else ()
 
 
 def _steps_after_all(plan: list[Target], layout: list[Step], pads: Pads) -> tuple[PartStep, ...]:

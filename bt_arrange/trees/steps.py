@@ -24,6 +24,8 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    PushAside,
+    PutBack,
     Separate,
     keys,
 )
@@ -35,7 +37,7 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.numbers import fixed
 from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstimator
 from bt_arrange.plan.choices import PushStrategy
-from bt_arrange.plan.compiled import ArrangementPlan, NeighbourCheck, PartStep
+from bt_arrange.plan.compiled import ArrangementPlan, Aside, NeighbourCheck, PartStep
 from bt_arrange.plan.layout import Release
 from bt_arrange.plan.targets import DEFAULT_YAW_THRESHOLD_DEG, Target, check_threshold
 from bt_arrange.plan.tolerance import Tolerance
@@ -426,6 +428,7 @@ def correction(
             1,
             step.blocked_by,
         )
+        asides = step.move_aside
     else:
         part = step if isinstance(step, PartStep) else PartStep.free(step)
         target, towards, restage, opening_m, kind_targets, margins, blocked_by = (
@@ -437,6 +440,7 @@ def correction(
             part.margins,
             part.blocked_by,
         )
+        asides = part.move_aside
     return _correction(
         target,
         plan.tolerance.threshold_mm,
@@ -452,6 +456,9 @@ def correction(
         settings=plan.settings,
         margins=margins,
         blocked_by=blocked_by,
+        move_aside=tuple(
+            _move_aside(target, aside, plan, towards or (), opening_m, label, blocked_by, margins) for aside in asides
+        ),
     )
 
 
@@ -471,6 +478,7 @@ def _correction(
     settings: ManipulationSettings | None = None,
     margins: int = 1,
     blocked_by: Mapping[str, str] | None = None,
+    move_aside: Sequence[py_trees.behaviour.Behaviour] = (),
 ) -> py_trees.behaviour.Behaviour:
     """Push and inspect one object until it lies within ``threshold_mm`` (and ``yaw_threshold_deg``) of its target.
 
@@ -484,6 +492,8 @@ def _correction(
     threshold's floor). ``margins``: how many times the camera's error is added to the offset
     (``RepeatUntilWithin.margins``: 2 for a part a later neighbour's recheck reads again).
     ``blocked_by``: per blocked push, the neighbour in the way, which a blocked correction names.
+    ``move_aside``: fallbacks after the restaging, each moving a neighbour aside for one blocked push
+    (``_move_aside``).
     """
     check_threshold(threshold_mm, settings)
     strategy = check_strategy(strategy)
@@ -504,11 +514,15 @@ def _correction(
         threshold_mm=None if towards is None or target.object_type.shape.rectangular else threshold_mm,
         blockers=blocked_by,
     )
-    if restage:
+    if restage or move_aside:
         push = py_trees.composites.Selector(
             name=f"push {obj} from a free side{label}",
             memory=True,
-            children=[push, *(_restage(target, d, release, label) for d, release in restage.items())],
+            children=[
+                push,
+                *(_restage(target, d, release, label) for d, release in (restage or {}).items()),
+                *move_aside,
+            ],
         )
     push_and_look = py_trees.composites.Sequence(
         name=f"push and inspect {obj}{label}",
@@ -518,7 +532,7 @@ def _correction(
     # A free part whose pushes stop converging is picked up and placed again, and corrected once more,
     # rather than spending the rest of its pushes. Among neighbours the release and the
     # sides to push from are the layout's: there the loop keeps its pushes.
-    free = towards is None and not restage
+    free = towards is None and not restage and not move_aside
     loop = RepeatUntilWithin(
         name=f"correct {obj} to {threshold_mm:g} mm{label}",
         child=push_and_look,
@@ -607,5 +621,124 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
                 f"while holding {obj} again{label}",
                 Place(f"place {obj} again{label}", obj, target.object_type, release=release, z_m=target.z_m),
             ),
+        ],
+    )
+
+
+def _move_aside(
+    target: Target,
+    aside: Aside,
+    plan: ArrangementPlan,
+    towards: tuple[str, ...],
+    opening_m: float | None,
+    label: str,
+    blocked_by: Mapping[str, str],
+    margins: int = 1,
+) -> py_trees.behaviour.Behaviour:
+    """When Push needed ``aside.move.towards`` and the neighbour in its way is one the layout can move aside.
+
+    ::
+
+        Sequence "move <neighbour> aside to correct <obj>"
+        ├── CheckBlackboardVariableValue "<obj> needs a push <towards>"   /<obj>/blocked_towards
+        ├── CheckBlackboardVariableValue "<neighbour> is in its way"       /<obj>/blocked_by
+        ├── PushAside "push <neighbour> aside"                             the layout's push, how far
+        ├── Inspect "inspect <neighbour> aside"
+        ├── FailureIsSuccess "then put <neighbour> back"
+        │   └── RepeatUntilWithin "correct <obj> to T mm with <neighbour> aside"
+        │       └── Push "push <obj> with <neighbour> aside" (<towards> free too), Inspect
+        ├── Sequence "put <neighbour> back"
+        │   ├── Push "put <neighbour> back"                                from the side it went to
+        │   ├── Inspect "inspect <neighbour> put back"
+        │   └── the neighbour's correction, as its recheck's (nothing moved aside for it)
+        └── RepeatUntilWithin "<obj> within with <neighbour> back"         its last look: no push
+
+    The neighbour is put back whatever became of the part; the branch succeeds only when the part's
+    last look found it within (``margins`` as its own loop's), so a correction that failed with the
+    neighbour aside fails here rather than moving the neighbour again.
+    """
+    obj, move = target.obj, aside.move
+    back = aside.neighbour
+    neighbour = back.target
+    other = neighbour.obj
+    tolerance = plan.tolerance
+    threshold_mm, yaw_threshold_deg = tolerance.threshold_mm, tolerance.yaw_threshold_deg
+
+    # The push with the neighbour aside still names the others in its way.
+    blocked_with_aside = {d: n for d, n in blocked_by.items() if d != move.towards}
+
+    def loop(name: str, child: py_trees.behaviour.Behaviour, max_attempts: int) -> RepeatUntilWithin:
+        return RepeatUntilWithin(
+            name=name,
+            child=child,
+            offset_key=keys.key(obj, keys.OFFSET_MM),
+            threshold_mm=threshold_mm,
+            max_attempts=max_attempts,
+            obj=obj,
+            yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
+            yaw_threshold_deg=yaw_threshold_deg,
+            # As the part's own loop counts the camera's error: within for one is within for the other.
+            margins=margins,
+        )
+
+    with_aside = loop(
+        f"correct {obj} to {threshold_mm:g} mm with {other} aside{label}",
+        py_trees.composites.Sequence(
+            name=f"push and inspect {obj} with {other} aside{label}",
+            memory=True,
+            children=[
+                Push(
+                    f"push {obj} with {other} aside{label}",
+                    obj,
+                    plan.strategy,
+                    target.object_type,
+                    yaw_threshold_deg,
+                    towards=(*towards, move.towards),
+                    opening_m=opening_m,
+                    z_m=target.z_m,
+                    threshold_mm=threshold_mm,
+                    blockers=blocked_with_aside,
+                ),
+                inspect(target, f"inspect {obj} with {other} aside{label}"),
+            ],
+        ),
+        plan.max_pushes,
+    )
+    put_back = py_trees.composites.Sequence(
+        name=f"put {other} back{label}",
+        memory=True,
+        children=[
+            PutBack(f"put {other} back{label}", other, move.back, neighbour.object_type, z_m=neighbour.z_m),
+            inspect(neighbour, f"inspect {other} put back{label}", kind_targets=back.kind_targets),
+            correction(back, plan, count=False, label=f" put back for {obj}{label}"),
+        ],
+    )
+    return py_trees.composites.Sequence(
+        name=f"move {other} aside to correct {obj}{label}",
+        memory=True,
+        children=[
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{obj} needs a push {move.towards}{label}",
+                check=py_trees.common.ComparisonExpression(
+                    keys.key(obj, keys.BLOCKED_TOWARDS), move.towards, operator.eq
+                ),
+            ),
+            py_trees.behaviours.CheckBlackboardVariableValue(
+                name=f"{other} is in its way{label}",
+                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_BY), other, operator.eq),
+            ),
+            PushAside(
+                f"push {other} aside{label}",
+                other,
+                move.aside,
+                move.distance_m,
+                neighbour.object_type,
+                for_obj=obj,
+                z_m=neighbour.z_m,
+            ),
+            inspect(neighbour, f"inspect {other} aside{label}", kind_targets=back.kind_targets),
+            py_trees.decorators.FailureIsSuccess(name=f"then put {other} back{label}", child=with_aside),
+            put_back,
+            loop(f"{obj} within with {other} back{label}", py_trees.behaviours.Success(name=f"{obj} looked at"), 0),
         ],
     )

@@ -16,6 +16,8 @@ from bt_arrange.behaviours import (
     Pick,
     Place,
     Push,
+    PushAside,
+    PutBack,
     Recheck,
     Separate,
 )
@@ -31,6 +33,8 @@ for _node in (
     Pick,
     Place,
     Push,
+    PushAside,
+    PutBack,
     Recheck,
     Separate,
     MoveHome,
