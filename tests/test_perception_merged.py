@@ -112,3 +112,36 @@ def test_a_piece_cut_by_the_image_border_stays_partial_even_where_it_is_expected
     detection = look_for(frame, a, (a.x_m, y_m))
     assert detection.status is DetectionStatus.PARTIAL, detection.reason
     assert "cut by the image border" in detection.reason
+
+
+def test_a_merged_face_seen_again_is_registered_once_to_the_same_pose() -> None:
+    from bt_arrange.perception import outline_merged
+
+    frame, pieces = two_pieces(0, 0.0, 0.5, blur_px=1.0)
+    piece, _ = pieces[0]
+    outline_merged._FREE_POSES._results.clear()
+    first = look_for(frame, piece, (piece.x_m, piece.y_m))
+    hits = outline_merged._FREE_POSES.hits
+    again = look_for(frame, piece, (piece.x_m, piece.y_m))
+    assert outline_merged._FREE_POSES.hits > hits  # the second look's contour registration was kept
+    outline_merged._FREE_POSES._results.clear()
+    fresh = look_for(frame, piece, (piece.x_m, piece.y_m))
+    assert first.found and first.merged
+    poses = [(d.pose_world.x_m, d.pose_world.y_m, d.pose_world.yaw_rad) for d in (first, again, fresh)]
+    assert poses[0] == poses[1] == poses[2]
+    assert first.reprojection_error_px == again.reprojection_error_px == fresh.reprojection_error_px
+
+
+def test_the_memo_keeps_the_latest_results_and_keys_arrays_by_value() -> None:
+    import numpy as np
+
+    from bt_arrange.perception.memo import Memo, array_key
+
+    memo = Memo(size=2)
+    calls = []
+    for key in ("a", "b", "a", "c", "a"):
+        memo.get(key, lambda key=key: calls.append(key) or key.upper())
+    assert calls == ["a", "b", "c", "a"]  # "a" kept until "c" pushed it out
+    assert array_key(np.array([1.0, 2.0])) == array_key(np.array([1.0, 2.0]))
+    assert array_key(np.array([1.0, 2.0])) != array_key(np.array([1.0, 2.0 + 1e-15]))
+    assert array_key(np.zeros((2, 1))) != array_key(np.zeros((1, 2)))

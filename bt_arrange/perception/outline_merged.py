@@ -36,6 +36,7 @@ from scipy.spatial import cKDTree
 
 from bt_arrange.geometry import FloatArray, fold_yaw
 from bt_arrange.perception.corners import SHARP_EDGE_SPREAD, _median
+from bt_arrange.perception.memo import Memo, array_key, model_key
 from bt_arrange.perception.outline_face import Face, edge_points, face_share, project, spans_two_directions
 from bt_arrange.perception.outline_fit import (
     COARSE_POINTS,
@@ -139,14 +140,44 @@ def free_edges(
     polygon = (contour_m * scale).astype(np.float32).reshape(-1, 1, 2)
     # A sample within a pixel of a contour point is nearer the contour than FREE_EDGE_PX, inside
     # or out: only the others can lie that far outside the blob, and only they are tested.
-    far = world[to_contour_m > px_m] * scale
-    inside = np.array([cv2.pointPolygonTest(polygon, (float(p[0]), float(p[1])), True) for p in far])
-    if np.any(inside < -FREE_EDGE_PX):
-        return None  # part of the outline lies outside the blob: not this part, or not here
+    # The farthest from the contour first, the likeliest to lie outside: the first found ends the test.
+    far_m = to_contour_m > px_m
+    far = world[far_m][np.argsort(-to_contour_m[far_m], kind="stable")] * scale
+    for p in far:
+        if cv2.pointPolygonTest(polygon, (float(p[0]), float(p[1])), True) < -FREE_EDGE_PX:
+            return None  # part of the outline lies outside the blob: not this part, or not here
     share = np.array(
         [on_contour[edge_of == k].mean() if np.any(edge_of == k) else 0.0 for k in range(len(model.lengths))]
     )
     return share >= FREE_EDGE_SHARE
+
+
+#: The free edges' registrations of faces seen before (``bt_arrange.perception.memo``).
+_FREE_POSES = Memo()
+
+
+def _free_pose(
+    contour_m: FloatArray, model: OutlineModel, prior_xy_m: tuple[float, float], px_m: float
+) -> tuple[tuple[float, float, float], NDArray[np.bool_]] | None:
+    """The outline's pose on the contour near the expected place and its free edges; None: refused.
+
+    Steps 1 and 2 of the module's: on the contour alone, so kept across looks (``Memo``).
+    """
+    best: tuple[float, tuple[float, float, float], np.ndarray] | None = None
+    for yaw in _coarse(contour_m, model, prior_xy_m)[:3]:
+        pose = _banded_icp(contour_m, model, (prior_xy_m[0], prior_xy_m[1], yaw), px_m)
+        free = free_edges(contour_m, model, pose, px_m)
+        if free is None or not free.any():
+            continue
+        share = float(model.lengths[free].sum() / model.lengths.sum())
+        if best is None or share > best[0]:
+            best = (share, pose, free)
+    if best is None or best[0] < MIN_FREE_PERIMETER_SHARE:
+        return None
+    _, pose, free = best
+    if not spans_two_directions(model, np.flatnonzero(free)):
+        return None
+    return pose, free
 
 
 def register_in_merged(
@@ -159,20 +190,11 @@ def register_in_merged(
 ) -> OutlineFit | None:
     """The part's pose from its free edges in a blob merged with another part's face, or None (see the module)."""
     px_m = 1.0 / px_per_m
-    best: tuple[float, tuple[float, float, float], np.ndarray] | None = None
-    for yaw in _coarse(face.contour_m, model, prior_xy_m)[:3]:
-        pose = _banded_icp(face.contour_m, model, (prior_xy_m[0], prior_xy_m[1], yaw), px_m)
-        free = free_edges(face.contour_m, model, pose, px_m)
-        if free is None or not free.any():
-            continue
-        share = float(model.lengths[free].sum() / model.lengths.sum())
-        if best is None or share > best[0]:
-            best = (share, pose, free)
-    if best is None or best[0] < MIN_FREE_PERIMETER_SHARE:
+    key = (array_key(face.contour_m), model_key(model), prior_xy_m, px_m)
+    found = _FREE_POSES.get(key, lambda: _free_pose(face.contour_m, model, prior_xy_m, px_m))
+    if found is None:
         return None
-    _, pose, free = best
-    if not spans_two_directions(model, np.flatnonzero(free)):
-        return None
+    pose, free = found
     near_outside_px: float | None = None
     residual = np.empty(0)
     for half_width_px, margin_px in EDGE_PASSES:
