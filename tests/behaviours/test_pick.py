@@ -184,9 +184,12 @@ def test_an_off_centre_grasp_crosses_the_stroke_fast_and_meets_the_part_at_the_s
     assert grasp.centre_m != (0.0, 0.0), "held off its centre"
     closes = _recorded_closes(clock, fragment, grasp.width_m)
     slow_from_m = grasp.width_m + 2 * SETTINGS.slow_close_clearance_per_side_m
-    # Sent from the full opening at the fingers' speed, slowed once the pads stand the clearance off
-    # the grasped side (the fake's fingers move 1 mm or so a control period), before they meet it.
-    assert closes[0] == (pytest.approx(SETTINGS.open_width_m), SETTINGS.finger_speed_m_s)
+    # Opened only the pick clearance clear of the grasped side (not the full stroke), sent from there at
+    # the fingers' speed, slowed once the pads stand the clearance off the grasped side (the fake's
+    # fingers move 1 mm or so a control period), before they meet it.
+    opening_m = grasp.width_m + 2 * SETTINGS.off_centre_pick_clearance_per_side_m
+    assert opening_m < SETTINGS.open_width_m
+    assert closes[0] == (pytest.approx(opening_m), SETTINGS.finger_speed_m_s)
     assert closes[1][1] == SETTINGS.squaring_finger_speed_m_s
     assert grasp.width_m + 0.004 < closes[1][0] <= slow_from_m
     assert len(closes) == 2
