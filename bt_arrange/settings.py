@@ -164,11 +164,12 @@ class ManipulationSettings:
     #: for the straight retreat up (the next pick opens them fully on its way).
     release_clearance_per_side_m: float = 0.008
     #: A part held off its centre (an irregular part), picked where the camera found it, is approached
-    #: with the pads open this far beyond its grasped side on each side (m), not to the full stroke:
-    #: its close crosses that much less free stroke at 150 mm/s (a 36 mm kite's 0.17 s). Over three
-    #: times the real-cell model's per-grasp offset (3.5 mm). A cuboid, and a grasp a layout gives,
-    #: open as before.
-    off_centre_pick_clearance_per_side_m: float = 0.012
+    #: with the pads open this far beyond its grasped side on each side (m), not to the full stroke
+    #: (85 mm): its close crosses that much less free stroke at 150 mm/s (a 36 mm kite's 9 mm). Over
+    #: five times the real-cell model's per-grasp offset (3.5 mm), and most of Table 1's injected pick
+    #: translation (up to 25 mm): at 12 mm a pad came down on an ell picked 14.7 mm off. A cuboid,
+    #: and a grasp a layout gives, open as before.
+    off_centre_pick_clearance_per_side_m: float = 0.020
     #: The fingers must stop within this time after an open or close command.
     gripper_timeout_s: float = 2.0
 
