@@ -38,10 +38,15 @@ class ManipulationSettings:
     #: A taller part raises the moves above the table: the TCP stays at least this far above its top.
     approach_clearance_m: float = 0.05
     #: A tree built for a plan of parts all lower than a cube moves above the table at
-    #: ``approach_clearance_m`` over the plan's tallest part instead (0.07 m for 20 mm parts: the pads'
-    #: bottoms as far above them as above a cube at 0.10 m; shorter descents, lifts and lowerings).
+    #: ``flat_approach_clearance_m`` over the plan's tallest part instead (shorter descents, lifts,
+    #: lowerings and retreats).
     #: False keeps ``approach_height_m`` as the floor: for a table holding taller things than the plan's parts.
     approach_over_plan: bool = True
+    #: The TCP's height (m) over the tallest top of a plan of flat parts placed free (``approach_over_plan``):
+    #: 0.06 m for 20 mm parts, the pads' bottoms 21 mm over the parts' tops (31 mm at 0.05). Each of a
+    #: transfer's four lines 10 mm shorter; no contact of the arm with a part other than the one it
+    #: handles over the five-outline plans at seeds 0 to 19 (docs/motion.md).
+    flat_approach_clearance_m: float = 0.04
     #: The held part is let go this far above resting: the arm's height error plus a little.
     release_clearance_m: float = 0.0005
     #: Layers: a part released on others is let go at least this far above its support. A
@@ -158,6 +163,13 @@ class ManipulationSettings:
     #: A release opens the pads only this far beyond the held part's width on each side (m), enough
     #: for the straight retreat up (the next pick opens them fully on its way).
     release_clearance_per_side_m: float = 0.008
+    #: A part held off its centre (an irregular part), picked where the camera found it, is approached
+    #: with the pads open this far beyond its grasped side on each side (m), not to the full stroke
+    #: (85 mm): its close crosses that much less free stroke at 150 mm/s (a 36 mm kite's 9 mm). Over
+    #: five times the real-cell model's per-grasp offset (3.5 mm), and most of Table 1's injected pick
+    #: translation (up to 25 mm): at 12 mm a pad came down on an ell picked 14.7 mm off. A cuboid,
+    #: and a grasp a layout gives, open as before.
+    off_centre_pick_clearance_per_side_m: float = 0.020
     #: The fingers must stop within this time after an open or close command.
     gripper_timeout_s: float = 2.0
 
@@ -187,6 +199,8 @@ class ManipulationSettings:
         for name, value in (
             ("hand-on distance", self.hand_on_remaining_m),
             ("release clearance per side", self.release_clearance_per_side_m),
+            ("off-centre pick clearance per side", self.off_centre_pick_clearance_per_side_m),
+            ("flat approach clearance", self.flat_approach_clearance_m),
             ("raised release clearance", self.raised_release_clearance_m),
         ):
             if not value >= 0.0:
@@ -235,14 +249,15 @@ class ManipulationSettings:
     def for_tallest_part(self, height_m: float) -> ManipulationSettings:
         """These settings for a plan whose tallest part's top is ``height_m`` above the table.
 
-        With ``approach_over_plan``, the approach comes down to ``approach_clearance_m`` over that top
-        when it is lower than ``approach_height_m``; a taller plan keeps these settings (the shapes'
-        own heights raise it, ``tcp_heights_m``).
+        With ``approach_over_plan``, when ``approach_clearance_m`` over that top is lower than
+        ``approach_height_m`` (parts lower than a cube), the approach comes down to
+        ``flat_approach_clearance_m`` over it, and so does every shape's (``tcp_heights_m``); a
+        taller plan keeps these settings (the shapes' own heights raise it).
         """
-        approach_m = height_m + self.approach_clearance_m
-        if not self.approach_over_plan or approach_m >= self.approach_height_m:
+        if not self.approach_over_plan or height_m + self.approach_clearance_m >= self.approach_height_m:
             return self
-        return replace(self, approach_height_m=approach_m)
+        clearance_m = min(self.approach_clearance_m, self.flat_approach_clearance_m)
+        return replace(self, approach_height_m=height_m + clearance_m, approach_clearance_m=clearance_m)
 
     def for_threshold(self, threshold_mm: float) -> ManipulationSettings:
         """These settings for a run to ``threshold_mm``: the shortest push and the least gap between targets.

@@ -221,7 +221,7 @@ def test_a_raised_part_among_neighbours_is_picked_off_its_support_as_the_layout_
 
 @pytest.mark.parametrize(
     ("example", "approach_m"),
-    [("irregular_parts", 0.07), ("near_symmetric", 0.07), ("four_cubes", 0.10), ("fresco", 0.10)],
+    [("irregular_parts", 0.06), ("near_symmetric", 0.06), ("four_cubes", 0.10), ("fresco", 0.10)],
 )
 def test_a_plan_of_flat_parts_placed_free_moves_above_the_table_at_the_clearance_over_its_tallest(
     example: str, approach_m: float
@@ -233,13 +233,19 @@ def test_a_plan_of_flat_parts_placed_free_moves_above_the_table_at_the_clearance
 
 def test_the_approach_over_the_plan_can_be_turned_off_and_never_rises_above_the_setting() -> None:
     settings = ManipulationSettings()
-    assert settings.for_tallest_part(0.02).approach_height_m == pytest.approx(0.07)
+    from bt_arrange.shapes import Prism
+
+    flat = settings.for_tallest_part(0.02)
+    flat_square = Prism.from_outline([[0, 0], [0.03, 0], [0.03, 0.03], [0, 0.03]], 0.02)
+    assert flat.approach_height_m == pytest.approx(0.06)
+    assert flat.tcp_heights_m(flat_square)[1] == pytest.approx(0.06), "every shape of the plan as low"
+    assert settings.for_tallest_part(0.05) is settings, "a cube's plan keeps 0.10 m"
     assert settings.for_tallest_part(0.08) is settings, "a taller part raises it through the shape's own height"
     kept = ManipulationSettings(approach_over_plan=False)
     assert kept.for_tallest_part(0.02) is kept
 
 
-@pytest.mark.parametrize(("example", "approach_m"), [("irregular_parts", 0.07), ("tower", 0.25)])
+@pytest.mark.parametrize(("example", "approach_m"), [("irregular_parts", 0.06), ("tower", 0.25)])
 def test_a_plan_exported_to_xml_moves_above_the_table_at_the_plans_own_height(
     example: str, approach_m: float, tmp_path: Path
 ) -> None:

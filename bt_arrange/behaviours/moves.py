@@ -296,6 +296,12 @@ def slow_close_from_m(settings: ManipulationSettings, object_type: ObjectType) -
     return grasp_width_m(settings, object_type) + 2.0 * settings.slow_close_clearance_per_side_m
 
 
+def pick_opening_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
+    """How far a pick of a part held off its centre opens: its grasped side and the pick clearance each side."""
+    held_m = grasp_width_m(settings, object_type)
+    return min(settings.open_width_m, held_m + 2.0 * settings.off_centre_pick_clearance_per_side_m)
+
+
 def release_opening_m(settings: ManipulationSettings, object_type: ObjectType) -> float:
     """How far a release opens the pads: the held side plus the release clearance each side, within the stroke."""
     held_m = grasp_width_m(settings, object_type)

@@ -25,6 +25,7 @@ from bt_arrange.behaviours.moves import (
     max_grip_width_m,
     min_held_width_m,
     open_stage,
+    pick_opening_m,
     slow_close_from_m,
     to_pose,
     toward_home_q,
@@ -150,6 +151,9 @@ class Pick(StagedBehaviour):
         grasp_m, approach_m, _ = heights_m(s, kind, self.z_m)
         x, y = pose.x_m, pose.y_m
         opening_m = s.open_width_m
+        if self.grasp is None and not centred_grasp(s, kind):
+            # Held off its centre (an irregular part): open only clear of its grasped side.
+            opening_m = pick_opening_m(s, kind)
         if self.grasp is None:
             half_turn = self._half_turn_shorter(context, pose, approach_m)
             x, y, yaw = free_grasp_pose(s, kind, x, y, pose.yaw_rad, wrist_yaw_rad(context), half_turn)

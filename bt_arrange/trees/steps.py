@@ -32,21 +32,22 @@ from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstima
 from bt_arrange.plan.compiled import ArrangementPlan, PartStep
 from bt_arrange.plan.layout import Release
 from bt_arrange.plan.targets import Target
-from bt_arrange.trees.corrections import (
+from bt_arrange.trees.corrections import STALL_AFTER_PUSHES, _correction, check_strategy, correction, inspect
+from bt_arrange.trees.turned import (
+    CAMERA_YAW_MARGIN_DEG,
+    COARSE_YAW_THRESHOLD_DEG,
     MAX_TURNED_REGRASPS,
     REGRASP_ANY_YAW_DEG,
     REGRASP_YAW_DEG,
-    STALL_AFTER_PUSHES,
-    _correction,
-    check_strategy,
-    correction,
-    inspect,
     regrasp_while_turned,
     turned_limit_deg,
 )
 
-#: The correction subtrees live in ``bt_arrange.trees.corrections``; their names are this module's too.
+#: The correction subtrees live in ``bt_arrange.trees.corrections``, a turned part's in ``trees.turned``;
+#: their names are this module's too.
 __all__ = [
+    "CAMERA_YAW_MARGIN_DEG",
+    "COARSE_YAW_THRESHOLD_DEG",
     "Locate",
     "MAX_TURNED_REGRASPS",
     "REGRASP_ANY_YAW_DEG",

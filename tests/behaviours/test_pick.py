@@ -176,17 +176,17 @@ def test_an_off_centre_grasp_crosses_the_stroke_fast_and_meets_the_part_at_the_s
     from bt_arrange.objects import ObjectType
     from bt_arrange.shapes import Prism
 
-    fragment = ObjectType(
-        "fragment",
-        shape=Prism.from_outline([[0, 0], [0.045, 0.004], [0.06, 0.03], [0.035, 0.028], [0.005, 0.04]], 0.02),
-    )
-    grasp = preferred_grasp(fragment.shape, ROBOTIQ_2F85)
+    kite = ObjectType("kite", shape=Prism.from_outline([[0, 0], [0.03, -0.02], [0.07, 0], [0.03, 0.02]], 0.02))
+    grasp = preferred_grasp(kite.shape, ROBOTIQ_2F85)
     assert grasp.centre_m != (0.0, 0.0), "held off its centre"
-    closes = _recorded_closes(clock, fragment, grasp.width_m)
+    closes = _recorded_closes(clock, kite, grasp.width_m)
     slow_from_m = grasp.width_m + 2 * SETTINGS.slow_close_clearance_per_side_m
-    # Sent from the full opening at the fingers' speed, slowed once the pads stand the clearance off
-    # the grasped side (the fake's fingers move 1 mm or so a control period), before they meet it.
-    assert closes[0] == (pytest.approx(SETTINGS.open_width_m), SETTINGS.finger_speed_m_s)
+    # Opened only the pick clearance clear of the grasped side (not the full stroke), sent from there at
+    # the fingers' speed, slowed once the pads stand the clearance off the grasped side (the fake's
+    # fingers move 1 mm or so a control period), before they meet it.
+    opening_m = grasp.width_m + 2 * SETTINGS.off_centre_pick_clearance_per_side_m
+    assert opening_m < SETTINGS.open_width_m
+    assert closes[0] == (pytest.approx(opening_m), SETTINGS.finger_speed_m_s)
     assert closes[1][1] == SETTINGS.squaring_finger_speed_m_s
     assert grasp.width_m + 0.004 < closes[1][0] <= slow_from_m
     assert len(closes) == 2
@@ -198,3 +198,15 @@ def test_a_cubes_centred_grasp_closes_once_at_the_fingers_speed(clock) -> None:
     assert _recorded_closes(clock, CUBE, CUBE_EDGE_M) == [
         (pytest.approx(SETTINGS.open_width_m), SETTINGS.finger_speed_m_s)
     ]
+
+
+def test_a_part_too_wide_for_the_pick_clearance_opens_to_the_full_stroke() -> None:
+    from bt_arrange.behaviours.moves import pick_opening_m
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.shapes import Prism
+
+    wide = ObjectType("wide", shape=Prism.from_outline([[0, 0], [0.06, 0], [0.05, 0.055], [0, 0.05]], 0.02))
+    assert preferred_grasp(wide.shape, ROBOTIQ_2F85).width_m + 2 * SETTINGS.off_centre_pick_clearance_per_side_m > (
+        SETTINGS.open_width_m
+    )
+    assert pick_opening_m(SETTINGS, wide) == SETTINGS.open_width_m
