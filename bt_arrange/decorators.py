@@ -20,6 +20,7 @@ from py_trees.common import Access, Status
 from bt_arrange.behaviours import keys
 from bt_arrange.checks import whole_number
 from bt_arrange.numbers import fixed
+from bt_arrange.plan.layout_part import pushed_from
 from bt_arrange.plan.tolerance import Tolerance
 from bt_arrange.ports import BOOL, INT, KEY, LIMIT, OFF_DOUBLE, OUTPUT, Port
 from bt_arrange.uncertainty import CAMERA_MARGIN_KEY
@@ -318,8 +319,8 @@ class RepeatUntilWithin(py_trees.decorators.Decorator):
         if self.last_blocked is None:
             return ""
         towards, by = self.last_blocked
-        if len(towards) == 2 and towards[0] in "+-":
-            side = ("-" if towards[0] == "+" else "+") + towards[1]
+        side = pushed_from(towards)
+        if side is not None:
             return f"; its push towards {towards} was blocked on its {side} side by {by}"
         return f"; its push squarely towards {towards.lstrip('@')} deg was blocked by {by}"
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bt_arrange.plan.layout_part import pushed_from
 from bt_arrange.shapes import SquarePush
 
 #: Strategy "diagonal": the most a push may move the part across its axis, per millimetre along it.
@@ -279,7 +280,7 @@ class Blocked:
                 f"{obj} needs a push of {abs(self.offset_mm):.2f} mm squarely towards {self.towards[1:]} deg (its "
                 f"frame), where {who} leaves the pads no room, and no free push closes it"
             )
-        side = ("-" if self.towards[0] == "+" else "+") + self.towards[1]
+        side = pushed_from(self.towards)
         return (
             f"{obj} needs a push of {abs(self.offset_mm):.2f} mm towards {self.towards}, from its {side} side, "
             f"where {who} leaves the pads no room"

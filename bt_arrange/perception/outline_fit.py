@@ -305,22 +305,31 @@ def median_1d(values: FloatArray) -> float:
 
 
 def icp(
-    points_m: FloatArray, model: OutlineModel, pose: tuple[float, float, float], trim_floor_m: float, rounds: int = 6
+    points_m: FloatArray,
+    model: OutlineModel,
+    pose: tuple[float, float, float],
+    trim_floor_m: float,
+    rounds: int = 6,
+    *,
+    corner_share: float = 0.0,
+    yaw_lever_m: float = 0.0,
 ) -> tuple[float, float, float]:
     """Point-to-line ICP of contour points on the plane: each point to its nearest edge's line, re-assigned each round.
 
-    Points whose nearest place on the outline is a vertex (the rounded corners) are left out.
+    Points whose nearest place on the outline is a vertex (the rounded corners), or within
+    ``corner_share`` of an edge's length from one, are left out. The rounds end once a round moves
+    the pose less than a micrometre; with ``yaw_lever_m`` its turn counts too, as the arc at that radius.
     """
     for _ in range(rounds):
         local = _to_model(points_m, *pose)
         distances, t = segment_distances(local, model)
         edge = np.argmin(distances, axis=1)
         along = t[np.arange(len(edge)), edge]
-        inner = (along > 0.0) & (along < 1.0)
+        inner = (along > corner_share) & (along < 1.0 - corner_share)
         if inner.sum() < 6:
             break
         new_pose, _ = gauss_newton(points_m[inner], edge[inner], model, pose, trim_floor_m, iterations=3)
-        moved = max(abs(new_pose[0] - pose[0]), abs(new_pose[1] - pose[1]))
+        moved = max(abs(new_pose[0] - pose[0]), abs(new_pose[1] - pose[1]), abs(new_pose[2] - pose[2]) * yaw_lever_m)
         pose = new_pose
         if moved < 1e-6:
             break

@@ -17,6 +17,13 @@ from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 DIRECTIONS: dict[str, tuple[float, float]] = {"+x": (1.0, 0.0), "-x": (-1.0, 0.0), "+y": (0.0, 1.0), "-y": (0.0, -1.0)}
 
 
+def pushed_from(towards: str) -> str | None:
+    """The side the pads stand on for a push ``towards`` (``"+y"`` -> ``"-y"``); None for a square push."""
+    if towards not in DIRECTIONS:
+        return None
+    return ("-" if towards[0] == "+" else "+") + towards[1]
+
+
 @dataclass(frozen=True)
 class Part:
     """One part at its target: ``name``, target ``(x_m, y_m, yaw_rad)``, its ``shape`` and the ``gripper`` holding it.

@@ -27,6 +27,7 @@ from bt_arrange.plan.compiled import ArrangementPlan, PartStep
 from bt_arrange.plan.footprints import Footprint, gap_m
 from bt_arrange.plan.layout import Pads, push_pads, restage_releases
 from bt_arrange.plan.layout_judged import blockers
+from bt_arrange.plan.layout_part import pushed_from
 
 #: The placing error a plan's gaps are judged at (mm): the paper's real cell after placing with no
 #: injected error, 3.72 mm (its Gazebo: 0.47 mm; FACTS.md, "A real cell's errors").
@@ -51,8 +52,9 @@ class TightSide:
     @property
     def side(self) -> str:
         """The side the pads push from: ``"-y"`` for a push towards ``"+y"``, a square push's name as it is."""
-        if len(self.towards) == 2 and self.towards[0] in "+-":
-            return ("-" if self.towards[0] == "+" else "+") + self.towards[1]
+        side = pushed_from(self.towards)
+        if side is not None:
+            return side
         return f"{self.towards[1:]} deg" if self.towards.startswith("@") else self.towards
 
     def text(self) -> str:

@@ -242,12 +242,7 @@ def _correction(
         name=f"place {obj} again when its pushes stall{label}",
         memory=True,
         children=[
-            py_trees.behaviours.CheckBlackboardVariableValue(
-                name=f"{obj}'s pushes stalled{label}",
-                check=py_trees.common.ComparisonExpression(
-                    keys.key(obj, keys.PUSHES_STALLED), keys.STALLED, operator.eq
-                ),
-            ),
+            reads_text(f"{obj}'s pushes stalled{label}", keys.key(obj, keys.PUSHES_STALLED), keys.STALLED),
             Pick(f"pick {obj} to place it again{label}", obj, kind, z_m=target.z_m),
             GraspGuard(
                 f"while holding {obj} to place it again{label}",
@@ -262,6 +257,13 @@ def _correction(
     )
 
 
+def reads_text(name: str, key: str, text: str) -> py_trees.behaviour.Behaviour:
+    """A condition: SUCCESS while the blackboard's ``key`` holds ``text`` (the only check an XML tree writes)."""
+    return py_trees.behaviours.CheckBlackboardVariableValue(
+        name=name, check=py_trees.common.ComparisonExpression(key, text, operator.eq)
+    )
+
+
 def _restage(target: Target, towards: str, release: Release, label: str) -> py_trees.behaviour.Behaviour:
     """When Push needed ``towards`` from a blocked side: pick the part up, release it past the target on that side."""
     obj = target.obj
@@ -271,17 +273,9 @@ def _restage(target: Target, towards: str, release: Release, label: str) -> py_t
         f"to push it {towards}{label}",
         memory=True,
         children=[
-            py_trees.behaviours.CheckBlackboardVariableValue(
-                name=f"{obj} needs a push {towards}{label}",
-                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_TOWARDS), towards, operator.eq),
-            ),
+            reads_text(f"{obj} needs a push {towards}{label}", keys.key(obj, keys.BLOCKED_TOWARDS), towards),
             # The loop allows it while a correction is left to push the part back and doing so brought it closer.
-            py_trees.behaviours.CheckBlackboardVariableValue(
-                name=f"{obj} may be released again{label}",
-                check=py_trees.common.ComparisonExpression(
-                    keys.key(obj, keys.RELEASE_AGAIN), keys.ALLOWED, operator.eq
-                ),
-            ),
+            reads_text(f"{obj} may be released again{label}", keys.key(obj, keys.RELEASE_AGAIN), keys.ALLOWED),
             Pick(f"pick {obj} again{label}", obj, target.object_type, grasp=release, z_m=target.z_m),
             GraspGuard(
                 f"while holding {obj} again{label}",
@@ -383,16 +377,8 @@ def _move_aside(
         name=f"move {other} aside to correct {obj}{label}",
         memory=True,
         children=[
-            py_trees.behaviours.CheckBlackboardVariableValue(
-                name=f"{obj} needs a push {move.towards}{label}",
-                check=py_trees.common.ComparisonExpression(
-                    keys.key(obj, keys.BLOCKED_TOWARDS), move.towards, operator.eq
-                ),
-            ),
-            py_trees.behaviours.CheckBlackboardVariableValue(
-                name=f"{other} is in its way{label}",
-                check=py_trees.common.ComparisonExpression(keys.key(obj, keys.BLOCKED_BY), other, operator.eq),
-            ),
+            reads_text(f"{obj} needs a push {move.towards}{label}", keys.key(obj, keys.BLOCKED_TOWARDS), move.towards),
+            reads_text(f"{other} is in its way{label}", keys.key(obj, keys.BLOCKED_BY), other),
             PushAside(
                 f"push {other} aside{label}",
                 other,

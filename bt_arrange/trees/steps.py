@@ -8,7 +8,6 @@ Table 1's row 4, ``EstimateGraspFromDepth``); any ``Callable[[Target], Behaviour
 
 from __future__ import annotations
 
-import operator
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -32,7 +31,14 @@ from bt_arrange.perception.depth_grasp import DepthGraspConfig, DepthGraspEstima
 from bt_arrange.plan.compiled import ArrangementPlan, PartStep
 from bt_arrange.plan.layout import Release
 from bt_arrange.plan.targets import Target
-from bt_arrange.trees.corrections import STALL_AFTER_PUSHES, _correction, check_strategy, correction, inspect
+from bt_arrange.trees.corrections import (
+    STALL_AFTER_PUSHES,
+    _correction,
+    check_strategy,
+    correction,
+    inspect,
+    reads_text,
+)
 from bt_arrange.trees.turned import (
     CAMERA_YAW_MARGIN_DEG,
     COARSE_YAW_THRESHOLD_DEG,
@@ -210,11 +216,8 @@ def _transfer(
                     memory=True,
                     children=[
                         # Only a look that failed on touching parts goes on: a part not found costs no look more.
-                        py_trees.behaviours.CheckBlackboardVariableValue(
-                            name=f"{obj} touches parts of its colour",
-                            check=py_trees.common.ComparisonExpression(
-                                keys.key(obj, keys.TOUCHING), keys.TOUCHING_PARTS, operator.eq
-                            ),
+                        reads_text(
+                            f"{obj} touches parts of its colour", keys.key(obj, keys.TOUCHING), keys.TOUCHING_PARTS
                         ),
                         separate,
                         again,
