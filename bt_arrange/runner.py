@@ -20,6 +20,7 @@ import py_trees.visitors
 from py_trees.common import Status
 
 from bt_arrange.behaviours import Context
+from bt_arrange.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS
 from bt_arrange.files import LineLog
 from bt_arrange.motion.safety import SafetyStop
 from bt_arrange.robot import Clock
@@ -124,7 +125,7 @@ class TransitionLog(py_trees.visitors.VisitorBase):
         seen: set[py_trees.behaviour.Behaviour] = set()
         # Breadth first (a list read from the front, growing as it is read): the changes come in the order of the tick.
         queue = list(nodes)
-        invalid = Status.INVALID
+        invalid = INVALID
         get, add = last.get, seen.add
         for node in queue:
             if node in seen:
@@ -219,7 +220,7 @@ def _passed_on_to(node: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Beha
     depends only on its class and its memory, fixed when it is built: it is worked out at its
     first look (``_pass_kind``) and kept on the node, not worked out again every tick.
     """
-    if node.status is not Status.RUNNING:
+    if node.status is not RUNNING:
         return None
     kind = getattr(node, _PASS_KIND, None)
     if kind is None:
@@ -234,7 +235,7 @@ def _passed_on_to(node: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Beha
         for child in node.children:
             if child is current:
                 return current
-            if child.status is not Status.INVALID:
+            if child.status is not INVALID:
                 return None
     return None
 
@@ -273,7 +274,7 @@ def resumed_tick(root: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.
     node's tick handed back as it happened, not run twice. Either way every node ends the tick
     as ``root.tick()`` would leave it, and the same nodes are yielded in the same order.
     """
-    running = Status.RUNNING
+    running = RUNNING
     above: list[py_trees.behaviour.Behaviour] = []
     node = root
     while True:
@@ -427,7 +428,7 @@ class Runner:
         if stop is not None:
             feedback = stop.reason
         return RunResult(
-            status=Status.FAILURE if stop is not None else self.root.status,
+            status=FAILURE if stop is not None else self.root.status,
             timed_out=self._timed_out,
             ticks=self._ticks,
             sim_seconds=clock.now() - start_s,
@@ -447,7 +448,7 @@ class Runner:
         if self.on_tick is not None:
             self.on_tick(self.root)
         self.context.brake.step()
-        if self.root.status in (Status.SUCCESS, Status.FAILURE):
+        if self.root.status in (SUCCESS, FAILURE):
             # A motion handed on at speed by the last behaviour runs to its end (the arm
             # arrives where it was going) before the run ends: the world time includes it.
             while self.context.brake.busy and clock.now() - start_s < self.time_limit_s:
@@ -456,7 +457,7 @@ class Runner:
             return False
         if clock.now() - start_s >= self.time_limit_s:
             self._timed_out = True
-            self.root.stop(Status.INVALID)
+            self.root.stop(INVALID)
             self.log.look([self.root], clock.now())
             self.log.take()
             return False
@@ -465,7 +466,7 @@ class Runner:
 
     def _end_on_stop(self, stop: SafetyStop, clock: Clock, start_s: float) -> None:
         """A safety stop: stop every behaviour; a refused motion's arm is braked to rest, a stopped robot left alone."""
-        self.root.stop(Status.INVALID)
+        self.root.stop(INVALID)
         self.log.look([self.root], clock.now())
         for transition in self.log.take():
             if self.on_transition is not None:

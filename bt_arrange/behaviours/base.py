@@ -28,6 +28,10 @@ from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.geometry import FloatArray
 from bt_arrange.motion import Motion
 
+#: The statuses, looked up once: ``Status.RUNNING`` goes through the enum's class on every use
+#: (about 80 ns), and the tick's own code (here, the guards, the runner) runs every control period.
+RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+
 
 class Stage(ABC):
     """One step of a behaviour. ``start`` and ``poll`` may raise ``BtArrangeError``; ``poll`` runs once per tick."""
@@ -49,11 +53,16 @@ class Stage(ABC):
         return None
 
 
+#: py_trees' log levels, looked up once: ``debug_logging`` is asked several times a tick.
+_DEBUG_LEVEL, _INFO_LEVEL = py_trees.logging.Level.DEBUG, py_trees.logging.Level.INFO
+_PY_TREES_LOGGING = py_trees.logging
+
+
 def debug_logging() -> bool:
     """Whether py_trees logs at DEBUG (its ``logger.debug`` prints only then): the per-tick message is built only so."""
     # ``level < Level.INFO``: the usual INFO and DEBUG told by identity, not through IntEnum's comparison.
-    level = py_trees.logging.level
-    return level is py_trees.logging.Level.DEBUG or (level is not py_trees.logging.Level.INFO and level < 1)
+    level = _PY_TREES_LOGGING.level
+    return level is _DEBUG_LEVEL or (level is not _INFO_LEVEL and level < 1)
 
 
 def end_tick(node: py_trees.behaviour.Behaviour, new_status: Status) -> None:
@@ -62,8 +71,8 @@ def end_tick(node: py_trees.behaviour.Behaviour, new_status: Status) -> None:
     # ``list(Status)`` at every tick; a set of them would hash each member in Python).
     if type(new_status) is not Status:
         node.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{node.name}]")
-        new_status = Status.INVALID
-    if new_status is not Status.RUNNING:
+        new_status = INVALID
+    if new_status is not RUNNING:
         node.stop(new_status)
     node.status = new_status
 
@@ -126,7 +135,7 @@ class MoveStage(Stage):
         """Send the next setpoint; after the last one, wait until the arm is still (at most ``settle_s``)."""
         if self._waiting_for_rest:
             if context.brake.active:
-                return Status.RUNNING
+                return RUNNING
             self._waiting_for_rest = False
             self.start_q = context.robot.arm.joint_positions()
             self.motion = self._plan(context, self.start_q)
@@ -134,25 +143,25 @@ class MoveStage(Stage):
         clock = context.robot.clock
         if self._skip_command:
             self._skip_command = False
-            return Status.RUNNING
+            return RUNNING
         if not self.motion.done:
             setpoint = self.motion.step()
             context.robot.arm.command(setpoint.positions_rad, setpoint.velocities_rad_s)
             if not self.motion.done and self._hand_on is not None and self._hand_on(context, self.motion):
                 context.brake.carry_on(self.motion)
-                return Status.SUCCESS
+                return SUCCESS
             if self.motion.done:
                 self._done_at_s = clock.now()
             # Even after the last setpoint: the next stage commands the arm on the next tick, not this one.
-            return Status.RUNNING
+            return RUNNING
         assert self._done_at_s is not None
         settings = context.settings
         # Settled when measured so, not after a fixed wait: the joints track a jerk-limited motion
         # closely and are usually still one control period after its last setpoint.
         still = float(np.max(np.abs(context.robot.arm.joint_velocities()))) < settings.settled_speed_rad_s
         if not still and clock.now() - self._done_at_s < settings.settle_s:
-            return Status.RUNNING
-        return Status.SUCCESS
+            return RUNNING
+        return SUCCESS
 
     def interrupt(self, context: Context) -> None:
         """Hand a running motion to the brake."""
@@ -215,10 +224,10 @@ class GripperStage(Stage):
     def poll(self, context: Context) -> Status:
         """SUCCESS once the fingers stand still (where an opening sent them)."""
         if not self._wait:
-            return Status.SUCCESS
+            return SUCCESS
         if not self._commanded:
             if context.brake.active:
-                return Status.RUNNING
+                return RUNNING
             self._send(context)
         self._polls += 1
         gripper = context.robot.gripper
@@ -229,24 +238,24 @@ class GripperStage(Stage):
                     f"{self.name}: fingers still moving after {waited_s:.1f} s "
                     f"(limit {context.settings.gripper_timeout_s:.1f} s), width {gripper.width() * 1000:.1f} mm"
                 )
-                return Status.FAILURE
-            return Status.RUNNING
+                return FAILURE
+            return RUNNING
         if self._opens_to_m is None:
-            return Status.SUCCESS
+            return SUCCESS
         wanted_m, width_m = self._opens_to_m(context), gripper.width()
         if width_m >= wanted_m - self.STALL_SHORT_M:
-            return Status.SUCCESS
+            return SUCCESS
         self.stalled += 1
         if self._on_stall is not None and self.stalled == 1:
             self._on_stall(context)
             self._polls = 0
             self._started_at_s = context.robot.clock.now()
-            return Status.RUNNING
+            return RUNNING
         self.reason = (
             f"{self.name}: the fingers stopped at {width_m * 1000:.1f} mm, short of {wanted_m * 1000:.1f} mm: "
             "the part is wedged between the pads"
         )
-        return Status.FAILURE
+        return FAILURE
 
 
 class InstantStage(Stage):
@@ -265,8 +274,8 @@ class InstantStage(Stage):
         """SUCCESS, or FAILURE with the action's reason."""
         if self._result is not None:
             self.reason = self._result
-            return Status.FAILURE
-        return Status.SUCCESS
+            return FAILURE
+        return SUCCESS
 
 
 class OnlyIf(Stage):
@@ -287,7 +296,7 @@ class OnlyIf(Stage):
     def poll(self, context: Context) -> Status:
         """The wrapped step's status, or SUCCESS when skipped."""
         if not self._active:
-            return Status.SUCCESS
+            return SUCCESS
         status = self._stage.poll(context)
         self.reason = self._stage.reason
         return status
@@ -395,7 +404,7 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         """
         if debug_logging():
             self.logger.debug(f"{self.__class__.__name__}.tick()")
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         # Not self.status yet: terminate() may need to check what the current state is first.
         new_status = self.update()
@@ -408,34 +417,34 @@ class StagedBehaviour(py_trees.behaviour.Behaviour):
         self.stage = None
         if self._failure is not None:
             self.feedback_message = self._failure
-            return Status.FAILURE
+            return FAILURE
         if context.brake.active:
             self.feedback_message = stage_names.WAITING_FOR_BRAKE
-            return Status.RUNNING
+            return RUNNING
         while self._index < len(self._stages):
             stage = self._stages[self._index]
             if not self._started and not self._start_current(context):
                 self.feedback_message = self._failure or ""
-                return Status.FAILURE
+                return FAILURE
             try:
                 status = stage.poll(context)
             except BtArrangeError as error:
                 self.feedback_message = self._abandon(stage, context, error)
-                return Status.FAILURE
-            if status == Status.RUNNING:
+                return FAILURE
+            if status == RUNNING:
                 self.feedback_message = self.stage = stage.name
-                return Status.RUNNING
-            if status == Status.FAILURE:
+                return RUNNING
+            if status == FAILURE:
                 self.feedback_message = stage.reason or f"{stage.name} failed"
-                return Status.FAILURE
+                return FAILURE
             self._index += 1
             self._started = False
         self.feedback_message = self.success_message()
-        return Status.SUCCESS
+        return SUCCESS
 
     def terminate(self, new_status: Status) -> None:
         """On interruption (INVALID), hand a running motion to the brake."""
-        if new_status == Status.INVALID and self.context is not None and self._index < len(self._stages):
+        if new_status == INVALID and self.context is not None and self._index < len(self._stages):
             if self._started:
                 self._stages[self._index].interrupt(self.context)
             self.feedback_message = stage_names.INTERRUPTED

@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import py_trees
 from py_trees.common import Status
 
-from bt_arrange.behaviours.base import debug_logging, end_tick
+from bt_arrange.behaviours.base import FAILURE, RUNNING, debug_logging, end_tick
 from bt_arrange.behaviours.context import Context
 from bt_arrange.behaviours.moves import min_held_width_m
 from bt_arrange.errors import BtArrangeError
@@ -112,16 +112,16 @@ class GraspGuard(py_trees.decorators.EternalGuard):
             self.logger.debug(f"{self.__class__.__name__}.tick()")
         held = self.condition()
         if isinstance(held, Status):
-            held = held != Status.FAILURE
+            held = held != FAILURE
         elif not isinstance(held, bool):
             raise RuntimeError(f"conditional check must return 'bool' or 'common.Status' [{type(held)}]")
         if not held:
-            self.stop(Status.FAILURE)
+            self.stop(FAILURE)
             yield self
             return
         if debug_logging():
             self.logger.debug(f"{self.__class__.__name__}.tick()")
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         yield from self.decorated.tick()
         new_status = self.update()

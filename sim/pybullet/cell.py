@@ -189,11 +189,13 @@ class WorkCell(CellBase):
     def step(self, control_periods: int = 1) -> None:
         """Advance the world by whole control periods (each several physics steps)."""
         friction = self.config.errors.friction.enabled
+        # Looked up once: ``BulletClient`` builds a fresh partial (and an ``inspect`` call) at every attribute access.
+        step_simulation = self.client.stepSimulation
         for _ in range(control_periods):
             if friction:
                 self._apply_friction_field()
             for _ in range(self._substeps):
-                self.client.stepSimulation()
+                step_simulation()
             if self._recentre_at_width_m is not None and self.gripper.width() >= self._recentre_at_width_m:
                 self._set_grasp_offset(0.0)
                 self._recentre_at_width_m = None
