@@ -8,7 +8,8 @@ single-cube trial (``trees/single_cube.py``); the four-cube tree (``trees/four_c
 the shipped examples of irregular parts (``--examples``, default ``irregular_parts,fresco``:
 ``bt-arrange run irregular_parts``, ``bt-arrange run fresco``).
 For each trial the wall time of the run is split into exclusive sections: ``render`` (camera
-captures), ``physics`` (inside the world's stepping), ``perception`` (the detector),
+captures), ``physics`` (inside the world's stepping), ``perception`` (the detector, and the
+fits a behaviour calls beside it: the held look, touching parts, a standing part's top face),
 ``planning`` (inverse kinematics and trajectories), ``tree`` (the rest of the ticks) and
 ``rest`` (the runner's loop, logging, hooks). Timers wrap the objects' methods in this
 benchmark only (``bt_arrange.timing``): an ordinary run is not instrumented.
@@ -32,7 +33,7 @@ stepping its physics: 1.0 would mean nothing but physics costs anything), and fo
 tree ``world_s_per_object``, ``bound_s_per_object`` and ``bound_ratio`` (world time over the bound).
 ``examples`` holds the same keys per example, with ``real_time_factor`` (world time over wall
 time), ``real_time_factor_cpu`` (over the process's CPU time, which other jobs on a shared machine
-do not stretch), ``perception_share`` (the detector's fraction of the wall time) and
+do not stretch), ``perception_share`` (perception's fraction of the wall time) and
 ``perception_share_cpu`` (its fraction of the CPU time: the detector's OpenCV and NumPy may use
 several threads, so on a shared machine its wall share moves with the other jobs); every trial
 has them.
@@ -43,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import json
 import math
 import sys
@@ -73,6 +75,15 @@ EXAMPLES = ("irregular_parts", "fresco")
 #: The detector's entry points: timed on the class, so the copies a look makes for one part type
 #: (``PartDetector.for_object``) are timed too.
 DETECTOR_METHODS = ("detect", "detect_all", "locate")
+#: The perception a behaviour calls outside the detector, timed where the behaviour's module holds
+#: it: (module, name). The held look's fit is most of it in a fresco.
+PERCEPTION_FUNCTIONS = (
+    ("bt_arrange.behaviours.held", "measure_held"),
+    ("bt_arrange.behaviours.looking", "touching_pixels"),
+    ("bt_arrange.behaviours.separate", "touching_clusters"),
+    ("bt_arrange.behaviours.standing", "measure_top_face"),
+    ("bt_arrange.behaviours.puzzle", "measure_unknown_outlines"),
+)
 
 
 @contextlib.contextmanager
@@ -86,6 +97,22 @@ def timed_on_class(timers: SectionTimers, cls: type, methods: tuple[str, ...], s
     finally:
         for name, function in own.items():
             setattr(cls, name, function)
+
+
+@contextlib.contextmanager
+def timed_functions(timers: SectionTimers, functions: tuple[tuple[str, str], ...], section: str) -> Iterator[None]:
+    """Time each module-level ``(module, name)`` as ``section`` while inside; the modules restored after."""
+    saved = []
+    try:
+        for module_name, name in functions:
+            module = importlib.import_module(module_name)
+            if hasattr(module, name):
+                saved.append((module, name, getattr(module, name)))
+                setattr(module, name, timers.wrap(section, getattr(module, name)))
+        yield
+    finally:
+        for module, name, function in saved:
+            setattr(module, name, function)
 
 
 def bare_stepping(seconds: float = 4.0) -> dict:
@@ -242,6 +269,8 @@ def run_trial(tree_file: Path, seed: int) -> dict:
     with (
         timed_on_class(timers, PartDetector, DETECTOR_METHODS, "perception"),
         timed_on_class(cpu_timers, PartDetector, DETECTOR_METHODS, "perception"),
+        timed_functions(timers, PERCEPTION_FUNCTIONS, "perception"),
+        timed_functions(cpu_timers, PERCEPTION_FUNCTIONS, "perception"),
         SimulatedRun(root, treefile.scene(module, seed)) as run,
     ):
         cell, context = run.cell, run.context
