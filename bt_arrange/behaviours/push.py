@@ -339,7 +339,8 @@ class Push(StagedBehaviour):
         yaw_error_rad = fold_yaw(pose.yaw_rad - target.yaw_rad, shape.symmetry_rad)
         min_push_mm, turned = s.min_push_m * 1000, self._turned()
         args = (offset_xy_mm, self.square_pushes, self.towards, min_push_mm, turned, self.threshold_mm, yaw_error_rad)
-        choice = self.plan_square_push(*args)
+        among_neighbours = self.opening_m is not None or not set(self.towards) >= set(self.square_pushes)
+        choice = self.plan_square_push(*args, among_neighbours)
         if choice is None and math.hypot(*offset_xy_mm) >= s.min_push_m * 1000:
             every_push_free = set(self.towards) >= set(self.square_pushes)
             if every_push_free and self.opening_m is None:
@@ -383,12 +384,15 @@ class Push(StagedBehaviour):
         via = None
         if self.across_m:
             # Straight up to the edge, then slanted: the pads carry the part across by friction while
-            # they press it along, and come into contact where a straight push would.
+            # they press it along, and come into contact where a straight push would. A long push (a
+            # staged part's way home) slants from its start, in one line that meets the edge there
+            # too: stopping at the edge cost 0.15 s a piece on the fresco.
             across = np.array([-direction[1], direction[0]]) * self.across_m
-            run_in_m = min(SLANT_RUN_IN_MM / 1000, s.push_clearance_m / 2)
+            long_push = distance_mm > LONG_PUSH_MM
+            run_in_m = s.push_clearance_m if long_push else min(SLANT_RUN_IN_MM / 1000, s.push_clearance_m / 2)
             lead = across * (run_in_m / distance_m)
             begin = begin - lead
-            via = centre - direction * (reach_m + run_in_m) - lead
+            via = None if long_push else centre - direction * (reach_m + run_in_m) - lead
             end = end + across
         back = end - direction * s.push_clearance_m
         return self._motion(

@@ -65,6 +65,7 @@ def plan_square_push(
     turned: bool,
     threshold_mm: float | None = None,
     yaw_error_rad: float = 0.0,
+    among_neighbours: bool | None = None,
 ) -> SquareMove | Blocked | None:
     """``choose_square_push``, and among neighbours a long push stopped short or a push that also moves across.
 
@@ -86,10 +87,11 @@ def plan_square_push(
     or more from its place, so that the correction goes on (None: never): at a coarse threshold
     it would end there, short, and what it corrects (0.2 to 0.35 mm beside the place) is within.
 
-    Any long push, among neighbours or not, at any threshold, moves the part across onto its
-    target's line, less what squaring it will carry it across (``squaring_shift_mm``, from
-    ``yaw_error_rad``, the part's measured yaw less its target's). Otherwise, every push free:
-    ``choose_square_push``'s choice, as it is.
+    A long push among neighbours (``among_neighbours``: a staged part, whose pushes may all be
+    free; None: some push is blocked), at any threshold, moves the part across onto its target's
+    line, less what squaring it will carry it across (``squaring_shift_mm``, from ``yaw_error_rad``,
+    the part's measured yaw less its target's). Otherwise, every push free: ``choose_square_push``'s
+    choice, as it is.
     """
     choice = choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
     plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
@@ -100,14 +102,16 @@ def plan_square_push(
 
     if not free:
         return plain
-    among_neighbours = len(free) < len(pushes)
+    some_blocked = len(free) < len(pushes)
     offset = np.asarray(offset_xy_mm, dtype=float)
-    if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
+    if (some_blocked if among_neighbours is None else among_neighbours) and (
+        isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM
+    ):
         # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
         # beside it stayed so): they end on the line the layout checked them along. At most
-        # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring. Among
-        # neighbours at a fine threshold the push stops short, for the next push to close the rest.
-        reserve_mm = APPROACH_RESERVE_MM if among_neighbours and may_stop_short(APPROACH_RESERVE_MM) else 0.0
+        # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring. With a
+        # push blocked, at a fine threshold, it stops short, for the next push to close the rest.
+        reserve_mm = APPROACH_RESERVE_MM if some_blocked and may_stop_short(APPROACH_RESERVE_MM) else 0.0
         push = pushes[plain.name]
         beside = float(offset @ np.array([-math.sin(push.heading_rad), math.cos(push.heading_rad)]))
         beside -= squaring_shift_mm(push, yaw_error_rad)
@@ -115,7 +119,7 @@ def plan_square_push(
         limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
         across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
         return SquareMove(plain.name, distance, across)
-    if not among_neighbours:
+    if not some_blocked:
         return plain
     if not may_stop_short(APPROACH_RESERVE_MM):
         # A coarse threshold: what the pushes below correct is mostly within, and the example fresco
