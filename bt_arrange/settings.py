@@ -111,11 +111,6 @@ class ManipulationSettings:
     #: by friction however fast it goes, but at a third of the speed the pads meet the face with a
     #: ninth of the kinetic energy, and the part stops within less of its support's edge.
     raised_push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.05, acceleration_m_s2=0.25, jerk_m_s3=2.0)
-    #: A staged part's way home (a square push longer than ``LONG_PUSH_MM``): the push's speed at twice
-    #: its acceleration and a steeper jerk. The part still stops when the pads do: they brake at 1 m/s^2,
-    #: under the 2.5 m/s^2 the table's friction brakes it (0.5 on 0.5 in Bullet). Measured on the example
-    #: fresco at seed 0: 44.7 s of world time against 45.9 at ``push_limits``, the pieces as close.
-    long_push_limits: CartesianLimits = CartesianLimits(velocity_m_s=0.15, acceleration_m_s2=1.0, jerk_m_s3=20.0)
     #: Joint moves with empty pads (above a part, home, out of the camera's view): the UR5's own joint
     #: speeds (the URDF's 3.15 and 3.2 rad/s), 16 rad/s^2 (0.2 s to full speed; the pendant allows 40)
     #: and 200 rad/s^3. The lines that carry a part (the lift, the lowering) run at the planner's

@@ -130,20 +130,12 @@ def line_nearly_done(remaining_m: float | None = None) -> Callable[[Context, Mot
 
 
 def line_to(  # noqa: ANN201 - a planning function
-    x_m: float,
-    y_m: float,
-    z_m: float,
-    yaw_rad: float,
-    pushing: bool = False,
-    free: bool = False,
-    gentle: bool = False,
-    long_push: bool = False,
+    x_m: float, y_m: float, z_m: float, yaw_rad: float, pushing: bool = False, free: bool = False, gentle: bool = False
 ):
     """A stage planner: a straight TCP line to a gripper-down pose (approach, descend, lift, push).
 
     ``pushing``: at the settings' push limits, slower than the planner's, so the part does not slide on;
-    ``gentle`` with it: at ``raised_push_limits``, for a part standing on others; ``long_push`` with it
-    (not gentle): at ``long_push_limits``, a staged part's way home.
+    ``gentle`` with it: at ``raised_push_limits``, for a part standing on others.
     ``free``: the pads hold nothing and touch nothing on the way (down to a part, up from a released
     one): at the settings' free-space line and joint limits.
     """
@@ -151,7 +143,7 @@ def line_to(  # noqa: ANN201 - a planning function
     def plan(context: Context, q: FloatArray) -> Motion:
         s = context.settings
         if pushing:
-            limits = s.raised_push_limits if gentle else s.long_push_limits if long_push else s.push_limits
+            limits = s.raised_push_limits if gentle else s.push_limits
             return context.planner.move_line(q, gripper_down_pose(x_m, y_m, z_m, yaw_rad), cartesian_limits=limits)
         if free:
             return context.planner.move_line(

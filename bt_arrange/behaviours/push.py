@@ -297,12 +297,11 @@ class Push(StagedBehaviour):
         push_stage: str,
         gentle: bool = False,
         via: FloatArray | None = None,
-        long_push: bool = False,
     ) -> list[Stage]:
         """The push's stages: open, go behind the part, lower, push, back off, lift (every push's).
 
         ``via``: the pads go there first, straight and at the push's speed, and push from there (a
-        push that also moves the part across). ``long_push``: the push at ``long_push_limits``.
+        push that also moves the part across).
         """
         approach_m, push_m = heights
         run_in: list[Stage] = []
@@ -315,9 +314,7 @@ class Push(StagedBehaviour):
             GripperStage(stage.WAIT_FOR_FINGERS, lambda c: None, start_periods=0),
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
             *run_in,
-            MoveStage(
-                push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle, long_push=long_push)
-            ),
+            MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
             MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
             MoveStage(
                 stage.LIFT_FINGERS,
@@ -337,7 +334,8 @@ class Push(StagedBehaviour):
         """
         s = context.settings
         self.across_m = 0.0
-        shape = self.object_type.shape  # its turn from the target's yaw: a square push takes it away
+        shape = self.object_type.shape
+        # The part's turn from its target's yaw, which a square push takes away.
         yaw_error_rad = fold_yaw(pose.yaw_rad - target.yaw_rad, shape.symmetry_rad)
         min_push_mm, turned = s.min_push_m * 1000, self._turned()
         args = (offset_xy_mm, self.square_pushes, self.towards, min_push_mm, turned, self.threshold_mm, yaw_error_rad)
@@ -385,9 +383,10 @@ class Push(StagedBehaviour):
         end = centre - direction * end_reach_m + direction * distance_m
         via = None
         if self.across_m:
-            # Straight up to the edge, then slanted: the pads carry the part across by friction while they
-            # press it, meeting it where a straight push would. A long push: one line slanted from its start,
-            # that meets the edge there too (stopping at the edge cost the fresco 0.15 s a piece).
+            # Straight up to the edge, then slanted: the pads carry the part across by friction while
+            # they press it along, and come into contact where a straight push would. A long push (a
+            # staged part's way home) slants from its start, in one line that meets the edge there
+            # too: stopping at the edge cost 0.15 s a piece on the fresco.
             across = np.array([-direction[1], direction[0]]) * self.across_m
             long_push = distance_mm > LONG_PUSH_MM
             run_in_m = s.push_clearance_m if long_push else min(SLANT_RUN_IN_MM / 1000, s.push_clearance_m / 2)
@@ -406,7 +405,6 @@ class Push(StagedBehaviour):
             stage.push(distance_m, name),
             gentle=self.z_m > 0.0,
             via=via,
-            long_push=distance_mm > LONG_PUSH_MM,
         )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:

@@ -166,13 +166,3 @@ def test_a_long_push_of_a_turned_part_ends_where_its_squared_edge_belongs_in_one
     pushing = path[: deepest + 1]
     slope = (pushing[-1, 1] - pushing[0, 1]) / (pushing[-1, 0] - pushing[0, 0])
     np.testing.assert_allclose(pushing[:, 1], pushing[0, 1] + slope * (pushing[:, 0] - pushing[0, 0]), atol=1e-6)
-    # At the long push's limits (a staged part's way home); a push near the target keeps the gentler ones.
-    from bt_arrange.motion import LinearMotion
-
-    lines = [s.motion for s in push._stages if isinstance(getattr(s, "motion", None), LinearMotion)]
-    assert SETTINGS.long_push_limits in [line.cartesian_limits for line in lines]
-    assert SETTINGS.long_push_limits.velocity_m_s == SETTINGS.push_limits.velocity_m_s
-    short = setup(context, TRIANGLE, (1.0, 0.0), towards=(names[0], names[90]), threshold_mm=0.8)
-    assert tick_until_done(short, context).status == Status.SUCCESS
-    limits = [s.motion.cartesian_limits for s in short._stages if isinstance(getattr(s, "motion", None), LinearMotion)]
-    assert SETTINGS.push_limits in limits and SETTINGS.long_push_limits not in limits
