@@ -135,11 +135,11 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
     assert Push.plan_square_push((20.0, 0.3), pushes, tuple(pushes), 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(20.0)
     )
-    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: choose_square_push's.
-    # Left 1 mm short at 0.8 mm, the part would count as within there, short of its place.
+    # A coarse threshold (the reserve under STOP_SHORT_FACTOR of it), or none known: the whole way, onto
+    # the line. Left 1 mm short at 0.8 mm, the part would count as within there, short of its place.
     for threshold_mm in (0.8, None):
         assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, threshold_mm) == SquareMove(
-            names[0], pytest.approx(20.0)
+            names[0], pytest.approx(20.0), pytest.approx(0.3)
         )
     # At most LONG_PUSH_MAX_ACROSS_MM across on the way.
     from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM
@@ -267,9 +267,46 @@ def test_at_a_coarse_threshold_a_push_that_would_leave_the_part_blocked_beside_i
     assert Push.plan_square_push((1.0, -1.0), pushes, every, 0.05, False, 0.8) == SquareMove(
         names[0], pytest.approx(1.0)
     )
-    # Far from the target (a staged part on its way home) the long push is made as chosen.
+    # Far from the target (a staged part on its way home) the long push goes the whole way, onto the line.
     assert Push.plan_square_push((10.0, -1.0), pushes, free, 0.05, False, 0.8) == SquareMove(
-        names[0], pytest.approx(10.0)
+        names[0], pytest.approx(10.0), pytest.approx(-1.0)
+    )
+
+
+def test_a_long_push_among_neighbours_takes_away_what_squaring_the_part_carries_it_across() -> None:
+    # A push meets a turned part's leading corner first; the part turns square about it, and its
+    # centroid, back_m ahead of the edge, swings across: pieces of the example fresco turned -1.33 deg
+    # ended their long pushes 0.62 mm to the left (their edge 26.6 mm behind the centroid), so a second
+    # push was needed. The pads now move across by what lies beside the line less that swing.
+    from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM, SquareMove
+    from bt_arrange.behaviours.square_pushes import squaring_shift_mm
+
+    pushes = TRIANGLE.named_pushes(ROBOTIQ_2F85)
+    names = {round(math.degrees(p.heading_rad)): n for n, p in pushes.items()}
+    free = (names[0], names[90])
+    push = pushes[names[0]]
+    turn_rad = math.radians(-1.33)
+    swing_mm = squaring_shift_mm(push, turn_rad)
+    assert swing_mm == pytest.approx(-turn_rad * push.back_m * 1000) and swing_mm > 0  # a clockwise turn: left
+    # Nothing beside the line: the pads move right by the swing, so that the part ends on its line.
+    assert Push.plan_square_push((15.0, 0.0), pushes, free, 0.05, False, 0.8, turn_rad) == SquareMove(
+        names[0], pytest.approx(15.0), pytest.approx(-swing_mm)
+    )
+    # The swing the other way cancels what lies beside; never more than LONG_PUSH_MAX_ACROSS_MM across.
+    assert Push.plan_square_push((15.0, -swing_mm), pushes, free, 0.05, False, 0.8, -turn_rad) == SquareMove(
+        names[0], pytest.approx(15.0)
+    )
+    assert Push.plan_square_push((15.0, -1.0), pushes, free, 0.05, False, 0.8, turn_rad) == SquareMove(
+        names[0], pytest.approx(15.0), pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+    )
+    # A staged part whose pushes are all free is among neighbours too (Push passes it: its opening was
+    # given); a part placed free is pushed as before, the whole way by the projection.
+    every = tuple(pushes)
+    assert Push.plan_square_push((15.0, 0.4), pushes, every, 0.05, False, 0.8, 0.0, True) == SquareMove(
+        names[0], pytest.approx(15.0), pytest.approx(0.4)
+    )
+    assert Push.plan_square_push((15.0, 0.4), pushes, every, 0.05, False, 0.8, turn_rad) == SquareMove(
+        names[0], pytest.approx(15.0)
     )
 
 

@@ -64,6 +64,8 @@ def plan_square_push(
     min_push_mm: float,
     turned: bool,
     threshold_mm: float | None = None,
+    yaw_error_rad: float = 0.0,
+    among_neighbours: bool | None = None,
 ) -> SquareMove | Blocked | None:
     """``choose_square_push``, and among neighbours a long push stopped short or a push that also moves across.
 
@@ -85,7 +87,11 @@ def plan_square_push(
     or more from its place, so that the correction goes on (None: never): at a coarse threshold
     it would end there, short, and what it corrects (0.2 to 0.35 mm beside the place) is within.
 
-    Every push free: ``choose_square_push``'s choice, as it is.
+    A long push among neighbours (``among_neighbours``: a staged part, whose pushes may all be
+    free; None: some push is blocked), at any threshold, moves the part across onto its target's
+    line, less what squaring it will carry it across (``squaring_shift_mm``, from ``yaw_error_rad``,
+    the part's measured yaw less its target's). Otherwise, every push free: ``choose_square_push``'s
+    choice, as it is.
     """
     choice = choose_square_push(offset_xy_mm, pushes, towards, min_push_mm, turned)
     plain = SquareMove(*choice) if isinstance(choice, tuple) else choice
@@ -94,9 +100,27 @@ def plan_square_push(
     def may_stop_short(reserve_mm: float) -> bool:
         return threshold_mm is not None and reserve_mm >= STOP_SHORT_FACTOR * threshold_mm
 
-    if len(free) == len(pushes) or not free:
+    if not free:
         return plain
+    some_blocked = len(free) < len(pushes)
     offset = np.asarray(offset_xy_mm, dtype=float)
+    if (some_blocked if among_neighbours is None else among_neighbours) and (
+        isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM
+    ):
+        # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
+        # beside it stayed so): they end on the line the layout checked them along. At most
+        # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring. With a
+        # push blocked, at a fine threshold, it stops short, for the next push to close the rest.
+        reserve_mm = APPROACH_RESERVE_MM if some_blocked and may_stop_short(APPROACH_RESERVE_MM) else 0.0
+        push = pushes[plain.name]
+        beside = float(offset @ np.array([-math.sin(push.heading_rad), math.cos(push.heading_rad)]))
+        beside -= squaring_shift_mm(push, yaw_error_rad)
+        distance = plain.distance_mm - reserve_mm
+        limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
+        across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
+        return SquareMove(plain.name, distance, across)
+    if not some_blocked:
+        return plain
     if not may_stop_short(APPROACH_RESERVE_MM):
         # A coarse threshold: what the pushes below correct is mostly within, and the example fresco
         # (0.8 mm) went as before, not better. Only near the target, where the push by the projection
@@ -118,16 +142,6 @@ def plan_square_push(
             if better:
                 return min(better, key=lambda item: item[:2])[2]
         return plain
-    if isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM:
-        # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
-        # beside it stayed so): they end on the line the layout checked them along. At most
-        # LONG_PUSH_MAX_ACROSS_MM: 2 mm across on a piece turned 3.5 deg kept it from squaring.
-        heading = pushes[plain.name].heading_rad
-        beside = float(offset @ np.array([-math.sin(heading), math.cos(heading)]))
-        distance = plain.distance_mm - APPROACH_RESERVE_MM
-        limit = min(DIAGONAL_ACROSS_RATIO * distance, LONG_PUSH_MAX_ACROSS_MM)
-        across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
-        return SquareMove(plain.name, distance, across)
     if float(np.hypot(*offset)) > LONG_PUSH_MM:
         # Between CONE_MAX_OFFSET_MM and here too: a piece turned 2 deg at its set-down ended its long
         # push 2.2 mm short, 0.75 mm beside its line, and its push by the projection met a neighbour.
@@ -151,6 +165,18 @@ def plan_square_push(
     if _free_cone_shares(offset, pushes, free) is not None or not slanted:
         return plain
     return min(slanted, key=lambda item: item[:2])[2]
+
+
+def squaring_shift_mm(push: SquarePush, yaw_error_rad: float) -> float:
+    """How far (mm, to the push's left) a push that squares a part turned ``yaw_error_rad`` carries it across.
+
+    The pads meet the leading corner of the edge first; the part turns square about that corner,
+    which the pads' friction holds, and its centroid, ``back_m`` ahead of the edge, swings across.
+    Measured on the example fresco's long pushes (seed 0): pieces turned -1.33, -1.30, -0.87 and
+    +0.49 deg went 0.62, 0.60, 0.40 and -0.34 mm to the left, 26, 26, 26 and 40 mm times their turn;
+    the edges lie 26.6, 25.8, 25.1 and 39.8 mm behind their centroids.
+    """
+    return -yaw_error_rad * push.back_m * 1000
 
 
 def _left_by(offset: np.ndarray, pushes: dict[str, SquarePush], move: SquareMove) -> np.ndarray:
