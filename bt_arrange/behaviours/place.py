@@ -29,6 +29,7 @@ from bt_arrange.motion import GRIPPER_SYMMETRY_RAD, nearest_symmetric_yaw
 from bt_arrange.numbers import fixed
 from bt_arrange.objects import CUBE, ObjectType
 from bt_arrange.plan.layout import Release
+from bt_arrange.plan.release_room import Settled
 from bt_arrange.ports import BOOL, RELEASE, STRING, Port
 
 
@@ -120,6 +121,8 @@ class Place(StagedBehaviour):
             self.reads(keys.key(obj, keys.HELD_CORRECTION))  # optional: None or absent, no correction
         #: The correction applied to the last placing's TCP pose (TCP frame), or None.
         self.corrected_by: PlanarPose | None = None
+        #: Among neighbours, how the correction's slide along the pads was split to keep them clear, or None.
+        self.settled: Settled | None = None
 
     def stages(self, context: Context) -> list[Stage]:
         """Carry, lower, open, retreat."""
@@ -151,13 +154,16 @@ class Place(StagedBehaviour):
             yaw = nearest_symmetric_yaw(across, wrist_yaw_rad(context), symmetry_rad)
             opening_m = self.release.opening_m
         self.corrected_by = None
+        self.settled = None
         correction_key = keys.key(self.obj, keys.HELD_CORRECTION)
         if self.held and self.where == "target" and self.blackboard.exists(correction_key):
             correction = self.blackboard.get(correction_key)
             if isinstance(correction, PlanarPose):
                 # The part sits in the pads where LookAtHeld measured it: the TCP goes where it puts it at its place.
                 c, s_ = math.cos(yaw), math.sin(yaw)
-                x, y = x + c * correction.x_m - s_ * correction.y_m, y + s_ * correction.x_m + c * correction.y_m
+                dx, dy = c * correction.x_m - s_ * correction.y_m, s_ * correction.x_m + c * correction.y_m
+                dx, dy = self._pads_clear(target.yaw_rad, dx, dy)
+                x, y = x + dx, y + dy
                 yaw += correction.yaw_rad
                 self.corrected_by = correction
         return [
@@ -180,6 +186,24 @@ class Place(StagedBehaviour):
                 hand_on=line_nearly_done(s.hand_on_remaining_m),
             ),
         ]
+
+    def _pads_clear(self, target_yaw_rad: float, dx_m: float, dy_m: float) -> tuple[float, float]:
+        """The correction's TCP shift on the table, its slide along the pads cut short before they meet a neighbour.
+
+        The pads move with the TCP: a part held some millimetres along them from where the pick meant
+        slides them that far along its sides, where the layout did not check them (``release_room``).
+        """
+        room = self.release.room if self.release is not None else None
+        if room is None:
+            return dx_m, dy_m
+        ux, uy = room.along_pads_world(target_yaw_rad)
+        slide_m = dx_m * ux + dy_m * uy
+        settled = room.settle(slide_m)
+        if not settled.kept_off:
+            return dx_m, dy_m
+        self.settled = settled
+        cut_m = settled.tcp_slide_m - slide_m
+        return dx_m + cut_m * ux, dy_m + cut_m * uy
 
     def _free_transfer(self, kind: ObjectType) -> bool:
         """A part without half-turn symmetry placed at its target, free or staged among neighbours.
@@ -221,10 +245,19 @@ class Place(StagedBehaviour):
         """Feedback once released."""
         if self.where == "pick":
             return f"{self.obj} set down where it was picked, to be looked at and picked again"
+        kept = ""
+        if self.settled is not None:
+            # The pads kept off a neighbour: the part lands that much off along them, to be pushed home.
+            kept = (
+                f" (the pads slid {fixed(self.settled.tcp_slide_m * 1000, 1)} mm along it, not "
+                f"{fixed((self.settled.tcp_slide_m - self.settled.part_off_m) * 1000, 1)}, to keep off "
+                f"{' and '.join(self.settled.kept_off)}; it lands {fixed(abs(self.settled.part_off_m) * 1000, 1)} mm "
+                "along them from there)"
+            )
         if self.release is not None and self.release.staged:
             dx, dy = self.release.offset_m
             return (
                 f"{self.obj} released {fixed(dx * 1000, 0, sign=True)}, {fixed(dy * 1000, 0, sign=True)} mm "
-                "from its target, to push home"
+                f"from its target, to push home{kept}"
             )
-        return f"{self.obj} released at its target"
+        return f"{self.obj} released at its target{kept}"

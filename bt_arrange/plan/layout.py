@@ -35,6 +35,7 @@ from bt_arrange.errors import PlanError
 from bt_arrange.plan.footprints import Footprint, Outline, Rect, gap_m, overlap, radius_of
 from bt_arrange.plan.layout_judged import KeptLayouts, blocked, blockers, current_targets, judging
 from bt_arrange.plan.layout_part import DIRECTIONS, Part
+from bt_arrange.plan.release_room import ReleaseRoom, release_pads, release_room
 from bt_arrange.shapes.gripper import ROBOTIQ_2F85, Gripper
 
 if TYPE_CHECKING:
@@ -102,17 +103,6 @@ class Pads:
     def release_opening_m(self, part: Part, axis: str) -> float:
         """How far the pads open to release a part held across ``axis``."""
         return min(self.max_opening_m, 2 * part.grasp_half(axis) + 2 * self.release_gap_m)
-
-
-def release_pads(part: Part, at: Footprint, axis: str, pads: Pads) -> list[Rect]:
-    """The two rectangles the pads sweep holding, lowering and releasing ``part`` at ``at`` across ``axis``."""
-    half = part.grasp_half(axis)
-    cx, cy = part.grasp_centre(axis)
-    depth = pads.release_gap_m + pads.finger_depth_m
-    centre = half + depth / 2
-    if axis == "x":
-        return [at.local(cx + sign * centre, cy, depth / 2, pads.width_m / 2) for sign in (1, -1)]
-    return [at.local(cx, cy + sign * centre, pads.width_m / 2, depth / 2) for sign in (1, -1)]
 
 
 def push_pads(part: Part, at: Footprint, towards: str, distance_m: float, pads: Pads) -> Rect:
@@ -193,6 +183,8 @@ class Release:
     opening_m: float
     offset_m: tuple[float, float] = (0.0, 0.0)
     centre_m: tuple[float, float] = (0.0, 0.0)
+    #: The neighbours as the layout saw them (``release_room``): where the pads may slide along the part.
+    room: ReleaseRoom | None = field(default=None, compare=False, repr=False)
 
     @property
     def staged(self) -> bool:
@@ -538,6 +530,7 @@ def _steps(sequence: Sequence[Part], pads: Pads) -> list[Step]:
     for part in sequence:
         release, _ = choose_release(part, placed, pads)
         assert release is not None
+        release = dataclasses.replace(release, room=release_room(part, release, placed, pads))
         after = [*placed, (part.name, part.footprint)]
         steps.append(
             Step(
