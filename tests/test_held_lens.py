@@ -13,8 +13,9 @@ from bt_arrange.geometry import PlanarPose
 from bt_arrange.objects import ObjectType
 from bt_arrange.paper_cell import camera_pose_world
 from bt_arrange.perception.colours import DEFAULT_COLOUR_TABLE
-from bt_arrange.perception.held import distorted, measure_held, undistorted
+from bt_arrange.perception.held import measure_held
 from bt_arrange.perception.outline_fit import OutlineModel, pixels_on_plane
+from bt_arrange.perception.pose import distorted, undistorted
 from bt_arrange.robot import CameraFrame, CameraIntrinsics, PixelWindow
 from bt_arrange.shapes import Prism
 

@@ -40,6 +40,7 @@ from bt_arrange.perception.pose import (
     project_world,
     solve_face_pose,
     tilt_deg,
+    undistorted,
 )
 from bt_arrange.perception.segmentation import (
     Blob,
@@ -182,12 +183,9 @@ class PartDetector:
             )
         undistort = None
         if any(abs(k) > 0 for k in intrinsics.distortion):
-            camera_matrix, distortion = intrinsics.matrix, np.asarray(intrinsics.distortion, dtype=float)
 
             def undistort(points: FloatArray) -> FloatArray:
-                pts = np.asarray(points, dtype=np.float64).reshape(-1, 1, 2)
-                undistorted = cv2.undistortPoints(pts, camera_matrix, distortion, P=camera_matrix)
-                return np.asarray(undistorted, dtype=np.float64).reshape(-1, 2)
+                return undistorted(intrinsics, np.asarray(points, dtype=np.float64).reshape(-1, 2))
 
         return PreparedView(
             rgb, intrinsics, T_W_C, scale, to_hsv(small), config.min_area_fraction * min(areas), undistort

@@ -37,9 +37,9 @@ from bt_arrange.perception.outline_fit import (
     pixels_on_plane,
     segment_distances,
 )
-from bt_arrange.perception.pose import project_world
+from bt_arrange.perception.pose import distorted, project_world, undistorted
 from bt_arrange.perception.segmentation import colour_mask
-from bt_arrange.robot import CameraFrame, CameraIntrinsics
+from bt_arrange.robot import CameraFrame
 
 #: A pixel whose surface lies this far (m) above the top face is the gripper's or the arm's.
 ABOVE_FACE_M = 0.004
@@ -125,43 +125,6 @@ def outline_points(
         return np.zeros((0, 2)), face, near_hidden
     points = pixels_on_plane(frame.intrinsics, T_W_C, undistorted(frame.intrinsics, pixels.astype(float)), plane_z_m)
     return points[np.isfinite(points).all(axis=1)], face, near_hidden
-
-
-def undistorted(intrinsics: CameraIntrinsics, pixels: FloatArray) -> FloatArray:
-    """Raw image pixels (N x 2) where the pinhole would see them: the lens's distortion taken out.
-
-    A calibrated camera's frames carry its distortion (``CalibratedCamera``). The held look stands
-    0.3 m off the camera's axis, where the calibrated real-cell model's lens moves a pixel 2 to 3 %
-    towards the centre: ignored, a held fresco piece was measured 5.5 to 6.7 mm off towards the axis,
-    and placed that far off.
-    """
-    if not any(abs(k) > 0 for k in intrinsics.distortion) or len(pixels) == 0:
-        return pixels
-    matrix = intrinsics.matrix
-    points = np.asarray(pixels, dtype=np.float64).reshape(-1, 1, 2)
-    pinhole = cv2.undistortPoints(points, matrix, np.asarray(intrinsics.distortion, dtype=float), P=matrix)
-    return np.asarray(pinhole, dtype=np.float64).reshape(-1, 2)
-
-
-def distorted(intrinsics: CameraIntrinsics, pixels: FloatArray) -> FloatArray:
-    """Pinhole pixels (N x 2) where the lens puts them in the raw image (``undistorted``'s inverse)."""
-    if not any(abs(k) > 0 for k in intrinsics.distortion) or len(pixels) == 0:
-        return pixels
-    normalised = np.column_stack(
-        [
-            (pixels[:, 0] - intrinsics.cx_px) / intrinsics.fx_px,
-            (pixels[:, 1] - intrinsics.cy_px) / intrinsics.fy_px,
-            np.ones(len(pixels)),
-        ]
-    )
-    raw, _ = cv2.projectPoints(
-        normalised.reshape(-1, 1, 3),
-        np.zeros(3),
-        np.zeros(3),
-        intrinsics.matrix,
-        np.asarray(intrinsics.distortion, dtype=float),
-    )
-    return np.asarray(raw, dtype=np.float64).reshape(-1, 2)
 
 
 def _fit(points: FloatArray, model: OutlineModel, start: tuple[float, float, float]) -> tuple[float, float, float]:

@@ -311,3 +311,40 @@ if TYPE_CHECKING:
     cube_centre_in_world = part_centre_in_world
 else:
     __getattr__ = renamed_attributes(__name__, {"cube_centre_in_world": "part_centre_in_world"})
+
+
+def undistorted(intrinsics: CameraIntrinsics, pixels: FloatArray) -> FloatArray:
+    """Raw image pixels (N x 2) where the pinhole would see them: the lens's distortion taken out.
+
+    A calibrated camera's frames carry its distortion (``CalibratedCamera``). The held look stands
+    0.3 m off the camera's axis, where the calibrated real-cell model's lens moves a pixel 2 to 3 %
+    towards the centre: ignored, a held fresco piece was measured 5.5 to 6.7 mm off towards the axis,
+    and placed that far off. The detector's edge fit takes its points through it too.
+    """
+    if not any(abs(k) > 0 for k in intrinsics.distortion) or len(pixels) == 0:
+        return pixels
+    matrix = intrinsics.matrix
+    points = np.asarray(pixels, dtype=np.float64).reshape(-1, 1, 2)
+    pinhole = cv2.undistortPoints(points, matrix, np.asarray(intrinsics.distortion, dtype=float), P=matrix)
+    return np.asarray(pinhole, dtype=np.float64).reshape(-1, 2)
+
+
+def distorted(intrinsics: CameraIntrinsics, pixels: FloatArray) -> FloatArray:
+    """Pinhole pixels (N x 2) where the lens puts them in the raw image (``undistorted``'s inverse)."""
+    if not any(abs(k) > 0 for k in intrinsics.distortion) or len(pixels) == 0:
+        return pixels
+    normalised = np.column_stack(
+        [
+            (pixels[:, 0] - intrinsics.cx_px) / intrinsics.fx_px,
+            (pixels[:, 1] - intrinsics.cy_px) / intrinsics.fy_px,
+            np.ones(len(pixels)),
+        ]
+    )
+    raw, _ = cv2.projectPoints(
+        normalised.reshape(-1, 1, 3),
+        np.zeros(3),
+        np.zeros(3),
+        intrinsics.matrix,
+        np.asarray(intrinsics.distortion, dtype=float),
+    )
+    return np.asarray(raw, dtype=np.float64).reshape(-1, 2)
