@@ -43,7 +43,7 @@ LONG_PUSH_MAX_ACROSS_MM = 1.0
 #: blocked push reaches.
 LONG_PUSH_SQUARE_DEG = 1.0
 #: The slant of such a push (across per length along: 0.15 is 8.5 deg, well inside the pads' friction).
-LONG_PUSH_ACROSS_RATIO = 0.15
+LONG_PUSH_ACROSS_RATIO = 0.25
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
 APPROACH_RESERVE_MM = 1.0

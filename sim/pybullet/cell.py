@@ -151,6 +151,8 @@ class WorkCell(CellBase):
         self._recentre_at_width_m: float | None = None
         #: How far (m) re-centring would swing the pad on the grasp offset's side (``end_grasp``).
         self._swing_m = 0.0
+        #: True while a release keeps the grasp's offset until the pads clear the part (``end_grasp``).
+        self.offset_kept = False
         self._joint_index = {
             self.client.getJointInfo(self.robot_id, i)[1].decode(): i
             for i in range(self.client.getNumJoints(self.robot_id))
@@ -204,6 +206,10 @@ class WorkCell(CellBase):
             ):
                 self._set_grasp_offset(0.0)
                 self._recentre_at_width_m = None
+                if self.offset_kept:
+                    # The fingers were sent where the kept offset put them: now to the centred opening.
+                    self.offset_kept = False
+                    self.gripper.retarget()
         self._steps += control_periods * self._substeps
 
     def _apply_friction_field(self) -> None:
@@ -402,6 +408,7 @@ class WorkCell(CellBase):
             return
         sigma_m = self.config.errors.gripper.grasp_offset_sigma_mm / 1000
         self._recentre_at_width_m = None
+        self.offset_kept = False
         self._set_grasp_offset(float(self._grasp_offset_rng.normal(0.0, sigma_m)))
 
     def end_grasp(self, opening_m: float) -> None:
@@ -434,10 +441,21 @@ class WorkCell(CellBase):
         if recentre_at_m >= clear_m:
             self._recentre_at_width_m = recentre_at_m
             return
-        self._recentre_at_width_m = clear_m
+        # Opened narrower than that, the centred fingers would close on the part again: only once clear.
+        self._recentre_at_width_m = clear_m if opening_m >= clear_m else math.inf
         kept_m = min(abs(self.grasp_offset_m), max(0.0, (self.gripper.max_width_m - opening_m) / 2))
         if kept_m < abs(self.grasp_offset_m):
             self._set_grasp_offset(math.copysign(kept_m, self.grasp_offset_m))
+        self.offset_kept = True
+
+    def finger_targets_m(self, opening_m: float) -> tuple[float, float]:
+        """Where each finger (left, right: its pad's distance from the centre) is sent for ``opening_m``.
+
+        Centred, but about the kept offset while a release keeps it (``end_grasp``): sent symmetric,
+        the fingers' position motors fought the gear constraint and crept open past the opening.
+        """
+        offset_m = self.grasp_offset_m if self.offset_kept else 0.0
+        return opening_m / 2 + offset_m, opening_m / 2 - offset_m
 
     #: How far (m) the near pad stays from a released part once the fingers re-centre.
     RECENTRE_CLEARANCE_M = 0.001

@@ -97,3 +97,30 @@ def test_in_the_real_cell_one_diagonal_push_does_what_takes_the_learned_strategy
     assert learned["status"] == diagonal["status"] == "within", (learned["reason"], diagonal["reason"])
     assert diagonal["pushes"] < learned["pushes"], (diagonal["pushes"], learned["pushes"])
     assert diagonal["pushed_truth_mm"] < 0.8
+
+
+def test_a_narrow_release_keeps_the_grasp_offset_until_the_pads_are_clear_and_leaves_the_cube_where_it_lies() -> None:
+    # Among neighbours the pads open a few millimetres only. Re-centred at once there, the pad on the
+    # offset's side swung across by twice the offset into the released part (a fresco piece flung
+    # 18 deg); now the offset stays until that pad is clear of the part.
+    import dataclasses
+
+    from bt_arrange_sim import realcell
+
+    errors = realcell.real()
+    only_gripper = realcell.RealCellErrors(
+        gripper=dataclasses.replace(errors.gripper, finger_offset_sigma_mm=0.0, grasp_offset_sigma_mm=5.0)
+    )
+    cell, _ = _grip_red_cube(CellConfig(errors=only_gripper.with_run_seed(4)))  # a 4.0 mm offset
+    with cell:
+        offset_m = cell.grasp_offset_m
+        assert abs(offset_m) > 0.003, "twice the offset well past the narrow opening's 2 mm a side"
+        before = np.array(cell.part_planar_truth("red")[:2])
+        cell.gripper.open(cell.gripper.width() + 0.004)
+        cell.settle(1.0)
+        moved_mm = float(np.linalg.norm(np.array(cell.part_planar_truth("red")[:2]) - before) * 1000)
+        assert moved_mm < 0.5, moved_mm
+        assert cell.grasp_offset_m == offset_m, "the pads still reach the cube: no re-centring"
+        cell.gripper.open(0.085)
+        cell.settle(1.0)
+        assert cell.grasp_offset_m == 0.0, "wide open, the near pad clears the cube: centred again"
