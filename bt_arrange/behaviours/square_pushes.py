@@ -38,11 +38,11 @@ LONG_PUSH_MM = 3.0
 LONG_PUSH_MAX_ACROSS_MM = 1.0
 #: A part turned less than this (deg) off its target's yaw is moved across by up to
 #: ``LONG_PUSH_ACROSS_RATIO`` of the long push (at least ``LONG_PUSH_MAX_ACROSS_MM``): in the
-#: calibrated real-cell model a piece landed 3.6 mm beside its staging's line; pushed home 32 mm
-#: with 1 mm across, it ended 2.6 mm beside its place, against a neighbour on the side only a
-#: blocked push reaches.
+#: calibrated real-cell model pieces land 4 to 6 mm beside their staging's line; one pushed home
+#: 32 mm with 1 mm across ended 2.6 mm beside its place, with 5 mm across 1.3 mm, each against a
+#: neighbour on the side only a blocked push reaches.
 LONG_PUSH_SQUARE_DEG = 1.0
-#: The slant of such a push (across per length along: 0.15 is 8.5 deg, well inside the pads' friction).
+#: The slant of such a push (across per length along: 0.25 is 14 deg, inside ``DIAGONAL_ACROSS_RATIO``).
 LONG_PUSH_ACROSS_RATIO = 0.25
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
