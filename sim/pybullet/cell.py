@@ -202,7 +202,7 @@ class WorkCell(CellBase):
             for _ in range(self._substeps):
                 step_simulation()
             if self._recentre_at_width_m is not None and (
-                self.gripper.width() >= self._recentre_at_width_m or self._pads_clear_of_parts()
+                self.gripper.width() >= self._recentre_at_width_m or (self.offset_kept and self._pads_clear_of_parts())
             ):
                 self._set_grasp_offset(0.0)
                 self._recentre_at_width_m = None
