@@ -141,12 +141,22 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
         assert Push.plan_square_push((20.0, 0.3), pushes, free, 0.2, False, threshold_mm) == SquareMove(
             names[0], pytest.approx(20.0), pytest.approx(0.3)
         )
-    # At most LONG_PUSH_MAX_ACROSS_MM across on the way.
+    # At most LONG_PUSH_ACROSS_RATIO of the push across on the way for a square part (11 mm: 2.75 mm) ...
     from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM
+    from bt_arrange.behaviours.square_pushes import LONG_PUSH_ACROSS_RATIO, LONG_PUSH_SQUARE_DEG
 
-    assert Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25) == SquareMove(
-        names[0], pytest.approx(12.0 - APPROACH_RESERVE_MM), pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+    distance_mm = 12.0 - APPROACH_RESERVE_MM
+    assert Push.plan_square_push((12.0, -4.0), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(distance_mm), pytest.approx(-LONG_PUSH_ACROSS_RATIO * distance_mm)
     )
+    assert Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25) == SquareMove(
+        names[0], pytest.approx(distance_mm), pytest.approx(-2.0)
+    )
+    # ... and LONG_PUSH_MAX_ACROSS_MM for one turned LONG_PUSH_SQUARE_DEG or more (it must square too).
+    turned_rad = math.radians(LONG_PUSH_SQUARE_DEG)
+    move = Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25, turned_rad)
+    assert isinstance(move, SquareMove) and move.across_mm >= -LONG_PUSH_MAX_ACROSS_MM - 1e-9
+    assert move.across_mm == pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
 
 
 def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:

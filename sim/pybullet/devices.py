@@ -142,9 +142,10 @@ class SimGripper(CellGripper):
         self._polls: tuple[tuple[float, list[float]], ...] = ((-1.0, []), (-1.0, []))
         #: Whether the pads' contacts have friction anchors now (the cell sets them as ``pad_contact`` says).
         self._pads_anchored = cell.config.physics.pad_contact.friction_anchor
+        #: The last opening sent (width, speed), while the fingers hold it; None after a close.
+        self._opening: tuple[float, float] | None = None
 
     def _drive_open(self, width_m: float, speed_m_s: float) -> None:
-        import pybullet
 
         physics = self._cell.config.physics
         held = self._unanchored_contacts()
@@ -154,20 +155,34 @@ class SimGripper(CellGripper):
         self._anchor_pads(physics.pad_contact.friction_anchor and not held)
         if physics.fresh_prism_release_contacts:
             self._refresh_contacts(held)
-        for finger in self._fingers:
+        self._drive_fingers(width_m, speed_m_s)
+
+    def _drive_fingers(self, width_m: float, speed_m_s: float) -> None:
+        """Send each finger where the cell puts it for an opening of ``width_m`` (``finger_targets_m``)."""
+        import pybullet
+
+        physics = self._cell.config.physics
+        self._opening = (width_m, speed_m_s)
+        for finger, target_m in zip(self._fingers, self._cell.finger_targets_m(width_m), strict=True):
             self._client.setJointMotorControl2(
                 self._body,
                 finger,
                 pybullet.POSITION_CONTROL,
-                targetPosition=width_m / 2,
+                targetPosition=target_m,
                 maxVelocity=speed_m_s / 2,
                 force=physics.finger_open_force_n,
                 positionGain=physics.finger_position_gain,
             )
 
+    def retarget(self) -> None:
+        """Send the fingers of the last opening again where the cell now puts them (re-centred)."""
+        if self._opening is not None:
+            self._drive_fingers(*self._opening)
+
     def _drive_close(self, force_n: float, speed_m_s: float) -> None:
         import pybullet
 
+        self._opening = None
         self._anchor_pads(self._cell.config.physics.pad_contact.friction_anchor)
         for finger in self._fingers:
             self._client.setJointMotorControl2(

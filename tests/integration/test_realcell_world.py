@@ -97,3 +97,43 @@ def test_in_the_real_cell_one_diagonal_push_does_what_takes_the_learned_strategy
     assert learned["status"] == diagonal["status"] == "within", (learned["reason"], diagonal["reason"])
     assert diagonal["pushes"] < learned["pushes"], (diagonal["pushes"], learned["pushes"])
     assert diagonal["pushed_truth_mm"] < 0.8
+
+
+def test_a_narrow_release_of_a_prism_keeps_the_grasp_offset_until_the_pads_are_clear() -> None:
+    # Among neighbours the pads open a few millimetres only. Re-centred at once there, the pad on the
+    # offset's side swung across by twice the offset into the released part (a fresco piece flung
+    # 18 deg); now the offset stays until that pad is clear of the part, which stays where it lies.
+    import dataclasses
+
+    from bt_arrange.motion import gripper_down_pose
+    from bt_arrange.objects import ObjectType
+    from bt_arrange.shapes import Prism
+    from bt_arrange_sim import realcell
+
+    errors = realcell.real()
+    only_gripper = realcell.RealCellErrors(
+        gripper=dataclasses.replace(errors.gripper, finger_offset_sigma_mm=0.0, grasp_offset_sigma_mm=5.0)
+    )
+    # A five-sided prism 50 mm across the pads (a box's release is as it was: Table 1's real column).
+    outline = [[-0.025, -0.02], [0.025, -0.02], [0.025, 0.02], [0.0, 0.03], [-0.025, 0.02]]
+    pentagon = ObjectType("pentagon", shape=Prism.from_outline(outline, 0.05))
+    with WorkCell(CellConfig(errors=only_gripper.with_run_seed(4))) as cell:  # a 4.0 mm offset
+        cell.arm.reset(ArmKinematics().inverse(gripper_down_pose(0.5, 0.0, 0.025), HOME_Q))
+        tcp = cell.arm.tcp_pose()
+        closing = tcp.rotation[:, 0]
+        x, y = float(tcp.position_m[0]), float(tcp.position_m[1])
+        cell.add_object(pentagon, "red", x, y, yaw_rad=float(np.arctan2(closing[1], closing[0])), name="pentagon")
+        cell.settle(0.2)
+        cell.gripper.close(40.0)
+        cell.settle(1.0)
+        offset_m = cell.grasp_offset_m
+        assert abs(offset_m) > 0.003, "twice the offset well past the narrow opening's 2 mm a side"
+        before = np.array(cell.part_planar_truth("pentagon")[:2])
+        cell.gripper.open(cell.gripper.width() + 0.004)
+        cell.settle(1.0)
+        moved_mm = float(np.linalg.norm(np.array(cell.part_planar_truth("pentagon")[:2]) - before) * 1000)
+        assert moved_mm < 0.5, moved_mm
+        assert cell.grasp_offset_m == offset_m, "the pads still reach the part: no re-centring"
+        cell.gripper.open(0.085)
+        cell.settle(1.0)
+        assert cell.grasp_offset_m == 0.0, "wide open, the near pad clears the part: centred again"
