@@ -146,7 +146,6 @@ class SimGripper(CellGripper):
         self._opening: tuple[float, float] | None = None
 
     def _drive_open(self, width_m: float, speed_m_s: float) -> None:
-
         physics = self._cell.config.physics
         held = self._unanchored_contacts()
         # The pads' friction anchors pin a held prism; opening, they pinned a stale contact point of its
