@@ -7,6 +7,7 @@ Inspect, with the fallbacks a part among neighbours or a free part that stalls n
 
 from __future__ import annotations
 
+import functools
 import operator
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -199,9 +200,9 @@ def _correction(
     # rather than spending the rest of its pushes. Among neighbours the release and the
     # sides to push from are the layout's: there the loop keeps its pushes.
     free = towards is None and not restage and not move_aside
-    loop = RepeatUntilWithin(
-        name=f"correct {obj} to {threshold_mm:g} mm{label}",
-        child=push_and_look,
+    # What the loop and the loop after placing again share: the part's offset, corrections and yaw keys.
+    correction_loop = functools.partial(
+        RepeatUntilWithin,
         offset_key=keys.key(obj, keys.OFFSET_MM),
         threshold_mm=threshold_mm,
         max_attempts=max_pushes,
@@ -209,14 +210,18 @@ def _correction(
         obj=obj,
         yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
         yaw_threshold_deg=yaw_threshold_deg,
-        stall_after=STALL_AFTER_PUSHES if free else 0,
         margins=margins,
+    )
+    loop = correction_loop(
+        name=f"correct {obj} to {threshold_mm:g} mm{label}",
+        child=push_and_look,
+        stall_after=STALL_AFTER_PUSHES if free else 0,
         release_again=bool(restage),
     )
     if not free:
         return loop
     kind = target.object_type
-    again = RepeatUntilWithin(
+    again = correction_loop(
         name=f"correct {obj} to {threshold_mm:g} mm after placing it again{label}",
         child=py_trees.composites.Sequence(
             name=f"push and inspect {obj} after placing it again{label}",
@@ -228,15 +233,7 @@ def _correction(
                 inspect(target, f"inspect {obj} after pushing it again{label}", kind_targets=kind_targets),
             ],
         ),
-        offset_key=keys.key(obj, keys.OFFSET_MM),
-        threshold_mm=threshold_mm,
-        max_attempts=max_pushes,
-        corrections_key=keys.key(obj, keys.CORRECTIONS) if count else None,
-        obj=obj,
-        yaw_key=keys.key(obj, keys.YAW_ERROR_DEG),
-        yaw_threshold_deg=yaw_threshold_deg,
         accumulate=True,
-        margins=margins,
     )
     place_again = py_trees.composites.Sequence(
         name=f"place {obj} again when its pushes stall{label}",
