@@ -12,13 +12,7 @@ from bt_arrange.behaviours import stages as stage
 from bt_arrange.behaviours.base import GripperStage, InstantStage, MoveStage, Stage, StagedBehaviour
 from bt_arrange.behaviours.common_ports import OBJ, OBJECT_TYPE_PORT, Z_PORT, entries
 from bt_arrange.behaviours.context import Context
-from bt_arrange.behaviours.moves import (
-    heights_m,
-    line_nearly_done,
-    line_to,
-    to_pose,
-    wrist_yaw_rad,
-)
+from bt_arrange.behaviours.moves import heights_m, line_nearly_done, line_to, to_pose, wrist_yaw_rad
 from bt_arrange.behaviours.square_pushes import (  # noqa: F401 - re-exported: Push's figures and verdicts
     APPROACH_RESERVE_MM,
     CONE_MAX_OFFSET_MM,
@@ -297,11 +291,13 @@ class Push(StagedBehaviour):
         push_stage: str,
         gentle: bool = False,
         via: FloatArray | None = None,
+        lift_away: bool = False,
     ) -> list[Stage]:
         """The push's stages: open, go behind the part, lower, push, back off, lift (every push's).
 
         ``via``: the pads go there first, straight and at the push's speed, and push from there (a
-        push that also moves the part across).
+        push that also moves the part across). ``lift_away``: back off and lift in one slanted line
+        (a square push on the table; the paper's pushes of cuboids keep its back-off, then lift).
         """
         approach_m, push_m = heights
         run_in: list[Stage] = []
@@ -315,7 +311,7 @@ class Push(StagedBehaviour):
             MoveStage(stage.LOWER_FINGERS, line_to(begin[0], begin[1], push_m, yaw, free=True)),
             *run_in,
             MoveStage(push_stage, line_to(end[0], end[1], push_m, yaw, pushing=True, gentle=gentle)),
-            MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True)),
+            *([] if lift_away else [MoveStage(stage.BACK_OFF, line_to(back[0], back[1], push_m, yaw, free=True))]),
             MoveStage(
                 stage.LIFT_FINGERS,
                 line_to(back[0], back[1], approach_m, yaw, free=True),
@@ -405,6 +401,8 @@ class Push(StagedBehaviour):
             stage.push(distance_m, name),
             gentle=self.z_m > 0.0,
             via=via,
+            # Above the pads' swept line, clear of neighbours: 0.21 s a push less on the example fresco.
+            lift_away=self.z_m == 0.0,
         )
 
     def _along(self, offset_xy_mm: tuple[float, float], name: str) -> float:

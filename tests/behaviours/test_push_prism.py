@@ -166,3 +166,23 @@ def test_a_long_push_of_a_turned_part_ends_where_its_squared_edge_belongs_in_one
     pushing = path[: deepest + 1]
     slope = (pushing[-1, 1] - pushing[0, 1]) / (pushing[-1, 0] - pushing[0, 0])
     np.testing.assert_allclose(pushing[:, 1], pushing[0, 1] + slope * (pushing[:, 0] - pushing[0, 0]), atol=1e-6)
+
+
+def test_a_square_push_on_the_table_leaves_the_edge_back_and_up_in_one_line(context: Context) -> None:
+    push = setup(context, TRIANGLE, (3.0, 0.4))
+    run = tick_until_done(push, context)
+    assert run.status == Status.SUCCESS, run.feedback
+    arm = fake_arm(context)
+    tcp = np.array([arm.tcp_pose_at(c.positions_rad).position_m for c in arm.commands]) - [*CENTRE, 0.0]
+    end = int(np.argmax(tcp[:, 0]))  # the push along +x ends furthest along it
+    push_z = tcp[end, 2]
+    leaving = tcp[end + 1 :] - tcp[end]
+    # No setpoint backs off at the push's height: from the first one on, the pads are behind the edge
+    # and above where they pushed, on one line to the push clearance behind the end.
+    assert len(leaving) > 5
+    assert np.all(leaving[:, 0] < 0.0) and np.all(leaving[:, 2] > 0.0)
+    slope = leaving[-1, 0] / leaving[-1, 2]
+    np.testing.assert_allclose(leaving[:, 0], slope * leaving[:, 2], atol=1e-6)
+    np.testing.assert_allclose(leaving[:, 1], 0.0, atol=1e-6)
+    lifted_m = SETTINGS.push_clearance_m / abs(slope)
+    assert leaving[-1, 2] <= lifted_m + 1e-6 and tcp[end + 1 :, 2].max() > push_z + 0.01
