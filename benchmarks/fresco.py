@@ -16,7 +16,8 @@ With ``--threshold-mm`` (and ``--yaw-threshold-deg``) the plan is run to that th
 piece counts as within by truth under it (gaps down to 0.5 mm at 0.25 mm). ``--cell`` and
 ``--calibration`` build the cell as ``bt-arrange run --cell real --calibration FILE`` does (a real
 cell's per-run errors drawn from the seed); ``within_run_threshold`` counts the pieces within the
-thresholds the plan ran to (its own 0.8 mm and 0.8 deg without ``--threshold-mm``).
+thresholds the plan ran to (its own 0.8 mm and 0.8 deg without ``--threshold-mm``). A seed whose
+fracture no order and approach builds is its own JSON line (``plan_error``), and the seeds go on.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import time
 from pathlib import Path
 
 from bt_arrange import backends, treefile
-from bt_arrange.errors import BtArrangeError
+from bt_arrange.errors import BtArrangeError, PlanError
 from bt_arrange.plan.layout import Outline, gap_m
 from bt_arrange.shapes import Prism
 
@@ -83,9 +84,13 @@ def run_once(
             path.write_text(plan_text(seed, pieces, gap_mm, threshold_mm, yaw_threshold_deg))
         else:
             path.write_text(plan_text(seed, pieces, gap_mm))
-        module = treefile.load(path)
-        # The pieces are scattered through the backend that runs them, as `bt-arrange run` does.
-        root, scene = treefile.build_root(module), treefile.scene(module, seed, backend=backend)
+        try:
+            module = treefile.load(path)
+            # The pieces are scattered through the backend that runs them, as `bt-arrange run` does.
+            root, scene = treefile.build_root(module), treefile.scene(module, seed, backend=backend)
+        except PlanError as error:
+            # A fracture no order and approach builds is this seed's outcome, not the campaign's end.
+            return {"seed": seed, "pieces": pieces, "gap_mm": gap_mm, "plan_error": str(error)}
     start = time.perf_counter()
     # Only a non-default cell is passed on, its per-run errors seeded by the run's seed: as `bt-arrange run`.
     options = {"cell": cell, "run_seed": seed} if cell != "ideal" else {}
@@ -191,7 +196,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.yaw_threshold_deg is not None
         else (args.threshold_mm if run_threshold else YAW_THRESHOLD_DEG)
     )
-    runs = []
+    runs: list[dict] = []
+    unbuilt: list[int] = []
     for seed in args.seeds:
         try:
             result = run_once(
@@ -211,12 +217,19 @@ def main(argv: list[str] | None = None) -> int:
             # A bad cell file or calibration: one line, as `bt-arrange run` says it.
             print(f"fresco.py: error: {error}", file=sys.stderr)
             return 2
-        runs.append(result)
+        if "plan_error" in result:
+            unbuilt.append(seed)
+        else:
+            runs.append(result)
         line = json.dumps(result)
         print(line, flush=True)
         if args.out:
             with args.out.open("a") as out:
                 out.write(line + "\n")
+    unbuilt_note = f"; no plan built at seed {', '.join(map(str, unbuilt))}" if unbuilt else ""
+    if not runs:
+        print(f"gap {args.gap_mm:g} mm: nothing run{unbuilt_note}")
+        return 0
     within = sum(r["within"] for r in runs)
     by_camera = sum(r["within_by_camera"] for r in runs)
     within_ran = sum(r["within_run_threshold"] for r in runs)
@@ -227,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         f"({by_camera} confirmed by the camera; {within_ran} within the thresholds run to); "
         f"smallest gap at the end {min(r['min_gap_truth_mm'] for r in runs):.2f} mm (0: touching); "
         f"most a later step moved a piece {max(r['max_moved_by_later_truth_mm'] for r in runs):.2f} mm "
-        f"(limit {args.moved_limit_mm:g}); inject {args.inject or 'none'}; cell {args.cell}"
+        f"(limit {args.moved_limit_mm:g}); inject {args.inject or 'none'}; cell {args.cell}{unbuilt_note}"
     )
     return 0
 

@@ -58,3 +58,40 @@ def test_the_run_gets_the_cell_its_seed_and_the_calibration(fresco, monkeypatch,
     with pytest.raises(Opened):
         fresco.run_once(3, 3, 2.0, None, 100)
     assert opened == [{"cell": "real", "run_seed": 3, "calibration": camera}, {}]
+
+
+def test_a_seed_whose_fracture_cannot_be_built_is_its_own_line_and_the_seeds_go_on(fresco, monkeypatch, capsys) -> None:
+    def run_once(seed: int, *args: Any, **options: Any) -> dict:
+        if seed == 8:
+            return {"seed": 8, "pieces": 5, "gap_mm": 2.0, "plan_error": "no order and approach builds this plan"}
+        return {
+            "seed": seed,
+            "pieces": 5,
+            "within": 5,
+            "within_by_camera": 4,
+            "within_run_threshold": 5,
+            "min_gap_truth_mm": 1.2,
+            "max_moved_by_later_truth_mm": 0.01,
+        }
+
+    monkeypatch.setattr(fresco, "run_once", run_once)
+    assert fresco.main(["--pieces", "5", "--seeds", "7", "8", "9"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [line.split(",")[0] for line in lines[:3]] == ['{"seed": 7', '{"seed": 8', '{"seed": 9']
+    assert '"plan_error": "no order and approach builds this plan"' in lines[1]
+    assert lines[-1].startswith("gap 2 mm: 10 of 10 pieces within 1 mm and 1 deg by ground truth (8 confirmed")
+    assert lines[-1].endswith("; no plan built at seed 8")
+
+
+def test_a_plan_error_building_the_fracture_is_returned_not_raised(fresco, monkeypatch) -> None:
+    def unbuildable(path: Path) -> None:
+        raise fresco.PlanError("no order and approach builds this plan (in any order): tile 2 has no room")
+
+    monkeypatch.setattr(fresco.treefile, "load", unbuildable)
+    result = fresco.run_once(8, 5, 2.0, None, 100)
+    assert result == {
+        "seed": 8,
+        "pieces": 5,
+        "gap_mm": 2.0,
+        "plan_error": "no order and approach builds this plan (in any order): tile 2 has no room",
+    }

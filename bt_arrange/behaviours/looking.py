@@ -116,6 +116,7 @@ def look(
     choose: Chooser | None = None,
     z_m: float = 0.0,
     frames: list[CameraFrame] | None = None,
+    near_m: float | None = None,
 ) -> Detection:
     """Find the part of ``colour``, rendering (or reading out) only the pixels a detection needs.
 
@@ -128,7 +129,9 @@ def look(
        full frame, whose outcome and reason stand.
 
     ``object_type`` (default the cube) sets the size the detector expects; ``z_m`` (a raised part's
-    bottom face above the table) the plane its top face is measured on. A window shows the
+    bottom face above the table) the plane its top face is measured on. ``near_m``: the search of
+    step 2 counts only the blobs within that distance of ``expected_xy_m`` (a part looked at again
+    where it was placed is not one of its colour found elsewhere). A window shows the
     pixels the full frame has there, so a window's detection is the full frame's (docs/perception.md).
     """
     camera = context.robot.camera
@@ -159,6 +162,18 @@ def look(
         window = PixelWindow.full(camera.intrinsics, binning) if binned else None
         search = capture(window)
         located = detector.locate(search, colour)
+        if near_m is not None and expected_xy_m is not None:
+            near = tuple(xy for xy in located if math.dist(xy, expected_xy_m) <= near_m)
+            if located and not near:
+                count = len(located)
+                return Detection(
+                    colour,
+                    DetectionStatus.NOT_FOUND,
+                    f"none within {near_m * 1000:.0f} mm of ({expected_xy_m[0]:.3f}, {expected_xy_m[1]:.3f}) m, "
+                    f"{count} {colour} {'blob' if count == 1 else 'blobs'} farther off",
+                    candidates_xy_m=located,
+                )
+            located = near
         if len(located) > 1 and choose is not None:
             chosen, reason = choose(located)
             if chosen is None:
@@ -305,6 +320,10 @@ class Detect(StagedBehaviour):
         """Where the part should be, to look there first; None: search the whole view."""
         return None
 
+    def search_near_m(self) -> float | None:
+        """How far from ``expected_xy_m`` the whole view's search may find the part (m); None: anywhere."""
+        return None
+
     def own_target(self) -> PlanarPose | None:
         """The object's target, when the tree has set it."""
         target_key = keys.key(self.obj, keys.TARGET)
@@ -329,7 +348,16 @@ class Detect(StagedBehaviour):
     def _look(self, context: Context) -> str | None:
         chooser = self.choose if self.kind_targets else None
         frames: list[CameraFrame] | None = [] if self.alone else None
-        detection = look(context, self.colour, self.expected_xy_m(), self.object_type, chooser, self.z_m, frames=frames)
+        detection = look(
+            context,
+            self.colour,
+            self.expected_xy_m(),
+            self.object_type,
+            chooser,
+            self.z_m,
+            frames=frames,
+            near_m=self.search_near_m(),
+        )
         if self.alone:
             # Only a blob of several parts of the colour (AMBIGUOUS) may be touching parts; a part not
             # found, or partly covered, is no business of ``Separate``.
@@ -519,6 +547,15 @@ class Recheck(Inspect):
         self.writes(keys.key(obj, keys.MOVED_MM), keys.key(obj, keys.MAX_MOVED_MM))
         self.moved_mm: float | None = None
         self._before: Pose | None = None
+
+    def search_near_m(self) -> float | None:
+        """The part's own size: a neighbour's step may shove it, not carry it off.
+
+        Not in the window at its target (its face merged with the new neighbour's), a placed part is
+        not another blob of its colour farther off whose outline fits: a 6-piece puzzle (seed 8) so
+        "found" a piece 163 mm away, still where it was scattered, and pushed it 123 mm through the others.
+        """
+        return max(self.object_type.shape.extent_m)
 
     def on_found(self, pose: Pose) -> None:
         """Compare with the pose it had when last looked at, then as Inspect."""

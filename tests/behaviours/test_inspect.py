@@ -8,8 +8,10 @@ import pytest
 from behaviour_helpers import cube_pose, exists, read, set_up, write
 from py_trees.common import Status
 
-from bt_arrange.behaviours import Inspect, offset_in_target_frame_mm
+from bt_arrange.behaviours import Inspect, Recheck, offset_in_target_frame_mm
 from bt_arrange.geometry import PlanarPose, Pose
+from bt_arrange.objects import ObjectType
+from bt_arrange.shapes import Prism
 from bt_arrange.testing import fake_camera, make_context, part, tick_until_done
 
 # -- Inspect -------------------------------------------------------------------------------------
@@ -100,3 +102,29 @@ def test_a_detection_in_a_window_is_the_full_frames(clock) -> None:
     assert (
         1000 * math.hypot(in_full.planar.x_m - in_window.planar.x_m, in_full.planar.y_m - in_window.planar.y_m) < 0.01
     )
+
+
+# -- Recheck: a placed part looked at again ------------------------------------------------------
+
+TRIANGLE = ObjectType("triangle", shape=Prism.from_outline([[0, 0], [0.06, 0], [0, 0.06]], 0.02))
+
+
+@pytest.mark.parametrize("behaviour", [Inspect, Recheck])
+def test_away_from_its_target_only_inspect_takes_the_one_blob_of_its_colour_whose_outline_fits(
+    clock, behaviour: type[Inspect]
+) -> None:
+    # A red triangle far from its target and a red cube elsewhere: Inspect tells them apart by outline
+    # and finds the triangle; a Recheck (of a part placed there, its face merged with a new neighbour's
+    # in a real run) takes no part of its colour farther off than its own size, and fails saying so.
+    parts = [part("red", 0.62, -0.2, 0.3, object_type=TRIANGLE), part("red", 0.4, 0.15)]
+    context = make_context(clock=clock, parts=parts)
+    write({"/red/target": PlanarPose(0.5, 0.0)})
+    run = tick_until_done(set_up(behaviour("look at red", "red", object_type=TRIANGLE), context), context)
+    if behaviour is Inspect:
+        assert run.status == Status.SUCCESS, run.feedback
+        pose = read("/red/pose")
+        assert 1000 * math.hypot(pose.x_m - 0.62, pose.y_m + 0.2) < 1.0
+    else:
+        assert run.status == Status.FAILURE
+        assert run.feedback == "red not_found: none within 80 mm of (0.500, 0.000) m, 2 red blobs farther off"
+        assert not exists("/red/pose")
