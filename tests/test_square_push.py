@@ -143,7 +143,7 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
         )
     # At most LONG_PUSH_ACROSS_RATIO of the push across on the way for a square part (11 mm: 2.75 mm) ...
     from bt_arrange.behaviours.push import LONG_PUSH_MAX_ACROSS_MM
-    from bt_arrange.behaviours.square_pushes import LONG_PUSH_ACROSS_RATIO, LONG_PUSH_SQUARE_DEG
+    from bt_arrange.behaviours.square_pushes import LONG_PUSH_ACROSS_RATIO
 
     distance_mm = 12.0 - APPROACH_RESERVE_MM
     assert Push.plan_square_push((12.0, -4.0), pushes, free, 0.2, False, 0.25) == SquareMove(
@@ -152,11 +152,14 @@ def test_among_neighbours_a_long_push_stops_short_of_the_target() -> None:
     assert Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25) == SquareMove(
         names[0], pytest.approx(distance_mm), pytest.approx(-2.0)
     )
-    # ... and LONG_PUSH_MAX_ACROSS_MM for one turned LONG_PUSH_SQUARE_DEG or more (it must square too).
-    turned_rad = math.radians(LONG_PUSH_SQUARE_DEG)
-    move = Push.plan_square_push((12.0, -2.0), pushes, free, 0.2, False, 0.25, turned_rad)
-    assert isinstance(move, SquareMove) and move.across_mm >= -LONG_PUSH_MAX_ACROSS_MM - 1e-9
-    assert move.across_mm == pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+    # ... as much for a turned one (it squares on the way), less the swing its squaring predicts ...
+    turned_rad = math.radians(2.0)
+    move = Push.plan_square_push((12.0, -4.0), pushes, free, 0.2, False, 0.25, turned_rad)
+    assert isinstance(move, SquareMove)
+    assert move.across_mm == pytest.approx(-LONG_PUSH_ACROSS_RATIO * distance_mm)
+    # ... and at least LONG_PUSH_MAX_ACROSS_MM on a short one.
+    move = Push.plan_square_push((3.5, -2.0), pushes, free, 0.2, False, None, turned_rad)
+    assert isinstance(move, SquareMove) and move.across_mm == pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
 
 
 def test_among_neighbours_an_offset_no_two_free_pushes_close_is_closed_by_a_push_that_also_moves_across() -> None:
@@ -302,13 +305,15 @@ def test_a_long_push_among_neighbours_takes_away_what_squaring_the_part_carries_
     assert Push.plan_square_push((15.0, 0.0), pushes, free, 0.05, False, 0.8, turn_rad) == SquareMove(
         names[0], pytest.approx(15.0), pytest.approx(-swing_mm)
     )
-    # The swing the other way cancels what lies beside; never more than LONG_PUSH_MAX_ACROSS_MM across.
+    # The swing the other way cancels what lies beside; the same way, it adds to it (a turned part too
+    # is moved across by up to a quarter of the push, not held to LONG_PUSH_MAX_ACROSS_MM).
     assert Push.plan_square_push((15.0, -swing_mm), pushes, free, 0.05, False, 0.8, -turn_rad) == SquareMove(
         names[0], pytest.approx(15.0)
     )
     assert Push.plan_square_push((15.0, -1.0), pushes, free, 0.05, False, 0.8, turn_rad) == SquareMove(
-        names[0], pytest.approx(15.0), pytest.approx(-LONG_PUSH_MAX_ACROSS_MM)
+        names[0], pytest.approx(15.0), pytest.approx(-1.0 - swing_mm)
     )
+    assert 1.0 + swing_mm > LONG_PUSH_MAX_ACROSS_MM
     # A staged part whose pushes are all free is among neighbours too (Push passes it: its opening was
     # given); a part placed free is pushed as before, the whole way by the projection.
     every = tuple(pushes)

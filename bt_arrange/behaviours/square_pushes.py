@@ -34,15 +34,15 @@ CONE_MAX_TRAVEL_RATIO = 4.0
 #: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
 #: it about the pads), on a side only a blocked push reaches.
 LONG_PUSH_MM = 3.0
-#: The most a long push among neighbours moves a turned part across on its way (mm).
+#: The least a long push among neighbours may move a part across on its way (mm).
 LONG_PUSH_MAX_ACROSS_MM = 1.0
-#: A part turned less than this (deg) off its target's yaw is moved across by up to
-#: ``LONG_PUSH_ACROSS_RATIO`` of the long push (at least ``LONG_PUSH_MAX_ACROSS_MM``): in the
-#: calibrated real-cell model pieces land 4 to 6 mm beside their staging's line; one pushed home
-#: 32 mm with 1 mm across ended 2.6 mm beside its place, with 5 mm across 1.3 mm, each against a
-#: neighbour on the side only a blocked push reaches.
-LONG_PUSH_SQUARE_DEG = 1.0
-#: The slant of such a push (across per length along: 0.25 is 14 deg, inside ``DIAGONAL_ACROSS_RATIO``).
+#: A long push moves the part across by up to this much of its length (at least
+#: ``LONG_PUSH_MAX_ACROSS_MM``; 0.25 is 14 deg, inside ``DIAGONAL_ACROSS_RATIO``), however turned:
+#: in the calibrated real-cell model pieces land 4 to 6 mm beside their staging's line, and one pushed
+#: home 32 mm with 1 mm across ended 2.6 mm beside its place, against a neighbour on the side only a
+#: blocked push reaches. Measured in the ideal cell (three fresco tiles, 20 mm pushes, turned 0.5 to
+#: 3.5 deg, 1 to 4 mm beside; ``docs/motion.md``): every one squared and ended within 0.55 mm, against
+#: up to 4.3 mm beside with the 1 mm a turned part was held to before.
 LONG_PUSH_ACROSS_RATIO = 0.25
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
@@ -65,14 +65,13 @@ SLANT_RUN_IN_MM = 1.0
 SQUARING_PRESS_MM = 0.3
 
 
-def long_push_across_limit_mm(distance_mm: float, yaw_error_rad: float) -> float:
+def long_push_across_limit_mm(distance_mm: float, yaw_error_rad: float = 0.0) -> float:
     """The most a long push among neighbours of ``distance_mm`` moves the part across (before the friction cone).
 
-    ``LONG_PUSH_MAX_ACROSS_MM`` for a part turned ``LONG_PUSH_SQUARE_DEG`` or more (2 mm across on a
-    piece turned 3.5 deg kept it from squaring); a squarer one ``LONG_PUSH_ACROSS_RATIO`` of the push.
+    ``LONG_PUSH_ACROSS_RATIO`` of the push, at least ``LONG_PUSH_MAX_ACROSS_MM``, whatever the part's
+    turn ``yaw_error_rad`` (the push squares it on the way: the swing it predicts is taken off
+    beforehand, ``squaring_shift_mm``).
     """
-    if abs(math.degrees(yaw_error_rad)) >= LONG_PUSH_SQUARE_DEG:
-        return LONG_PUSH_MAX_ACROSS_MM
     return max(LONG_PUSH_MAX_ACROSS_MM, LONG_PUSH_ACROSS_RATIO * distance_mm)
 
 
@@ -127,9 +126,9 @@ def plan_square_push(
         isinstance(plain, SquareMove) and plain.distance_mm > LONG_PUSH_MM
     ):
         # On the way home the pads also bring the part onto its place's line (a set-down 0.7 mm
-        # beside it stayed so): they end on the line the layout checked them along. At most
-        # long_push_across_limit_mm: 2 mm across on a piece turned 3.5 deg kept it from squaring. With a
-        # push blocked, at a fine threshold, it stops short, for the next push to close the rest.
+        # beside it stayed so): they end on the line the layout checked them along, at most
+        # long_push_across_limit_mm. With a push blocked, at a fine threshold, it stops short, for
+        # the next push to close the rest.
         reserve_mm = APPROACH_RESERVE_MM if some_blocked and may_stop_short(APPROACH_RESERVE_MM) else 0.0
         push = pushes[plain.name]
         beside = float(offset @ np.array([-math.sin(push.heading_rad), math.cos(push.heading_rad)]))
