@@ -34,15 +34,16 @@ CONE_MAX_TRAVEL_RATIO = 4.0
 #: Pushed all the way, the part landed 0.2 to 0.35 mm beside its place (the squaring contact turns
 #: it about the pads), on a side only a blocked push reaches.
 LONG_PUSH_MM = 3.0
-#: The least a long push among neighbours may move a part across on its way (mm).
+#: The least a long push among neighbours may move a part across on its way (mm; named when it
+#: was the most for a turned part).
 LONG_PUSH_MAX_ACROSS_MM = 1.0
 #: A long push moves the part across by up to this much of its length (at least
 #: ``LONG_PUSH_MAX_ACROSS_MM``; 0.25 is 14 deg, inside ``DIAGONAL_ACROSS_RATIO``), however turned:
 #: in the calibrated real-cell model pieces land 4 to 6 mm beside their staging's line, and one pushed
 #: home 32 mm with 1 mm across ended 2.6 mm beside its place, against a neighbour on the side only a
-#: blocked push reaches. Measured in the ideal cell (three fresco tiles, 20 mm pushes, turned 0.5 to
-#: 3.5 deg, 1 to 4 mm beside; ``docs/motion.md``): every one squared and ended within 0.55 mm, against
-#: up to 4.3 mm beside with the 1 mm a turned part was held to before.
+#: blocked push reaches. ``benchmarks/long_push.py`` (three fresco tiles, 20 mm pushes, turned 0.5
+#: to 3 deg, 1 to 4 mm beside): every piece squared, 118 of 120 within 0.5 mm (the others 0.55 and
+#: 0.66 mm); held to 1 mm across, as a turned part was before, 10 of 40 (up to 4.3 mm off).
 LONG_PUSH_ACROSS_RATIO = 0.25
 #: How far short of the target a long push among neighbours stops (mm): enough along the push for
 #: ``DIAGONAL_ACROSS_RATIO`` of it to carry the part across by what the long push left beside it.
