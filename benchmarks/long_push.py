@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.across_limit_mm is not None:
         held_mm = args.across_limit_mm
-        square_pushes.long_push_across_limit_mm = lambda distance_mm, yaw_error_rad=0.0: held_mm
+        square_pushes.long_push_across_limit_mm = lambda distance_mm: held_mm
     landed = total = 0
     for index in args.tiles:
         kind = tile_type(index)

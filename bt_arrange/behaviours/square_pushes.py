@@ -66,12 +66,12 @@ SLANT_RUN_IN_MM = 1.0
 SQUARING_PRESS_MM = 0.3
 
 
-def long_push_across_limit_mm(distance_mm: float, yaw_error_rad: float = 0.0) -> float:
+def long_push_across_limit_mm(distance_mm: float) -> float:
     """The most a long push among neighbours of ``distance_mm`` moves the part across (before the friction cone).
 
     ``LONG_PUSH_ACROSS_RATIO`` of the push, at least ``LONG_PUSH_MAX_ACROSS_MM``, whatever the part's
-    turn ``yaw_error_rad`` (the push squares it on the way: the swing it predicts is taken off
-    beforehand, ``squaring_shift_mm``).
+    turn (the push squares it on the way: the swing it predicts is taken off beforehand,
+    ``squaring_shift_mm``).
     """
     return max(LONG_PUSH_MAX_ACROSS_MM, LONG_PUSH_ACROSS_RATIO * distance_mm)
 
@@ -135,7 +135,7 @@ def plan_square_push(
         beside = float(offset @ np.array([-math.sin(push.heading_rad), math.cos(push.heading_rad)]))
         beside -= squaring_shift_mm(push, yaw_error_rad)
         distance = plain.distance_mm - reserve_mm
-        limit = min(DIAGONAL_ACROSS_RATIO * distance, long_push_across_limit_mm(distance, yaw_error_rad))
+        limit = min(DIAGONAL_ACROSS_RATIO * distance, long_push_across_limit_mm(distance))
         across = max(-limit, min(limit, beside)) if abs(beside) >= min_push_mm else 0.0
         return SquareMove(plain.name, distance, across)
     if not some_blocked:
